@@ -1,2 +1,39 @@
-"""tenscell: tensegrity models of the cytoskeleton and the rheology they predict."""
+"""tenscell: tensegrity models of the cytoskeleton and the rheology they predict.
+
+The pipeline, one module per stage::
+
+    structure -> coordinates -> equilibrium -> shapes -> linear -> response -> analyses -> plotting, cli
+
+Quick start::
+
+    import numpy as np, tenscell
+    cell = tenscell.paper_cell()                     # the paper's 6-strut cell, alpha=0, delta=50°
+    lin = tenscell.linearize(cell, P=1000.0, EA=1.0, c=1.0)
+    f = np.logspace(-2, 3, 61)                       # Hz
+    Gp, Gpp = tenscell.moduli(lin, f)                # Pa
+"""
+from .equilibrium import Cell, NotPrestressableError, equilibrate, rest_lengths
+from .linear import LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, relaxation_spectrum
+from .response import (
+    FrequencyResponse,
+    compliance,
+    frequency_response,
+    log_slope,
+    loss_tangent,
+    moduli,
+    static_modulus,
+    viscosity_limit,
+)
+from .shapes import DEFAULT_DELTA, REGULAR_DELTA, if_free_delta, paper_cell, paper_structure
+from .structure import Point, Structure, StructureError
+
 __version__ = "0.1.0"
+
+__all__ = [
+    "Structure", "Point", "StructureError",
+    "Cell", "equilibrate", "rest_lengths", "NotPrestressableError",
+    "paper_cell", "paper_structure", "if_free_delta", "DEFAULT_DELTA", "REGULAR_DELTA",
+    "LinearModel", "linearize", "RelaxationSpectrum", "relaxation_spectrum", "NotPositiveDefiniteError",
+    "compliance", "moduli", "frequency_response", "FrequencyResponse", "static_modulus", "viscosity_limit",
+    "loss_tangent", "log_slope",
+]

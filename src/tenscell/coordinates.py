@@ -1,0 +1,267 @@
+"""Generalized coordinates q -> node positions, with exact derivatives.
+
+Every movable part of a :class:`~tenscell.structure.Structure` owns a block of
+generalized coordinates, laid out in this order: the struts in the
+structure's order, then the point nodes in index order.
+
+* anchored strut: 2 direction coordinates;
+* free strut: its centre ``(X, Y, Z)`` (m) then 2 direction coordinates;
+* point node: ``(X, Y, Z)`` (m).
+
+For the paper's cell this is exactly the order of the paper's Eq. (2):
+``[δ11 α11 δ21 α21 δ31 α31 X1 Y1 Z1 δ12 α12 ... X Y Z]``.
+
+Two direction parametrizations are offered:
+
+``"angles"``
+    the paper's declination δ (from b3) and azimuth α (from b1), in radians:
+    ``u = (sin δ cos α, sin δ sin α, cos δ)``. Singular for vertical struts.
+``"local"``
+    a singularity-free chart around the reference direction ``u_ref``:
+    ``u = w/|w|`` with ``w = u_ref + θ1 e1 + θ2 e2`` and ``e1, e2 ⊥ u_ref``
+    (θ dimensionless, zero at the reference).
+
+Both give the same physics; the test suite checks that the compliance is the
+same in either chart.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .structure import Structure
+
+__all__ = ["Coordinates", "NodeKinematics", "make_coordinates", "kinematics", "positions", "PARAMETRIZATIONS"]
+
+PARAMETRIZATIONS = ("angles", "local")
+_W = 5  # widest coordinate block a node depends on (a free strut)
+
+
+@dataclass(frozen=True, eq=False)
+class Coordinates:
+    """How a structure's generalized coordinates map to its nodes.
+
+    Attributes
+    ----------
+    structure : Structure
+    kind : str
+        ``"angles"`` or ``"local"``.
+    n : int
+        Number of generalized coordinates.
+    q0 : ndarray, shape (n,)
+        Coordinates of the reference configuration (m or rad).
+    node_index : ndarray of int, shape (n_nodes, 5)
+        For each node, the global indices of the coordinates it depends on,
+        padded with -1 (fixed nodes depend on none).
+    labels : tuple of str
+        A name for each coordinate, e.g. ``"delta[0]"``, ``"Z[3]"``.
+    """
+
+    structure: Structure
+    kind: str
+    n: int
+    q0: np.ndarray
+    node_index: np.ndarray
+    labels: tuple[str, ...]
+    # strut bookkeeping (arrays over struts)
+    strut_start: np.ndarray  # first coordinate of each strut's block
+    anchored: np.ndarray  # bool per strut
+    lengths: np.ndarray  # strut lengths (m)
+    frame: np.ndarray  # (n_struts, 3, 3): rows u_ref, e1, e2 (used by "local")
+    point_start: np.ndarray  # first coordinate of each point node
+
+
+@dataclass(frozen=True, eq=False)
+class NodeKinematics:
+    """Node positions and their exact derivatives at one configuration.
+
+    Attributes
+    ----------
+    x : ndarray, shape (n_nodes, 3)
+        Positions (m).
+    jac : ndarray, shape (n_nodes, 3, 5)
+        ``∂x/∂q`` restricted to the node's coordinate block ``index``.
+    hess : ndarray, shape (n_nodes, 3, 5, 5)
+        ``∂²x/∂q∂q`` on the same block.
+    index : ndarray of int, shape (n_nodes, 5)
+        Global coordinate indices of the block, -1 where unused.
+    """
+
+    x: np.ndarray
+    jac: np.ndarray
+    hess: np.ndarray
+    index: np.ndarray
+
+
+def make_coordinates(structure: Structure, kind: str = "angles") -> Coordinates:
+    """Lay out the generalized coordinates of a structure.
+
+    Parameters
+    ----------
+    structure : Structure
+    kind : {"angles", "local"}
+        Direction parametrization of the struts (see module docstring).
+
+    Returns
+    -------
+    Coordinates
+        With ``q0`` reproducing the structure's reference node positions.
+    """
+    if kind not in PARAMETRIZATIONS:
+        raise ValueError(f"parametrization must be one of {PARAMETRIZATIONS}, got {kind!r}")
+    s = structure
+    ns = len(s.struts)
+    struts = np.asarray(s.struts, dtype=int).reshape(ns, 2)
+    anchored = np.array([s.is_anchored(k) for k in range(ns)], dtype=bool)
+    lengths = s.strut_lengths
+    node_index = -np.ones((s.n_nodes, _W), dtype=int)
+    labels: list[str] = []
+    q0: list[float] = []
+    starts = np.zeros(ns, dtype=int)
+    frame = np.zeros((ns, 3, 3))
+    pos = 0
+    for k in range(ns):
+        tail, head = struts[k]
+        u = (s.nodes[head] - s.nodes[tail]) / lengths[k]
+        frame[k] = _frame(u)
+        starts[k] = pos
+        if kind == "angles":
+            delta = float(np.arccos(np.clip(u[2], -1.0, 1.0)))
+            alpha = float(np.arctan2(u[1], u[0]))
+            if alpha < -1e-12:
+                alpha += 2 * np.pi
+            alpha = max(alpha, 0.0)
+            dirq, dirl = [delta, alpha], [f"delta[{k}]", f"alpha[{k}]"]
+        else:
+            dirq, dirl = [0.0, 0.0], [f"theta1[{k}]", f"theta2[{k}]"]
+        if anchored[k]:
+            node_index[head, :2] = [pos, pos + 1]
+            q0 += dirq
+            labels += dirl
+            pos += 2
+        else:
+            centre = 0.5 * (s.nodes[head] + s.nodes[tail])
+            node_index[head] = node_index[tail] = np.arange(pos, pos + 5)
+            q0 += list(centre) + dirq
+            labels += [f"X[{k}]", f"Y[{k}]", f"Z[{k}]"] + dirl
+            pos += 5
+    points = s.point_nodes
+    pstart = np.zeros(len(points), dtype=int)
+    for i, p in enumerate(points):
+        pstart[i] = pos
+        node_index[p, :3] = [pos, pos + 1, pos + 2]
+        q0 += list(s.nodes[p])
+        labels += [f"X(node {p})", f"Y(node {p})", f"Z(node {p})"]
+        pos += 3
+    q0a = np.array(q0, dtype=float)
+    for a in (q0a, node_index, starts, anchored, frame, pstart):
+        a.setflags(write=False)
+    return Coordinates(
+        structure=s, kind=kind, n=pos, q0=q0a, node_index=node_index, labels=tuple(labels),
+        strut_start=starts, anchored=anchored, lengths=lengths, frame=frame, point_start=pstart,
+    )
+
+
+def _frame(u: np.ndarray) -> np.ndarray:
+    """Rows (u, e1, e2): an orthonormal frame with e1, e2 spanning the plane ⊥ u."""
+    helper = np.eye(3)[int(np.argmin(np.abs(u)))]
+    e1 = np.cross(u, helper)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(u, e1)
+    return np.array([u, e1, e2])
+
+
+def _directions(coords: Coordinates, theta: np.ndarray):
+    """Unit strut directions and exact derivatives w.r.t. the 2 direction coordinates.
+
+    Returns u (ns, 3), du (ns, 3, 2), d2u (ns, 3, 2, 2).
+    """
+    ns = theta.shape[0]
+    du = np.zeros((ns, 3, 2))
+    d2u = np.zeros((ns, 3, 2, 2))
+    if coords.kind == "angles":
+        d, a = theta[:, 0], theta[:, 1]
+        sd, cd, sa, ca = np.sin(d), np.cos(d), np.sin(a), np.cos(a)
+        u = np.stack([sd * ca, sd * sa, cd], axis=1)
+        du[:, :, 0] = np.stack([cd * ca, cd * sa, -sd], axis=1)
+        du[:, :, 1] = np.stack([-sd * sa, sd * ca, np.zeros(ns)], axis=1)
+        d2u[:, :, 0, 0] = -u
+        d2u[:, :, 0, 1] = d2u[:, :, 1, 0] = np.stack([-cd * sa, cd * ca, np.zeros(ns)], axis=1)
+        d2u[:, :, 1, 1] = np.stack([-sd * ca, -sd * sa, np.zeros(ns)], axis=1)
+        return u, du, d2u
+    # local gnomonic chart: u = w/r, w = u_ref + θ1 e1 + θ2 e2
+    uref, E = coords.frame[:, 0], coords.frame[:, 1:]  # E: (ns, 2, 3)
+    w = uref + np.einsum("sk,skx->sx", theta, E)
+    r = np.linalg.norm(w, axis=1)
+    u = w / r[:, None]
+    ue = np.einsum("sx,skx->sk", u, E)  # u·e_k
+    # ∂u/∂θ_k = (e_k − u (u·e_k)) / r
+    du = (np.transpose(E, (0, 2, 1)) - u[:, :, None] * ue[:, None, :]) / r[:, None, None]
+    # ∂²u/∂θ_k∂θ_l = −[du_l (u·e_k) + u (du_l·e_k)]/r − du_k (u·e_l)/r
+    due = np.einsum("sxl,skx->skl", du, E)  # (du_l · e_k) at [s, k, l]
+    for k in range(2):
+        for l in range(2):
+            d2u[:, :, k, l] = (
+                -(du[:, :, l] * ue[:, k, None] + u * due[:, k, l, None]) - du[:, :, k] * ue[:, l, None]
+            ) / r[:, None]
+    return u, du, d2u
+
+
+def kinematics(coords: Coordinates, q: np.ndarray) -> NodeKinematics:
+    """Node positions and their exact first and second derivatives.
+
+    Parameters
+    ----------
+    coords : Coordinates
+    q : ndarray, shape (n,)
+        Generalized coordinates (m and rad).
+
+    Returns
+    -------
+    NodeKinematics
+    """
+    q = np.asarray(q, dtype=float)
+    if q.shape != (coords.n,):
+        raise ValueError(f"q must have shape ({coords.n},), got {q.shape}")
+    s = coords.structure
+    x = np.array(s.nodes, dtype=float)  # fixed nodes keep their reference positions
+    jac = np.zeros((s.n_nodes, 3, _W))
+    hess = np.zeros((s.n_nodes, 3, _W, _W))
+    ns = len(s.struts)
+    if ns:
+        struts = np.asarray(s.struts, dtype=int)
+        st = coords.strut_start
+        anch = coords.anchored
+        off = np.where(anch, 0, 3)  # direction coordinates follow the centre in free struts
+        theta = np.stack([q[st + off], q[st + off + 1]], axis=1)
+        u, du, d2u = _directions(coords, theta)
+        L = coords.lengths
+        # anchored: head = tail(fixed) + L u
+        ia = np.flatnonzero(anch)
+        if ia.size:
+            tails, heads = struts[ia, 0], struts[ia, 1]
+            x[heads] = x[tails] + L[ia, None] * u[ia]
+            jac[heads, :, :2] = L[ia, None, None] * du[ia]
+            hess[heads, :, :2, :2] = L[ia, None, None, None] * d2u[ia]
+        # free: head/tail = G ± (L/2) u
+        iff = np.flatnonzero(~anch)
+        if iff.size:
+            G = np.stack([q[st[iff]], q[st[iff] + 1], q[st[iff] + 2]], axis=1)
+            half = 0.5 * L[iff]
+            for sign, nodes in ((1.0, struts[iff, 1]), (-1.0, struts[iff, 0])):
+                x[nodes] = G + sign * half[:, None] * u[iff]
+                jac[nodes, :, :3] = np.eye(3)
+                jac[nodes, :, 3:] = sign * half[:, None, None] * du[iff]
+                hess[nodes, :, 3:, 3:] = sign * half[:, None, None, None] * d2u[iff]
+    pts = np.asarray(s.point_nodes, dtype=int)
+    if pts.size:
+        ps = coords.point_start
+        x[pts] = np.stack([q[ps], q[ps + 1], q[ps + 2]], axis=1)
+        jac[pts, :, :3] = np.eye(3)
+    return NodeKinematics(x=x, jac=jac, hess=hess, index=coords.node_index)
+
+
+def positions(coords: Coordinates, q: np.ndarray) -> np.ndarray:
+    """Node positions (m), shape (n_nodes, 3), at generalized coordinates ``q``."""
+    return kinematics(coords, q).x

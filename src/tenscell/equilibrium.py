@@ -1,0 +1,436 @@
+"""Tendon lengths, the equilibrium matrix, self-stress and prestress.
+
+The paper's Eq. (6)–(11) at the level of geometry:
+
+* ``l(q)``: working-tendon lengths (m);
+* ``A(q) = ∂l/∂q`` (the paper's equilibrium matrix, shape ``(n_q, m)``, Eq. 7)
+  and the exact Hessians ``∂²l_j/∂q²``;
+* the self-stress space ``{T : A(q0) T = 0}`` by SVD, the state ``T0``
+  (``‖T0‖₂ = 1``, equal tension within the structure's equal-tension groups,
+  all cable tensions strictly positive), ``T = P·T0`` (Eq. 10);
+* rest lengths from Eq. (11).
+
+A :class:`Cell` bundles a structure with its prestressable reference and the
+per-cell geometry (A, Hessians, ``Kp``) that every later stage reuses, so
+that linearizing at many prestresses costs only a few small matrix products.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+import scipy.sparse as sp
+
+from .coordinates import Coordinates, NodeKinematics, kinematics, make_coordinates
+from .structure import STRUT, Point, Structure
+
+__all__ = [
+    "NotPrestressableError",
+    "MemberGeometry",
+    "Cell",
+    "member_geometry",
+    "equilibrium_matrix",
+    "assemble_hessian",
+    "point_vector",
+    "self_stress_basis",
+    "self_stress",
+    "equilibrate",
+    "rest_lengths",
+    "generalized_forces",
+    "damping_matrix",
+    "tangent_stiffness",
+    "SPARSE_THRESHOLD",
+]
+
+#: structures with more generalized coordinates than this use scipy.sparse matrices
+SPARSE_THRESHOLD = 1500
+
+
+class NotPrestressableError(ValueError):
+    """The requested reference admits no self-stress with all tendons in tension."""
+
+
+@dataclass(frozen=True, eq=False)
+class MemberGeometry:
+    """Lengths and exact derivatives of all members at one configuration.
+
+    Attributes
+    ----------
+    lengths : ndarray, shape (m,)
+        Member lengths (m).
+    grad : ndarray, shape (m, 10)
+        ``∂l_j/∂q`` on the member's local coordinate block (m/rad or 1).
+    hess : ndarray, shape (m, 10, 10)
+        ``∂²l_j/∂q²`` on the same block.
+    index : ndarray of int, shape (m, 10)
+        Global coordinate indices of the block, -1 where unused.
+    n : int
+        Number of generalized coordinates.
+    """
+
+    lengths: np.ndarray
+    grad: np.ndarray
+    hess: np.ndarray
+    index: np.ndarray
+    n: int
+
+
+def member_geometry(coords: Coordinates, q: np.ndarray, kin: NodeKinematics | None = None) -> MemberGeometry:
+    """Member lengths, gradients and Hessians at ``q`` (all analytic).
+
+    With ``d = x_a − x_b``, ``l = |d|``, ``e = d/l`` and ``M = [J_a, −J_b]``
+    the chain rule gives ``∇l = Mᵀe`` and
+    ``∇²l = Mᵀ (I − eeᵀ)/l M + Σ_x e_x (H_a ⊕ −H_b)_x``.
+    """
+    kin = kinematics(coords, q) if kin is None else kin
+    t = np.asarray(coords.structure.tendons, dtype=int).reshape(-1, 2)
+    a, b = t[:, 0], t[:, 1]
+    d = kin.x[a] - kin.x[b]
+    l = np.linalg.norm(d, axis=1)
+    if np.any(l <= 0):
+        j = int(np.flatnonzero(l <= 0)[0])
+        raise ValueError(f"tendon {j} has zero length in this configuration")
+    e = d / l[:, None]
+    M = np.concatenate([kin.jac[a], -kin.jac[b]], axis=2)  # (m, 3, 10)
+    grad = np.einsum("mxk,mx->mk", M, e)
+    proj = (np.eye(3)[None] - e[:, :, None] * e[:, None, :]) / l[:, None, None]
+    hess = np.einsum("mxk,mxy,myl->mkl", M, proj, M)
+    w = kin.hess.shape[-1]
+    hess[:, :w, :w] += np.einsum("mx,mxkl->mkl", e, kin.hess[a])
+    hess[:, w:, w:] -= np.einsum("mx,mxkl->mkl", e, kin.hess[b])
+    index = np.concatenate([kin.index[a], kin.index[b]], axis=1)
+    return MemberGeometry(lengths=l, grad=grad, hess=hess, index=index, n=coords.n)
+
+
+def _use_sparse(n: int) -> bool:
+    return n > SPARSE_THRESHOLD
+
+
+def equilibrium_matrix(geom: MemberGeometry, sparse: bool | None = None):
+    """The equilibrium matrix ``A = ∂l/∂q``, shape ``(n_q, m)``.
+
+    Dense ndarray for small structures, ``scipy.sparse.csr_matrix`` above
+    :data:`SPARSE_THRESHOLD` coordinates (or as ``sparse`` demands).
+    """
+    m, w = geom.grad.shape
+    rows = geom.index.ravel()
+    cols = np.repeat(np.arange(m), w)
+    keep = rows >= 0
+    A = sp.csr_matrix((geom.grad.ravel()[keep], (rows[keep], cols[keep])), shape=(geom.n, m))
+    use_sparse = _use_sparse(geom.n) if sparse is None else sparse
+    return A if use_sparse else A.toarray()
+
+
+def assemble_hessian(geom: MemberGeometry, weights: np.ndarray, sparse: bool | None = None):
+    """``Σ_j w_j ∇²l_j`` assembled into an ``(n_q, n_q)`` matrix."""
+    m, w = geom.grad.shape
+    blocks = geom.hess * np.asarray(weights, dtype=float)[:, None, None]
+    r = np.repeat(geom.index, w, axis=1).ravel()
+    c = np.tile(geom.index, (1, w)).ravel()
+    keep = (r >= 0) & (c >= 0)
+    H = sp.csr_matrix((blocks.ravel()[keep], (r[keep], c[keep])), shape=(geom.n, geom.n))
+    use_sparse = _use_sparse(geom.n) if sparse is None else sparse
+    return H if use_sparse else H.toarray()
+
+
+def point_vector(coords: Coordinates, point: Point, kin: NodeKinematics) -> np.ndarray:
+    """``∂(d·x_p)/∂q`` for a load or probe point ``p``, shape ``(n_q,)``.
+
+    For the load this is ``−H(q)`` (a unit force along the direction does
+    virtual work ``(∂x_p/∂q)ᵀd``); for the probe it is ``D(q)``.
+    """
+    v = np.zeros(coords.n + 1)  # last slot swallows the -1 padding
+    d = np.asarray(point.direction)
+    for node, wgt in zip(point.nodes, point.weights):
+        np.add.at(v, kin.index[node], wgt * (kin.jac[node].T @ d))
+    return v[:-1]
+
+
+def self_stress_basis(A, rtol: float = 1e-10) -> tuple[np.ndarray, int]:
+    """Orthonormal basis of ``null(A)`` (columns, shape ``(m, k)``) and ``rank A``."""
+    A = A.toarray() if sp.issparse(A) else np.asarray(A)
+    _, s, vt = scipy.linalg.svd(A, full_matrices=True)
+    tol = rtol * (s[0] if s.size else 1.0)
+    rank = int(np.sum(s > tol))
+    return vt[rank:].T.copy(), rank
+
+
+def self_stress(
+    A,
+    families: tuple[str, ...],
+    equal_tension_groups: tuple[tuple[int, ...], ...] = (),
+    *,
+    describe: str = "this reference",
+    rtol: float = 1e-9,
+) -> tuple[np.ndarray, int]:
+    """The self-stress state ``T0`` and the dimension of the self-stress space.
+
+    ``T0`` satisfies ``A T0 = 0``, ``‖T0‖₂ = 1``, equal tensions inside each
+    equal-tension group, and strictly positive tension in every cable (every
+    member whose family is not ``"strut"``). When the constraints leave a
+    single state it is used; when several remain, the state maximizing the
+    smallest cable tension (a linear program) is chosen.
+
+    Raises
+    ------
+    NotPrestressableError
+        If no such state exists, with the reason.
+    """
+    N, rank = self_stress_basis(A)
+    m = len(families)
+    if N.shape[1] == 0:
+        raise NotPrestressableError(
+            f"{describe} is not prestressable: the equilibrium matrix has full column rank {rank} "
+            f"for {m} tendons, so no self-stress exists (A(q0)·T = 0 only for T = 0)"
+        )
+    dim = N.shape[1]
+    rows = []
+    for g in equal_tension_groups:
+        for j in g[1:]:
+            r = np.zeros(m)
+            r[g[0]], r[j] = 1.0, -1.0
+            rows.append(r)
+    if rows:
+        E = np.array(rows) @ N
+        Z, _ = self_stress_basis(E) if E.size else (np.eye(dim), 0)
+        N = N @ Z
+        if N.shape[1] == 0:
+            raise NotPrestressableError(
+                f"{describe} is not prestressable with equal tensions in the requested groups: "
+                f"the {dim}-dimensional self-stress space contains no such state"
+            )
+    cable = np.array([f != STRUT for f in families])
+    if N.shape[1] == 1:
+        T = N[:, 0]
+        if T[cable].sum() < 0:
+            T = -T
+    else:
+        T = _max_min_tension(N, cable)
+    T = T / np.linalg.norm(T)
+    floor = rtol * np.abs(T).max()
+    slack = np.flatnonzero(cable & (T <= floor))
+    if slack.size:
+        fams = sorted({families[j] for j in slack})
+        worst = float(T[slack].min())
+        raise NotPrestressableError(
+            f"{describe} is not prestressable: in its self-stress state {slack.size} tendon(s) "
+            f"({', '.join(fams)}; indices {slack.tolist()}) are not in tension "
+            f"(smallest normalized tension {worst:.3g}); a tensegrity needs every tendon strictly in tension"
+        )
+    return T, dim
+
+
+def _max_min_tension(N: np.ndarray, cable: np.ndarray) -> np.ndarray:
+    """The self-stress in span(N) maximizing the smallest cable tension (sum of cables = 1)."""
+    m, k = N.shape
+    # variables: x (k), s;  maximize s  s.t.  s - N_c x <= 0,  sum(N_c x) = 1
+    Nc = N[cable]
+    c = np.zeros(k + 1)
+    c[-1] = -1.0
+    A_ub = np.hstack([-Nc, np.ones((Nc.shape[0], 1))])
+    A_eq = np.hstack([Nc.sum(axis=0)[None], [[0.0]]])
+    res = scipy.optimize.linprog(
+        c, A_ub=A_ub, b_ub=np.zeros(Nc.shape[0]), A_eq=A_eq, b_eq=[1.0],
+        bounds=[(None, None)] * k + [(None, 1.0)], method="highs",
+    )
+    if res.status != 0:
+        return N[:, 0]
+    return N @ res.x[:k]
+
+
+@dataclass(frozen=True, eq=False)
+class Cell:
+    """A structure at its prestressable reference configuration.
+
+    Created by :func:`equilibrate` (or a built-in such as
+    :func:`tenscell.paper_cell`). Everything that depends only on the
+    geometry and the self-stress is computed once here.
+
+    Attributes
+    ----------
+    structure : Structure
+    coords : Coordinates
+    q0 : ndarray, shape (n,)
+        Reference generalized coordinates (m, rad).
+    lengths : ndarray, shape (m,)
+        Tendon lengths at the reference, ``l_j(q0)`` (m).
+    A : ndarray or sparse, shape (n, m)
+        Equilibrium matrix ``A(q0)`` (Eq. 7).
+    T0 : ndarray, shape (m,)
+        Self-stress state, ``‖T0‖₂ = 1``; tensions are ``P·T0`` (N).
+    Kp : ndarray or sparse, shape (n, n)
+        Prestress stiffness ``Σ T0_j (∇²l_j + a_j a_jᵀ/l_j)`` (N/m per N of P).
+    load : ndarray, shape (n,)
+        ``−H0``: generalized force of a unit load (1/N·N; m or m/rad).
+    probe : ndarray, shape (n,)
+        ``D0``: output row, probe displacement per unit ``q`` (m/m, m/rad).
+    self_stress_dim : int
+        Dimension of the self-stress space ``null A(q0)``.
+    parameters : mapping
+        The named parameters the cell was built from (for messages and reports).
+    """
+
+    structure: Structure
+    coords: Coordinates
+    q0: np.ndarray
+    lengths: np.ndarray
+    A: object
+    T0: np.ndarray
+    Kp: object
+    load: np.ndarray
+    probe: np.ndarray
+    self_stress_dim: int
+    geometry: MemberGeometry
+    parameters: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+
+    @property
+    def n(self) -> int:
+        """Number of generalized coordinates."""
+        return self.coords.n
+
+    @property
+    def m(self) -> int:
+        """Number of working tendons."""
+        return len(self.T0)
+
+    @property
+    def sparse(self) -> bool:
+        """Whether the matrices are scipy.sparse (large structures)."""
+        return sp.issparse(self.A)
+
+    @property
+    def strut_length(self) -> float:
+        """The strut length L used in the equivalent-continuum factor 0.5/L (m).
+
+        The mean strut length when struts differ; 1 m when there are none.
+        """
+        Ls = self.structure.strut_lengths
+        return float(Ls.mean()) if Ls.size else float(self.parameters.get("L", 1.0))
+
+    def describe(self) -> str:
+        """A short description with the cell's parameters."""
+        return _label(self.structure.name, self.parameters)
+
+
+def _label(name: str, parameters) -> str:
+    if not parameters:
+        return name
+    ps = ", ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}" for k, v in parameters.items())
+    return f"{name} ({ps})"
+
+
+def equilibrate(
+    structure: Structure,
+    parametrization: str = "angles",
+    *,
+    T0: np.ndarray | None = None,
+    parameters: dict | None = None,
+) -> Cell:
+    """Find the self-stress of a structure at its reference and build a :class:`Cell`.
+
+    Parameters
+    ----------
+    structure : Structure
+        Its node positions are the reference configuration q0.
+    parametrization : {"angles", "local"}
+        Strut direction coordinates (see :mod:`tenscell.coordinates`).
+    T0 : ndarray, optional
+        A self-stress to use instead of the computed one; it is checked
+        (``A T0 = 0``, cables in tension) and normalized.
+    parameters : dict, optional
+        Named parameters to record in the cell.
+
+    Raises
+    ------
+    NotPrestressableError
+        If the reference admits no self-stress with every tendon in tension.
+    """
+    coords = make_coordinates(structure, parametrization)
+    kin = kinematics(coords, coords.q0)
+    geom = member_geometry(coords, coords.q0, kin)
+    A = equilibrium_matrix(geom)
+    label = _label(structure.name, parameters or {})
+    if T0 is None:
+        T0, dim = self_stress(A, structure.families, structure.equal_tension_groups, describe=label)
+    else:
+        T0 = _check_given_self_stress(A, structure.families, T0, label)
+        dim = self_stress_basis(A)[0].shape[1]
+    l = geom.lengths
+    Kp = assemble_hessian(geom, T0) + _weighted_gram(A, T0 / l)
+    load = point_vector(coords, structure.load, kin)
+    probe = point_vector(coords, structure.probe, kin)
+    for arr in (T0, l, load, probe):
+        arr.setflags(write=False)
+    return Cell(
+        structure=structure, coords=coords, q0=coords.q0, lengths=l, A=A, T0=T0, Kp=Kp, load=load,
+        probe=probe, self_stress_dim=dim, geometry=geom,
+        parameters=MappingProxyType(dict(parameters or {})),
+    )
+
+
+def _check_given_self_stress(A, families, T0, label) -> np.ndarray:
+    T0 = np.array(T0, dtype=float)
+    if T0.shape != (len(families),) or not np.all(np.isfinite(T0)):
+        raise ValueError(f"T0 must be {len(families)} finite tensions, got shape {T0.shape}")
+    T0 = T0 / np.linalg.norm(T0)
+    resid = np.linalg.norm(A @ T0) / max(np.abs(A).max() if not sp.issparse(A) else abs(A).max(), 1e-300)
+    if resid > 1e-8:
+        raise NotPrestressableError(f"the given T0 is not a self-stress of {label}: |A·T0| = {resid:.3g}")
+    cable = np.array([f != STRUT for f in families])
+    if np.any(T0[cable] <= 0):
+        bad = np.flatnonzero(cable & (T0 <= 0)).tolist()
+        raise NotPrestressableError(f"the given T0 has tendons {bad} not in tension")
+    return T0
+
+
+def _weighted_gram(A, w: np.ndarray):
+    """``A diag(w) Aᵀ`` for dense or sparse A."""
+    if sp.issparse(A):
+        return (A @ sp.diags(w) @ A.T).tocsr()
+    return (A * w) @ A.T
+
+
+def rest_lengths(cell: Cell, P: float, EA: np.ndarray) -> np.ndarray:
+    """Rest lengths giving ``T = P·T0`` at the reference (paper Eq. 11), in m.
+
+    ``l0_j = l_j(q0)·EA_j / (T0_j·P + EA_j)``.
+    """
+    EA = np.broadcast_to(np.asarray(EA, dtype=float), cell.T0.shape)
+    return cell.lengths * EA / (cell.T0 * P + EA)
+
+
+def generalized_forces(cell: Cell, q: np.ndarray, tensions_fn):
+    """Elastic generalized forces ``A(q)·T(q)`` and the member geometry at ``q``.
+
+    Parameters
+    ----------
+    cell : Cell
+    q : ndarray, shape (n,)
+    tensions_fn : callable
+        ``l (m,) -> T (m,)``: member tensions (N) from lengths (m).
+
+    Returns
+    -------
+    f : ndarray, shape (n,)
+        ``A(q) T(l(q))`` (N or N·m per coordinate).
+    geom : MemberGeometry
+    """
+    geom = member_geometry(cell.coords, q)
+    T = tensions_fn(geom.lengths)
+    f = np.zeros(cell.n + 1)
+    np.add.at(f, geom.index.ravel(), (geom.grad * T[:, None]).ravel())
+    return f[:-1], geom
+
+
+def damping_matrix(geom: MemberGeometry, c: np.ndarray):
+    """``C(q) = Σ c_j a_j a_jᵀ`` (paper Eq. 8), in N·s/m, from a member geometry."""
+    return _weighted_gram(equilibrium_matrix(geom), np.broadcast_to(c, geom.lengths.shape))
+
+
+def tangent_stiffness(geom: MemberGeometry, T: np.ndarray, dT_dl: np.ndarray):
+    """Exact Jacobian of ``A(q)T(l(q))``: ``Σ T_j ∇²l_j + Σ (dT_j/dl_j) a_j a_jᵀ`` (N/m)."""
+    A = equilibrium_matrix(geom)
+    return assemble_hessian(geom, T) + _weighted_gram(A, dT_dl)

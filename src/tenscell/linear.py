@@ -1,0 +1,209 @@
+"""Linearization about the prestressed reference (paper Eqs. 12–14).
+
+``C0·q̇ + K0·q + H0·F = 0`` and ``z = D0·q`` with
+
+* ``K0 = P·Kp + Σ_j EA_j·K_j``, ``Kp = Σ T0_j (∇²l_j + a_j a_jᵀ/l_j)``,
+  ``K_j = a_j a_jᵀ/l_j`` (N/m in length coordinates; the paper's Eq. 13);
+* ``C0 = Σ c_j a_j a_jᵀ`` (N·s/m);
+* ``H0 = −(∂x_load/∂q)ᵀ·d`` and ``D0 = (∂x_probe/∂q)ᵀ·d`` at q0.
+
+The relaxation spectrum solves ``K0 v = λ C0 v`` (rates λ in 1/s) with
+``vᵀ C0 v = 1``, so that ``(K0 + iωC0)⁻¹ = Σ v vᵀ/(λ + iω)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ._checks import positive_array, positive_scalar
+from .equilibrium import Cell, _weighted_gram, rest_lengths
+
+__all__ = ["LinearModel", "RelaxationSpectrum", "linearize", "relaxation_spectrum", "NotPositiveDefiniteError"]
+
+
+class NotPositiveDefiniteError(ValueError):
+    """K0 is not positive definite: the reference is not a stable equilibrium."""
+
+
+@dataclass(frozen=True, eq=False)
+class LinearModel:
+    """The linearized cell at one prestress and one set of tendon properties.
+
+    Attributes
+    ----------
+    cell : Cell
+    P : float
+        Prestress: tendon tensions at the reference are ``P·T0`` (N; the
+        paper's "Pa" is this scale, see ``docs/conventions.md``).
+    EA : ndarray, shape (m,)
+        Tendon stiffnesses (N).
+    c : ndarray, shape (m,)
+        Tendon damping coefficients (N·s/m).
+    K0 : ndarray or sparse, shape (n, n)
+        Stiffness matrix (N/m in length coordinates, N·m/rad² in angles).
+    C0 : ndarray or sparse, shape (n, n)
+        Damping matrix (N·s/m in length coordinates).
+    H0 : ndarray, shape (n,)
+        Disturbance vector for the single load F1.
+    D0 : ndarray, shape (n,)
+        Output row for the probe z1.
+    l0 : ndarray, shape (m,)
+        Rest lengths (m) giving ``T = P·T0`` at the reference (Eq. 11).
+    """
+
+    cell: Cell
+    P: float
+    EA: np.ndarray
+    c: np.ndarray
+    K0: object
+    C0: object
+    H0: np.ndarray
+    D0: np.ndarray
+    l0: np.ndarray
+
+    @property
+    def L(self) -> float:
+        """Strut length used for the equivalent-continuum factor ``0.5/L`` (m)."""
+        return self.cell.strut_length
+
+    @property
+    def Kp(self):
+        """Prestress stiffness ``Kp`` (per unit P), from the cell."""
+        return self.cell.Kp
+
+    @property
+    def K_j(self) -> np.ndarray:
+        """Material stiffness matrices ``K_j = a_j a_jᵀ/l_j``, shape (m, n, n) (dense)."""
+        A = self.cell.A.toarray() if sp.issparse(self.cell.A) else self.cell.A
+        return np.einsum("im,jm->mij", A, A) / self.cell.lengths[:, None, None]
+
+    @property
+    def tensions(self) -> np.ndarray:
+        """Tendon tensions at the reference, ``P·T0`` (N)."""
+        return self.P * self.cell.T0
+
+
+def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
+    """Linearize the cell's equations of motion at prestress ``P``.
+
+    Parameters
+    ----------
+    cell : Cell
+        A prestressable reference, e.g. :func:`tenscell.paper_cell`.
+    P : float
+        Prestress scale (N): tensions ``P·T0``. Must be > 0.
+    EA : float or array_like, shape (m,)
+        Tendon stiffness (N), one value for all or one per tendon.
+    c : float or array_like, shape (m,)
+        Tendon damping (N·s/m), one value for all or one per tendon.
+    check : bool
+        Verify that K0 is positive definite (default). Turn off only in
+        inner loops that have already checked.
+
+    Returns
+    -------
+    LinearModel
+
+    Raises
+    ------
+    ValueError
+        For a non-numeric, non-positive or NaN ``P``, ``EA`` or ``c``.
+    NotPositiveDefiniteError
+        If K0 is not positive definite (the reference is unstable).
+    """
+    P = positive_scalar("P (prestress)", P, "N")
+    m = cell.m
+    EA = positive_array("EA", EA, (m,), "N")
+    c = positive_array("c", c, (m,), "N·s/m")
+    A = cell.A
+    K0 = P * cell.Kp + _weighted_gram(A, EA / cell.lengths)
+    C0 = _weighted_gram(A, c)
+    if check:
+        _require_positive_definite(K0, cell, P)
+    return LinearModel(
+        cell=cell, P=P, EA=EA, c=c, K0=K0, C0=C0, H0=-np.asarray(cell.load), D0=np.asarray(cell.probe),
+        l0=rest_lengths(cell, P, EA),
+    )
+
+
+def _require_positive_definite(K0, cell: Cell, P: float) -> None:
+    if sp.issparse(K0):
+        try:
+            lam = spla.eigsh(K0.tocsc(), k=1, sigma=0.0, which="LM", return_eigenvectors=False)[0]
+            ok = lam > 0
+        except (RuntimeError, spla.ArpackNoConvergence):  # exactly singular at the shift
+            ok, lam = False, 0.0
+    else:
+        try:
+            np.linalg.cholesky(K0)
+            return
+        except np.linalg.LinAlgError:
+            ok = False
+            lam = float(np.linalg.eigvalsh(K0)[0])
+    if not ok:
+        raise NotPositiveDefiniteError(
+            f"K0 is not positive definite for {cell.describe()} at P={P:.6g} "
+            f"(smallest eigenvalue {lam:.3g}): the reference is not a stable equilibrium. "
+            "For the paper cell keep delta between about 45.5° and 54.7° at alpha=0."
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class RelaxationSpectrum:
+    """Modes of the linear model: ``J(ω) = Σ_k r_k / (λ_k + iω)``.
+
+    Attributes
+    ----------
+    rates : ndarray, shape (n,)
+        Relaxation rates λ_k (1/s), ascending; ``K0 v = λ C0 v``.
+    residues : ndarray, shape (n,)
+        ``r_k = (D0·v_k)(−H0·v_k)`` (m/(N·s)); non-negative when probe = load.
+    modes : ndarray, shape (n, n)
+        C0-orthonormal eigenvectors as columns.
+    """
+
+    rates: np.ndarray
+    residues: np.ndarray
+    modes: np.ndarray
+
+    @property
+    def times(self) -> np.ndarray:
+        """Relaxation times τ_k = 1/λ_k (s)."""
+        return 1.0 / self.rates
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Compliance weights ``r_k/λ_k`` (m/N): each mode's share of the static compliance."""
+        return self.residues / self.rates
+
+
+def relaxation_spectrum(lin: LinearModel) -> RelaxationSpectrum:
+    """Solve ``K0 v = λ C0 v``; requires C0 positive definite (dense models).
+
+    Raises
+    ------
+    ValueError
+        If C0 is singular (e.g. the cell without intermediate filaments, whose
+        damping leaves a mechanism undamped): use direct solves instead.
+    """
+    K0, C0 = lin.K0, lin.C0
+    if sp.issparse(K0):
+        K0, C0 = K0.toarray(), C0.toarray()
+    try:
+        Lc = np.linalg.cholesky(C0)
+    except np.linalg.LinAlgError:
+        raise ValueError(
+            f"the damping matrix C0 of {lin.cell.describe()} is singular (not positive definite), "
+            "so the relaxation spectrum K0 v = λ C0 v is not defined; compliance() uses direct solves"
+        ) from None
+    # K~ = Lc⁻¹ K0 Lc⁻ᵀ is symmetric; its eigenvectors w give v = Lc⁻ᵀ w with vᵀC0v = 1
+    X = scipy.linalg.solve_triangular(Lc, K0, lower=True, check_finite=False)
+    Kt = scipy.linalg.solve_triangular(Lc, X.T, lower=True, check_finite=False)
+    lam, W = np.linalg.eigh(0.5 * (Kt + Kt.T))
+    V = scipy.linalg.solve_triangular(Lc.T, W, lower=False, check_finite=False)
+    r = (lin.D0 @ V) * (-lin.H0 @ V)
+    return RelaxationSpectrum(rates=lam, residues=r, modes=V)
