@@ -1,0 +1,605 @@
+"""Reading and writing measured cell rheology data (storage and loss moduli).
+
+Files are plain CSV. Lines whose first non-blank character is ``#`` are
+comments (kept, e.g. for the source citation) and blank lines are ignored.
+The first other line is the header. Column names are matched
+case-insensitively, ignoring surrounding whitespace, in any order.
+
+Supported layouts
+-----------------
+1. Frequency sweep: ``frequency_Hz, G_storage_Pa, G_loss_Pa``.
+2. Prestress sweep: ``prestress_Pa, frequency_Hz, G_storage_Pa, G_loss_Pa``.
+3. Magnitude and phase: ``frequency_Hz, G_abs_Pa, phase_deg``, converted to
+   ``G' = |G| cos(phase)`` and ``G'' = |G| sin(phase)``. A ``prestress_Pa``
+   column is accepted here too, giving a prestress sweep.
+
+Optional standard deviations (used as fit weights): ``G_storage_sd_Pa`` and
+``G_loss_sd_Pa`` (layouts 1 and 2), or ``G_abs_sd_Pa`` and ``phase_sd_deg``
+together (layout 3; propagated to G' and G'' to first order).
+
+Any other column is an error, so that a misspelt name is not silently ignored.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "DataError",
+    "RheologyData",
+    "read_csv",
+    "write_csv",
+    "bundled",
+    "bundled_names",
+]
+
+# Canonical spellings, used for writing and in messages; matching is on the
+# lower-cased form.
+_FREQUENCY = "frequency_Hz"
+_PRESTRESS = "prestress_Pa"
+_STORAGE = "G_storage_Pa"
+_LOSS = "G_loss_Pa"
+_STORAGE_SD = "G_storage_sd_Pa"
+_LOSS_SD = "G_loss_sd_Pa"
+_ABS = "G_abs_Pa"
+_PHASE = "phase_deg"
+_ABS_SD = "G_abs_sd_Pa"
+_PHASE_SD = "phase_sd_deg"
+
+_CARTESIAN_COLUMNS = (_STORAGE, _LOSS, _STORAGE_SD, _LOSS_SD)
+_POLAR_COLUMNS = (_ABS, _PHASE, _ABS_SD, _PHASE_SD)
+_ALL_COLUMNS = (_PRESTRESS, _FREQUENCY) + _CARTESIAN_COLUMNS + _POLAR_COLUMNS
+_CANONICAL = {name.lower(): name for name in _ALL_COLUMNS}
+
+# Short name -> file in the package's data directory. A tuple, not a dict,
+# so that no caller can alter the registry.
+_BUNDLED = (
+    ("fabry2001", "fabry2001_hasm_powerlaw.csv"),
+    ("stamenovic2002", "stamenovic2002_hasm_0p1Hz.csv"),
+)
+
+
+class DataError(ValueError):
+    """Invalid or unreadable rheology data.
+
+    The message names the file (or data source), the 1-based line number in
+    the file where one applies (comment and blank lines are counted), and the
+    problem.
+    """
+
+
+def _error(source: str, problem: str, line: int | None = None) -> DataError:
+    where = f"{source}, line {line}" if line is not None else f"{source}"
+    return DataError(f"{where}: {problem}")
+
+
+@dataclass(frozen=True, eq=False)
+class RheologyData:
+    """Measured complex shear modulus of cells, as storage and loss moduli.
+
+    Array fields are stored as read-only float64 copies. ``eq=False``
+    because element-wise array comparison has no single truth value; compare
+    the arrays themselves.
+
+    Parameters
+    ----------
+    frequency_hz : array_like, shape (n,)
+        Oscillation frequency f in Hz (not angular frequency); > 0.
+    G_storage : array_like, shape (n,)
+        Storage modulus G' in Pa; > 0.
+    G_loss : array_like, shape (n,)
+        Loss modulus G'' in Pa; > 0.
+    prestress : array_like, shape (n,), optional
+        Cytoskeletal prestress in Pa (> 0) for a prestress sweep; None for a
+        frequency sweep.
+    G_storage_sd, G_loss_sd : array_like, shape (n,), optional
+        Standard deviations of G' and G'' in Pa (> 0), or None if unknown.
+    source : str, optional
+        File path or name the data came from; used in error messages.
+    comments : tuple of str, optional
+        Comment lines of the file, without the leading ``#``, stripped.
+        Must not contain line breaks.
+    kind : {"frequency", "prestress", None}, optional
+        ``"prestress"`` when `prestress` is given, else ``"frequency"``.
+        Derived when None; an inconsistent value is an error.
+
+    Raises
+    ------
+    DataError
+        If arrays are not 1-D of equal non-zero length, contain NaN or inf,
+        or have non-positive frequencies, prestresses, moduli or SDs.
+    """
+
+    frequency_hz: np.ndarray
+    G_storage: np.ndarray
+    G_loss: np.ndarray
+    prestress: np.ndarray | None = None
+    G_storage_sd: np.ndarray | None = None
+    G_loss_sd: np.ndarray | None = None
+    source: str = "<memory>"
+    comments: tuple[str, ...] = ()
+    kind: str | None = None
+
+    def __post_init__(self) -> None:
+        source = str(self.source)
+        # object.__setattr__ because the dataclass is frozen; normalising
+        # here means every instance, however built, satisfies the invariants.
+        object.__setattr__(self, "source", source)
+
+        def as_array(name: str, value, *, optional: bool) -> np.ndarray | None:
+            if value is None:
+                if optional:
+                    return None
+                raise _error(source, f"{name} is required")
+            try:
+                arr = np.array(value, dtype=np.float64)
+            except (TypeError, ValueError) as exc:
+                raise _error(source, f"{name} is not numeric: {exc}") from exc
+            if arr.ndim != 1:
+                raise _error(source, f"{name} must be 1-D, got shape {arr.shape}")
+            if not np.all(np.isfinite(arr)):
+                bad = int(np.flatnonzero(~np.isfinite(arr))[0])
+                raise _error(source, f"{name}[{bad}] = {arr[bad]} is not finite")
+            if np.any(arr <= 0):
+                bad = int(np.flatnonzero(arr <= 0)[0])
+                raise _error(source, f"{name}[{bad}] = {arr[bad]} must be > 0")
+            arr.flags.writeable = False
+            return arr
+
+        arrays = {
+            "frequency_hz": as_array("frequency_hz", self.frequency_hz, optional=False),
+            "G_storage": as_array("G_storage", self.G_storage, optional=False),
+            "G_loss": as_array("G_loss", self.G_loss, optional=False),
+            "prestress": as_array("prestress", self.prestress, optional=True),
+            "G_storage_sd": as_array("G_storage_sd", self.G_storage_sd, optional=True),
+            "G_loss_sd": as_array("G_loss_sd", self.G_loss_sd, optional=True),
+        }
+        lengths = {k: len(v) for k, v in arrays.items() if v is not None}
+        if len(set(lengths.values())) != 1:
+            raise _error(source, f"arrays have different lengths: {lengths}")
+        if lengths["frequency_hz"] == 0:
+            raise _error(source, "no data points")
+        for name, arr in arrays.items():
+            object.__setattr__(self, name, arr)
+
+        if isinstance(self.comments, str):
+            raise _error(source, "comments must be a sequence of strings, not a str")
+        comments = tuple(self.comments)
+        for c in comments:
+            if not isinstance(c, str):
+                raise _error(source, f"comment {c!r} is not a str")
+            # A line break would turn the rest of the comment into a data
+            # line when written by write_csv.
+            if "\n" in c or "\r" in c:
+                raise _error(source, f"comment {c!r} contains a line break")
+        object.__setattr__(self, "comments", comments)
+
+        expected_kind = "frequency" if arrays["prestress"] is None else "prestress"
+        if self.kind is None:
+            object.__setattr__(self, "kind", expected_kind)
+        elif self.kind != expected_kind:
+            raise _error(
+                source,
+                f"kind={self.kind!r} is inconsistent with prestress "
+                f"{'absent' if arrays['prestress'] is None else 'present'} "
+                f"(expected {expected_kind!r})",
+            )
+
+    @property
+    def n(self) -> int:
+        """Number of data points."""
+        return int(self.frequency_hz.shape[0])
+
+    @property
+    def weights_storage(self) -> np.ndarray:
+        """Weights for residuals of log10 G', shape (n,).
+
+        ``G' ln(10) / sd(G')``, the inverse of the first-order SD of log10 G',
+        if `G_storage_sd` is given; otherwise ones.
+        """
+        return _log_weights(self.G_storage, self.G_storage_sd, self.n)
+
+    @property
+    def weights_loss(self) -> np.ndarray:
+        """Weights for residuals of log10 G'', shape (n,).
+
+        ``G'' ln(10) / sd(G'')``, the inverse of the first-order SD of
+        log10 G'', if `G_loss_sd` is given; otherwise ones.
+        """
+        return _log_weights(self.G_loss, self.G_loss_sd, self.n)
+
+
+def _log_weights(G: np.ndarray, sd: np.ndarray | None, n: int) -> np.ndarray:
+    # sd(log10 G) ~= sd(G) / (G ln 10) to first order.
+    if sd is None:
+        return np.ones(n)
+    return G * math.log(10.0) / sd
+
+
+def _parse_float(text: str) -> float | None:
+    # float() also accepts digit separators like "1_000"; in a data file that
+    # is more likely a typo than intent.
+    if "_" in text:
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _looks_numeric(names: list[str]) -> bool:
+    return bool(names) and all(_parse_float(s.strip()) is not None for s in names)
+
+
+def _parse_header(raw: list[str], source: str, line: int) -> list[str]:
+    """Return the canonical column names of a header row, checking the layout."""
+    names = [s.strip() for s in raw]
+    lowered = [s.lower() for s in names]
+
+    unknown = [s for s, lo in zip(names, lowered) if lo not in _CANONICAL]
+    if unknown:
+        hint = " (is the header line missing?)" if _looks_numeric(names) else ""
+        raise _error(
+            source,
+            f"unknown column(s) {', '.join(repr(s) for s in unknown)}{hint}; "
+            f"recognised columns are {', '.join(_ALL_COLUMNS)}",
+            line,
+        )
+    canonical = [_CANONICAL[lo] for lo in lowered]
+    duplicates = sorted({c for c in canonical if canonical.count(c) > 1})
+    if duplicates:
+        raise _error(source, f"duplicate column(s) {', '.join(duplicates)}", line)
+
+    present = set(canonical)
+    cartesian = [c for c in _CARTESIAN_COLUMNS if c in present]
+    polar = [c for c in _POLAR_COLUMNS if c in present]
+    if cartesian and polar:
+        raise _error(
+            source,
+            f"header mixes G'/G'' columns ({', '.join(cartesian)}) with "
+            f"|G|/phase columns ({', '.join(polar)}); use one layout",
+            line,
+        )
+    if polar:
+        required = (_FREQUENCY, _ABS, _PHASE)
+    else:
+        required = (_FREQUENCY, _STORAGE, _LOSS)
+    missing = [c for c in required if c not in present]
+    if missing:
+        raise _error(
+            source,
+            f"missing required column(s) {', '.join(missing)}; "
+            f"columns found: {', '.join(names)}",
+            line,
+        )
+    if polar and (_ABS_SD in present) != (_PHASE_SD in present):
+        have, lack = (_ABS_SD, _PHASE_SD) if _ABS_SD in present else (_PHASE_SD, _ABS_SD)
+        raise _error(
+            source,
+            f"column {have} needs {lack} as well: both are needed to propagate "
+            f"the uncertainty to G' and G''",
+            line,
+        )
+    return canonical
+
+
+def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
+    comments: list[str] = []
+    columns: list[str] | None = None
+    header_line = 0
+    values: dict[str, list[float]] = {}
+    row_lines: list[int] = []
+
+    # Split on "\n" only (the file was opened in universal-newline mode), so
+    # that line numbers agree with what an editor shows; str.splitlines()
+    # would also break on form feeds and other rare separators.
+    for lineno, line in enumerate(text.split("\n"), start=1):
+        stripped = line.strip()
+        if not stripped:
+            continue
+        if stripped.startswith("#"):
+            comments.append(stripped[1:].strip())
+            continue
+        try:
+            fields = next(csv.reader([line], strict=True))
+        except csv.Error as exc:
+            raise _error(source, f"malformed CSV: {exc}", lineno) from exc
+
+        if columns is None:
+            columns = _parse_header(fields, source, lineno)
+            header_line = lineno
+            values = {c: [] for c in columns}
+            continue
+
+        if len(fields) != len(columns):
+            raise _error(
+                source,
+                f"expected {len(columns)} fields ({', '.join(columns)}), "
+                f"found {len(fields)}",
+                lineno,
+            )
+        row: dict[str, float] = {}
+        for col, field in zip(columns, fields):
+            text_value = field.strip()
+            value = _parse_float(text_value)
+            if value is None:
+                found = repr(text_value) if text_value else "an empty field"
+                raise _error(source, f"column {col}: not a number: {found}", lineno)
+            if not math.isfinite(value):
+                raise _error(source, f"column {col}: value {text_value!r} is not finite", lineno)
+            row[col] = value
+        _check_row(row, source, lineno)
+        for col, value in row.items():
+            values[col].append(value)
+        row_lines.append(lineno)
+
+    if columns is None:
+        raise _error(source, "no header line (the file has no non-comment lines)")
+    n = len(row_lines)
+    if n == 0:
+        raise _error(source, "no data rows after the header", header_line)
+    if n < min_points:
+        raise _error(
+            source,
+            f"{n} data point{'s' if n != 1 else ''}, fewer than min_points={min_points} "
+            f"(a fit needs at least as many points as free parameters)",
+        )
+
+    arr = {c: np.asarray(v, dtype=np.float64) for c, v in values.items()}
+    if _ABS in arr:
+        G_storage, G_loss, storage_sd, loss_sd = _polar_to_cartesian(
+            arr[_ABS], arr[_PHASE], arr.get(_ABS_SD), arr.get(_PHASE_SD)
+        )
+    else:
+        G_storage, G_loss = arr[_STORAGE], arr[_LOSS]
+        storage_sd, loss_sd = arr.get(_STORAGE_SD), arr.get(_LOSS_SD)
+
+    return RheologyData(
+        frequency_hz=arr[_FREQUENCY],
+        G_storage=G_storage,
+        G_loss=G_loss,
+        prestress=arr.get(_PRESTRESS),
+        G_storage_sd=storage_sd,
+        G_loss_sd=loss_sd,
+        source=source,
+        comments=tuple(comments),
+    )
+
+
+def _check_row(row: dict[str, float], source: str, lineno: int) -> None:
+    """Check the physical ranges of one parsed data row."""
+    positive = {
+        _FREQUENCY: "frequency",
+        _PRESTRESS: "prestress",
+        _STORAGE: "storage modulus G'",
+        _LOSS: "loss modulus G''",
+        _ABS: "modulus |G|",
+        _STORAGE_SD: "standard deviation of G'",
+        _LOSS_SD: "standard deviation of G''",
+        _ABS_SD: "standard deviation of |G|",
+        _PHASE_SD: "standard deviation of the phase",
+    }
+    for col, what in positive.items():
+        if col in row and row[col] <= 0:
+            kind = "zero" if row[col] == 0 else "negative"
+            raise _error(
+                source, f"column {col}: {kind} {what} ({row[col]:g}); must be > 0", lineno
+            )
+    if _PHASE in row:
+        phase = row[_PHASE]
+        if not 0.0 <= phase <= 90.0:
+            raise _error(
+                source,
+                f"column {_PHASE}: phase {phase:g} deg outside [0, 90] deg",
+                lineno,
+            )
+        # The bounds are allowed by the range check but give a zero modulus,
+        # which cannot be fitted on a log scale.
+        if phase == 0.0:
+            raise _error(
+                source,
+                f"column {_PHASE}: phase 0 deg gives a zero loss modulus "
+                f"G'' = |G| sin(phase); must be > 0",
+                lineno,
+            )
+        if phase == 90.0:
+            raise _error(
+                source,
+                f"column {_PHASE}: phase 90 deg gives a zero storage modulus "
+                f"G' = |G| cos(phase); must be > 0",
+                lineno,
+            )
+
+
+def _polar_to_cartesian(
+    G_abs: np.ndarray,
+    phase_deg: np.ndarray,
+    abs_sd: np.ndarray | None,
+    phase_sd_deg: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """Convert |G| (Pa) and phase (deg) to G', G'' (Pa) and their SDs."""
+    phi = np.deg2rad(phase_deg)
+    cos, sin = np.cos(phi), np.sin(phi)
+    G_storage = G_abs * cos
+    G_loss = G_abs * sin
+    if abs_sd is None or phase_sd_deg is None:
+        return G_storage, G_loss, None, None
+    # First-order propagation assuming independent errors in |G| and phase;
+    # the phase SD must be in radians for the derivative d(cos)/dphi = -sin.
+    s_phi = np.deg2rad(phase_sd_deg)
+    storage_sd = np.hypot(cos * abs_sd, G_abs * sin * s_phi)
+    loss_sd = np.hypot(sin * abs_sd, G_abs * cos * s_phi)
+    return G_storage, G_loss, storage_sd, loss_sd
+
+
+def read_csv(path: str | os.PathLike[str], *, min_points: int = 1) -> RheologyData:
+    """Read a rheology data file.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        CSV file in one of the layouts described in the module docstring.
+        Frequencies in Hz, moduli and prestress in Pa, phase in degrees.
+    min_points : int, optional
+        Minimum number of data points required, e.g. the number of free
+        parameters of the model to be fitted. Default 1.
+
+    Returns
+    -------
+    RheologyData
+        With ``source`` set to `path`, and ``comments`` holding every ``#``
+        line of the file (before or after the header) in file order.
+
+    Raises
+    ------
+    DataError
+        If the file is missing, unreadable or not UTF-8; has no header or no
+        data rows; has unknown, duplicate, missing or mixed-layout columns;
+        a row with the wrong number of fields; a non-numeric, NaN or infinite
+        value; a non-positive frequency, prestress, modulus or SD; a phase
+        outside [0, 90] deg or at 0 or 90 deg (a zero modulus); or fewer
+        than `min_points` rows.
+    """
+    source = os.fspath(path)
+    if isinstance(source, bytes):
+        source = os.fsdecode(source)
+    try:
+        # utf-8-sig drops the byte-order mark spreadsheet programs often add,
+        # which would otherwise become part of the first column name.
+        with open(source, encoding="utf-8-sig") as fh:
+            text = fh.read()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise _error(source, f"cannot read file: {exc}") from exc
+    return _parse_text(text, source, min_points)
+
+
+def _format(x: float) -> str:
+    # repr gives the shortest string that reads back to the same float.
+    return repr(float(x))
+
+
+def write_csv(data: RheologyData, path: str | os.PathLike[str]) -> None:
+    """Write data as CSV in layout 1 (frequency sweep) or 2 (prestress sweep).
+
+    Comments are written first as ``# ...`` lines, then the header
+    (``[prestress_Pa,] frequency_Hz, G_storage_Pa, G_loss_Pa`` plus
+    ``G_storage_sd_Pa`` / ``G_loss_sd_Pa`` when present) and the rows.
+    Floats are written so that :func:`read_csv` recovers them exactly.
+
+    The file is written to a temporary file in the same directory and then
+    moved into place with :func:`os.replace`, so readers see either the old
+    file or the complete new one, and a failure leaves no partial file.
+
+    Parameters
+    ----------
+    data : RheologyData
+        Data to write.
+    path : str or os.PathLike
+        Destination file; replaced if it exists.
+
+    Raises
+    ------
+    OSError
+        If the directory does not exist or is not writable.
+    """
+    target = Path(os.fspath(path))
+    columns: list[tuple[str, np.ndarray]] = []
+    if data.prestress is not None:
+        columns.append((_PRESTRESS, data.prestress))
+    columns += [
+        (_FREQUENCY, data.frequency_hz),
+        (_STORAGE, data.G_storage),
+        (_LOSS, data.G_loss),
+    ]
+    if data.G_storage_sd is not None:
+        columns.append((_STORAGE_SD, data.G_storage_sd))
+    if data.G_loss_sd is not None:
+        columns.append((_LOSS_SD, data.G_loss_sd))
+
+    directory = target.parent
+    fd, tmp_name = tempfile.mkstemp(
+        dir=directory, prefix=f".{target.name}.", suffix=".tmp"
+    )
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            for comment in data.comments:
+                fh.write(f"# {comment}\n" if comment else "#\n")
+            writer = csv.writer(fh, lineterminator="\n")
+            writer.writerow([name for name, _ in columns])
+            for i in range(data.n):
+                writer.writerow([_format(arr[i]) for _, arr in columns])
+            fh.flush()
+            os.fsync(fh.fileno())
+        # mkstemp creates the file mode 0600; keep an existing file's mode,
+        # otherwise use the usual mode for a data file.
+        try:
+            mode = target.stat().st_mode & 0o777
+        except OSError:
+            mode = 0o644
+        os.chmod(tmp_name, mode)
+        os.replace(tmp_name, target)
+    except BaseException:
+        try:
+            os.unlink(tmp_name)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+def bundled_names() -> tuple[str, ...]:
+    """Short names of the data sets shipped with tenscell.
+
+    Returns
+    -------
+    tuple of str
+        ``("fabry2001", "stamenovic2002")``: human airway smooth muscle
+        frequency sweep (power law, Fabry et al. 2001) and prestress sweep at
+        0.1 Hz (Stamenovic et al. 2002).
+    """
+    return tuple(short for short, _ in _BUNDLED)
+
+
+def bundled(name: str) -> RheologyData:
+    """Load a data set shipped with tenscell.
+
+    Parameters
+    ----------
+    name : str
+        A short name from :func:`bundled_names` (``"fabry2001"``,
+        ``"stamenovic2002"``) or the full file name (e.g.
+        ``"fabry2001_hasm_powerlaw.csv"``); case-insensitive.
+
+    Returns
+    -------
+    RheologyData
+        ``source`` is the location of the bundled file.
+
+    Raises
+    ------
+    DataError
+        If `name` is not a bundled data set; the message lists the names.
+    """
+    key = str(name).strip().lower()
+    for short, filename in _BUNDLED:
+        if key in (short, filename.lower()):
+            break
+    else:
+        available = ", ".join(f"{s!r} ({f})" for s, f in _BUNDLED)
+        raise DataError(f"{name!r}: no bundled data set of that name; available: {available}")
+    resource = resources.files("tenscell") / "data" / filename
+    source = str(resource)
+    # Read through the resource API rather than open() so that this also
+    # works when the package is installed as a zip file.
+    try:
+        text = resource.read_text(encoding="utf-8-sig")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise _error(source, f"cannot read bundled file: {exc}") from exc
+    return _parse_text(text, source, min_points=1)
