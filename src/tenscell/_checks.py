@@ -50,5 +50,5 @@ def positive_array(name: str, value, shape: tuple[int, ...] | None = None, unit:
     if np.any(bad):
         i = int(np.flatnonzero(bad.ravel())[0])
         where = f" (entry {i})" if arr.ndim else ""
-        raise ValueError(f"{name} must be {allowed}, got {arr.ravel()[i]!r}{where}")
+        raise ValueError(f"{name} must be {allowed}, got {arr.ravel()[i].item()!r}{where}")
     return arr
