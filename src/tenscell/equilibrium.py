@@ -168,7 +168,8 @@ def self_stress(
 ) -> tuple[np.ndarray, int]:
     """The self-stress state ``T0`` and the dimension of the self-stress space.
 
-    ``T0`` satisfies ``A T0 = 0``, ``‖T0‖₂ = 1``, equal tensions inside each
+    ``T0`` satisfies ``A T0 = 0``, ``‖T0_cables‖₂ = 1`` (the norm over the
+    members that are not struts), equal tensions inside each
     equal-tension group, and strictly positive tension in every cable (every
     member whose family is not ``"strut"``). When the constraints leave a
     single state it is used; when several remain, the state maximizing the
@@ -209,7 +210,9 @@ def self_stress(
             T = -T
     else:
         T = _max_min_tension(N, cable)
-    T = T / np.linalg.norm(T)
+    # normalize over the cables only, so a cell whose struts are listed as elastic members
+    # (negative force) has the same T0 on its tendons as its rigid-strut twin
+    T = T / np.linalg.norm(T[cable])
     floor = rtol * np.abs(T).max()
     slack = np.flatnonzero(cable & (T <= floor))
     if slack.size:
@@ -260,7 +263,7 @@ class Cell:
     A : ndarray or sparse, shape (n, m)
         Equilibrium matrix ``A(q0)`` (Eq. 7).
     T0 : ndarray, shape (m,)
-        Self-stress state, ``‖T0‖₂ = 1``; tensions are ``P·T0`` (N).
+        Self-stress state, ``‖T0‖₂ = 1`` over the cables; tensions are ``P·T0`` (N).
     Kp : ndarray or sparse, shape (n, n)
         Prestress stiffness ``Σ T0_j (∇²l_j + a_j a_jᵀ/l_j)`` (N/m per N of P).
     load : ndarray, shape (n,)
@@ -375,11 +378,11 @@ def _check_given_self_stress(A, families, T0, label) -> np.ndarray:
     T0 = np.array(T0, dtype=float)
     if T0.shape != (len(families),) or not np.all(np.isfinite(T0)):
         raise ValueError(f"T0 must be {len(families)} finite tensions, got shape {T0.shape}")
-    T0 = T0 / np.linalg.norm(T0)
+    cable = np.array([f != STRUT for f in families])
+    T0 = T0 / np.linalg.norm(T0[cable])
     resid = np.linalg.norm(A @ T0) / max(np.abs(A).max() if not sp.issparse(A) else abs(A).max(), 1e-300)
     if resid > 1e-8:
         raise NotPrestressableError(f"the given T0 is not a self-stress of {label}: |A·T0| = {resid:.3g}")
-    cable = np.array([f != STRUT for f in families])
     if np.any(T0[cable] <= 0):
         bad = np.flatnonzero(cable & (T0 <= 0)).tolist()
         raise NotPrestressableError(f"the given T0 has tendons {bad} not in tension")
