@@ -181,6 +181,24 @@ class RelaxationSpectrum:
         return self.residues / self.rates
 
 
+#: a Cholesky pivot of C0 smaller than this fraction of the largest marks C0 as singular
+C0_PIVOT_RTOL = 1e-12
+
+
+def _cholesky_or_none(M: np.ndarray) -> np.ndarray | None:
+    """Lower Cholesky factor of a positive definite M, or None if M is singular or indefinite.
+
+    Round-off lets Cholesky "succeed" on a singular matrix with tiny pivots, so
+    pivots below ``C0_PIVOT_RTOL`` of the largest count as zero.
+    """
+    try:
+        Lf = np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        return None
+    d = np.diagonal(Lf) ** 2
+    return Lf if d.min() > C0_PIVOT_RTOL * d.max() else None
+
+
 def relaxation_spectrum(lin: LinearModel) -> RelaxationSpectrum:
     """Solve ``K0 v = λ C0 v``; requires C0 positive definite (dense models).
 
@@ -190,16 +208,22 @@ def relaxation_spectrum(lin: LinearModel) -> RelaxationSpectrum:
         If C0 is singular (e.g. the cell without intermediate filaments, whose
         damping leaves a mechanism undamped): use direct solves instead.
     """
-    K0, C0 = lin.K0, lin.C0
-    if sp.issparse(K0):
-        K0, C0 = K0.toarray(), C0.toarray()
-    try:
-        Lc = np.linalg.cholesky(C0)
-    except np.linalg.LinAlgError:
+    spec = _spectrum_or_none(lin)
+    if spec is None:
         raise ValueError(
             f"the damping matrix C0 of {lin.cell.describe()} is singular (not positive definite), "
             "so the relaxation spectrum K0 v = λ C0 v is not defined; compliance() uses direct solves"
-        ) from None
+        )
+    return spec
+
+
+def _spectrum_or_none(lin: LinearModel) -> RelaxationSpectrum | None:
+    K0, C0 = lin.K0, lin.C0
+    if sp.issparse(K0):
+        return None
+    Lc = _cholesky_or_none(C0)
+    if Lc is None:
+        return None
     # K~ = Lc⁻¹ K0 Lc⁻ᵀ is symmetric; its eigenvectors w give v = Lc⁻ᵀ w with vᵀC0v = 1
     X = scipy.linalg.solve_triangular(Lc, K0, lower=True, check_finite=False)
     Kt = scipy.linalg.solve_triangular(Lc, X.T, lower=True, check_finite=False)

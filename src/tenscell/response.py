@@ -16,7 +16,7 @@ import scipy.sparse.linalg as spla
 
 from ._checks import positive_array
 from .equilibrium import Cell
-from .linear import LinearModel, linearize, relaxation_spectrum
+from .linear import LinearModel, _cholesky_or_none, _spectrum_or_none, linearize
 
 __all__ = [
     "compliance",
@@ -35,13 +35,7 @@ def _frequencies(f_hz) -> np.ndarray:
 
 
 def _c0_positive_definite(lin: LinearModel) -> bool:
-    if sp.issparse(lin.C0):
-        return False
-    try:
-        np.linalg.cholesky(lin.C0)
-        return True
-    except np.linalg.LinAlgError:
-        return False
+    return not sp.issparse(lin.C0) and _cholesky_or_none(lin.C0) is not None
 
 
 def compliance(lin: LinearModel, f_hz) -> np.ndarray:
@@ -62,8 +56,8 @@ def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     """
     f = _frequencies(f_hz)
     w = 2 * np.pi * f.ravel()
-    if _c0_positive_definite(lin):
-        spec = relaxation_spectrum(lin)
+    spec = _spectrum_or_none(lin)
+    if spec is not None:
         lam, r = spec.rates, spec.residues
         # Σ r/(λ + iω) in real arithmetic: one matrix product per part
         den = 1.0 / (lam[:, None] ** 2 + w[None, :] ** 2)
