@@ -1,0 +1,105 @@
+"""The command line: CSV output, bad input as one line and exit status 2, reproduce outputs."""
+from __future__ import annotations
+
+import csv
+import io
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import tenscell
+from tenscell.cli import main, parse_frequencies
+
+
+def run(argv, capsys):
+    code = main(argv)
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_moduli_csv_matches_api(capsys):
+    code, out, err = run(["moduli", "--prestress", "500,1000", "--freq", "0.01:1000:5"], capsys)
+    assert code == 0 and err == ""
+    rows = list(csv.reader(io.StringIO(out)))
+    assert rows[0] == ["prestress", "frequency_Hz", "G_storage", "G_loss"]
+    data = np.array(rows[1:], dtype=float)
+    assert data.shape == (10, 4)
+    f = np.logspace(-2, 3, 5)
+    Gp, Gpp = tenscell.moduli(tenscell.linearize(tenscell.paper_cell(), 1000.0), f)
+    np.testing.assert_allclose(data[5:, 1], f, rtol=1e-9)
+    np.testing.assert_allclose(data[5:, 2], Gp, rtol=1e-9)
+    np.testing.assert_allclose(data[5:, 3], Gpp, rtol=1e-9)
+
+
+def test_moduli_options(capsys):
+    code, out, _ = run(["moduli", "--freq", "1,10", "--alpha-deg", "2", "--delta-deg", "49", "--EA", "2",
+                        "--c", "0.5", "--L", "1.5"], capsys)
+    assert code == 0
+    data = np.array([r.split(",") for r in out.strip().splitlines()[1:]], dtype=float)
+    cell = tenscell.paper_cell(alpha=math.radians(2), delta=math.radians(49), L=1.5)
+    Gp, _ = tenscell.moduli(tenscell.linearize(cell, 1000.0, EA=2.0, c=0.5), [1.0, 10.0])
+    np.testing.assert_allclose(data[:, 2], Gp, rtol=1e-9)
+    code, out, _ = run(["moduli", "--no-if", "--freq", "1"], capsys)
+    assert code == 0 and len(out.strip().splitlines()) == 2
+
+
+@pytest.mark.parametrize("argv, word", [
+    (["moduli", "--prestress", "-5"], "P"),
+    (["moduli", "--prestress", "abc"], "--prestress"),
+    (["moduli", "--freq", "0:1:3"], "--freq"),
+    (["moduli", "--freq", "nan"], "frequency"),
+    (["moduli", "--freq", "1:10"], "--freq"),
+    (["moduli", "--EA", "0"], "EA"),
+    (["moduli", "--c", "-1"], "c"),
+    (["moduli", "--L", "0"], "L"),
+    (["moduli", "--L", "nan"], "L"),
+    (["moduli", "--delta-deg", "40"], "positive definite"),
+    (["moduli", "--delta-deg", "54.7356103172"], "not prestressable"),
+    (["moduli", "--EA", "1,2,3"], "EA"),
+])
+def test_bad_input_is_one_line_exit_2(argv, word, capsys):
+    code, out, err = run(argv, capsys)
+    assert code == 2
+    assert out == "" or out.startswith("prestress")
+    assert err.count("\n") == 1 and word in err and "Traceback" not in err
+
+
+def test_console_script_exit_status_no_traceback():
+    r = subprocess.run([sys.executable, "-m", "tenscell.cli", "moduli", "--L", "-1"], capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "L must be" in r.stderr
+
+
+def test_parse_frequencies():
+    np.testing.assert_allclose(parse_frequencies("0.01:1000:6"), np.logspace(-2, 3, 6))
+    np.testing.assert_allclose(parse_frequencies("1, 2,5"), [1, 2, 5])
+
+
+def test_reproduce_homogeneous_outputs(tmp_path):
+    from tenscell.cli import reproduce_homogeneous
+
+    reproduce_homogeneous(tmp_path, lambda msg: None)
+    for name in ("fig2_prestress.png", "fig3_frequency.png", "fig2_prestress.csv", "fig3_frequency.csv", "claims.md"):
+        assert (tmp_path / name).stat().st_size > 0
+    rows = list(csv.reader(open(tmp_path / "fig3_frequency.csv")))
+    assert rows[0] == ["prestress", "frequency_Hz", "G_storage", "G_loss"]
+    claims = (tmp_path / "claims.md").read_text()
+    for k in range(1, 5):
+        assert f"Claim {k}" in claims
+    assert not list(tmp_path.glob(".*"))  # no temporary files left behind
+
+
+def test_failed_write_leaves_no_file(tmp_path, monkeypatch):
+    from tenscell import _io
+
+    target = tmp_path / "x.csv"
+
+    def rows():
+        yield (1.0, 2.0)
+        raise RuntimeError("boom")
+
+    with pytest.raises(RuntimeError):
+        _io.write_csv_rows(target, ["a", "b"], rows())
+    assert not target.exists() and list(tmp_path.iterdir()) == []
