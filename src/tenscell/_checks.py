@@ -33,6 +33,12 @@ def positive_scalar(name: str, value, unit: str = "") -> float:
 def positive_array(name: str, value, shape: tuple[int, ...] | None = None, unit: str = "",
                    allow_zero: bool = False) -> np.ndarray:
     """``value`` as a float array of positive entries, broadcast to ``shape`` if given."""
+    # fast paths for the common clean cases, which sit on the hot path of parameter sweeps
+    if shape is not None and type(value) is float and value > 0 and value != np.inf:
+        return np.full(shape, value)
+    if (shape is None and type(value) is np.ndarray and value.dtype == np.float64 and value.size
+            and (value.min() >= 0.0 if allow_zero else value.min() > 0.0) and value.max() < np.inf):
+        return value  # NaN makes min() NaN, fails the test and takes the checked path below
     bound = ">= 0" if allow_zero else "> 0"
     allowed = f"finite numbers {bound}{(' (' + unit + ')') if unit else ''}"
     try:

@@ -274,6 +274,8 @@ class Cell:
         Dimension of the self-stress space ``null A(q0)``.
     parameters : mapping
         The named parameters the cell was built from (for messages and reports).
+    L : float
+        Strut length for the equivalent-continuum factor 0.5/L (m).
     """
 
     structure: Structure
@@ -288,6 +290,7 @@ class Cell:
     self_stress_dim: int
     geometry: MemberGeometry
     parameters: MappingProxyType = field(default_factory=lambda: MappingProxyType({}))
+    L: float = 1.0
 
     @property
     def n(self) -> int:
@@ -308,10 +311,10 @@ class Cell:
     def strut_length(self) -> float:
         """The strut length L used in the equivalent-continuum factor 0.5/L (m).
 
-        The mean strut length when struts differ; 1 m when there are none.
+        The mean strut length when struts differ; the ``L`` parameter (or
+        1 m) when there are no rigid struts.
         """
-        Ls = self.structure.strut_lengths
-        return float(Ls.mean()) if Ls.size else float(self.parameters.get("L", 1.0))
+        return self.L
 
     def describe(self) -> str:
         """A short description with the cell's parameters."""
@@ -370,8 +373,13 @@ def equilibrate(
     return Cell(
         structure=structure, coords=coords, q0=coords.q0, lengths=l, A=A, T0=T0, Kp=Kp, load=load,
         probe=probe, self_stress_dim=dim, geometry=geom,
-        parameters=MappingProxyType(dict(parameters or {})),
+        parameters=MappingProxyType(dict(parameters or {})), L=_continuum_length(structure, parameters or {}),
     )
+
+
+def _continuum_length(structure: Structure, parameters: dict) -> float:
+    Ls = structure.strut_lengths
+    return float(Ls.mean()) if Ls.size else float(parameters.get("L", 1.0))
 
 
 def _check_given_self_stress(A, families, T0, label) -> np.ndarray:

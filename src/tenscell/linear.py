@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -221,13 +222,11 @@ def _spectrum_or_none(lin: LinearModel) -> RelaxationSpectrum | None:
     K0, C0 = lin.K0, lin.C0
     if sp.issparse(K0):
         return None
-    Lc = _cholesky_or_none(C0)
-    if Lc is None:
+    if _cholesky_or_none(C0) is None:
         return None
-    # K~ = Lc⁻¹ K0 Lc⁻ᵀ is symmetric; its eigenvectors w give v = Lc⁻ᵀ w with vᵀC0v = 1
-    X = scipy.linalg.solve_triangular(Lc, K0, lower=True, check_finite=False)
-    Kt = scipy.linalg.solve_triangular(Lc, X.T, lower=True, check_finite=False)
-    lam, W = np.linalg.eigh(0.5 * (Kt + Kt.T))
-    V = scipy.linalg.solve_triangular(Lc.T, W, lower=False, check_finite=False)
+    # LAPACK sygv: one call for the symmetric-definite pencil, eigenvectors with VᵀC0V = I
+    lam, V, info = scipy.linalg.lapack.dsygv(K0, C0, itype=1, jobz="V", uplo="L")
+    if info != 0:
+        return None
     r = (lin.D0 @ V) * (-lin.H0 @ V)
     return RelaxationSpectrum(rates=lam, residues=r, modes=V)

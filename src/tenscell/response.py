@@ -59,9 +59,11 @@ def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     spec = _spectrum_or_none(lin)
     if spec is not None:
         lam, r = spec.rates, spec.residues
-        # Σ r/(λ + iω) in real arithmetic: one matrix product per part
-        den = 1.0 / (lam[:, None] ** 2 + w[None, :] ** 2)
-        J = (r * lam) @ den - 1j * w * (r @ den)
+        # Σ r/(λ + iω) in real arithmetic: one (2 × n)(n × nf) product gives both parts
+        den = np.add.outer(lam * lam, w * w)
+        np.reciprocal(den, out=den)
+        re, im = np.stack([r * lam, r]) @ den
+        J = re - 1j * (w * im)
     else:
         J = _direct(lin, w)
     return J.reshape(f.shape)
