@@ -140,17 +140,20 @@ class Structure:
             if not 0 <= i < n:
                 raise StructureError(f"{what} refers to unknown node {i} (there are {n} nodes)")
 
+        def check_member(what, a, b):
+            check_node(a, what)
+            check_node(b, what)
+            if a == b:
+                raise StructureError(f"{what} joins node {a} to itself")
+            if np.linalg.norm(nodes[a] - nodes[b]) <= 0:
+                raise StructureError(f"{what} has zero length")
+
         for i in fixed:
             check_node(i, "fixed list")
         fixed_set = set(fixed)
         owner: dict[int, int] = {}
         for k, (a, b) in enumerate(struts):
-            check_node(a, f"strut {k}")
-            check_node(b, f"strut {k}")
-            if a == b:
-                raise StructureError(f"strut {k} joins node {a} to itself")
-            if np.linalg.norm(nodes[a] - nodes[b]) <= 0:
-                raise StructureError(f"strut {k} has zero length")
+            check_member(f"strut {k}", a, b)
             if b in fixed_set:
                 raise StructureError(
                     f"strut {k}: its head node {b} is fixed; put the anchored (fixed) node first"
@@ -163,18 +166,13 @@ class Structure:
             raise StructureError(f"{len(families)} families for {len(tendons)} tendons")
         seen: dict[frozenset, int] = {}
         for j, (a, b) in enumerate(tendons):
-            check_node(a, f"tendon {j}")
-            check_node(b, f"tendon {j}")
-            if a == b:
-                raise StructureError(f"tendon {j} joins node {a} to itself")
+            check_member(f"tendon {j}", a, b)
             key = frozenset((a, b))
             if key in seen:
                 raise StructureError(f"tendon {j} duplicates tendon {seen[key]} (nodes {a}-{b})")
             seen[key] = j
             if a in fixed_set and b in fixed_set:
                 raise StructureError(f"tendon {j} joins two fixed nodes and cannot work; leave it out")
-            if np.linalg.norm(nodes[a] - nodes[b]) <= 0:
-                raise StructureError(f"tendon {j} has zero length")
         for g in self.equal_tension_groups:
             for j in g:
                 if not 0 <= j < len(tendons):
