@@ -282,6 +282,17 @@ def test_if_free_cell_uses_direct_solves():
         tenscell.relaxation_spectrum(lin)
     Gp, Gpp = tenscell.moduli(lin, F_WIDE)
     assert np.all(np.isfinite(Gp)) and np.all(Gpp > 0)
+    # a spectrum built on a round-off Cholesky of the singular C0 gave G'(1e-4 Hz) < 0 here
+    for P in (300.0, 1000.0):
+        lin = tenscell.linearize(c, P)
+        np.testing.assert_allclose(tenscell.moduli(lin, 1e-4)[0], tenscell.static_modulus(lin), rtol=1e-6)
+
+
+def test_if_free_curve_off_alpha_zero():
+    """Near α = 0 the IF-free curve is prestressable; at α = 0.2 rad its self-stress compresses actin."""
+    assert tenscell.paper_cell(alpha=0.05, intermediate_filaments=False).T0.min() > 0
+    with pytest.raises(tenscell.NotPrestressableError, match="curve delta\\*\\(alpha\\) itself"):
+        tenscell.paper_cell(alpha=0.2, intermediate_filaments=False)
 
 
 # ---- bad input -------------------------------------------------------------------------

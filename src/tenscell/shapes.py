@@ -199,9 +199,16 @@ def paper_cell(
             )
         else:
             star = if_free_delta(alpha)
-            hint = (
-                f" Without intermediate filaments a self-stress exists only on the curve delta*(alpha); "
-                f"at alpha={alpha:.6g} rad that is delta={math.degrees(star):.6g}° (call with delta=None); "
-                f"you asked for {math.degrees(delta):.6g}°."
-            )
+            if abs(star - delta) < 1e-9:
+                hint = (
+                    f" This is the IF-free prestressable curve delta*(alpha) itself, but at alpha={alpha:.6g} rad "
+                    "its self-stress puts the tendons listed above in compression; at alpha=0 (the regular member) "
+                    "every actin tendon is in tension."
+                )
+            else:
+                hint = (
+                    f" Without intermediate filaments a self-stress exists only on the curve delta*(alpha); "
+                    f"at alpha={alpha:.6g} rad that is delta={math.degrees(star):.6g}° (call with delta=None); "
+                    f"you asked for {math.degrees(delta):.6g}°."
+                )
         raise NotPrestressableError(str(err) + "." + hint) from None
