@@ -152,6 +152,22 @@ def _require_positive_definite(K0, cell: Cell, P: float) -> None:
         )
 
 
+#: C0 counts as singular when its smallest eigenvalue is below this fraction of its largest
+C0_RTOL = 1e-10
+
+
+def _well_conditioned_pd(M: np.ndarray, rtol: float = C0_RTOL) -> bool:
+    """Whether a dense symmetric matrix is positive definite with λ_min > rtol·λ_max.
+
+    A Cholesky factorization alone is not enough: it succeeds on matrices that
+    are singular up to rounding (the cell without intermediate filaments has a
+    C0 eigenvalue of ~1e-16 against ~5), and a spectrum built on such a factor
+    is garbage.
+    """
+    lam = np.linalg.eigvalsh(0.5 * (M + M.T))
+    return bool(lam[0] > rtol * max(lam[-1], 0.0) and lam[-1] > 0)
+
+
 @dataclass(frozen=True, eq=False)
 class RelaxationSpectrum:
     """Modes of the linear model: ``J(ω) = Σ_k r_k / (λ_k + iω)``.
@@ -194,6 +210,8 @@ def relaxation_spectrum(lin: LinearModel) -> RelaxationSpectrum:
     if sp.issparse(K0):
         K0, C0 = K0.toarray(), C0.toarray()
     try:
+        if not _well_conditioned_pd(C0):
+            raise np.linalg.LinAlgError
         Lc = np.linalg.cholesky(C0)
     except np.linalg.LinAlgError:
         raise ValueError(

@@ -16,7 +16,7 @@ import scipy.sparse.linalg as spla
 
 from ._checks import positive_array
 from .equilibrium import Cell
-from .linear import LinearModel, linearize, relaxation_spectrum
+from .linear import LinearModel, _well_conditioned_pd, linearize, relaxation_spectrum
 
 __all__ = [
     "compliance",
@@ -37,11 +37,7 @@ def _frequencies(f_hz) -> np.ndarray:
 def _c0_positive_definite(lin: LinearModel) -> bool:
     if sp.issparse(lin.C0):
         return False
-    try:
-        np.linalg.cholesky(lin.C0)
-        return True
-    except np.linalg.LinAlgError:
-        return False
+    return _well_conditioned_pd(lin.C0)
 
 
 def compliance(lin: LinearModel, f_hz) -> np.ndarray:
