@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -283,10 +282,12 @@ def relaxation_spectrum(lin: LinearModel) -> RelaxationSpectrum:
             f"the damping matrix C0 of {lin.cell.describe()} is singular (not positive definite), "
             "so the relaxation spectrum K0 v = λ C0 v is not defined; compliance() uses direct solves"
         ) from None
-    # K~ = Lc⁻¹ K0 Lc⁻ᵀ is symmetric; its eigenvectors w give v = Lc⁻ᵀ w with vᵀC0v = 1
-    X = scipy.linalg.solve_triangular(Lc, K0, lower=True, check_finite=False)
-    Kt = scipy.linalg.solve_triangular(Lc, X.T, lower=True, check_finite=False)
+    # K~ = Lc⁻¹ K0 Lc⁻ᵀ is symmetric; its eigenvectors w give v = Lc⁻ᵀ w with vᵀC0v = 1.
+    # numpy's solve, not scipy's solve_triangular: on a loaded 2-core machine the latter's
+    # threaded trsm took ~16 ms per 24×24 call against ~0.02 ms here (same result to rounding)
+    X = np.linalg.solve(Lc, K0)
+    Kt = np.linalg.solve(Lc, X.T)
     lam, W = np.linalg.eigh(0.5 * (Kt + Kt.T))
-    V = scipy.linalg.solve_triangular(Lc.T, W, lower=False, check_finite=False)
+    V = np.linalg.solve(Lc.T, W)
     r = (lin.D0 @ V) * (-lin.H0 @ V)
     return RelaxationSpectrum(rates=lam, residues=r, modes=V)

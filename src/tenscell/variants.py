@@ -93,8 +93,8 @@ class LossPeak:
     storage: float
 
 
-def loss_peak(lin: LinearModel, f_min: float = 1e-4, f_max: float = 1e8, n: int = 241) -> LossPeak:
-    """The maximum of G''(f) between ``f_min`` and ``f_max`` (Hz), refined to ~1e-9 in log f.
+def loss_peak(lin: LinearModel, f_min: float = 1e-4, f_max: float = 1e8, n: int = 121) -> LossPeak:
+    """The maximum of G''(f) between ``f_min`` and ``f_max`` (Hz), refined to ~1e-8 in log10 f.
 
     Raises
     ------
@@ -117,7 +117,7 @@ def loss_peak(lin: LinearModel, f_min: float = 1e-4, f_max: float = 1e8, n: int 
         return -float(((0.5 / lin.L) / compliance(lin, [10.0 ** u])).imag[0])
 
     r = scipy.optimize.minimize_scalar(neg, bounds=(math.log10(f[k - 1]), math.log10(f[k + 1])), method="bounded",
-                                       options={"xatol": 1e-9})
+                                       options={"xatol": 1e-8})
     fp = 10.0 ** r.x
     G = (0.5 / lin.L) / compliance(lin, [fp])[0]
     return LossPeak(frequency_hz=float(fp), height=float(G.imag), storage=float(G.real))
@@ -406,9 +406,9 @@ def references_study(
     *,
     EA: float = 1.0,
     c: float = 1.0,
-    map_alpha=np.radians(np.arange(-30.0, 60.1, 2.5)),
-    map_delta=np.radians(np.arange(30.0, 70.1, 1.25)),
-    curve_alpha=np.radians([-10.0, 0.0, 10.0, 20.0]),
+    map_alpha=np.radians(np.arange(-25.0, 35.1, 2.5)),
+    map_delta=np.radians(np.arange(30.0, 65.1, 1.25)),
+    curve_alpha=np.radians([-10.0, -5.0, 0.0, 5.0, 10.0, 15.0, 20.0]),
 ) -> ReferencesStudy:
     """The valid-reference map and the moduli of the spherical, regular, cylindrical and IF-free cells."""
     Ps = _grid("prestress", prestress, "N")
