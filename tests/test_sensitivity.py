@@ -109,7 +109,8 @@ def test_perturbation_table_and_summary():
     # c (all) × 1.1 multiplies G'' by 1.1 at low frequency (G'' = ωη there)
     assert rows["c (all)"].loss[1] == pytest.approx(0.10, abs=2e-3)
     # δ ± 10% leaves the valid band (45.5°–54.74° at α = 0) on both sides
-    assert "−" in rows["delta"].note and "+" in rows["delta"].note
+    assert "−" in rows["delta (±10%)"].note and "+" in rows["delta (±10%)"].note
+    assert not rows["delta (±5%)"].note and rows["delta (±5%)"].worst > 0.08
     el = S.elasticities(f_hz=F)
     summary = {s.group: s for s in S.summarize(el, table)}
     assert summary["EA actin"].n == 21 and summary["c IF"].n == 12

@@ -31,6 +31,7 @@ multiplying every c by s maps G(f) to G(s·f), so ``Σ e_c = ∂ln G/∂ln f``; 
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,7 +40,7 @@ import scipy.sparse as sp
 from ._checks import finite_scalar, positive_array, positive_scalar
 from .linear import LinearModel, linearize
 from .response import compliance
-from .shapes import DEFAULT_DELTA, paper_cell
+from .shapes import paper_cell
 from .structure import STRUT
 
 __all__ = [
@@ -385,10 +386,16 @@ def perturbation_table(
     record("P", "P", lambda sgn: G_material(P * (1 + sgn * change), EA, c))
     dgeo = None if not intermediate_filaments else delta0
     record("L", "L", lambda sgn: _modulus(alpha, dgeo, L * (1 + sgn * change), P, EA, c, f, intermediate_filaments))
-    record(f"alpha (±{alpha_change:g} rad)", "alpha",
-           lambda sgn: _modulus(alpha + sgn * alpha_change, dgeo, L, P, EA, c, f, intermediate_filaments))
-    if intermediate_filaments:
-        record("delta", "delta", lambda sgn: _modulus(alpha, delta0 * (1 + sgn * change), L, P, EA, c, f))
+    # the reference angles are the tightest parameters (the valid band is narrow), so each is also
+    # changed by half as much: those rows give numbers where ±change leaves the band
+    for frac, tag in ((1.0, ""), (0.5, " (half)")):
+        da = frac * alpha_change
+        record(f"alpha (±{da:g} rad)", "alpha" + tag,
+               lambda sgn, da=da: _modulus(alpha + sgn * da, dgeo, L, P, EA, c, f, intermediate_filaments))
+        if intermediate_filaments:
+            dd = frac * change
+            record(f"delta (±{100 * dd:g}%)", "delta" + tag,
+                   lambda sgn, dd=dd: _modulus(alpha, delta0 * (1 + sgn * dd), L, P, EA, c, f))
     return rows
 
 
@@ -436,7 +443,8 @@ def summarize(el: Elasticities, table: list[PerturbationRow], bound: float = PAP
             e = np.vstack([el.group_sum(key)])
             es, elo = (el.G * e).real / el.G.real, (el.G * e).imag / el.G.imag
         else:
-            idx = [k for k, gg in enumerate(el.groups) if gg == g]
+            base = g.replace(" (half)", "")
+            idx = [k for k, gg in enumerate(el.groups) if gg == base]
             es, elo = el.storage[idx], el.loss[idx]
         ms = max((x for r in members for x in r.storage if not math.isnan(x)), default=math.nan)
         ml = max((x for r in members for x in r.loss if not math.isnan(x)), default=math.nan)
@@ -563,7 +571,7 @@ def monte_carlo(
     if parameters == "all":
         factors[:, -1] = alpha_spread * rng.uniform(-1.0, 1.0, size=n)
     cs, cl, reasons = np.full(n, np.nan), np.full(n, np.nan), []
-    bar = tqdm(range(n), desc="Monte Carlo", file=__import__("sys").stderr, disable=None if progress is None else not progress)
+    bar = tqdm(range(n), desc="Monte Carlo", file=sys.stderr, disable=None if progress is None else not progress)
     for i in bar:
         fa = factors[i]
         try:
@@ -601,23 +609,30 @@ def sensitivity_markdown(el: Elasticities, summary: list[GroupSummary], mcs: lis
         "L, α and δ by central differences through paper_cell "
         + "(" + "; ".join(f"{n}: {m}, error estimate {e:.1e}" for n, m, e in zip(el.names, el.methods, el.errors)
                           if n in ("L", "alpha", "delta")) + "). "
-        "For α (0 in the reference) the semi-elasticity ∂ln G/∂α is per rad and the finite change is ±0.1 rad.",
+        "For α (0 in the reference) the semi-elasticity ∂ln G/∂α is per rad and the finite change is ±0.1 rad. "
+        "The angles are also changed by half as much (rows marked 'half': ±0.05 rad, ±5%), since ±10% of δ leaves "
+        "the valid band 45.5°–54.74° on both sides.",
         "",
         f"| parameter group | n | max abs ∂lnG'/∂ln p | max abs ∂lnG''/∂ln p | max ΔG'/G' (±10%) | max ΔG''/G'' (±10%) | ≤ {100 * bound:g}%? |",
         "|---|---|---|---|---|---|---|",
     ]
     verdict = {True: "yes", False: "**no**", None: "partly"}
     for s in summary:
+        both_invalid = math.isnan(s.max_change_storage) and math.isnan(s.max_change_loss)
         lines.append(
             f"| {s.group} | {s.n} | {s.max_elasticity_storage:.4f} | {s.max_elasticity_loss:.4f} | "
-            f"{_pct(s.max_change_storage)} | {_pct(s.max_change_loss)} | {verdict[s.holds]}"
+            f"{_pct(s.max_change_storage)} | {_pct(s.max_change_loss)} | {'n/a' if both_invalid else verdict[s.holds]}"
             + (f" ({s.note})" if s.note else "") + " |"
         )
     ok = [s.group for s in summary if s.holds]
     bad = [s.group for s in summary if s.holds is False]
-    part = [s.group for s in summary if s.holds is None]
+    na = [s.group for s in summary if math.isnan(s.max_change_storage) and math.isnan(s.max_change_loss)]
+    part = [s.group for s in summary if s.holds is None and s.group not in na]
     lines += ["", f"**10% in, at most {100 * bound:g}% out** holds for: {', '.join(ok) or 'none'}.",
-              f"It fails for: {', '.join(bad) or 'none'}." + (f" Partly (some perturbations invalid): {', '.join(part)}." if part else ""),
+              f"It fails for: {', '.join(bad) or 'none'}."
+              + (f" Within {100 * bound:g}% where valid, but part of the perturbations are not valid references: "
+                 f"{', '.join(part)}." if part else "")
+              + (f" Not applicable (both perturbations leave the valid region): {', '.join(na)}." if na else ""),
               ""]
     tot = el.complex[[k for k, g in enumerate(el.groups) if g.startswith(("EA", "c", "P"))]].sum(axis=0)
     lines.append(f"Sum rule e_P + Σe_EA + Σe_c = 1: largest deviation {np.max(np.abs(tot - 1)):.2e}.")
