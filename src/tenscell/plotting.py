@@ -177,10 +177,12 @@ def monte_carlo_figure(results, bound: float = 0.08, title: str = "Monte Carlo o
     """Histograms of the largest |ΔG'/G'| and |ΔG''/G''| per draw (one colour per result)."""
     with plt.rc_context(STYLE):
         fig, (a1, a2) = moduli_panels(title)
-        for res in results:
-            v = res.valid
-            for ax, x in ((a1, res.change_storage[v]), (a2, res.change_loss[v])):
-                ax.hist(100 * x, bins=40, alpha=0.6, label=f"{res.label} ({v.sum()} valid draws)")
+        for ax, attr in ((a1, "change_storage"), (a2, "change_loss")):
+            top = max(float(np.nanmax(getattr(r, attr))) for r in results)
+            bins = np.linspace(0.0, 100 * top, 50)  # shared bins, so the sets compare bar for bar
+            for res in results:
+                v = res.valid
+                ax.hist(100 * getattr(res, attr)[v], bins=bins, alpha=0.6, label=f"{res.label} ({v.sum()} valid draws)")
         for ax, name in ((a1, "G′"), (a2, "G″")):
             ax.axvline(100 * bound, color="k", ls=":", label=f"{100 * bound:g}%")
             ax.set_xlabel(f"largest |Δ{name}/{name}| over frequency (%)")
