@@ -238,6 +238,9 @@ def test_regular_cell_has_the_if_free_self_stress():
     assert np.abs(cell.A @ cell.T0).max() < 1e-13
     G = _G(linearize(cell, 1000.0))
     assert np.all(G.real > 0) and np.all(G.imag > 0)
+    cell2 = shapes.regular_cell(L=2.0)
+    assert cell2.strut_length == pytest.approx(2.0)
+    assert np.allclose(_G(linearize(cell2, 1000.0)), _G(linearize(cell, 1000.0), 2 * F) / 4, rtol=1e-9)
 
 
 def test_cylindrical_reference_lies_on_the_cylinder_and_is_valid():

@@ -15,6 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
+import scipy.linalg.lapack
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -216,22 +218,6 @@ def _require_positive_definite(K0, cell: Cell, P: float) -> None:
         )
 
 
-#: C0 counts as singular when its smallest eigenvalue is below this fraction of its largest
-C0_RTOL = 1e-10
-
-
-def _well_conditioned_pd(M: np.ndarray, rtol: float = C0_RTOL) -> bool:
-    """Whether a dense symmetric matrix is positive definite with λ_min > rtol·λ_max.
-
-    A Cholesky factorization alone is not enough: it succeeds on matrices that
-    are singular up to rounding (the cell without intermediate filaments has a
-    C0 eigenvalue of ~1e-16 against ~5), and a spectrum built on such a factor
-    is garbage.
-    """
-    lam = np.linalg.eigvalsh(0.5 * (M + M.T))
-    return bool(lam[0] > rtol * max(lam[-1], 0.0) and lam[-1] > 0)
-
-
 @dataclass(frozen=True, eq=False)
 class RelaxationSpectrum:
     """Modes of the linear model: ``J(ω) = Σ_k r_k / (λ_k + iω)``.
@@ -261,6 +247,24 @@ class RelaxationSpectrum:
         return self.residues / self.rates
 
 
+#: a Cholesky pivot of C0 smaller than this fraction of the largest marks C0 as singular
+C0_PIVOT_RTOL = 1e-12
+
+
+def _cholesky_or_none(M: np.ndarray) -> np.ndarray | None:
+    """Lower Cholesky factor of a positive definite M, or None if M is singular or indefinite.
+
+    Round-off lets Cholesky "succeed" on a singular matrix with tiny pivots, so
+    pivots below ``C0_PIVOT_RTOL`` of the largest count as zero.
+    """
+    try:
+        Lf = np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        return None
+    d = np.diagonal(Lf) ** 2
+    return Lf if d.min() > C0_PIVOT_RTOL * d.max() else None
+
+
 def relaxation_spectrum(lin: LinearModel) -> RelaxationSpectrum:
     """Solve ``K0 v = λ C0 v``; requires C0 positive definite (dense models).
 
@@ -270,24 +274,24 @@ def relaxation_spectrum(lin: LinearModel) -> RelaxationSpectrum:
         If C0 is singular (e.g. the cell without intermediate filaments, whose
         damping leaves a mechanism undamped): use direct solves instead.
     """
-    K0, C0 = lin.K0, lin.C0
-    if sp.issparse(K0):
-        K0, C0 = K0.toarray(), C0.toarray()
-    try:
-        if not _well_conditioned_pd(C0):
-            raise np.linalg.LinAlgError
-        Lc = np.linalg.cholesky(C0)
-    except np.linalg.LinAlgError:
+    spec = _spectrum_or_none(lin)
+    if spec is None:
         raise ValueError(
             f"the damping matrix C0 of {lin.cell.describe()} is singular (not positive definite), "
             "so the relaxation spectrum K0 v = λ C0 v is not defined; compliance() uses direct solves"
-        ) from None
-    # K~ = Lc⁻¹ K0 Lc⁻ᵀ is symmetric; its eigenvectors w give v = Lc⁻ᵀ w with vᵀC0v = 1.
-    # numpy's solve, not scipy's solve_triangular: on a loaded 2-core machine the latter's
-    # threaded trsm took ~16 ms per 24×24 call against ~0.02 ms here (same result to rounding)
-    X = np.linalg.solve(Lc, K0)
-    Kt = np.linalg.solve(Lc, X.T)
-    lam, W = np.linalg.eigh(0.5 * (Kt + Kt.T))
-    V = np.linalg.solve(Lc.T, W)
+        )
+    return spec
+
+
+def _spectrum_or_none(lin: LinearModel) -> RelaxationSpectrum | None:
+    K0, C0 = lin.K0, lin.C0
+    if sp.issparse(K0):
+        return None
+    if _cholesky_or_none(C0) is None:
+        return None
+    # LAPACK sygv: one call for the symmetric-definite pencil, eigenvectors with VᵀC0V = I
+    lam, V, info = scipy.linalg.lapack.dsygv(K0, C0, itype=1, jobz="V", uplo="L")
+    if info != 0:
+        return None
     r = (lin.D0 @ V) * (-lin.H0 @ V)
     return RelaxationSpectrum(rates=lam, residues=r, modes=V)

@@ -248,9 +248,12 @@ def _assemble_cell(structure: Structure, parametrization: str, T0: np.ndarray, p
     probe = point_vector(coords, structure.probe, kin)
     for arr in (T0, l, load, probe):
         arr.setflags(write=False)
+    # newer Cells store the continuum length L as a field; older ones derive it from the struts
+    extra = {"L": float(structure.strut_lengths.mean())} if "L" in Cell.__dataclass_fields__ else {}
     return Cell(
         structure=structure, coords=coords, q0=coords.q0, lengths=l, A=A, T0=T0, Kp=Kp, load=load, probe=probe,
         self_stress_dim=self_stress_basis(A)[0].shape[1], geometry=geom, parameters=MappingProxyType(dict(parameters)),
+        **extra,
     )
 
 
