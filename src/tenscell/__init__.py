@@ -26,6 +26,13 @@ from .response import (
 )
 from .shapes import DEFAULT_DELTA, REGULAR_DELTA, if_free_delta, paper_cell, paper_structure
 from .structure import Point, Structure, StructureError
+from .linear import linearize_tangent  # issue 5: variants, sensitivity, future work
+from .shapes import cylindrical_cell, regular_cell, semiflexible_paper_cell
+from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table
+from .variants import (
+    linearize_semiflexible, linearize_stiffening, loss_peak, no_if_study, prestress_map, references_study,
+    semiflexible_study, stiffening_study,
+)
 
 __version__ = "0.1.0"
 
@@ -36,4 +43,8 @@ __all__ = [
     "LinearModel", "linearize", "RelaxationSpectrum", "relaxation_spectrum", "NotPositiveDefiniteError",
     "compliance", "moduli", "frequency_response", "FrequencyResponse", "static_modulus", "viscosity_limit",
     "loss_tangent", "log_slope",
+    "linearize_tangent", "cylindrical_cell", "regular_cell", "semiflexible_paper_cell",
+    "analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table",
+    "linearize_semiflexible", "linearize_stiffening", "loss_peak", "no_if_study", "prestress_map",
+    "references_study", "semiflexible_study", "stiffening_study",
 ]

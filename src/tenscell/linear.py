@@ -21,9 +21,16 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ._checks import positive_array, positive_scalar
-from .equilibrium import Cell, _weighted_gram, rest_lengths
+from .equilibrium import Cell, _weighted_gram, assemble_hessian, rest_lengths
 
-__all__ = ["LinearModel", "RelaxationSpectrum", "linearize", "relaxation_spectrum", "NotPositiveDefiniteError"]
+__all__ = [
+    "LinearModel",
+    "RelaxationSpectrum",
+    "linearize",
+    "linearize_tangent",
+    "relaxation_spectrum",
+    "NotPositiveDefiniteError",
+]
 
 
 class NotPositiveDefiniteError(ValueError):
@@ -128,6 +135,64 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     return LinearModel(
         cell=cell, P=P, EA=EA, c=c, K0=K0, C0=C0, H0=-np.asarray(cell.load), D0=np.asarray(cell.probe),
         l0=rest_lengths(cell, P, EA),
+    )
+
+
+def linearize_tangent(cell: Cell, P: float, k, c=1.0, *, l0=None, check: bool = True) -> LinearModel:
+    """Linearize with given tangent stiffnesses ``k_j = dT_j/dl_j`` of the members at the reference.
+
+    For members whose law is not the Voigt spring (a strain-stiffening
+    filament, an elastic strut): the exact Jacobian of ``A(q)·T(l(q))`` at the
+    reference is ``K0 = P·Σ T0_j ∇²l_j + Σ k_j a_j a_jᵀ``. With
+    ``k_j = (EA_j + P·T0_j)/l_j`` (the Voigt spring with the rest lengths of
+    Eq. 11) this is exactly :func:`linearize`.
+
+    Parameters
+    ----------
+    cell : Cell
+    P : float
+        Prestress scale (N), > 0: tensions ``P·T0``.
+    k : array_like, shape (m,)
+        Tangent stiffness of each member at its reference tension (N/m), > 0.
+    c : float or array_like, shape (m,)
+        Damping (N·s/m), ≥ 0: a zero marks an undamped member (C0 may then be
+        singular; :func:`tenscell.compliance` uses direct solves).
+    l0 : array_like, shape (m,), optional
+        Rest lengths of the members' laws (m), stored for reference. Default:
+        ``l − P·T0/k``, the rest length of the linear spring with this tangent.
+    check : bool
+        Verify that K0 is positive definite.
+
+    Returns
+    -------
+    LinearModel
+        Its ``EA`` holds the Voigt stiffness with the same tangent,
+        ``k_j·l_j − P·T0_j`` (N).
+
+    Raises
+    ------
+    ValueError
+        For a bad ``P``, ``k``, ``c`` or ``l0``.
+    NotPositiveDefiniteError
+        If K0 is not positive definite.
+    """
+    P = positive_scalar("P (prestress)", P, "N")
+    m = cell.m
+    k = positive_array("k (tangent stiffness)", k, (m,), "N/m")
+    c = positive_array("c", c, (m,), "N·s/m", allow_zero=True)
+    T = P * cell.T0
+    if l0 is None:
+        l0 = cell.lengths - T / k
+    else:
+        l0 = positive_array("l0 (rest length)", l0, (m,), "m")
+    A = cell.A
+    K0 = P * assemble_hessian(cell.geometry, cell.T0, sparse=cell.sparse) + _weighted_gram(A, k)
+    C0 = _weighted_gram(A, c)
+    if check:
+        _require_positive_definite(K0, cell, P)
+    return LinearModel(
+        cell=cell, P=P, EA=k * cell.lengths - T, c=c, K0=K0, C0=C0, H0=-np.asarray(cell.load),
+        D0=np.asarray(cell.probe), l0=np.asarray(l0, dtype=float),
     )
 
 

@@ -212,3 +212,325 @@ def paper_cell(
                     f"you asked for {math.degrees(delta):.6g}°."
                 )
         raise NotPrestressableError(str(err) + "." + hint) from None
+
+
+# ---- variants of the discussion and the future work (issue 5) ---------------------------------
+# imported here rather than at the top so this section merges cleanly with other additions
+from types import MappingProxyType  # noqa: E402
+
+from .equilibrium import _weighted_gram, assemble_hessian, point_vector, self_stress_basis  # noqa: E402
+from .structure import STRUT  # noqa: E402
+
+__all__ += [
+    "regular_cell",
+    "semiflexible_structure",
+    "semiflexible_paper_cell",
+    "cylindrical_nodes",
+    "cylindrical_structure",
+    "cylindrical_cell",
+    "find_cylindrical_reference",
+    "CYLINDRICAL_PARAMETERS",
+]
+
+
+def _assemble_cell(structure: Structure, parametrization: str, T0: np.ndarray, parameters: dict) -> Cell:
+    """A :class:`Cell` with a given, already checked self-stress (members may carry zero tension).
+
+    :func:`equilibrate` refuses a state with a slack member, which is right
+    for a tensegrity in general; the regular member's only equal-IF state has
+    exactly zero IF tension, and it is a legitimate reference as long as K0 is
+    positive definite (the IFs then act through their stiffness alone).
+    """
+    coords = make_coordinates(structure, parametrization)
+    kin = kinematics(coords, coords.q0)
+    geom = member_geometry(coords, coords.q0, kin)
+    A = equilibrium_matrix(geom)
+    resid = np.abs(A @ T0).max() / np.abs(A).max()
+    if resid > 1e-10:
+        raise NotPrestressableError(f"the given state is not a self-stress of {structure.name}: |A·T0| = {resid:.3g}")
+    l = geom.lengths
+    T0 = np.array(T0, dtype=float)
+    Kp = assemble_hessian(geom, T0) + _weighted_gram(A, T0 / l)
+    load = point_vector(coords, structure.load, kin)
+    probe = point_vector(coords, structure.probe, kin)
+    for arr in (T0, l, load, probe):
+        arr.setflags(write=False)
+    # newer Cells store the continuum length L as a field; older ones derive it from the struts
+    extra = {"L": float(structure.strut_lengths.mean())} if "L" in Cell.__dataclass_fields__ else {}
+    return Cell(
+        structure=structure, coords=coords, q0=coords.q0, lengths=l, A=A, T0=T0, Kp=Kp, load=load, probe=probe,
+        self_stress_dim=self_stress_basis(A)[0].shape[1], geometry=geom, parameters=MappingProxyType(dict(parameters)),
+        **extra,
+    )
+
+
+def regular_cell(L: float = 1.0, parametrization: str = "angles") -> Cell:
+    """The regular member (α = 0, δ = arctan √2) with its IF-free self-stress.
+
+    At the regular member the only self-stress with all 12 intermediate
+    filaments equal has zero IF tension: it is the self-stress of the cell
+    without intermediate filaments (all 21 actin tensions equal,
+    ``1/√21`` each), padded with zeros. The IFs are kept as elastic,
+    damped members at their rest length; they carry no prestress. Returns
+    the 24-coordinate cell whose ``T0`` has 21 equal actin entries and 12
+    zeros.
+
+    Parameters
+    ----------
+    L : float
+        Strut length (m).
+    parametrization : {"angles", "local"}
+
+    Returns
+    -------
+    Cell
+    """
+    L = positive_scalar("L", L, "m")
+    bare = paper_cell(0.0, REGULAR_DELTA, L, intermediate_filaments=False, parametrization=parametrization)
+    st = paper_structure(0.0, REGULAR_DELTA, L, intermediate_filaments=True)
+    st = Structure(
+        nodes=st.nodes, struts=st.struts, tendons=st.tendons, families=st.families, fixed=st.fixed, load=st.load,
+        probe=st.probe, name="regular paper cell (IFs without prestress)", node_names=st.node_names,
+    )
+    T0 = np.concatenate([bare.T0, np.zeros(12)])
+    params = {"alpha": 0.0, "delta": REGULAR_DELTA, "L": L, "intermediate_filaments": True, "IF_prestress": False}
+    return _assemble_cell(st, parametrization, T0, params)
+
+
+def semiflexible_structure(structure: Structure) -> Structure:
+    """The same structure with each rigid strut replaced by an elastic member of family ``"strut"``.
+
+    Every node that was on a strut becomes a point node (an anchored strut's
+    tail stays fixed), and the struts are appended after the tendons, in the
+    structure's strut order, so tendon indices and equal-tension groups are
+    unchanged. The self-stress then gives the struts negative (compressive)
+    forces; it is normalized over the cables only, so the tendons carry the
+    same ``T0`` as in the rigid-strut structure.
+    """
+    if not structure.struts:
+        raise ValueError(f"{structure.name} has no rigid struts to make elastic")
+    return Structure(
+        nodes=structure.nodes,
+        struts=(),
+        tendons=tuple(structure.tendons) + tuple(structure.struts),
+        families=tuple(structure.families) + (STRUT,) * len(structure.struts),
+        fixed=structure.fixed,
+        load=structure.load,
+        probe=structure.probe,
+        equal_tension_groups=structure.equal_tension_groups,
+        name=f"{structure.name} with elastic struts",
+        node_names=structure.node_names,
+    )
+
+
+def semiflexible_paper_cell(
+    alpha: float = 0.0, delta: float | None = None, L: float = 1.0, intermediate_filaments: bool = True
+) -> Cell:
+    """The paper cell with elastic struts (members of family ``"strut"``, the last 6 members).
+
+    Same reference and arguments as :func:`paper_cell` (angles in rad, L in
+    m). With intermediate filaments: 30 coordinates (10 point nodes) and 39
+    members; without: 27 coordinates and 27 members. Give the struts their
+    axial stiffness and damping through
+    :func:`tenscell.variants.linearize_semiflexible`.
+    """
+    rigid = paper_cell(alpha, delta, L, intermediate_filaments)
+    p = dict(rigid.parameters)
+    st = semiflexible_structure(rigid.structure)
+    return equilibrate(st, "angles", parameters={**p, "struts": "elastic"})
+
+
+def _rotation_z(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+# node permutation of a +120° turn about b3: A1→A3→A2→A1, C likewise, B2→B1→B3→B2, D likewise
+_TURN = {0: 2, 2: 1, 1: 0, 3: 5, 5: 4, 4: 3, 8: 6, 6: 10, 10: 8, 9: 7, 7: 11, 11: 9, 12: 12}
+
+#: threefold-symmetric cylindrical reference found by :func:`find_cylindrical_reference` (L = 1):
+#: (θ_C1, θ_B1, θ_D1) azimuths of C1, B1, D1 on the cylinder (rad), then the heights z_B1 and z_N (in units of L)
+CYLINDRICAL_PARAMETERS = (-0.07299678835782628, 3.2753075343084035, -0.4754664633822025, 1.1394623955534753, 0.5692268252971129)
+
+
+def cylindrical_nodes(params, L: float = 1.0) -> np.ndarray:
+    """Node positions (m), shape (13, 3), of a threefold-symmetric cell on a right circular cylinder.
+
+    Same nodes and tendons as the paper's cell (order :data:`PAPER_NODE_NAMES`);
+    the anchors A_i are the paper's, the cylinder is the vertical one through
+    them (radius ``L/√8``), and every strut end lies on it. ``params`` =
+    (θ_C1, θ_B1, θ_D1, z_B1/L, z_N/L): the azimuths (rad) of C1, B1, D1, the
+    height of B1 and of the centre node N (on the axis). The heights of C1
+    and D1 follow from the strut length L; the other struts are turned by
+    ±120° about the axis.
+
+    Raises
+    ------
+    ValueError
+        If a strut of length L cannot join the requested azimuths.
+    """
+    tc, tb, td, zb, zn = (finite_scalar("cylinder parameter", v) for v in params)
+    L = positive_scalar("L", L, "m")
+    A = paper_nodes(0.0, DEFAULT_DELTA, L)[:3]
+    R = float(np.linalg.norm(A[0, :2]))
+    x = np.zeros((13, 3))
+    x[:3] = A
+    on = lambda t, z: np.array([R * math.cos(t), R * math.sin(t), z])  # noqa: E731
+    h1 = np.linalg.norm(on(tc, 0)[:2] - A[0, :2])
+    h2 = np.linalg.norm(on(tb, 0)[:2] - on(td, 0)[:2])
+    if max(h1, h2) >= L:
+        raise ValueError("cylinder parameters: a strut of length L cannot join the requested azimuths")
+    x[3] = on(tc, math.sqrt(L * L - h1 * h1))
+    x[6] = on(tb, zb * L)
+    x[7] = on(td, zb * L - math.sqrt(L * L - h2 * h2))
+    x[12] = (0.0, 0.0, zn * L)
+    R120 = _rotation_z(2 * math.pi / 3)
+    for g in (3, 6, 7):
+        x[_TURN[g]] = R120 @ x[g]
+        x[_TURN[_TURN[g]]] = R120 @ x[_TURN[g]]
+    return x
+
+
+def cylindrical_structure(params=None, L: float = 1.0) -> Structure:
+    """The cylindrical cell as a :class:`Structure` (the paper cell's topology, load and probe)."""
+    params = CYLINDRICAL_PARAMETERS if params is None else params
+    base = paper_structure(0.0, DEFAULT_DELTA, L, intermediate_filaments=True)
+    return Structure(
+        nodes=cylindrical_nodes(params, L), struts=base.struts, tendons=base.tendons, families=base.families,
+        fixed=base.fixed, load=base.load, probe=base.probe, equal_tension_groups=base.equal_tension_groups,
+        name="cylindrical cell", node_names=base.node_names,
+    )
+
+
+def cylindrical_cell(params=None, L: float = 1.0, parametrization: str = "angles") -> Cell:
+    """A prestressable cell whose strut ends lie on a right circular cylinder (the paper's "cylindrical solutions").
+
+    Parameters
+    ----------
+    params : sequence of 5 floats, optional
+        See :func:`cylindrical_nodes`; default :data:`CYLINDRICAL_PARAMETERS`,
+        the reference found by :func:`find_cylindrical_reference`.
+    L : float
+        Strut length (m).
+    parametrization : {"angles", "local"}
+
+    Raises
+    ------
+    NotPrestressableError
+        If the configuration has no self-stress with equal IFs and all
+        tendons in tension.
+    """
+    params = CYLINDRICAL_PARAMETERS if params is None else tuple(params)
+    st = cylindrical_structure(params, L)
+    names = ("theta_C1", "theta_B1", "theta_D1", "zB1_over_L", "zN_over_L")
+    return equilibrate(st, parametrization, parameters={**dict(zip(names, map(float, params))), "L": float(L)})
+
+
+def _turn_orbits(structure: Structure) -> np.ndarray:
+    """Orbit number of each tendon under the +120° turn; the 12 IFs share one orbit (equal IF tension)."""
+    key = {frozenset(t): j for j, t in enumerate(structure.tendons)}
+    orbit = -np.ones(structure.n_tendons, dtype=int)
+    n = 0
+    for j in range(structure.n_tendons):
+        if orbit[j] >= 0:
+            continue
+        k = j
+        for _ in range(3):
+            orbit[k] = n
+            a, b = structure.tendons[k]
+            k = key[frozenset((_TURN[a], _TURN[b]))]
+        n += 1
+    ifs = structure.family_indices(INTERMEDIATE_FILAMENT)
+    orbit[ifs] = orbit[ifs].min()
+    _, orbit = np.unique(orbit, return_inverse=True)
+    return orbit
+
+
+def find_cylindrical_reference(
+    start=None, *, min_tension: float = 0.02, stiffness_check=(1000.0, 1.0), n_starts: int = 10, seed: int = 0
+) -> tuple[float, ...]:
+    """Form-find a threefold-symmetric prestressable cell with every strut end on a cylinder.
+
+    Unknowns: the 5 shape parameters of :func:`cylindrical_nodes` (L = 1)
+    and the tensions of the 8 symmetry classes of tendons (7 actin orbits of
+    the +120° turn and one common IF tension). Equations: equilibrium
+    ``A(q)·T = 0`` (24 rows), ``‖T‖ = 1``, with every class tension ≥
+    ``min_tension``: a bound-constrained nonlinear least-squares problem
+    (``scipy.optimize.least_squares``), underdetermined, so it has a family
+    of solutions; the first one reached from ``start`` whose K0 is positive
+    definite is returned. If the solution reached from ``start`` is unstable,
+    the search restarts from seeded random perturbations of it (σ = 0.3 in
+    every parameter).
+
+    Parameters
+    ----------
+    start : sequence of 5 floats, optional
+        Default: the spherical reference (α = 0, δ = 50°) projected onto the
+        cylinder (same azimuths and heights of C1, B1, D1, N).
+    min_tension : float
+        Lower bound of each normalized class tension (dimensionless).
+    stiffness_check : (P, EA)
+        The reference must have K0 = P·Kp + Σ EA a aᵀ/l positive definite at
+        this prestress (N) and stiffness (N).
+    n_starts : int
+        Number of starts in all (the first is ``start`` itself).
+    seed : int
+        Seed of the random restarts.
+
+    Returns
+    -------
+    tuple of 5 floats
+        Parameters for :func:`cylindrical_cell`.
+
+    Raises
+    ------
+    NotPrestressableError
+        If no start leads to a stable, prestressable reference.
+    """
+    base = paper_structure(0.0, DEFAULT_DELTA, 1.0, intermediate_filaments=True)
+    orbit = _turn_orbits(base)
+    n_orb = int(orbit.max()) + 1
+    if start is None:
+        x = paper_nodes(0.0, DEFAULT_DELTA, 1.0)
+        az = lambda v: math.atan2(v[1], v[0])  # noqa: E731
+        start = (az(x[3]), az(x[6]), az(x[7]), x[6, 2], x[12, 2])
+    p0 = np.array([finite_scalar("start", v) for v in start], dtype=float)
+    if p0.shape != (5,):
+        raise ValueError(f"start must have 5 entries (θ_C1, θ_B1, θ_D1, z_B1/L, z_N/L), got {p0.size}")
+    P, EA = stiffness_check
+
+    def residual(z):
+        try:
+            nodes = cylindrical_nodes(z[:5], 1.0)
+        except ValueError:
+            return np.full(25, 1e3)
+        st = Structure(nodes=nodes, struts=base.struts, tendons=base.tendons, families=base.families,
+                       fixed=base.fixed, load=base.load, probe=base.probe)
+        co = make_coordinates(st, "angles")
+        A = equilibrium_matrix(member_geometry(co, co.q0), sparse=False)
+        T = z[5:][orbit]
+        return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
+
+    lb = np.concatenate([np.full(5, -np.inf), np.full(n_orb, min_tension)])
+    rng = np.random.default_rng(seed)
+    reasons = []
+    for k in range(max(int(n_starts), 1)):
+        p = p0 if k == 0 else p0 + 0.3 * rng.standard_normal(5)
+        z0 = np.concatenate([p, np.full(n_orb, 1.0 / math.sqrt(base.n_tendons))])
+        res = scipy.optimize.least_squares(residual, z0, bounds=(lb, np.inf), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        eq = float(np.linalg.norm(residual(res.x)))
+        if eq > 1e-12:
+            reasons.append(f"start {k}: no equilibrium (residual {eq:.2g})")
+            continue
+        params = tuple(float(v) for v in res.x[:5])
+        try:
+            cell = cylindrical_cell(params)
+        except ValueError as err:
+            reasons.append(f"start {k}: {type(err).__name__}")
+            continue
+        K0 = P * cell.Kp + _weighted_gram(cell.A, np.full(cell.m, float(EA)) / cell.lengths)
+        lam = float(np.linalg.eigvalsh(K0)[0])
+        if lam > 0:
+            return params
+        reasons.append(f"start {k}: unstable (smallest K0 eigenvalue {lam:.3g})")
+    raise NotPrestressableError("no stable cylindrical reference found: " + "; ".join(reasons))

@@ -1,0 +1,656 @@
+"""Sensitivity of the moduli to every parameter (the paper's "10% in, at most 8% out").
+
+Three tools:
+
+* :func:`analytic_elasticities` — exact local elasticities ``∂ln G/∂ln p`` of
+  the complex modulus for every tendon stiffness ``EA_j``, every damping
+  ``c_j`` and the prestress ``P``, from the derivatives of
+  ``J = D0ᵀ Z⁻¹ (−H0)`` with ``Z = K0 + iωC0``: with ``x = Z⁻¹(−H0)`` and
+  ``y = Z⁻ᵀ D0``,
+
+  ``∂J/∂EA_j = −(yᵀa_j)(a_jᵀx)/l_j``, ``∂J/∂c_j = −iω (yᵀa_j)(a_jᵀx)``,
+  ``∂J/∂P = −yᵀ Kp x``,
+
+  and ``∂ln G/∂ln p = −p·(∂J/∂p)/J`` (``G = (0.5/L)/J``). The storage and loss
+  elasticities follow as ``∂ln G'/∂ln p = Re(G·e)/G'`` and
+  ``∂ln G''/∂ln p = Im(G·e)/G''``.
+* :func:`elasticities` — the same plus the geometry of the paper cell (L, α,
+  δ) by central differences through :func:`tenscell.paper_cell` (the
+  self-stress comes from an SVD, which complex steps do not pass through).
+  The step is checked: each derivative is also taken with twice the step and
+  the difference is reported as its error estimate. α is 0 in the default
+  reference, so for α the *semi*-elasticity ``∂ln G/∂α`` (1/rad) is given.
+* :func:`perturbation_table` and :func:`monte_carlo` — the finite ±10%
+  changes themselves, one parameter at a time and all at once (seeded).
+
+Scaling laws give exact sum rules that the tests check: multiplying P, every
+EA and every c by s multiplies G by s, so ``e_P + Σ e_EA + Σ e_c = 1``;
+multiplying every c by s maps G(f) to G(s·f), so ``Σ e_c = ∂ln G/∂ln f``; and
+``G_L(f) = G_1(L·f)/L²`` gives ``e_L = ∂ln G/∂ln f − 2``.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from ._checks import finite_scalar, positive_array, positive_scalar
+from .linear import LinearModel, linearize
+from .response import compliance
+from .shapes import paper_cell
+from .structure import STRUT
+
+__all__ = [
+    "Elasticities",
+    "analytic_elasticities",
+    "elasticities",
+    "PerturbationRow",
+    "perturbation_table",
+    "GroupSummary",
+    "summarize",
+    "MonteCarloResult",
+    "monte_carlo",
+    "sensitivity_markdown",
+    "SENSITIVITY_FREQUENCIES",
+    "PAPER_BOUND",
+]
+
+#: default frequency grid of the sensitivity study (Hz): the paper's 10⁻² to 10³ Hz
+SENSITIVITY_FREQUENCIES = np.logspace(-2, 3, 51)
+#: the paper's bound: a 10% change of a parameter changes the moduli by at most 8%
+PAPER_BOUND = 0.08
+
+
+@dataclass(frozen=True, eq=False)
+class Elasticities:
+    """Local elasticities of the complex modulus over frequency.
+
+    Attributes
+    ----------
+    frequency_hz : ndarray, shape (nf,)
+        Frequencies (Hz).
+    names : tuple of str
+        One per parameter: ``"EA[j]"``, ``"c[j]"``, ``"P"``, and for the paper
+        cell ``"L"``, ``"alpha"``, ``"delta"``.
+    groups : tuple of str
+        A group per parameter for summaries, e.g. ``"EA actin"``, ``"c IF"``, ``"P"``.
+    values : ndarray, shape (np,)
+        The parameters' base values (N, N·s/m, N, m, rad).
+    complex : ndarray of complex, shape (np, nf)
+        ``∂ln G/∂ln p`` (dimensionless); for ``"alpha"`` ``∂ln G/∂α`` (1/rad).
+    G : ndarray of complex, shape (nf,)
+        The base modulus ``G' + iG''`` (Pa).
+    methods : tuple of str
+        How each row was computed ("analytic" or the finite-difference rule and step).
+    errors : ndarray, shape (np,)
+        Estimated absolute error of each row (max over f; 0 for analytic rows).
+    """
+
+    frequency_hz: np.ndarray
+    names: tuple[str, ...]
+    groups: tuple[str, ...]
+    values: np.ndarray
+    complex: np.ndarray
+    G: np.ndarray
+    methods: tuple[str, ...]
+    errors: np.ndarray
+
+    @property
+    def storage(self) -> np.ndarray:
+        """``∂ln G'/∂ln p``, shape (np, nf) (per rad for α)."""
+        return (self.G * self.complex).real / self.G.real
+
+    @property
+    def loss(self) -> np.ndarray:
+        """``∂ln G''/∂ln p``, shape (np, nf) (per rad for α)."""
+        return (self.G * self.complex).imag / self.G.imag
+
+    def index(self, name: str) -> int:
+        """Row of a parameter by name."""
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise ValueError(f"unknown parameter {name!r}; known: {', '.join(self.names[:3])}, ..., {self.names[-1]}") from None
+
+    def group_sum(self, group: str) -> np.ndarray:
+        """Complex elasticity of scaling a whole group together (sum of its rows), shape (nf,)."""
+        rows = [k for k, g in enumerate(self.groups) if g == group or g.startswith(group + " ")]
+        if not rows:
+            raise ValueError(f"unknown group {group!r}")
+        return self.complex[rows].sum(axis=0)
+
+
+def _family_tag(family: str) -> str:
+    return {"actin": "actin", "intermediate_filament": "IF", STRUT: "strut"}.get(family, family)
+
+
+def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Elasticities:
+    """Exact elasticities of G for every EA_j, every c_j and P of a linear model.
+
+    Works for any dense :class:`~tenscell.linear.LinearModel` built by
+    :func:`tenscell.linearize` (where ``K0 = P·Kp + Σ EA_j a_j a_jᵀ/l_j``),
+    including singular C0 (direct solves).
+
+    Parameters
+    ----------
+    lin : LinearModel
+    f_hz : array_like, shape (nf,)
+        Frequencies (Hz), > 0.
+
+    Returns
+    -------
+    Elasticities
+        Rows ``EA[0..m-1]``, ``c[0..m-1]``, ``P``.
+    """
+    f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
+    w = 2 * np.pi * f
+    dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M)  # noqa: E731
+    K0, C0, Kp, A = dense(lin.K0), dense(lin.C0), dense(lin.Kp), dense(lin.cell.A)
+    Z = K0[None] + 1j * w[:, None, None] * C0[None]
+    b = (-lin.H0).astype(complex)
+    X = np.linalg.solve(Z, np.broadcast_to(b, (f.size, b.size))[..., None])[..., 0]
+    Y = np.linalg.solve(np.transpose(Z, (0, 2, 1)), np.broadcast_to(lin.D0.astype(complex), X.shape)[..., None])[..., 0]
+    J = X @ lin.D0
+    xa, ya = X @ A, Y @ A  # (nf, m): a_jᵀx, yᵀa_j
+    prod = ya * xa
+    l = lin.cell.lengths
+    dJ_EA = -prod / l
+    dJ_c = -1j * w[:, None] * prod
+    dJ_P = -np.einsum("fi,ij,fj->f", Y, Kp, X)
+    e_EA = -(lin.EA * dJ_EA / J[:, None]).T
+    e_c = -(lin.c * dJ_c / J[:, None]).T
+    e_P = -(lin.P * dJ_P / J)[None]
+    m = lin.cell.m
+    fam = [_family_tag(x) for x in lin.cell.structure.families]
+    names = tuple(f"EA[{j}]" for j in range(m)) + tuple(f"c[{j}]" for j in range(m)) + ("P",)
+    groups = tuple(f"EA {fam[j]}" for j in range(m)) + tuple(f"c {fam[j]}" for j in range(m)) + ("P",)
+    return Elasticities(
+        frequency_hz=f, names=names, groups=groups, values=np.concatenate([lin.EA, lin.c, [lin.P]]),
+        complex=np.vstack([e_EA, e_c, e_P]), G=(0.5 / lin.L) / J, methods=("analytic",) * (2 * m + 1),
+        errors=np.zeros(2 * m + 1),
+    )
+
+
+def _modulus(alpha, delta, L, P, EA, c, f, intermediate_filaments=True):
+    cell = paper_cell(alpha=alpha, delta=delta, L=L, intermediate_filaments=intermediate_filaments)
+    return (0.5 / cell.strut_length) / compliance(linearize(cell, P=P, EA=EA, c=c), f)
+
+
+def _geometry_derivative(G_of, x0, h, relative):
+    """d ln G/d ln x (``relative``) or d ln G/dx by central differences, with a step check.
+
+    Relative steps move ln x by ±h (points ``x0·e^{±h}``), so the central
+    quotient is a derivative in ln x. The error estimate is the difference
+    from the quotient with step 2h (the truncation error of the h quotient is
+    a quarter of it). Where one side is not a valid reference, a one-sided
+    second-order rule is used instead and the method says so.
+
+    Returns (derivative (nf,), error estimate, method).
+    """
+    def at(k):
+        return x0 * math.exp(k * h) if relative else x0 + k * h
+
+    vals = {}
+    for k in (-2, -1, 1, 2):
+        try:
+            vals[k] = np.log(G_of(at(k)))
+        except ValueError:
+            vals[k] = None
+    base = np.log(G_of(at(0)))
+    unit = " (in ln x)" if relative else " rad"
+    if vals[1] is not None and vals[-1] is not None:
+        d1 = (vals[1] - vals[-1]) / (2 * h)
+        if vals[2] is not None and vals[-2] is not None:
+            err = float(np.max(np.abs(d1 - (vals[2] - vals[-2]) / (4 * h))))
+        else:
+            err = math.nan
+        return d1, err, f"central difference, step {h:g}{unit}"
+    for side, word in ((1, "forward"), (-1, "backward")):
+        if vals[side] is not None and vals[2 * side] is not None:
+            d1 = side * (-3 * base + 4 * vals[side] - vals[2 * side]) / (2 * h)
+            other = "backward" if side > 0 else "forward"
+            return d1, math.nan, (f"one-sided {word} difference (2nd order), step {h:g}{unit}: "
+                                  f"the {other} side is not a valid reference")
+    raise ValueError("no valid reference on either side of the base point within two steps")
+
+
+def elasticities(
+    *,
+    alpha: float = 0.0,
+    delta: float | None = None,
+    L: float = 1.0,
+    P: float = 1000.0,
+    EA=1.0,
+    c=1.0,
+    f_hz=SENSITIVITY_FREQUENCIES,
+    intermediate_filaments: bool = True,
+    step: float = 1e-4,
+) -> Elasticities:
+    """Elasticities of the paper cell's G for every parameter: EA_j, c_j, P, L, α, δ.
+
+    EA_j, c_j and P analytically (:func:`analytic_elasticities`); L, α and δ by
+    central differences through :func:`tenscell.paper_cell` with relative
+    step ``step`` (L, δ) or absolute step ``step`` rad (α), one-sided where
+    one side leaves the valid region. Without intermediate filaments δ is not
+    free (it follows the curve δ*(α)), so the δ row is omitted and α moves
+    along the curve.
+
+    Parameters
+    ----------
+    alpha, delta : float
+        Reference angles (rad); ``delta=None``: 50° with IFs, δ*(α) without.
+    L : float
+        Strut length (m).
+    P : float
+        Prestress (N).
+    EA, c : float or array_like, shape (m,)
+        Tendon stiffness (N) and damping (N·s/m).
+    f_hz : array_like
+        Frequencies (Hz).
+    intermediate_filaments : bool
+    step : float
+        Finite-difference step (relative for L and δ, rad for α), in (0, 0.01].
+
+    Returns
+    -------
+    Elasticities
+    """
+    step = positive_scalar("step", step)
+    if step > 0.01:
+        raise ValueError(f"step must be at most 0.01 (a relative step, or rad for alpha), got {step!r}")
+    alpha = finite_scalar("alpha", alpha, "a finite angle in radians")
+    f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
+    cell = paper_cell(alpha=alpha, delta=delta, L=L, intermediate_filaments=intermediate_filaments)
+    delta0 = float(cell.parameters["delta"])
+    lin = linearize(cell, P=P, EA=EA, c=c)
+    base = analytic_elasticities(lin, f)
+    EA_, c_ = lin.EA, lin.c
+    rows, names, groups, values, methods, errors = [], [], [], [], [], []
+    geo = [
+        ("L", L, True, lambda x: _modulus(alpha, None if not intermediate_filaments else delta0, x, P, EA_, c_, f,
+                                          intermediate_filaments)),
+        ("alpha", alpha, False, lambda x: _modulus(x, None if not intermediate_filaments else delta0, L, P, EA_, c_, f,
+                                                   intermediate_filaments)),
+    ]
+    if intermediate_filaments:
+        geo.append(("delta", delta0, True, lambda x: _modulus(alpha, x, L, P, EA_, c_, f)))
+    for name, x0, relative, G_of in geo:
+        d, err, method = _geometry_derivative(G_of, x0, step, relative)
+        rows.append(d)
+        names.append(name)
+        groups.append(name)
+        values.append(x0)
+        methods.append(method)
+        errors.append(err)
+    return Elasticities(
+        frequency_hz=f, names=base.names + tuple(names), groups=base.groups + tuple(groups),
+        values=np.concatenate([base.values, values]), complex=np.vstack([base.complex, np.array(rows)]),
+        G=base.G, methods=base.methods + tuple(methods), errors=np.concatenate([base.errors, errors]),
+    )
+
+
+# ---- finite ±10% changes -------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PerturbationRow:
+    """Largest relative change of G' and G'' (over frequency) for one parameter changed by ±``change``.
+
+    ``storage``/``loss`` are ``(at −change, at +change)``, as fractions;
+    NaN where that perturbation leaves the valid region (``note`` says why).
+    """
+
+    name: str
+    group: str
+    storage: tuple[float, float]
+    loss: tuple[float, float]
+    note: str = ""
+
+    @property
+    def worst(self) -> float:
+        """Largest change of either modulus over both signs (fraction; NaN if both signs invalid)."""
+        v = [x for x in self.storage + self.loss if not math.isnan(x)]
+        return max(v) if v else math.nan
+
+
+def _base_parameters(alpha, delta, L, P, EA, c, intermediate_filaments):
+    cell = paper_cell(alpha=alpha, delta=delta, L=L, intermediate_filaments=intermediate_filaments)
+    m = cell.m
+    return cell, positive_array("EA", EA, (m,), "N"), positive_array("c", c, (m,), "N·s/m")
+
+
+def perturbation_table(
+    *,
+    change: float = 0.10,
+    alpha_change: float | None = None,
+    alpha: float = 0.0,
+    delta: float | None = None,
+    L: float = 1.0,
+    P: float = 1000.0,
+    EA=1.0,
+    c=1.0,
+    f_hz=SENSITIVITY_FREQUENCIES,
+    intermediate_filaments: bool = True,
+) -> list[PerturbationRow]:
+    """Change one parameter at a time by ±``change`` and record the largest change of G', G''.
+
+    Parameters: each EA_j and each c_j individually, all EA together, all c
+    together, P, L, δ (relative changes ``1 ± change``) and α (shifted by
+    ``± alpha_change`` rad, default ``change`` rad: α = 0 in the default
+    reference, so a relative change would be no change).
+
+    Returns
+    -------
+    list of PerturbationRow
+    """
+    change = positive_scalar("change", change)
+    if change >= 1:
+        raise ValueError(f"change must be a fraction below 1, got {change!r}")
+    alpha_change = change if alpha_change is None else positive_scalar("alpha_change", alpha_change, "rad")
+    f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
+    cell, EA, c = _base_parameters(alpha, delta, L, P, EA, c, intermediate_filaments)
+    delta0 = float(cell.parameters["delta"])
+    fam = [_family_tag(x) for x in cell.structure.families]
+
+    def G_material(P_, EA_, c_):
+        return (0.5 / cell.strut_length) / compliance(linearize(cell, P=P_, EA=EA_, c=c_), f)
+
+    G0 = G_material(P, EA, c)
+    rows = []
+
+    def record(name, group, evaluate):
+        s, lo, notes = [math.nan, math.nan], [math.nan, math.nan], []
+        for k, sgn in enumerate((-1.0, 1.0)):
+            try:
+                G1 = evaluate(sgn)
+            except ValueError as err:
+                notes.append(f"{'−' if sgn < 0 else '+'}: not a valid reference ({type(err).__name__})")
+                continue
+            s[k] = float(np.max(np.abs(G1.real / G0.real - 1)))
+            lo[k] = float(np.max(np.abs(G1.imag / G0.imag - 1)))
+        rows.append(PerturbationRow(name, group, tuple(s), tuple(lo), "; ".join(notes)))
+
+    def scaled(v, j, sgn):
+        out = v.copy()
+        out[j] *= 1 + sgn * change
+        return out
+
+    m = cell.m
+    for j in range(m):
+        record(f"EA[{j}]", f"EA {fam[j]}", lambda sgn, j=j: G_material(P, scaled(EA, j, sgn), c))
+    for j in range(m):
+        record(f"c[{j}]", f"c {fam[j]}", lambda sgn, j=j: G_material(P, EA, scaled(c, j, sgn)))
+    record("EA (all)", "EA (all)", lambda sgn: G_material(P, EA * (1 + sgn * change), c))
+    record("c (all)", "c (all)", lambda sgn: G_material(P, EA, c * (1 + sgn * change)))
+    record("P", "P", lambda sgn: G_material(P * (1 + sgn * change), EA, c))
+    dgeo = None if not intermediate_filaments else delta0
+    record("L", "L", lambda sgn: _modulus(alpha, dgeo, L * (1 + sgn * change), P, EA, c, f, intermediate_filaments))
+    # the reference angles are the tightest parameters (the valid band is narrow), so each is also
+    # changed by half as much: those rows give numbers where ±change leaves the band
+    for frac, tag in ((1.0, ""), (0.5, " (half)")):
+        da = frac * alpha_change
+        record(f"alpha (±{da:g} rad)", "alpha" + tag,
+               lambda sgn, da=da: _modulus(alpha + sgn * da, dgeo, L, P, EA, c, f, intermediate_filaments))
+        if intermediate_filaments:
+            dd = frac * change
+            record(f"delta (±{100 * dd:g}%)", "delta" + tag,
+                   lambda sgn, dd=dd: _modulus(alpha, delta0 * (1 + sgn * dd), L, P, EA, c, f))
+    return rows
+
+
+@dataclass(frozen=True)
+class GroupSummary:
+    """One line of the sensitivity table: a parameter group.
+
+    Attributes
+    ----------
+    group : str
+    n : int
+        Number of parameters in the group.
+    max_elasticity_storage, max_elasticity_loss : float
+        Largest |∂ln G'/∂ln p|, |∂ln G''/∂ln p| over the group's members and
+        the frequencies (per rad for α); NaN if not computed.
+    max_change_storage, max_change_loss : float
+        Largest |ΔG'/G'|, |ΔG''/G''| (fractions) for ±10% of one member.
+    holds : bool or None
+        Whether "10% in, at most 8% out" holds; None if part of the
+        perturbations were invalid references.
+    note : str
+    """
+
+    group: str
+    n: int
+    max_elasticity_storage: float
+    max_elasticity_loss: float
+    max_change_storage: float
+    max_change_loss: float
+    holds: bool | None
+    note: str = ""
+
+
+def summarize(el: Elasticities, table: list[PerturbationRow], bound: float = PAPER_BOUND) -> list[GroupSummary]:
+    """Collapse elasticities and ±10% changes into one line per parameter group."""
+    out = []
+    order = []
+    for r in table:
+        if r.group not in order:
+            order.append(r.group)
+    for g in order:
+        members = [r for r in table if r.group == g]
+        if g in ("EA (all)", "c (all)"):
+            key = g.split()[0]
+            e = np.vstack([el.group_sum(key)])
+            es, elo = (el.G * e).real / el.G.real, (el.G * e).imag / el.G.imag
+        else:
+            base = g.replace(" (half)", "")
+            idx = [k for k, gg in enumerate(el.groups) if gg == base]
+            es, elo = el.storage[idx], el.loss[idx]
+        ms = max((x for r in members for x in r.storage if not math.isnan(x)), default=math.nan)
+        ml = max((x for r in members for x in r.loss if not math.isnan(x)), default=math.nan)
+        notes = "; ".join(sorted({r.note for r in members if r.note}))
+        holds = None if notes else bool(max(ms, ml) <= bound)
+        if notes and not math.isnan(max(ms, ml)) and max(ms, ml) > bound:
+            holds = False
+        out.append(GroupSummary(
+            group=g, n=len(members), max_elasticity_storage=float(np.max(np.abs(es))) if np.size(es) else math.nan,
+            max_elasticity_loss=float(np.max(np.abs(elo))) if np.size(elo) else math.nan,
+            max_change_storage=ms, max_change_loss=ml, holds=holds, note=notes,
+        ))
+    return out
+
+
+# ---- Monte Carlo -----------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class MonteCarloResult:
+    """Simultaneous random perturbations of the parameters.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The perturbed parameters.
+    factors : ndarray, shape (n, np)
+        The draws: multiplicative factors (α: additive shifts in rad).
+    change_storage, change_loss : ndarray, shape (n,)
+        Largest |ΔG'/G'| and |ΔG''/G''| over frequency per draw (fractions);
+        NaN where the draw is not a valid reference.
+    reasons : tuple of str
+        For invalid draws, the error type; "" for valid draws.
+    spread : float
+    seed : int
+    """
+
+    names: tuple[str, ...]
+    factors: np.ndarray
+    change_storage: np.ndarray
+    change_loss: np.ndarray
+    reasons: tuple[str, ...]
+    spread: float
+    seed: int
+    alpha_spread: float = 0.0
+    label: str = ""
+    frequency_hz: np.ndarray = field(default_factory=lambda: SENSITIVITY_FREQUENCIES)
+
+    @property
+    def valid(self) -> np.ndarray:
+        """Mask of the draws that gave a valid reference."""
+        return ~np.isnan(self.change_storage)
+
+    @property
+    def worst(self) -> np.ndarray:
+        """max(|ΔG'/G'|, |ΔG''/G''|) per valid draw."""
+        v = self.valid
+        return np.maximum(self.change_storage[v], self.change_loss[v])
+
+    def fraction_within(self, bound: float = PAPER_BOUND) -> float:
+        """Fraction of the valid draws whose moduli all changed by at most ``bound``."""
+        w = self.worst
+        return float(np.mean(w <= bound)) if w.size else math.nan
+
+    def percentiles(self, q=(50, 95, 100)) -> dict[str, np.ndarray]:
+        """Percentiles of the storage and loss changes over the valid draws (fractions)."""
+        v = self.valid
+        return {"storage": np.percentile(self.change_storage[v], q), "loss": np.percentile(self.change_loss[v], q)}
+
+
+def monte_carlo(
+    n: int = 200,
+    *,
+    spread: float = 0.10,
+    seed: int = 0,
+    parameters: str = "all",
+    alpha_spread: float | None = None,
+    alpha: float = 0.0,
+    delta: float | None = None,
+    L: float = 1.0,
+    P: float = 1000.0,
+    EA=1.0,
+    c=1.0,
+    f_hz=SENSITIVITY_FREQUENCIES,
+    progress: bool | None = None,
+) -> MonteCarloResult:
+    """Seeded Monte Carlo of simultaneous uniform ±``spread`` perturbations of the paper cell.
+
+    Every EA_j, every c_j, P, and (for ``parameters="all"``) L and δ are
+    multiplied by independent factors uniform in ``[1 − spread, 1 + spread]``;
+    α is shifted by a uniform amount in ``±alpha_spread`` rad (default
+    ``spread`` rad). ``parameters="material"`` perturbs EA_j, c_j and P only.
+
+    Parameters
+    ----------
+    n : int
+        Number of draws, ≥ 1.
+    progress : bool, optional
+        Show a tqdm bar on stderr (default: when stderr is a terminal).
+
+    Returns
+    -------
+    MonteCarloResult
+    """
+    from tqdm import tqdm
+
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n (number of draws) must be a whole number >= 1, got {n!r}")
+    spread = positive_scalar("spread", spread)
+    if spread >= 1:
+        raise ValueError(f"spread must be a fraction below 1, got {spread!r}")
+    if parameters not in ("all", "material"):
+        raise ValueError(f"parameters must be 'all' or 'material', got {parameters!r}")
+    alpha_spread = spread if alpha_spread is None else positive_scalar("alpha_spread", alpha_spread, "rad")
+    f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
+    cell, EA, c = _base_parameters(alpha, delta, L, P, EA, c, True)
+    delta0 = float(cell.parameters["delta"])
+    m = cell.m
+    G0 = (0.5 / cell.strut_length) / compliance(linearize(cell, P=P, EA=EA, c=c), f)
+    names = tuple(f"EA[{j}]" for j in range(m)) + tuple(f"c[{j}]" for j in range(m)) + ("P",)
+    if parameters == "all":
+        names += ("L", "delta", "alpha")
+    rng = np.random.default_rng(seed)
+    k = len(names)
+    factors = 1 + spread * rng.uniform(-1.0, 1.0, size=(n, k))
+    if parameters == "all":
+        factors[:, -1] = alpha_spread * rng.uniform(-1.0, 1.0, size=n)
+    cs, cl, reasons = np.full(n, np.nan), np.full(n, np.nan), []
+    bar = tqdm(range(n), desc="Monte Carlo", file=sys.stderr, disable=None if progress is None else not progress)
+    for i in bar:
+        fa = factors[i]
+        try:
+            if parameters == "all":
+                cell_i = paper_cell(alpha=alpha + fa[-1], delta=delta0 * fa[-2], L=L * fa[-3])
+            else:
+                cell_i = cell
+            lin = linearize(cell_i, P=P * fa[2 * m], EA=EA * fa[:m], c=c * fa[m:2 * m])
+            G1 = (0.5 / cell_i.strut_length) / compliance(lin, f)
+        except ValueError as err:
+            reasons.append(type(err).__name__)
+            continue
+        cs[i] = np.max(np.abs(G1.real / G0.real - 1))
+        cl[i] = np.max(np.abs(G1.imag / G0.imag - 1))
+        reasons.append("")
+    label = "all parameters" if parameters == "all" else "material parameters (EA_j, c_j, P)"
+    return MonteCarloResult(names=names, factors=factors, change_storage=cs, change_loss=cl, reasons=tuple(reasons),
+                            spread=spread, seed=seed, alpha_spread=alpha_spread if parameters == "all" else 0.0,
+                            label=label, frequency_hz=f)
+
+
+def _pct(x: float) -> str:
+    return "n/a" if math.isnan(x) else f"{100 * x:.2f}%"
+
+
+def sensitivity_markdown(el: Elasticities, summary: list[GroupSummary], mcs: list[MonteCarloResult],
+                         bound: float = PAPER_BOUND) -> str:
+    """The sensitivity study as a short markdown report with its numbers."""
+    f = el.frequency_hz
+    lines = [
+        "# Sensitivity of G' and G'' to the parameters",
+        "",
+        f"Paper cell, α = 0, δ = 50°, L = 1 m, P = 1000, EA = 1 N, c = 1 N·s/m, f = {f[0]:g}–{f[-1]:g} Hz ({f.size} points). "
+        "Elasticities of EA_j, c_j and P are analytic (derivatives of J through (K0 + iωC0)⁻¹); "
+        "L, α and δ by central differences through paper_cell "
+        + "(" + "; ".join(f"{n}: {m}, error estimate {e:.1e}" for n, m, e in zip(el.names, el.methods, el.errors)
+                          if n in ("L", "alpha", "delta")) + "). "
+        "For α (0 in the reference) the semi-elasticity ∂ln G/∂α is per rad and the finite change is ±0.1 rad. "
+        "The angles are also changed by half as much (rows marked 'half': ±0.05 rad, ±5%), since ±10% of δ leaves "
+        "the valid band 45.5°–54.74° on both sides.",
+        "",
+        f"| parameter group | n | max abs ∂lnG'/∂ln p | max abs ∂lnG''/∂ln p | max ΔG'/G' (±10%) | max ΔG''/G'' (±10%) | ≤ {100 * bound:g}%? |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    verdict = {True: "yes", False: "**no**", None: "partly"}
+    for s in summary:
+        both_invalid = math.isnan(s.max_change_storage) and math.isnan(s.max_change_loss)
+        lines.append(
+            f"| {s.group} | {s.n} | {s.max_elasticity_storage:.4f} | {s.max_elasticity_loss:.4f} | "
+            f"{_pct(s.max_change_storage)} | {_pct(s.max_change_loss)} | {'n/a' if both_invalid else verdict[s.holds]}"
+            + (f" ({s.note})" if s.note else "") + " |"
+        )
+    ok = [s.group for s in summary if s.holds]
+    bad = [s.group for s in summary if s.holds is False]
+    na = [s.group for s in summary if math.isnan(s.max_change_storage) and math.isnan(s.max_change_loss)]
+    part = [s.group for s in summary if s.holds is None and s.group not in na]
+    lines += ["", f"**10% in, at most {100 * bound:g}% out** holds for: {', '.join(ok) or 'none'}.",
+              f"It fails for: {', '.join(bad) or 'none'}."
+              + (f" Within {100 * bound:g}% where valid, but part of the perturbations are not valid references: "
+                 f"{', '.join(part)}." if part else "")
+              + (f" Not applicable (both perturbations leave the valid region): {', '.join(na)}." if na else ""),
+              ""]
+    tot = el.complex[[k for k, g in enumerate(el.groups) if g.startswith(("EA", "c", "P"))]].sum(axis=0)
+    lines.append(f"Sum rule e_P + Σe_EA + Σe_c = 1: largest deviation {np.max(np.abs(tot - 1)):.2e}.")
+    lines.append("")
+    for mc in mcs:
+        p = mc.percentiles()
+        nv = int(mc.valid.sum())
+        lines += [
+            f"## Monte Carlo, {mc.label}",
+            "",
+            f"{mc.factors.shape[0]} draws (seed {mc.seed}), each factor uniform in ±{100 * mc.spread:g}%"
+            + (f", α shifted uniformly in ±{mc.alpha_spread:g} rad" if mc.alpha_spread else "")
+            + f"; {mc.factors.shape[0] - nv} draws were not valid references"
+            + (" (" + ", ".join(f"{r}: {mc.reasons.count(r)}" for r in sorted(set(mc.reasons) - {''})) + ")" if nv < mc.factors.shape[0] else "")
+            + ".",
+            f"- largest |ΔG'/G'| over f: median {_pct(p['storage'][0])}, 95th percentile {_pct(p['storage'][1])}, max {_pct(p['storage'][2])}",
+            f"- largest |ΔG''/G''| over f: median {_pct(p['loss'][0])}, 95th percentile {_pct(p['loss'][1])}, max {_pct(p['loss'][2])}",
+            f"- draws with both moduli within {100 * bound:g}% at every frequency: {100 * mc.fraction_within(bound):.1f}%",
+            "",
+        ]
+    return "\n".join(lines)
