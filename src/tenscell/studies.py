@@ -14,6 +14,7 @@ import numpy as np
 from .equilibrium import Cell
 from .linear import linearize
 from .response import FrequencyResponse, frequency_response, log_slope
+from .sensitivity import perturbation_table
 from .shapes import paper_cell
 
 __all__ = [
@@ -99,38 +100,22 @@ def robustness(
     EA: float = 1.0,
     c: float = 1.0,
 ) -> dict[str, tuple[float, float, str]]:
-    """Largest relative change of G' and G'' when one parameter changes by ±``change``.
+    """Largest relative change of G' and G'' per parameter group for ±``change`` in one parameter.
 
-    Each of P, EA (all tendons), c (all tendons), L and δ is scaled by
-    ``1 ± change`` in turn (α, which is 0 by default, is shifted by
-    ``± change`` rad instead). Returns, per parameter,
-    ``(max |ΔG'/G'|, max |ΔG''/G''|, note)``: maxima over the frequency grid
-    and the perturbations that give a valid reference; ``note`` says which
-    perturbations leave the prestressable, stable band and why (then the
-    maxima cover the other sign only, or are NaN).
+    A summary of :func:`tenscell.sensitivity.perturbation_table` (each EA_j
+    and c_j alone, all EA, all c, P, L, δ by ``1 ± change``; α by
+    ``± change`` rad; δ and α also at half size). Returns, per group,
+    ``(max |ΔG'/G'|, max |ΔG''/G''|, note)`` over the frequency grid, the
+    group's members and both signs; ``note`` says which perturbations leave
+    the prestressable, stable band (those are excluded, NaN if all are).
     """
-    base = dict(P=P, alpha=alpha, delta=delta, L=L, EA=EA, c=c)
-
-    def G(p):
-        cell = paper_cell(alpha=p["alpha"], delta=p["delta"], L=p["L"])
-        return (0.5 / cell.strut_length) / frequency_response(cell, f_hz, p["P"], EA=p["EA"], c=p["c"]).J[0]
-
-    G0 = G(base)
-    out = {}
-    for name in ("P", "EA", "c", "L", "delta", "alpha"):
-        worst, notes = [math.nan, math.nan], []
-        for sgn in (-1.0, 1.0):
-            p = dict(base)
-            p[name] = p[name] + sgn * change if name == "alpha" else p[name] * (1 + sgn * change)
-            try:
-                G1 = G(p)
-            except ValueError as err:
-                shown = f"{math.degrees(p[name]):.4g}°" if name in ("delta", "alpha") else f"{p[name]:.4g}"
-                notes.append(f"{name} = {shown} is not a valid reference ({type(err).__name__})")
-                continue
-            worst[0] = np.nanmax([worst[0], float(np.max(np.abs(G1.real / G0.real - 1)))])
-            worst[1] = np.nanmax([worst[1], float(np.max(np.abs(G1.imag / G0.imag - 1)))])
-        out[name] = (float(worst[0]), float(worst[1]), "; ".join(notes))
+    table = perturbation_table(change=change, alpha=alpha, delta=delta, L=L, P=P, EA=EA, c=c, f_hz=f_hz)
+    out: dict[str, tuple[float, float, str]] = {}
+    for group in dict.fromkeys(r.group for r in table):
+        rows = [r for r in table if r.group == group]
+        worst = [max((x for r in rows for x in getattr(r, part) if not math.isnan(x)), default=math.nan)
+                 for part in ("storage", "loss")]
+        out[group] = (worst[0], worst[1], "; ".join(sorted({r.note for r in rows if r.note})))
     return out
 
 
@@ -216,8 +201,12 @@ def paper_claims(study: HomogeneousStudy, robust: dict[str, tuple[float, float, 
                         ev, bool(np.all(sl > 0) and less_sensitive)))
     # 4. robustness
     if robust is not None:
-        ev = [f"±10% in {k}: max |ΔG'/G'| = {v[0] * 100:.2f}%, max |ΔG''/G''| = {v[1] * 100:.2f}% (0.01–1000 Hz, P = 1000)"
+        size = lambda k: ("±0.05 rad in" if k.startswith("alpha") else "±5% in") if "(half)" in k else (  # noqa: E731
+            "±0.1 rad in" if k == "alpha" else "±10% in")
+        ev = [f"{size(k)} {k}: max |ΔG'/G'| = {v[0] * 100:.2f}%, max |ΔG''/G''| = {v[1] * 100:.2f}% (0.01–1000 Hz, P = 1000)"
               + (f"; {v[2]}" if v[2] else "") for k, v in robust.items()]
+        ev.append("'EA actin', 'c IF', ...: each tendon changed alone (worst tendon shown); '(all)': every tendon together; "
+                  "'(half)': half-size changes, since ±10% of δ leaves the valid band")
         ok = [k for k, v in robust.items() if not v[2] and max(v[0], v[1]) <= 0.08]
         bad = [k for k, v in robust.items() if k not in ok]
         ev.append(f"holds (≤ 8%) for: {', '.join(ok) or 'none'}; fails for: {', '.join(bad) or 'none'}")
