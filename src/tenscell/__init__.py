@@ -26,6 +26,7 @@ from .response import (
 )
 from .shapes import DEFAULT_DELTA, REGULAR_DELTA, if_free_delta, paper_cell, paper_structure
 from .structure import Point, Structure, StructureError
+from .fitting import FitParameter, FitResult, fit
 
 __version__ = "0.1.0"
 
@@ -36,4 +37,5 @@ __all__ = [
     "LinearModel", "linearize", "RelaxationSpectrum", "relaxation_spectrum", "NotPositiveDefiniteError",
     "compliance", "moduli", "frequency_response", "FrequencyResponse", "static_modulus", "viscosity_limit",
     "loss_tangent", "log_slope",
+    "fit", "FitResult", "FitParameter",
 ]

@@ -386,7 +386,7 @@ class FitProblem:
             rows = np.vstack([dG.real / (G.real[:, None] * _LN10), dG.imag / (G.imag[:, None] * _LN10)])
         return self.weights[:, None] * np.nan_to_num(rows)
 
-    def jacobian_fd(self, theta, step: float = 1e-6) -> np.ndarray:
+    def jacobian_fd(self, theta, step: float = 1e-5) -> np.ndarray:
         """Central finite-difference Jacobian of :meth:`residuals` (the slow reference), shape (2N, n_free)."""
         theta = np.asarray(theta, dtype=float)
         out = np.empty((self.y_obs.size, theta.size))
@@ -531,14 +531,16 @@ def make_problem(
     A = cell.A.toarray() if sp.issparse(cell.A) else np.asarray(cell.A, dtype=float)
     Kp = cell.Kp.toarray() if sp.issparse(cell.Kp) else np.asarray(cell.Kp, dtype=float)
     m = cell.m
-    try:
-        chol = np.linalg.cholesky(A @ A.T)
-    except np.linalg.LinAlgError:
+    AAt = A @ A.T
+    ev = np.linalg.eigvalsh(AAt)
+    # Cholesky alone can pass a singular matrix on rounding noise; compare with its scale
+    if not ev[0] > 1e-10 * ev[-1]:
         raise ValueError(
             f"{cell.describe()}: the damping matrix C0 = Σ c_j a_j a_jᵀ is singular (the tendons leave a mechanism "
             "undamped, e.g. the cell without intermediate filaments), so its relaxation spectrum, which the fit "
             "uses, does not exist; fit a cell with a positive definite C0"
-        ) from None
+        )
+    chol = np.linalg.cholesky(AAt)
 
     fam_groups, fams = _family_groups(cell)
     need = required_points(tendons, damping, n_families=len(fams))
