@@ -726,7 +726,10 @@ def _perturb(problem: FitProblem, theta, rng: np.random.Generator) -> np.ndarray
             lo, hi = mid - 2 * _LN10, mid + 2 * _LN10
         y[pick] = rng.uniform(lo, hi, size=3)
     else:
-        y[free] += rng.normal(0.0, 1.0, int(free.sum())) * _LN10
+        move = free.copy()
+        # L is a gauge of (P, EA, c) unless one of c, P is held fixed: moving it only wanders
+        move[-1] &= not bool(np.all(free[problem.n_ea: -1]))
+        y[move] += rng.normal(0.0, 1.0, int(move.sum())) * _LN10
     return _clip(problem, y[free])
 
 
@@ -763,7 +766,7 @@ def _hop(problem: FitProblem, start: int, seed_seq, hops: int, patience: int, ma
         nfev += n
         if trial.cost < best.cost:
             r = problem.rms(trial.x)
-            stale = 0 if r < 0.99 * rms else stale + 1
+            stale = 0 if r < 0.95 * rms else stale + 1
             best, rms = trial, r
             history.append((time.monotonic() - t_begin, rms, best.x.copy()))
         else:
@@ -878,6 +881,15 @@ class FitResult:
         return float(EA.min()), float(EA.max()), float(math.log10(EA.max() / EA.min()))
 
     @property
+    def stiffness_spread_interior(self) -> tuple[float, float, float] | None:
+        """Like :attr:`stiffness_spread`, over the tendons whose stiffness is not at a bound (None if none is)."""
+        inside = np.array([self.parameters[g].at_bound is None for g in self.problem.ea_groups])
+        if not inside.any():
+            return None
+        e = self.EA[inside]
+        return float(e.min()), float(e.max()), float(math.log10(e.max() / e.min()))
+
+    @property
     def n_at_bound(self) -> int:
         """How many varied parameters sit at a bound."""
         return sum(p.at_bound is not None for p in self.parameters)
@@ -933,18 +945,28 @@ class FitResult:
             "message": self.message,
             "time_s": self.elapsed_s,
             "starts": self.starts,
-            "seed": self.seed,
+            "seed": None if self.seed is None else int(self.seed),
             "n_evaluations": self.n_evaluations,
             "n_free_parameters": self.problem.n_free,
             "n_residuals": self.problem.n_residuals,
             "parameters": [p.to_dict() for p in self.parameters],
             "tendon_stiffness_spread": {"min_N": lo, "max_N": hi, "decades": dec},
+            "tendon_stiffness_spread_not_at_bounds": (
+                None if self.stiffness_spread_interior is None else dict(
+                    zip(("min_N", "max_N", "decades"), self.stiffness_spread_interior))),
             "residuals_log10": {"G_storage": self.residuals[: self.data.n].tolist(),
                                 "G_loss": self.residuals[self.data.n:].tolist()},
             "start_rms": list(self.start_rms),
             "alternatives": [a.to_dict() for a in self.alternatives],
             "history": [{"time_s": t, "rms_log10_error": r} for t, r in self.history],
         }
+
+    def _interior_text(self) -> str:
+        inner = self.stiffness_spread_interior
+        full = self.stiffness_spread
+        if inner is None or inner == full:
+            return ""
+        return f"; {inner[0]:.3g} .. {inner[1]:.3g} N ({inner[2]:.1f} decades) without those at bounds"
 
     def report(self) -> str:
         """A readable plain-text report (in the spirit of lmfit's ``fit_report``)."""
@@ -959,7 +981,7 @@ class FitResult:
             + ("converged" if self.converged else "NOT converged"),
             f"    starts:             {self.starts} (seed {self.seed}), {self.n_evaluations} model evaluations, "
             f"{self.elapsed_s:.1f} s",
-            f"    stiffness spread:   {lo:.3g} .. {hi:.3g} N ({dec:.1f} decades)",
+            f"    stiffness spread:   {lo:.3g} .. {hi:.3g} N ({dec:.1f} decades)" + self._interior_text(),
             f"    message:            {self.message}",
             "[[Parameters]]",
         ]
@@ -997,7 +1019,7 @@ def fit(
     jobs: int = 1,
     tolerance: float = 0.01,
     hops: int = 30,
-    patience: int = 10,
+    patience: int = 6,
     max_nfev: int = 300,
     polish: float = 0.2,
     bounds: dict | None = None,
@@ -1027,7 +1049,7 @@ def fit(
     hops : int
         Basin-hopping moves per start, at most.
     patience : int
-        Stop a start after this many moves without a 1 % improvement.
+        Stop a start after this many moves without a 5 % improvement of its RMS.
     max_nfev : int
         Model evaluations per least-squares run.
     polish : float
@@ -1208,7 +1230,7 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
         f"- {result.message}",
         f"- Starts: {result.starts} (seed {result.seed}); time {result.elapsed_s:.1f} s; "
         f"{result.n_evaluations} model evaluations.",
-        f"- Tendon stiffness spread: {lo:.3g} to {hi:.3g} N ({dec:.1f} decades).",
+        f"- Tendon stiffness spread: {lo:.3g} to {hi:.3g} N ({dec:.1f} decades){result._interior_text()}.",
         "",
     ]
     if baseline is not None:

@@ -116,6 +116,7 @@ def fit_figure(data, curves, title: str | None = None):
                 ax.set_xlabel("frequency f (Hz)")
             else:
                 ax.set_xlabel("prestress (Pa)")
+                ax.set_ylim(bottom=0.0)
             ax.set_title(f"{cv.label}: rms log10 error {cv.rms_log10_error:.3g}")
         axes[0][0].set_ylabel("modulus (Pa)")
         axes[0][0].legend(loc="best")
