@@ -684,7 +684,14 @@ def _initial_guess(problem: FitProblem, rng: np.random.Generator) -> np.ndarray:
     best = None
     # damping c shifts the spectrum in frequency; the prestress-to-stiffness ratio sets how much P matters
     c_grid = np.linspace(-6.0, 6.0, 25) * _LN10 if free[n_ea] else [None]
-    p_grid = np.array([-6.0, -3.0, 0.0]) * _LN10 if free[-2] else [None]
+    if problem.kind == "prestress":
+        # the data vary with prestress, so P must matter: relative to a typical tendon, not the
+        # softest (a negligible P is a flat, prestress-blind trap the solver cannot leave)
+        p_ref = float(np.median(u))
+        p_grid = np.array([-2.0, -1.0, 0.0, 1.0]) * _LN10 if free[-2] else [None]
+    else:
+        p_ref = float(u.min())
+        p_grid = np.array([-6.0, -3.0, 0.0]) * _LN10 if free[-2] else [None]
     for lc in c_grid:
         for lp in p_grid:
             trial = phi.copy()
@@ -692,7 +699,7 @@ def _initial_guess(problem: FitProblem, rng: np.random.Generator) -> np.ndarray:
             if lc is not None:
                 trial[ic] = math.log(problem.scale_damping) + lc + c_jitter
             if lp is not None:
-                trial[-2] = u.min() + lp + base_p
+                trial[-2] = p_ref + lp + base_p
             out = problem._evaluate(trial, jac=False)
             r = problem._residuals_from(out) / problem.weights
             if out is None or np.any(np.abs(r) >= _PENALTY):
