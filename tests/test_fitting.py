@@ -339,3 +339,28 @@ def test_cli_fit_bad_input_exit_2_no_files(tmp_path, capsys):
     assert cli_main(["fit", str(bad), "--starts", "0", "--out", str(out)]) == 2
     assert cli_main(["fit", str(tmp_path / "missing.csv"), "--out", str(out)]) == 2
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_cli_fit_too_few_points_exit_2(tmp_path, capsys):
+    path = tmp_path / "three.csv"
+    path.write_text("# three points\nfrequency_Hz,G_storage_Pa,G_loss_Pa\n1,100,30\n2,110,33\n4,120,37\n")
+    out = tmp_path / "out"
+    assert cli_main(["fit", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "three.csv" in err and "fewer than" in err
+    assert not out.exists()
+
+
+def test_cli_fit_magnitude_phase_layout(tmp_path, cell):
+    """|G| and phase in degrees are read, converted and fitted like G', G''."""
+    data = _synthetic(cell, np.logspace(-1, 2, 6), 300.0, 2.0, 0.05)
+    G = np.hypot(data.G_storage, data.G_loss)
+    phase = np.degrees(np.arctan2(data.G_loss, data.G_storage))
+    lines = ["frequency_Hz,G_abs_Pa,phase_deg"] + [f"{f:.17g},{g:.17g},{p:.17g}" for f, g, p in
+                                                   zip(data.frequency_hz, G, phase)]
+    path = tmp_path / "polar.csv"
+    path.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "out"
+    assert cli_main(["fit", str(path), "--tendons", "uniform", "--starts", "1", "--out", str(out)]) == 0
+    doc = json.loads((out / "fit.json").read_text())
+    assert doc["rms_log10_error"] < 1e-6
