@@ -42,7 +42,7 @@ from __future__ import annotations
 import math
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
@@ -651,10 +651,10 @@ def make_problem(
 # ---------------------------------------------------------------------------------
 # the search
 # ---------------------------------------------------------------------------------
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Chain:
     start: int
-    theta: np.ndarray = field(compare=False)
+    theta: np.ndarray
     rms: float
     cost: float
     nfev: int
