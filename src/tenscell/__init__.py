@@ -33,6 +33,7 @@ from .variants import (
     linearize_semiflexible, linearize_stiffening, loss_peak, no_if_study, prestress_map, references_study,
     semiflexible_study, stiffening_study,
 )
+from .fitting import FitParameter, FitResult, fit
 
 __version__ = "0.1.0"
 
@@ -47,4 +48,5 @@ __all__ = [
     "analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table",
     "linearize_semiflexible", "linearize_stiffening", "loss_peak", "no_if_study", "prestress_map",
     "references_study", "semiflexible_study", "stiffening_study",
+    "fit", "FitResult", "FitParameter",
 ]

@@ -28,6 +28,7 @@ __all__ = [
     "references_figure",
     "semiflexible_figure",
     "stiffening_figure",
+    "fit_figure",
 ]
 
 STYLE = {
@@ -271,4 +272,44 @@ def stiffening_figure(study, title: str = "Strain-stiffening intermediate filame
             ax.set_xlabel("prestress P (N, the paper's Pa)")
             ax.set_ylabel(f"{name} (Pa)")
         a1.legend(title="IF stiffening", loc="upper left")
+    return fig
+
+
+def fit_figure(data, curves, title: str | None = None):
+    """Measured moduli as circles and fitted models as lines, one panel per model (paper Figs. 4–5).
+
+    Parameters
+    ----------
+    data : tenscell.data.RheologyData
+        The measurements: G' filled circles, G'' open circles.
+    curves : sequence of tenscell.fitting.FitCurve
+        One panel each (e.g. the heterogeneous fit, then the homogeneous
+        baseline); G' solid line, G'' dashed.
+    title : str, optional
+
+    Frequency sweeps are drawn on log-log axes against f (Hz); prestress
+    sweeps on linear axes against prestress (Pa), as in the paper.
+    """
+    prestress = data.kind == "prestress"
+    x = data.prestress if prestress else data.frequency_hz
+    with plt.rc_context(STYLE):
+        fig, axes = plt.subplots(1, len(curves), figsize=(4.2 * len(curves), 3.6), constrained_layout=True,
+                                 sharey=True, squeeze=False)
+        if title:
+            fig.suptitle(title)
+        for ax, cv in zip(axes[0], curves):
+            ax.plot(x, data.G_storage, "o", color="C0", label="G′ data")
+            ax.plot(x, data.G_loss, "o", mfc="none", color="C3", label="G″ data")
+            ax.plot(cv.x, cv.G_storage, "-", color="C0", label="G′ model")
+            ax.plot(cv.x, cv.G_loss, "--", color="C3", label="G″ model")
+            if not prestress:
+                ax.set_xscale("log")
+                ax.set_yscale("log")
+                ax.set_xlabel("frequency f (Hz)")
+            else:
+                ax.set_xlabel("prestress (Pa)")
+                ax.set_ylim(bottom=0.0)
+            ax.set_title(f"{cv.label}: rms log10 error {cv.rms_log10_error:.3g}")
+        axes[0][0].set_ylabel("modulus (Pa)")
+        axes[0][0].legend(loc="best")
     return fig
