@@ -467,6 +467,12 @@ class EquationsOfMotion:
                 self._warm = v
                 return v, F, fac
             step = self._apply(fac, -R)
+            if np.abs(step[:n]).max() <= 1e-13 * np.abs(v).max():
+                # at the round-off floor of the force balance: one last full step and stop
+                v = v + step[:n]
+                F = F + step[n] if disp else F
+                self._warm = v
+                return v, F, fac
             r0 = np.linalg.norm(R)
             a = 1.0
             while True:
@@ -771,7 +777,7 @@ def simulate(
         stats["segments"] += 1
         if sol.status == -1:
             raise SimulationError(f"time integration failed at t={sol.t[-1] if sol.t.size else t0:.6g} s: {sol.message}")
-        ts, ys = sol.t, sol.y.T
+        ts, ys = np.asarray(sol.t, dtype=float), np.asarray(sol.y, dtype=float).reshape(n, -1).T
         if te is None and not first:
             ts, ys = ts[1:], ys[1:]
         segs.append((ts, ys, cur))
