@@ -26,6 +26,11 @@ from .response import (
 )
 from .shapes import DEFAULT_DELTA, REGULAR_DELTA, if_free_delta, paper_cell, paper_structure
 from .structure import Point, Structure, StructureError
+from .constitutive import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
+from .timedomain import (CreepSpectrum, PowerLawFit, StressRelaxation, creep_compliance, creep_spectrum, fit_power_law,
+                         local_exponent, relaxation_modulus, stress_relaxation)
+from .dynamics import (SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response,
+                       linearize_law, oscillatory_response, simulate)
 
 __version__ = "0.1.0"
 
@@ -36,4 +41,9 @@ __all__ = [
     "LinearModel", "linearize", "RelaxationSpectrum", "relaxation_spectrum", "NotPositiveDefiniteError",
     "compliance", "moduli", "frequency_response", "FrequencyResponse", "static_modulus", "viscosity_limit",
     "loss_tangent", "log_slope",
+    "Voigt", "PowerDashpot", "voigt_law", "power_dashpot_law", "LinearizationError",
+    "CreepSpectrum", "creep_spectrum", "creep_compliance", "StressRelaxation", "stress_relaxation",
+    "relaxation_modulus", "local_exponent", "PowerLawFit", "fit_power_law",
+    "simulate", "SineForce", "StepForce", "SineDisplacement", "SimulationError", "linearize_law",
+    "oscillatory_response", "amplitude_sweep", "creep_response",
 ]

@@ -1108,6 +1108,29 @@ class OscillatoryResponse:
         """Linear compliance J(ω) (m/N)."""
         return complex((0.5 / self.linear.L) / self._lin()) if self.linear is not None else complex("nan")
 
+    def cycle(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(t, z, F)`` over the analysed cycles, both ends included (a closed loop); s, m, N."""
+        sim, h = self.simulation, self.harmonics
+        N = int(round(sim.loading.period / (sim.t[-1] - sim.t[-2])))
+        sel = slice(sim.t.size - 1 - h.cycles * N, sim.t.size)
+        return sim.t[sel], sim.z[sel], sim.force[sel]
+
+    def linear_cycle(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(z, F)`` of the linear model on the times of :meth:`cycle` (m, N); NaN without a linearization.
+
+        Under force control F is the prescribed force and z the linear
+        response; under displacement control the reverse.
+        """
+        t, z, F = self.cycle()
+        load = self.simulation.loading
+        if self.linear is None:
+            nan = np.full(t.shape, np.nan)
+            return (nan, F) if load.controls == "force" else (z, nan)
+        e = np.exp(1j * load.omega * t)
+        if load.controls == "force":
+            return (self.J_linear * load.phasor * e).real, np.asarray(load.value(t))
+        return np.asarray(load.value(t)), (load.phasor / self.J_linear * e).real
+
     def summary(self) -> dict:
         """JSON-ready numbers: moduli (Pa), THD, periodicity, energies (J), slack tendons."""
         h, sim = self.harmonics, self.simulation
