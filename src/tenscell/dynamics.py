@@ -293,11 +293,19 @@ class EquationsOfMotion:
 
     Notes
     -----
-    The public methods take the state ``y = q − q0`` (what is integrated) and
-    a boolean ``taut`` mask (which tendons carry load; all cables by
-    default). The object remembers its last few evaluations (and the last
-    velocity as the Newton starting guess for nonlinear dashpots); that is
-    the only state it keeps.
+    The public methods take the state ``y = q − q0`` (what is integrated).
+    A cable carries ``max(0, T(l, l'))``, so the velocities solve the
+    complementarity problem ``Σ_j a_j max(0, T_j(l_j, a_jᵀq')) = −H·F``;
+    it is solved by a semismooth Newton iteration with a line search,
+    started from the previous solution (for a Voigt law with the right
+    taut set that is a single linear solve). Its solution is a continuous
+    function of the configuration, so a tendon may even stay taut at zero
+    force (shortening at the free rate of its Voigt element) without any
+    chattering. Passing ``taut`` instead imposes which tendons carry load
+    (no complementarity), e.g. to test the Jacobian of one branch.
+
+    The object remembers its last few evaluations and the last velocity (the
+    Newton starting guess); that is the only state it keeps.
 
     Raises
     ------
@@ -327,13 +335,14 @@ class EquationsOfMotion:
         self._flatA = (idx * self.m + np.arange(self.m)[:, None]).ravel()
         self._flatK = (idx[:, :, None] * (self.n + 1) + idx[:, None, :]).ravel()
         self._memo: dict = {}
-        self._warm: np.ndarray | None = None
+        self._warm: tuple | None = None
         kin0 = kinematics(self.coords, self.q0)
         self._p_load0 = self._position(cell.structure.load, kin0)
         self._p_probe0 = self._position(cell.structure.probe, kin0)
-        self.all_taut = np.ones(self.m, dtype=bool)
+        #: tension below which a cable counts as slack in reports and events (N): 1e-9 of the largest tension at rest
+        self.slack_tolerance = 1e-9 * max(float(np.abs(law.elastic(cell.lengths)).max()), 1e-300)
         try:
-            self.state(0.0, np.zeros(self.n))
+            self.state(0.0, np.zeros(self.n), np.ones(self.m, dtype=bool))
         except SimulationError as err:
             raise SimulationError(
                 f"{cell.describe()}: {err}. The massless equations need a positive definite damping matrix "
@@ -372,123 +381,174 @@ class EquationsOfMotion:
         return kin, l, grad, A, g, D
 
     # -- the velocity solve
-    def _key(self, t, y, taut):
-        return (float(t), y.tobytes(), taut.tobytes())
-
     def _solve(self, t, y, taut):
-        key = self._key(t, y, taut)
+        key = (float(t), y.tobytes(), None if taut is None else taut.tobytes())
         hit = self._memo.get(key)
         if hit is not None:
             return hit
         q = self.q0 + y
         kin, l, grad, A, g, D = self._geometry(q)
-        w = taut.astype(float)
-        law, n = self.law, self.n
         z = self._position(self.cell.structure.probe, kin) - self._p_probe0
+        zrhs = None
         if self.displacement_control:
             zrhs = self.loading.rate(t) + self.gamma * (self.loading.value(t) - z)
             F = 0.0
         else:
             F = float(self.loading.value(t))
-        zero = np.zeros(self.m)
-        if law.rate_linear:
-            Tel, _, cv = law.derivatives(l, zero)
-            C = (A * (w * cv)) @ A.T
-            rhs = -(A @ (w * Tel))
-            v, F, fac = self._linear_solve(C, g, D, rhs, F, zrhs if self.displacement_control else None, t, taut)
+        if self.law.rate_linear:
+            if taut is not None:
+                v, F, T, active, fac = self._linear_solve(A, g, D, l, F, zrhs, t, taut)
+            else:
+                v, F, T, active, fac = self._active_set(A, g, D, l, F, zrhs, t)
         else:
-            v, F, fac = self._newton(A, g, D, l, w, F, zrhs if self.displacement_control else None, t, taut)
+            v, F, T, active, fac = self._newton(A, g, D, l, F, zrhs, t, taut)
         u = A.T @ v
-        T, dTdl, dTdv = law.derivatives(l, u)
-        Tel = law.elastic(l)
-        carried = np.where(taut, T, 0.0)
-        power = float(np.sum((carried - np.maximum(Tel, 0.0)) * u))
+        _, dTdl, dTdv = self.law.derivatives(l, u)
+        Tel = self.law.elastic(l)
+        carried = np.where(active, T, 0.0)
+        if taut is None:
+            carried = np.where(self.cable, np.maximum(T, 0.0), T)
+        power = float(np.sum((carried - np.where(self.cable, np.maximum(Tel, 0.0), Tel)) * u))
+        shown = (~self.cable) | (T >= -self.slack_tolerance) if taut is None else taut.copy()
         state = MotionState(
             t=float(t), q=q, v=v, force=float(F), z=float(z),
             u=self._position(self.cell.structure.load, kin) - self._p_load0, u_rate=float(g @ v),
-            lengths=l, rates=u, tensions=carried, trial=T, taut=taut.copy(), power=power,
+            lengths=l, rates=u, tensions=carried, trial=T, taut=shown, power=power,
         )
-        extras = (kin, grad, A, g, D, dTdl, dTdv, fac)
+        extras = (kin, grad, A, g, D, dTdl, dTdv, active, fac)
         if len(self._memo) > 8:
             self._memo.clear()
         self._memo[key] = (state, extras)
         return state, extras
 
-    def _factor(self, C, t, taut):
+    def _factor(self, C, g, D, t, active):
+        if self.displacement_control:
+            M = np.zeros((self.n + 1, self.n + 1))
+            M[: self.n, : self.n] = C
+            M[: self.n, self.n] = -g
+            M[self.n, : self.n] = D
+            lu = scipy.linalg.lu_factor(M, check_finite=False)
+            if not np.all(np.isfinite(lu[0])) or np.min(np.abs(np.diag(lu[0]))) <= 1e-14 * np.abs(lu[0]).max():
+                raise SimulationError(f"the constrained damping system is singular at t={t:.6g} s")
+            return ("lu", lu)
         try:
             return ("chol", scipy.linalg.cho_factor(C, lower=True, check_finite=False))
         except (np.linalg.LinAlgError, ValueError):
-            slack = np.flatnonzero(~taut & self.cable).tolist()
+            slack = np.flatnonzero(~active & self.cable).tolist()
             raise SimulationError(
                 f"the damping matrix C(q) is singular at t={t:.6g} s"
                 + (f" with tendons {slack} slack" if slack else "")
                 + ": part of the structure has no damping, so the massless equations do not determine its velocity"
             ) from None
 
-    def _saddle(self, C, g, D):
-        M = np.zeros((self.n + 1, self.n + 1))
-        M[: self.n, : self.n] = C
-        M[: self.n, self.n] = -g
-        M[self.n, : self.n] = D
-        return ("lu", scipy.linalg.lu_factor(M, check_finite=False))
-
     @staticmethod
     def _apply(fac, b):
         kind, f = fac
         return scipy.linalg.cho_solve(f, b, check_finite=False) if kind == "chol" else scipy.linalg.lu_solve(f, b, check_finite=False)
 
-    def _linear_solve(self, C, g, D, rhs, F, zrhs, t, taut):
+    def _linear_solve(self, A, g, D, l, F, zrhs, t, taut):
+        """Rate-linear law with an imposed taut set: one linear solve."""
+        Tel, _, cv = self.law.derivatives(l, np.zeros(self.m))
+        w = taut.astype(float)
+        fac = self._factor((A * (w * cv)) @ A.T, g, D, t, taut)
+        rhs = -(A @ (w * Tel))
         if zrhs is None:
-            fac = self._factor(C, t, taut)
-            return self._apply(fac, rhs + g * F), F, fac
-        fac = self._saddle(C, g, D)
-        x = self._apply(fac, np.r_[rhs, zrhs])
-        return x[: self.n], float(x[self.n]), fac
+            v = self._apply(fac, rhs + g * F)
+        else:
+            x = self._apply(fac, np.r_[rhs, zrhs])
+            v, F = x[: self.n], float(x[self.n])
+        return v, F, Tel + cv * (A.T @ v), taut.copy(), fac
 
-    def _newton(self, A, g, D, l, w, F, zrhs, t, taut):
+    def _active_set(self, A, g, D, l, F, zrhs, t):
+        """Rate-linear law: primal-dual active-set iteration for the taut set (exact linear solves).
+
+        Each pass solves with the current set and retakes as taut every cable
+        whose (would-be) tension is positive; a consistent set ends it. The
+        result depends on the configuration only, not on the starting set
+        (the starting set is the previous one, so usually one pass).
+        """
+        S = self._warm[2] if self._warm is not None else np.ones(self.m, dtype=bool)
+        seen = set()
+        for _ in range(2 * self.m + 2):
+            v, Fs, T, _, fac = self._linear_solve(A, g, D, l, F, zrhs, t, S)
+            if np.all(T[S & self.cable] >= 0.0) and np.all(T[~S] <= 0.0):
+                self._warm = (v, Fs, S.copy())
+                return v, Fs, T, S.copy(), fac
+            new = (~self.cable) | (T > 0.0)
+            key = new.tobytes()
+            if key in seen:
+                break
+            seen.add(key)
+            S = new
+        # the iteration cycles (possible at near-ties): fall back to the globalized semismooth Newton
+        return self._newton(A, g, D, l, F, zrhs, t, None)
+
+    def _newton(self, A, g, D, l, F, zrhs, t, taut):
+        """Semismooth Newton with backtracking on |R| for ``A·[max(0, T)] = g·F`` (+ the displacement constraint)."""
         law, n = self.law, self.n
         disp = zrhs is not None
-        v = np.zeros(n) if self._warm is None else self._warm.copy()
+        v = np.zeros(n) if self._warm is None else self._warm[0].copy()
+        if disp and self._warm is not None:
+            F = self._warm[1]
 
-        def residual(v, F):
+        def evaluate(v, F):
             T, _, dTdv = law.derivatives(l, A.T @ v)
-            R = A @ (w * T) - g * F
+            if taut is None:
+                act = (~self.cable) | (T > 0.0)
+            else:
+                act = taut
+            Tc = np.where(act, T, 0.0)
+            R = A @ Tc - g * F
             if disp:
                 R = np.r_[R, D @ v - zrhs]
-            return R, T, dTdv
+            return R, T, dTdv, act
 
-        R, T, dTdv = residual(v, F)
+        R, T, dTdv, act = evaluate(v, F)
         for _ in range(100):
-            scale = np.abs(A) @ np.abs(w * T) + np.abs(g * F) + 1e-300
-            tol = 1e-12 * scale.max()
-            C = (A * (w * dTdv)) @ A.T
-            fac = self._factor(C, t, taut) if not disp else self._saddle(C, g, D)
-            if np.abs(R[:n]).max() <= tol and (not disp or abs(R[n]) <= 1e-12 * (abs(zrhs) + np.abs(D).max() * np.abs(v).max() + 1e-300)):
-                self._warm = v
-                return v, F, fac
+            scale = np.abs(A) @ np.abs(np.where(act, T, 0.0)) + np.abs(g * F) + 1e-300
+            fac = self._factor((A * np.where(act, dTdv, 0.0)) @ A.T, g, D, t, act)
+            ok = np.abs(R[:n]).max() <= 1e-12 * scale.max()
+            if ok and disp:
+                ok = abs(R[n]) <= 1e-12 * (abs(zrhs) + np.abs(D).max() * np.abs(v).max() + 1e-300)
+            if ok:
+                break
             step = self._apply(fac, -R)
             if np.abs(step[:n]).max() <= 1e-13 * np.abs(v).max():
-                # at the round-off floor of the force balance: one last full step and stop
+                # at the round-off floor of the force balance: take the last full step and stop
                 v = v + step[:n]
                 F = F + step[n] if disp else F
-                self._warm = v
-                return v, F, fac
+                R, T, dTdv, act = evaluate(v, F)
+                fac = self._factor((A * np.where(act, dTdv, 0.0)) @ A.T, g, D, t, act)
+                break
             r0 = np.linalg.norm(R)
             a = 1.0
             while True:
                 vn = v + a * step[:n]
                 Fn = F + a * step[n] if disp else F
-                Rn, Tn, dn = residual(vn, Fn)
-                if np.linalg.norm(Rn) <= (1.0 - 1e-4 * a) * r0 or a < 1e-12:
+                out = evaluate(vn, Fn)
+                if np.linalg.norm(out[0]) <= (1.0 - 1e-4 * a) * r0:
                     break
                 a *= 0.5
-            v, F, R, T, dTdv = vn, Fn, Rn, Tn, dn
-        raise SimulationError(f"the velocity solve of the nonlinear dashpot law did not converge at t={t:.6g} s")
+                if a < 1e-6:  # no descent along the Newton direction: the residual is at its round-off floor
+                    out = None
+                    break
+            if out is None:
+                break
+            v, F = vn, Fn
+            R, T, dTdv, act = out
+        else:
+            raise SimulationError(f"the velocity solve did not converge at t={t:.6g} s")
+        self._warm = (v, F, np.asarray(act, dtype=bool).copy())
+        return v, F, T, act, fac
 
     # -- public interface
     def state(self, t: float, y: np.ndarray, taut: np.ndarray | None = None) -> MotionState:
-        """The :class:`MotionState` at time ``t`` (s) and ``y = q − q0``."""
-        taut = self.all_taut if taut is None else np.asarray(taut, dtype=bool)
+        """The :class:`MotionState` at time ``t`` (s) and ``y = q − q0``.
+
+        ``taut`` (bool, shape (m,)) imposes which tendons carry load; by
+        default cables carry ``max(0, T)`` (complementarity).
+        """
+        taut = None if taut is None else np.asarray(taut, dtype=bool)
         return self._solve(t, np.asarray(y, dtype=float), taut)[0]
 
     def velocity(self, t: float, y: np.ndarray, taut: np.ndarray | None = None) -> np.ndarray:
@@ -496,11 +556,15 @@ class EquationsOfMotion:
         return self.state(t, y, taut).v
 
     def jacobian(self, t: float, y: np.ndarray, taut: np.ndarray | None = None) -> np.ndarray:
-        """Exact ``∂q'/∂q`` (1/s), shape (n, n), by the implicit-function theorem (see module docstring)."""
-        taut = self.all_taut if taut is None else np.asarray(taut, dtype=bool)
-        state, (kin, G, A, g, D, dTdl, dTdv, fac) = self._solve(t, np.asarray(y, dtype=float), taut)
+        """Exact ``∂q'/∂q`` (1/s), shape (n, n), by the implicit-function theorem (see module docstring).
+
+        With slack possible it is the Jacobian of the branch (set of taut
+        tendons) active at ``(t, y)``.
+        """
+        taut = None if taut is None else np.asarray(taut, dtype=bool)
+        state, (kin, G, A, g, D, dTdl, dTdv, active, fac) = self._solve(t, np.asarray(y, dtype=float), taut)
         n = self.n
-        w = taut.astype(float)
+        w = active.astype(float)
         Hs = member_geometry(self.coords, state.q, kin).hess
         vloc = np.r_[state.v, 0.0][self._idx]
         Hv = np.einsum("mkl,ml->mk", Hs, vloc)
@@ -516,26 +580,6 @@ class EquationsOfMotion:
         Hp = Hg if st.probe == st.load else self._point_hessian(st.probe, kin)
         rhs = np.vstack([-K, -(Hp @ state.v + self.gamma * D)[None, :]])
         return self._apply(fac, rhs)[:n]
-
-    def consistent_taut(self, t: float, y: np.ndarray, taut: np.ndarray | None = None, rtol: float = 1e-9) -> np.ndarray:
-        """The set of taut tendons consistent with no compression at ``(t, y)``.
-
-        Starting from ``taut``, tendons whose tension is negative go slack and
-        slack ones whose would-be tension is positive become taut, until
-        nothing changes (ties within ``rtol·max|T|`` keep their state).
-        """
-        taut = (self.all_taut if taut is None else np.asarray(taut, dtype=bool)).copy()
-        y = np.asarray(y, dtype=float)
-        for _ in range(2 * self.m + 4):
-            st = self.state(t, y, taut)
-            tol = rtol * max(np.abs(st.trial).max(), 1e-300)
-            new = taut.copy()
-            new[self.cable & taut & (st.trial < -tol)] = False
-            new[self.cable & ~taut & (st.trial > tol)] = True
-            if np.array_equal(new, taut):
-                return taut
-            taut = new
-        raise SimulationError(f"no consistent set of taut tendons found at t={t:.6g} s")
 
 
 # ---- simulation ----------------------------------------------------------------------
@@ -569,9 +613,7 @@ class Simulation:
     events : tuple of SlackEvent
         Every slack/taut switch, in time order.
     stats : dict
-        Solver statistics: ``nfev``, ``njev``, ``nlu``, ``segments``.
-    taut_end : ndarray of bool, shape (m,)
-        Taut tendons at the final time (to continue the simulation).
+        Solver statistics: ``nfev``, ``njev``, ``nlu``.
 
     Notes
     -----
@@ -596,7 +638,6 @@ class Simulation:
     taut: np.ndarray
     events: tuple
     stats: dict = field(default_factory=dict)
-    taut_end: np.ndarray | None = None
 
     @property
     def slack_tendons(self) -> list[int]:
@@ -648,16 +689,14 @@ def simulate(
     t_eval=None,
     q_start=None,
     t_start: float = 0.0,
-    taut_start=None,
     method: str = "BDF",
     rtol: float = 1e-8,
     atol: float | None = None,
     jacobian: str = "analytic",
     slack: str = "allow",
     max_step: float | None = None,
-    max_events: int = 10000,
 ) -> Simulation:
-    """Integrate the nonlinear equations of motion from ``t = 0`` to ``t_end``.
+    """Integrate the nonlinear equations of motion from ``t_start`` to ``t_end``.
 
     Parameters
     ----------
@@ -668,20 +707,18 @@ def simulate(
     t_end : float
         Final time (s), > 0.
     t_eval : array_like, optional
-        Output times (s) in ``[0, t_end]``; default: the solver's own steps.
+        Output times (s) in ``[t_start, t_end]``; default: the solver's own steps.
     q_start : array_like, shape (n,), optional
         Initial coordinates (m, rad); default the reference ``q0`` (at rest).
     t_start : float
-        Initial time (s), < ``t_end``; to continue a simulation.
-    taut_start : array_like of bool, shape (m,), optional
-        Tendons taut at ``t_start`` (default all); made consistent before
-        starting, and only changes from it are recorded as events.
+        Initial time (s), ``0 <= t_start < t_end``; to continue a simulation.
     method : {"BDF", "Radau", "LSODA"}
         Stiff solver of :func:`scipy.integrate.solve_ivp` (BDF is the fastest
         at equal accuracy on the paper cell; Radau is the alternative).
     rtol : float
         Relative tolerance; the state is ``q − q0``, so it is relative to the
-        displacement, not to the coordinates.
+        displacement, not to the coordinates. Below ~1e-9 the round-off of
+        the prestress forces (~P, cancelling to ~F) sets a floor.
     atol : float, optional
         Absolute tolerance (m, rad); default ``rtol ×`` the size of the static
         linear response to the load amplitude.
@@ -692,12 +729,13 @@ def simulate(
         :class:`SimulationError` when one would go into compression.
     max_step : float, optional
         Largest step (s); default a sixteenth of the period for periodic loads.
-    max_events : int
-        Give up after this many slack/taut switches (chattering guard).
 
     Returns
     -------
     Simulation
+        Slack/taut switches are located by solve_ivp's event root finding on
+        each cable's constitutive tension (slack below
+        :attr:`EquationsOfMotion.slack_tolerance`).
     """
     t_end = positive_scalar("t_end", t_end, "s")
     t_start = finite_scalar("t_start", t_start, "a finite time (s)")
@@ -730,105 +768,54 @@ def simulate(
         max_step = loading.period / 16.0 if loading.period else np.inf
     max_step = positive_scalar("max_step", max_step, "s") if np.isfinite(max_step) else np.inf
 
-    t0 = t_start
-    given = eq.all_taut if taut_start is None else np.asarray(taut_start, dtype=bool)
-    if given.shape != (eq.m,):
-        raise ValueError(f"taut_start must be {eq.m} booleans (one per tendon), got shape {given.shape}")
-    taut = eq.consistent_taut(t0, y, given)
-    events: list[SlackEvent] = []
     fam = cell.structure.families
-    for j in np.flatnonzero(taut != given):
-        events.append(SlackEvent(t0, int(j), fam[j], "taut" if taut[j] else "slack"))
-    if slack == "error" and any(e.kind == "slack" for e in events):
-        raise SimulationError(f"tendon {events[0].tendon} ({events[0].family}) is slack at t={t0:g} s")
-    segs = []
-    stats = {"nfev": 0, "njev": 0, "nlu": 0, "segments": 0}
-    first = True
-    while True:
-        cur = taut.copy()
-        taut_c = cur & eq.cable
-        slack_c = ~cur & eq.cable
+    tol = eq.slack_tolerance
+    cables = np.flatnonzero(eq.cable)
+    st0 = eq.state(t_start, y)
+    events: list[SlackEvent] = [SlackEvent(t_start, int(j), fam[j], "slack") for j in cables if not st0.taut[j]]
+    if slack == "error" and events:
+        raise SimulationError(f"tendon {events[0].tendon} ({events[0].family}) is slack at t={t_start:g} s")
 
-        def fun(t, yy, cur=cur):
-            return eq.velocity(t, yy, cur)
+    def make_event(j):
+        def ev(t, yy):
+            return float(eq.state(t, yy).trial[j]) + tol
+        ev.terminal = slack == "error"
+        ev.direction = -1 if slack == "error" else 0
+        return ev
 
-        def jac(t, yy, cur=cur):
-            return eq.jacobian(t, yy, cur)
-
-        def ev_slack(t, yy, cur=cur, m=taut_c):
-            return float(eq.state(t, yy, cur).trial[m].min()) if m.any() else 1.0
-
-        def ev_taut(t, yy, cur=cur, m=slack_c):
-            return float(eq.state(t, yy, cur).trial[m].max()) if m.any() else -1.0
-
-        ev_slack.terminal, ev_slack.direction = True, -1
-        ev_taut.terminal, ev_taut.direction = True, 1
-        if t_eval is None:
-            te = None
-        else:
-            te = t_eval[(t_eval >= t0) if first else (t_eval > t0)]
-        sol = solve_ivp(
-            fun, (t0, t_end), y, method=method, t_eval=te, events=[ev_slack, ev_taut], rtol=rtol, atol=atol,
-            jac=jac if jacobian == "analytic" else None, max_step=max_step,
+    sol = solve_ivp(
+        lambda t, yy: eq.velocity(t, yy), (t_start, t_end), y, method=method, t_eval=t_eval,
+        events=[make_event(j) for j in cables], rtol=rtol, atol=atol,
+        jac=(lambda t, yy: eq.jacobian(t, yy)) if jacobian == "analytic" else None, max_step=max_step,
+    )
+    if sol.status == -1:
+        raise SimulationError(f"time integration failed at t={sol.t[-1] if sol.t.size else t_start:.6g} s: {sol.message}")
+    if sol.status == 1:
+        k = next(i for i, te in enumerate(sol.t_events) if te.size)
+        j = int(cables[k])
+        raise SimulationError(
+            f"tendon {j} ({fam[j]}) would go into compression at t={float(sol.t_events[k][0]):.6g} s "
+            f"(load {loading!r}); run with slack='allow' to let it go slack"
         )
-        stats["nfev"] += sol.nfev
-        stats["njev"] += sol.njev
-        stats["nlu"] += sol.nlu
-        stats["segments"] += 1
-        if sol.status == -1:
-            raise SimulationError(f"time integration failed at t={sol.t[-1] if sol.t.size else t0:.6g} s: {sol.message}")
-        ts, ys = np.asarray(sol.t, dtype=float), np.asarray(sol.y, dtype=float).reshape(n, -1).T
-        if te is None and not first:
-            ts, ys = ts[1:], ys[1:]
-        segs.append((ts, ys, cur))
-        first = False
-        if sol.status != 1:
-            break
-        if sol.t_events[0].size:
-            t_ev, y_ev, kind = float(sol.t_events[0][0]), sol.y_events[0][0], "slack"
-            st = eq.state(t_ev, y_ev, cur)
-            cand = np.flatnonzero(taut_c)
-            j = int(cand[np.argmin(st.trial[cand])])
-            if slack == "error":
-                raise SimulationError(
-                    f"tendon {j} ({fam[j]}) would go into compression at t={t_ev:.6g} s "
-                    f"(load {loading!r}); run with slack='allow' to let it go slack"
-                )
-        else:
-            t_ev, y_ev, kind = float(sol.t_events[1][0]), sol.y_events[1][0], "taut"
-            st = eq.state(t_ev, y_ev, cur)
-            cand = np.flatnonzero(slack_c)
-            j = int(cand[np.argmax(st.trial[cand])])
-        new = cur.copy()
-        new[j] = kind == "taut"
-        events.append(SlackEvent(t_ev, j, fam[j], kind))
-        fixed = eq.consistent_taut(t_ev, y_ev, new)
-        for k in np.flatnonzero(fixed != new):
-            events.append(SlackEvent(t_ev, int(k), fam[k], "taut" if fixed[k] else "slack"))
-        if len(events) > max_events:
-            raise SimulationError(f"more than {max_events} slack/taut switches by t={t_ev:.6g} s (chattering)")
-        taut, t0, y = fixed, t_ev, np.asarray(y_ev, dtype=float)
-        if t_end - t0 <= 1e-12 * t_end:
-            break
+    for k, j in enumerate(cables):
+        # the constitutive tension changes sign at each root, so the switches alternate
+        slack_now = not st0.taut[j]
+        for te in sol.t_events[k]:
+            slack_now = not slack_now
+            events.append(SlackEvent(float(te), int(j), fam[j], "slack" if slack_now else "taut"))
+    events.sort(key=lambda e: (e.time, e.tendon))
+    ts, ys = np.asarray(sol.t, dtype=float), np.asarray(sol.y, dtype=float).reshape(n, -1).T
+    states = [eq.state(tk, yk) for tk, yk in zip(ts, ys)]
 
-    ts, qs, F, z, u, ur, T, P, S = [], [], [], [], [], [], [], [], []
-    for seg_t, seg_y, cur in segs:
-        for tk, yk in zip(seg_t, seg_y):
-            st = eq.state(tk, yk, cur)
-            ts.append(tk)
-            qs.append(st.q)
-            F.append(st.force)
-            z.append(st.z)
-            u.append(st.u)
-            ur.append(st.u_rate)
-            T.append(st.tensions)
-            P.append(st.power)
-            S.append(cur)
-    arr = lambda a: np.asarray(a, dtype=float)  # noqa: E731
+    def col(name):
+        return np.array([getattr(s, name) for s in states], dtype=float)
+
     return Simulation(
-        cell=cell, law=law, loading=loading, t=arr(ts), q=arr(qs).reshape(-1, n), force=arr(F), z=arr(z), u=arr(u),
-        u_rate=arr(ur), tensions=arr(T).reshape(-1, eq.m), power=arr(P),
-        taut=np.asarray(S, dtype=bool).reshape(-1, eq.m), events=tuple(events), stats=stats, taut_end=taut.copy(),
+        cell=cell, law=law, loading=loading, t=ts, q=np.array([s.q for s in states]).reshape(-1, n),
+        force=col("force"), z=col("z"), u=col("u"), u_rate=col("u_rate"),
+        tensions=np.array([s.tensions for s in states]).reshape(-1, eq.m), power=col("power"),
+        taut=np.array([s.taut for s in states], dtype=bool).reshape(-1, eq.m), events=tuple(events),
+        stats={"nfev": int(sol.nfev), "njev": int(sol.njev), "nlu": int(sol.nlu)},
     )
 
 
@@ -837,11 +824,13 @@ def _concat(a: Simulation, b: Simulation) -> Simulation:
     k = 1 if (a.t.size and b.t.size and b.t[0] <= a.t[-1]) else 0
     cat = lambda x, y: np.concatenate([x, y[k:]])  # noqa: E731
     stats = {key: a.stats.get(key, 0) + b.stats.get(key, 0) for key in set(a.stats) | set(b.stats)}
+    # b records tendons already slack at its start as switches at that instant: they are not new
+    t0 = b.t[0] if b.t.size else None
+    new = tuple(e for e in b.events if not (e.time == t0 and e.kind == "slack" and not a.taut[-1, e.tendon]))
     return Simulation(
         cell=a.cell, law=a.law, loading=a.loading, t=cat(a.t, b.t), q=cat(a.q, b.q), force=cat(a.force, b.force),
         z=cat(a.z, b.z), u=cat(a.u, b.u), u_rate=cat(a.u_rate, b.u_rate), tensions=cat(a.tensions, b.tensions),
-        power=cat(a.power, b.power), taut=cat(a.taut, b.taut), events=a.events + b.events, stats=stats,
-        taut_end=b.taut_end,
+        power=cat(a.power, b.power), taut=cat(a.taut, b.taut), events=a.events + new, stats=stats,
     )
 
 
@@ -1247,17 +1236,16 @@ def oscillatory_response(
     q_start = linear_steady_state(lin, loading) if (start != "rest" and lin is not None) else None
     T = loading.period
 
-    def run(k0, k1, q, taut):
+    def run(k0, k1, q):
         t_eval = np.arange(k0 * N, k1 * N + 1) * (T / N)
         t_eval[0], t_eval[-1] = k0 * T, k1 * T
-        return simulate(cell, law, loading, k1 * T, t_eval=t_eval, q_start=q, t_start=k0 * T, taut_start=taut,
-                        **solver)
+        return simulate(cell, law, loading, k1 * T, t_eval=t_eval, q_start=q, t_start=k0 * T, **solver)
 
     if cycles is not None:
-        sim = run(0, cycles, q_start, None)
+        sim = run(0, cycles, q_start)
     else:
         total = analyse + 1
-        sim = run(0, total, q_start, None)
+        sim = run(0, total, q_start)
         prev = float("inf")
         while total < max_cycles:
             p = harmonics(sim, cycles=analyse, n_harmonics=2).periodicity
@@ -1265,7 +1253,7 @@ def oscillatory_response(
                 break
             prev = p
             more = min(total, max_cycles - total)
-            sim = _concat(sim, run(total, total + more, sim.q[-1], sim.taut_end))
+            sim = _concat(sim, run(total, total + more, sim.q[-1]))
             total += more
         cycles = total
     h = harmonics(sim, cycles=analyse, n_harmonics=n_harmonics)
