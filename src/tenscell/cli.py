@@ -195,8 +195,8 @@ def _law_from_args(args):
     if args.beta == 1.0:
         law = voigt_law(cell, P=P[0], EA=EA, c=c)
     else:
-        law = power_dashpot_law(cell, P=P[0], EA=EA, c=c, beta=args.beta,
-                                velocity_scale=1e-3 if args.velocity_scale is None else args.velocity_scale)
+        kw = {} if args.velocity_scale is None else {"velocity_scale": args.velocity_scale}
+        law = power_dashpot_law(cell, P=P[0], EA=EA, c=c, beta=args.beta, **kw)
     rtol = args.rtol if args.rtol is not None else (1e-8 if args.beta == 1.0 else 1e-6)
     return cell, law, {"rtol": rtol}
 
