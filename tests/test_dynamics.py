@@ -288,3 +288,40 @@ def test_bad_input(cell, law):
     noif = tenscell.paper_cell(intermediate_filaments=False)
     with pytest.raises(SimulationError, match="damping matrix"):
         simulate(noif, voigt_law(noif), SineForce(1.0, 1.0), 1.0)
+
+
+# ---- command line ---------------------------------------------------------------------
+def test_cli_simulate_and_creep(tmp_path, capsys):
+    import json
+
+    from tenscell.cli import main
+
+    out = tmp_path / "sim"
+    assert main(["simulate", "--amplitude", "5", "--freq", "1", "--cycles", "3", "--samples", "64",
+                 "--out", str(out)]) == 0
+    names = {p.name for p in out.iterdir()}
+    assert {"traces.csv", "traces.png", "loop.csv", "loop.png", "harmonics.csv", "harmonics.png",
+            "simulate.json"} <= names
+    assert not any(n.startswith(".") for n in names)  # no temporary files left behind
+    d = json.loads((out / "simulate.json").read_text())
+    for key in ("G_storage", "G_loss", "G_storage_linear", "G_loss_linear", "thd", "slack_tendons"):
+        assert key in d
+    assert d["G_storage"] == pytest.approx(d["G_storage_linear"], rel=2e-3)
+    assert d["slack_tendons"] == [] and d["cycles_simulated"] == 3
+    out2 = tmp_path / "creep"
+    assert main(["creep", "--amplitude", "0.1", "--points", "21", "--out", str(out2)]) == 0
+    d2 = json.loads((out2 / "creep.json").read_text())
+    assert d2["steps"][0]["max_relative_departure_from_linear"] < 1e-3
+    assert (out2 / "creep.png").exists() and (out2 / "relaxation.csv").exists()
+
+
+def test_cli_bad_input_is_one_line_and_no_output(tmp_path, capsys):
+    from tenscell.cli import main
+
+    out = tmp_path / "bad"
+    assert main(["simulate", "--amplitude", "-3", "--freq", "1", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "amplitude" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists() or not any(out.iterdir())
+    assert main(["simulate", "--amplitude", "1", "--freq", "1", "--no-if", "--out", str(out)]) == 2
+    assert "damping matrix" in capsys.readouterr().err

@@ -293,6 +293,7 @@ def _add_simulate(sub) -> None:
 def _cmd_creep(args) -> int:
     from . import plotting
     from ._io import write_csv_rows, write_json
+    from .constitutive import LinearizationError
     from .dynamics import creep_response, linearize_law
     from .timedomain import creep_spectrum, fit_power_law, local_exponent, stress_relaxation
 
@@ -305,56 +306,71 @@ def _cmd_creep(args) -> int:
     if win.size != 2:
         raise ValueError(f"--window: expected a:b (s), got {args.window!r}")
     out = Path(args.out)
-    lin = linearize_law(cell, law)
-    spec = creep_spectrum(lin)
-    J_lin = spec.compliance(t)
-    curves = {"linear": J_lin}
-    expo = {"linear": spec.exponent(t)}
-    fits = {"linear": fit_power_law(t, J_lin, win[0], win[1])}
-    runs = []
+    P0 = float(parse_list(args.prestress, "--prestress")[0])
+    try:
+        lin, note = linearize_law(cell, law), ""
+    except LinearizationError as err:  # beta < 1: only the nonlinear curves exist
+        lin, note = None, str(err)
+    curves, expo, fits = {}, {}, {}
+    summary = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0},
+               "linear_note": note, "power_law_window_s": [float(win[0]), float(win[1])]}
+    if lin is not None:
+        spec = creep_spectrum(lin)
+        curves["linear"] = spec.compliance(t)
+        expo["linear"] = spec.exponent(t)
+        rel = stress_relaxation(lin)
+        write_csv_rows(out / "spectrum.csv", ["retardation_time_s", "weight_m_per_N"],
+                       ([float(a), float(b)] for a, b in zip(spec.times, spec.weights)))
+        write_csv_rows(out / "relaxation.csv", ["t_s", "G_relaxation_Pa"],
+                       ([float(a), float(b)] for a, b in zip(t, rel.modulus(t))))
+        summary.update({
+            "static_compliance_m_per_N": spec.static,
+            "instantaneous_compliance_m_per_N": spec.instantaneous,
+            "retardation_times_s": spec.times.tolist(),
+            "retardation_weights_m_per_N": spec.weights.tolist(),
+            "relaxation": {"equilibrium_modulus_Pa": (0.5 / rel.L) * rel.equilibrium, "viscosity_Pa_s": rel.viscosity,
+                           "times_s": rel.times.tolist(), "weights_N_per_m": rel.weights.tolist()},
+        })
+    steps = []
     for F in amps:
         cr = creep_response(cell, law, float(F), t, slack=args.slack, **solver)
         key = f"step {F:g} N"
         curves[key] = cr.compliance
-        runs.append((key, float(F), cr))
+        step = {"force_N": float(F), "slack_tendons": cr.simulation.slack_summary()}
+        if lin is not None:
+            step["max_relative_departure_from_linear"] = float(np.abs(cr.compliance / curves["linear"] - 1).max())
+        steps.append(step)
         if np.all(cr.compliance > 0):
             expo[key] = local_exponent(t, cr.compliance)
-            fits[key] = fit_power_law(t, cr.compliance, win[0], win[1])
-    header = ["t_s"] + [f"J_{k.replace(' ', '_')}_m_per_N" for k in curves] + ["exponent_linear"]
-    write_csv_rows(out / "creep.csv", header,
-                   ([float(t[i])] + [float(J[i]) for J in curves.values()] + [float(expo["linear"][i])]
-                    for i in range(t.size)))
-    P0 = float(parse_list(args.prestress, "--prestress")[0])
-    plotting.save(plotting.creep_loglog(t, curves, expo, fits["linear"], f"Creep after a force step (P = {P0:g} N)"),
-                  out / "creep.png")
-    rel = stress_relaxation(lin)
-    write_csv_rows(out / "spectrum.csv", ["retardation_time_s", "weight_m_per_N"],
-                   ([float(a), float(b)] for a, b in zip(spec.times, spec.weights)))
-    write_csv_rows(out / "relaxation.csv", ["t_s", "G_relaxation_Pa"],
-                   ([float(a), float(b)] for a, b in zip(t, rel.modulus(t))))
-    summary = {
-        "model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta,
-                  "prestress_N": float(parse_list(args.prestress, "--prestress")[0])},
-        "static_compliance_m_per_N": spec.static,
-        "instantaneous_compliance_m_per_N": spec.instantaneous,
-        "retardation_times_s": {"min": float(spec.times.min()), "max": float(spec.times.max())},
-        "relaxation": {"equilibrium_modulus_Pa": (0.5 / rel.L) * rel.equilibrium, "viscosity_Pa_s": rel.viscosity,
-                       "times_s": rel.times.tolist()},
-        "power_law_window_s": [float(win[0]), float(win[1])],
-        "power_law_fits": {k: {"A_m_per_N": v.A, "alpha": v.alpha, "rms_log": v.rms_log, "max_rel": v.max_rel,
-                               "points": v.n} for k, v in fits.items()},
-        "steps": [{"force_N": F, "max_relative_departure_from_linear": float(np.abs(cr.compliance / J_lin - 1).max()),
-                   "slack_tendons": cr.simulation.slack_summary()} for _, F, cr in runs],
-    }
+    summary["steps"] = steps
     inwin = (t >= win[0]) & (t <= win[1])
+    fit_lines = []
+    for k, J in curves.items():
+        if np.all(J[inwin] > 0) and inwin.sum() >= 2:
+            fits[k] = fit_power_law(t, J, win[0], win[1])
+    summary["power_law_fits"] = {}
     for k, v in fits.items():
-        print(f"{k}: J(t) ~ {v.A:.4g}·t^{v.alpha:.4f} over [{v.t_min:g}, {v.t_max:g}] s "
-              f"(rms log residual {v.rms_log:.3g}); local exponent in the window "
-              f"{expo[k][inwin].min():.3g}..{expo[k][inwin].max():.3g}")
-        summary["power_law_fits"][k]["local_exponent_range"] = [float(expo[k][inwin].min()),
-                                                                float(expo[k][inwin].max())]
+        e = expo.get(k)
+        rng = [float(e[inwin].min()), float(e[inwin].max())] if e is not None else None
+        summary["power_law_fits"][k] = {"A_m_per_N": v.A, "alpha": v.alpha, "rms_log": v.rms_log, "max_rel": v.max_rel,
+                                        "points": v.n, "local_exponent_range": rng}
+        fit_lines.append(f"{k}: J(t) ~ {v.A:.4g}·t^{v.alpha:.4f} over [{v.t_min:g}, {v.t_max:g}] s "
+                         f"(rms log residual {v.rms_log:.3g})"
+                         + (f"; local exponent in the window {rng[0]:.3g}..{rng[1]:.3g}" if rng else ""))
+    keys = list(curves)
+    write_csv_rows(out / "creep.csv", ["t_s"] + [f"J_{k.replace(' ', '_')}_m_per_N" for k in keys]
+                   + [f"exponent_{k.replace(' ', '_')}" for k in expo],
+                   ([float(t[i])] + [float(curves[k][i]) for k in keys] + [float(e[i]) for e in expo.values()]
+                    for i in range(t.size)))
+    plotting.save(plotting.creep_loglog(t, curves, expo, fits.get("linear"), f"Creep after a force step (P = {P0:g} N)"),
+                  out / "creep.png")
     write_json(out / "creep.json", summary)
-    print(f"wrote creep.csv, creep.png, spectrum.csv, relaxation.csv, creep.json in {out}/", file=sys.stderr)
+    for line in fit_lines:
+        print(line)
+    if note:
+        print(f"tenscell creep: note: {note}", file=sys.stderr)
+    files = ["creep.csv", "creep.png"] + (["spectrum.csv", "relaxation.csv"] if lin is not None else []) + ["creep.json"]
+    print(f"wrote {', '.join(files)} in {out}/", file=sys.stderr)
     return 0
 
 
