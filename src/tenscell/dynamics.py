@@ -9,24 +9,28 @@ virtual displacement along the load direction d) and a tendon law
 ``T(l, l')`` from :mod:`tenscell.constitutive`. For the Voigt law the
 equation is linear in the velocities, ``C(q)·q' = −A(q)·T_el(q) − H(q)·F(t)``
 with ``C(q) = Σ c_j a_j a_jᵀ``; for a nonlinear dashpot it is solved for ``q'``
-by a damped Newton iteration at every evaluation. Either way the state is
+by a Newton iteration at every evaluation. Either way the state is
 ``y = q − q0`` and ``q' = v(t, q)`` is integrated with a stiff implicit
-method of :func:`scipy.integrate.solve_ivp` (Radau by default) with the
-exact Jacobian ``∂v/∂q`` from the implicit-function theorem:
+method of :func:`scipy.integrate.solve_ivp` (BDF by default, Radau on
+request) with the exact Jacobian ``∂v/∂q`` from the implicit-function
+theorem:
 
-``∂v/∂q = −C_eff⁻¹ [Σ_j (T_j ∇²l_j + ∂T_j/∂l a_j a_jᵀ + ∂T_j/∂l' a_j (∇²l_j q')ᵀ) − F·∇²(d·x_load)]``,
+``∂v/∂q = −C_eff⁻¹ [Σ_j (T_j ∇²l_j + ∂T_j/∂l a_j a_jᵀ + ∂T_j/∂l' a_j (∇²l_j q')ᵀ)
+− F·∇²(d·x_load)]``,
 
-``C_eff = Σ_j ∂T_j/∂l' a_j a_jᵀ`` (the exact member Hessians come from
-:func:`tenscell.equilibrium.member_geometry`).
+``C_eff = Σ_j ∂T_j/∂l' a_j a_jᵀ`` over the taut tendons (the exact member
+Hessians come from :func:`tenscell.equilibrium.member_geometry`).
 
-**Slack.** Tendons are cables: a tendon whose tension would become negative
-goes slack and carries ``T = 0`` (spring and dashpot alike) until its
-would-be tension ``T(l, l')`` becomes positive again. The switches are found
-as zero crossings (solve_ivp events) of the smallest tension among taut
-tendons and of the largest would-be tension among slack ones; each is
-recorded as a :class:`SlackEvent` (time, tendon). No tendon ever carries
-compression: at every switch the set of taut tendons is made consistent
-(all taut tensions ≥ 0, all slack would-be tensions ≤ 0). Members of family
+**Slack.** Tendons are cables: each carries ``max(0, T(l, l'))``, spring
+and dashpot alike, so a tendon whose tension would become negative goes
+slack and carries nothing until its would-be tension is positive again.
+The velocities then solve a complementarity problem (an active-set
+iteration of exact linear solves for Voigt tendons, a semismooth Newton
+iteration otherwise); its solution is continuous in q, so no restart is
+needed and a tendon sliding at zero force causes no chattering. Every
+switch is located by solve_ivp's event root finding on the tendon's
+constitutive tension and recorded as a :class:`SlackEvent` (time, tendon,
+family, kind). No tendon ever carries compression. Members of family
 ``"strut"`` are bilateral and never go slack.
 
 **Loads.** :class:`SineForce` and :class:`StepForce` prescribe the force F
