@@ -34,6 +34,11 @@ from .variants import (
     semiflexible_study, stiffening_study,
 )
 from .fitting import FitParameter, FitResult, fit
+from .constitutive import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
+from .timedomain import (CreepSpectrum, PowerLawFit, StressRelaxation, creep_compliance, creep_spectrum, fit_power_law,
+                         local_exponent, relaxation_modulus, stress_relaxation)
+from .dynamics import (SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response,
+                       linearize_law, oscillatory_response, simulate)
 
 __version__ = "0.1.0"
 
@@ -49,4 +54,9 @@ __all__ = [
     "linearize_semiflexible", "linearize_stiffening", "loss_peak", "no_if_study", "prestress_map",
     "references_study", "semiflexible_study", "stiffening_study",
     "fit", "FitResult", "FitParameter",
+    "Voigt", "PowerDashpot", "voigt_law", "power_dashpot_law", "LinearizationError",
+    "CreepSpectrum", "creep_spectrum", "creep_compliance", "StressRelaxation", "stress_relaxation",
+    "relaxation_modulus", "local_exponent", "PowerLawFit", "fit_power_law",
+    "simulate", "SineForce", "StepForce", "SineDisplacement", "SimulationError", "linearize_law",
+    "oscillatory_response", "amplitude_sweep", "creep_response",
 ]

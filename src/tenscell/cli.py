@@ -112,6 +112,39 @@ def reproduce_homogeneous(out: Path, log) -> None:
     log("claims.md")
 
 
+def reproduce_dynamics(out: Path, log) -> None:
+    """Time-domain checks into ``out/dynamics``: small-amplitude moduli, a nonlinear loop, creep."""
+    from . import paper_cell, plotting
+    from ._io import write_json
+    from .constitutive import voigt_law
+    from .dynamics import creep_response, oscillatory_response
+    from .timedomain import creep_spectrum
+
+    d = out / "dynamics"
+    cell = paper_cell()
+    law = voigt_law(cell, P=1000.0, EA=1.0, c=1.0)
+    small = oscillatory_response(cell, law, 0.1, 1.0, samples_per_cycle=64)
+    big = oscillatory_response(cell, law, 30.0, 1.0, samples_per_cycle=64)
+    t, z, F = big.cycle()
+    zl, _ = big.linear_cycle()
+    plotting.save(plotting.force_displacement_loop(z, F, zl, None, "Default cell, 30 N at 1 Hz: nonlinear vs linear"),
+                  d / "loop_30N_1Hz.png")
+    plotting.save(plotting.harmonic_spectrum(big.harmonics), d / "harmonics_30N_1Hz.png")
+    ts = np.logspace(-5, 0, 31)
+    spec = creep_spectrum(small.linear)
+    creep = {f"step {F_:g} N": creep_response(cell, law, F_, ts).compliance for F_ in (0.1, 30.0)}
+    plotting.save(plotting.creep_loglog(ts, {"linear": spec.compliance(ts), **creep}, {"linear": spec.exponent(ts)},
+                                        None, "Default cell: creep after a force step"), d / "creep.png")
+    rows = {}
+    for name, r in (("0.1 N, 1 Hz", small), ("30 N, 1 Hz", big)):
+        rows[name] = {k: r.summary()[k] for k in ("G_storage", "G_loss", "G_storage_linear", "G_loss_linear", "thd",
+                                                   "periodicity", "work_per_cycle_J", "dissipated_per_cycle_J")}
+        rows[name]["slack_tendons"] = r.simulation.slack_tendons
+    rows["creep_max_departure"] = {k: float(np.abs(v / spec.compliance(ts) - 1).max()) for k, v in creep.items()}
+    write_json(d / "dynamics.json", rows)
+    log("dynamics/loop_30N_1Hz.png, dynamics/harmonics_30N_1Hz.png, dynamics/creep.png, dynamics/dynamics.json")
+
+
 #: the stages of `tenscell reproduce`, in order: (name, function(out_dir, log))
 REPRODUCE_STAGES = [
     ("homogeneous study (Figs. 2-3, claims)", reproduce_homogeneous),
@@ -401,8 +434,229 @@ REPRODUCE_STAGES.append(("discussion variants and future work (no-IF, sensitivit
                          reproduce_variants))
 
 
+# ---- time domain: simulate, creep ------------------------------------------------------
+def _add_law_options(p) -> None:
+    p.add_argument("--prestress", default="1000", help="prestress P (N, the paper's Pa; default 1000)")
+    p.add_argument("--beta", type=float, default=1.0,
+                   help="dashpot exponent: T = EA(l/l0-1) + c·sign(l')|l'|^beta (default 1, the Voigt law)")
+    p.add_argument("--velocity-scale", type=float, default=None,
+                   help="smoothing velocity of the power-law dashpot near l' = 0 (m/s, default 1e-3; beta != 1 only)")
+    p.add_argument("--rtol", type=float, default=None,
+                   help="relative tolerance of the integrator (default 1e-8; 1e-6 when beta != 1)")
+
+
+def _law_from_args(args):
+    """(cell, law, solver options) from the model and law options."""
+    from .constitutive import power_dashpot_law, voigt_law
+
+    cell, EA, c = model_from_args(args)
+    P = parse_list(args.prestress, "--prestress")
+    if P.size != 1:
+        raise ValueError(f"--prestress: give one value for a simulation, got {P.size}")
+    if args.beta == 1.0:
+        law = voigt_law(cell, P=P[0], EA=EA, c=c)
+    else:
+        kw = {} if args.velocity_scale is None else {"velocity_scale": args.velocity_scale}
+        law = power_dashpot_law(cell, P=P[0], EA=EA, c=c, beta=args.beta, **kw)
+    rtol = args.rtol if args.rtol is not None else (1e-8 if args.beta == 1.0 else 1e-6)
+    return cell, law, {"rtol": rtol}
+
+
+def _cmd_simulate(args) -> int:
+    from . import plotting
+    from ._io import write_csv_rows, write_json
+    from .dynamics import amplitude_sweep, oscillatory_response
+
+    cell, law, solver = _law_from_args(args)
+    freq = parse_list(args.freq, "--freq")
+    if freq.size != 1:
+        raise ValueError(f"--freq: give one frequency (Hz) for a simulation, got {freq.size}")
+    f = float(freq[0])
+    if args.cycles is not None and args.cycles < 1:
+        raise ValueError(f"--cycles must be at least 1, got {args.cycles}")
+    out = Path(args.out)
+    kw = dict(control=args.control, cycles=args.cycles, samples_per_cycle=args.samples, slack=args.slack, **solver)
+    res = oscillatory_response(cell, law, args.amplitude, f, **kw)
+    sim, h = res.simulation, res.harmonics
+    unit = "N" if args.control == "force" else "m"
+    label = f"{args.control} amplitude {args.amplitude:g} {unit}, {f:g} Hz"
+    m = cell.m
+    write_csv_rows(out / "traces.csv", ["t_s", "force_N", "z_m", "load_displacement_m"] + [f"T{j}_N" for j in range(m)],
+                   ([float(sim.t[k]), float(sim.force[k]), float(sim.z[k]), float(sim.u[k])]
+                    + [float(x) for x in sim.tensions[k]] for k in range(sim.t.size)))
+    plotting.save(plotting.time_traces(sim, f"Nonlinear simulation: {label}"), out / "traces.png")
+    t, z, F = res.cycle()
+    zl, Fl = res.linear_cycle()
+    write_csv_rows(out / "loop.csv", ["t_s", "force_N", "z_m", "z_linear_m", "force_linear_N"],
+                   ([float(a), float(b), float(c_), float(d), float(e)] for a, b, c_, d, e in zip(t, F, z, zl, Fl)))
+    lin_ok = res.linear is not None
+    plotting.save(plotting.force_displacement_loop(z, F, zl if lin_ok else None, Fl if lin_ok else None,
+                                                   f"Force-displacement loop: {label}"), out / "loop.png")
+    ref = abs(h.response[1])
+    write_csv_rows(out / "harmonics.csv", ["harmonic", "frequency_Hz", "z_amplitude_m", "z_phase_rad", "z_relative",
+                                            "force_amplitude_N"],
+                   ([k, k * f, float(abs(h.response[k])), float(np.angle(h.response[k])), float(abs(h.response[k]) / ref),
+                     float(abs(h.force[k]))] for k in range(1, h.response.size)))
+    plotting.save(plotting.harmonic_spectrum(h), out / "harmonics.png")
+    summary = res.summary()
+    summary["model"] = {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta,
+                        "EA": args.EA, "c": args.c, "prestress_N": float(parse_list(args.prestress, "--prestress")[0])}
+    written = ["traces.csv", "traces.png", "loop.csv", "loop.png", "harmonics.csv", "harmonics.png"]
+    if args.amplitudes:
+        sweep = amplitude_sweep(cell, law, f, parse_list(args.amplitudes, "--amplitudes"),
+                                **{k: v for k, v in kw.items() if k != "control"})
+        write_csv_rows(out / "sweep.csv", ["amplitude_N", "G_storage", "G_loss", "storage_departure", "loss_departure",
+                                           "thd", "periodicity", "n_slack"], sweep.rows())
+        summary["sweep"] = {
+            "amplitudes_N": sweep.amplitudes.tolist(),
+            "amplitude_for_1pct_departure_N": sweep.threshold("departure", 0.01),
+            "amplitude_for_1pct_storage_departure_N": sweep.threshold("storage_departure", 0.01),
+            "amplitude_for_1pct_loss_departure_N": sweep.threshold("loss_departure", 0.01),
+            "amplitude_for_1pct_thd_N": sweep.threshold("thd", 0.01),
+        }
+        written.append("sweep.csv")
+    write_json(out / "simulate.json", summary)
+    written.append("simulate.json")
+    print(f"G' = {res.G_storage:.6g} Pa (linear {res.G_storage_linear:.6g}), G'' = {res.G_loss:.6g} Pa "
+          f"(linear {res.G_loss_linear:.6g}), THD = {100 * res.thd:.3g} %, slack tendons: {sim.slack_tendons or 'none'}")
+    if not (h.periodicity <= 1e-4):
+        print(f"tenscell simulate: warning: the last two cycles differ by {h.periodicity:.2g} of the amplitude; "
+              "the state may not be periodic yet (raise --cycles or omit it for the adaptive default)", file=sys.stderr)
+    print(f"wrote {', '.join(written)} in {out}/", file=sys.stderr)
+    return 0
+
+
+def _add_simulate(sub) -> None:
+    p = sub.add_parser("simulate", help="nonlinear time-domain simulation under a sinusoidal load",
+                       description="Integrate the nonlinear equations of motion of the paper cell under a sinusoidal "
+                                   "load to a periodic steady state; write time traces, the force-displacement loop, "
+                                   "the harmonic spectrum (CSV + PNG) and simulate.json (G', G'' from the time domain "
+                                   "and from the linear model, THD, slack tendons).")
+    p.add_argument("--amplitude", type=float, required=True,
+                   help="load amplitude: force F at the load point (N), or displacement (m) with --control displacement")
+    p.add_argument("--freq", required=True, help="forcing frequency f (Hz)")
+    p.add_argument("--cycles", type=int, default=None,
+                   help="cycles to simulate (default: adaptive, until two consecutive cycles agree)")
+    p.add_argument("--control", choices=("force", "displacement"), default="force",
+                   help="prescribe the force (default) or the probe displacement")
+    p.add_argument("--samples", type=int, default=128, help="samples per cycle (default 128)")
+    p.add_argument("--slack", choices=("allow", "error"), default="allow",
+                   help="let tendons go slack and record it (default) or stop with an error")
+    p.add_argument("--amplitudes", default=None,
+                   help="also sweep these force amplitudes (N, comma list) and report where G', G'' depart from the "
+                        "linear values by 1%% and where THD reaches 1%% (sweep.csv)")
+    p.add_argument("--out", required=True, help="output directory")
+    add_model_options(p)
+    _add_law_options(p)
+    p.set_defaults(func=_cmd_simulate)
+
+
+def _cmd_creep(args) -> int:
+    from . import plotting
+    from ._io import write_csv_rows, write_json
+    from .constitutive import LinearizationError
+    from .dynamics import creep_response, linearize_law
+    from .timedomain import creep_spectrum, fit_power_law, local_exponent, stress_relaxation
+
+    cell, law, solver = _law_from_args(args)
+    if not (0 < args.t_min < args.t_max) or args.points < 3:
+        raise ValueError(f"need 0 < --t-min < --t-max and --points >= 3, got {args.t_min}, {args.t_max}, {args.points}")
+    t = np.logspace(math.log10(args.t_min), math.log10(args.t_max), args.points)
+    amps = parse_list(args.amplitude, "--amplitude")
+    win = parse_list(args.window.replace(":", ","), "--window") if args.window else np.array([t[0], t[-1]])
+    if win.size != 2:
+        raise ValueError(f"--window: expected a:b (s), got {args.window!r}")
+    out = Path(args.out)
+    P0 = float(parse_list(args.prestress, "--prestress")[0])
+    try:
+        lin, note = linearize_law(cell, law), ""
+    except LinearizationError as err:  # beta < 1: only the nonlinear curves exist
+        lin, note = None, str(err)
+    curves, expo, fits = {}, {}, {}
+    summary = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0},
+               "linear_note": note, "power_law_window_s": [float(win[0]), float(win[1])]}
+    if lin is not None:
+        spec = creep_spectrum(lin)
+        curves["linear"] = spec.compliance(t)
+        expo["linear"] = spec.exponent(t)
+        rel = stress_relaxation(lin)
+        write_csv_rows(out / "spectrum.csv", ["retardation_time_s", "weight_m_per_N"],
+                       ([float(a), float(b)] for a, b in zip(spec.times, spec.weights)))
+        write_csv_rows(out / "relaxation.csv", ["t_s", "G_relaxation_Pa"],
+                       ([float(a), float(b)] for a, b in zip(t, rel.modulus(t))))
+        summary.update({
+            "static_compliance_m_per_N": spec.static,
+            "instantaneous_compliance_m_per_N": spec.instantaneous,
+            "retardation_times_s": spec.times.tolist(),
+            "retardation_weights_m_per_N": spec.weights.tolist(),
+            "relaxation": {"equilibrium_modulus_Pa": (0.5 / rel.L) * rel.equilibrium, "viscosity_Pa_s": rel.viscosity,
+                           "times_s": rel.times.tolist(), "weights_N_per_m": rel.weights.tolist()},
+        })
+    steps = []
+    for F in amps:
+        cr = creep_response(cell, law, float(F), t, slack=args.slack, **solver)
+        key = f"step {F:g} N"
+        curves[key] = cr.compliance
+        step = {"force_N": float(F), "slack_tendons": cr.simulation.slack_summary()}
+        if lin is not None:
+            step["max_relative_departure_from_linear"] = float(np.abs(cr.compliance / curves["linear"] - 1).max())
+        steps.append(step)
+        if np.all(cr.compliance > 0):
+            expo[key] = local_exponent(t, cr.compliance)
+    summary["steps"] = steps
+    inwin = (t >= win[0]) & (t <= win[1])
+    fit_lines = []
+    for k, J in curves.items():
+        if np.all(J[inwin] > 0) and inwin.sum() >= 2:
+            fits[k] = fit_power_law(t, J, win[0], win[1])
+    summary["power_law_fits"] = {}
+    for k, v in fits.items():
+        e = expo.get(k)
+        rng = [float(e[inwin].min()), float(e[inwin].max())] if e is not None else None
+        summary["power_law_fits"][k] = {"A_m_per_N": v.A, "alpha": v.alpha, "rms_log": v.rms_log, "max_rel": v.max_rel,
+                                        "points": v.n, "local_exponent_range": rng}
+        fit_lines.append(f"{k}: J(t) ~ {v.A:.4g}·t^{v.alpha:.4f} over [{v.t_min:g}, {v.t_max:g}] s "
+                         f"(rms log residual {v.rms_log:.3g})"
+                         + (f"; local exponent in the window {rng[0]:.3g}..{rng[1]:.3g}" if rng else ""))
+    keys = list(curves)
+    write_csv_rows(out / "creep.csv", ["t_s"] + [f"J_{k.replace(' ', '_')}_m_per_N" for k in keys]
+                   + [f"exponent_{k.replace(' ', '_')}" for k in expo],
+                   ([float(t[i])] + [float(curves[k][i]) for k in keys] + [float(e[i]) for e in expo.values()]
+                    for i in range(t.size)))
+    plotting.save(plotting.creep_loglog(t, curves, expo, fits.get("linear"), f"Creep after a force step (P = {P0:g} N)"),
+                  out / "creep.png")
+    write_json(out / "creep.json", summary)
+    for line in fit_lines:
+        print(line)
+    if note:
+        print(f"tenscell creep: note: {note}", file=sys.stderr)
+    files = ["creep.csv", "creep.png"] + (["spectrum.csv", "relaxation.csv"] if lin is not None else []) + ["creep.json"]
+    print(f"wrote {', '.join(files)} in {out}/", file=sys.stderr)
+    return 0
+
+
+def _add_creep(sub) -> None:
+    p = sub.add_parser("creep", help="creep compliance J(t): linear (exact) vs nonlinear (simulated)",
+                       description="Creep after a force step at the load point: the linear model's exact J(t) from "
+                                   "its relaxation spectrum and the nonlinear simulation for each step force; "
+                                   "log-log plot, local exponent, power-law fit over a window, relaxation modulus.")
+    p.add_argument("--amplitude", default="0.1,30", help="step forces (N, comma list; default 0.1,30)")
+    p.add_argument("--t-min", type=float, default=1e-5, help="first output time (s, default 1e-5)")
+    p.add_argument("--t-max", type=float, default=1.0, help="last output time (s, default 1)")
+    p.add_argument("--points", type=int, default=61, help="log-spaced output times (default 61)")
+    p.add_argument("--window", default=None, help="power-law fit window a:b (s; default the whole range)")
+    p.add_argument("--slack", choices=("allow", "error"), default="allow",
+                   help="let tendons go slack and record it (default) or stop with an error")
+    p.add_argument("--out", required=True, help="output directory")
+    add_model_options(p)
+    _add_law_options(p)
+    p.set_defaults(func=_cmd_creep)
+
+REPRODUCE_STAGES.append(("time domain (small-amplitude moduli, nonlinear loop, creep)", reproduce_dynamics))
+
+
 #: subcommand registrars, in the order they appear in --help
-COMMANDS = [_add_moduli, _add_reproduce, _add_fit, _add_study]
+COMMANDS = [_add_moduli, _add_reproduce, _add_fit, _add_simulate, _add_creep, _add_study]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,405 @@
+"""Creep and stress relaxation of the linear model, and power-law analysis of time curves.
+
+The linear model ``C0·q' + K0·q = b·F`` (``b = −H0``), ``z = D0·q`` has the
+transfer function ``J(s) = D0 (K0 + s·C0)⁻¹ b`` (m/N). With the generalized
+eigenvectors of ``C0 v = τ K0 v`` (``vᵀK0v = 1``; τ ≥ 0 in s, τ = 0 for
+modes the tendons do not damp)
+
+``J(s) = Σ_k ρ_k / (1 + s·τ_k)``,  ``ρ_k = (D0·v_k)(b·v_k)`` (m/N),
+
+so the **creep compliance**, the displacement per newton after a unit force
+step at t = 0, is exact and closed-form:
+
+``J(t) = J_inst + Σ_{τ_k>0} ρ_k (1 − e^{−t/τ_k})``,  ``J_inst = Σ_{τ_k=0} ρ_k``
+
+(``τ_k = 1/λ_k`` and ``ρ_k = r_k/λ_k`` in the notation of
+:class:`tenscell.RelaxationSpectrum`; ``J_inst = 0`` when C0 is positive
+definite, as for the paper cell with intermediate filaments).
+
+The **relaxation function**, the force after a unit displacement step, is
+the inverse Laplace transform of ``1/(s·J(s))``. Its poles are the zeros of
+``J(s)``, so
+
+``R(t) = η·δ(t) + k_∞ + Σ_i g_i e^{−t/θ_i}`` (N/m),
+
+with ``k_∞ = 1/J(0)`` (the static stiffness), ``η = 1/Σ_k ρ_k/τ_k``
+(N·s/m; an impulse, present when C0 is positive definite: a Voigt network
+resists an instantaneous step with an infinite force) and θ_i the
+relaxation times of the clamped structure. The relaxation modulus is
+``G(t) = (0.5/L)·R(t)`` (Pa), the same continuum factor as ``G' + iG''``.
+
+Both are exact for the linear model. :mod:`tenscell.dynamics` computes the
+nonlinear creep by simulation.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+
+from ._checks import positive_array, positive_scalar
+from .linear import LinearModel
+
+__all__ = [
+    "CreepSpectrum",
+    "creep_spectrum",
+    "creep_compliance",
+    "StressRelaxation",
+    "stress_relaxation",
+    "relaxation_modulus",
+    "local_exponent",
+    "PowerLawFit",
+    "fit_power_law",
+]
+
+_ZERO_TIME = 1e-12  # τ below this fraction of the longest retardation time counts as instantaneous
+
+
+def _times(t) -> np.ndarray:
+    return positive_array("t (time)", t, unit="s", allow_zero=True)
+
+
+@dataclass(frozen=True, eq=False)
+class CreepSpectrum:
+    """Discrete retardation spectrum of the linear model's creep compliance.
+
+    ``J(t) = instantaneous + Σ_k weights_k (1 − e^{−t/times_k})`` (m/N).
+
+    Attributes
+    ----------
+    times : ndarray, shape (k,)
+        Retardation times τ_k (s), ascending, all > 0 (``1/λ_k`` of the
+        relaxation rates ``K0 v = λ C0 v``).
+    weights : ndarray, shape (k,)
+        Compliance weights ρ_k (m/N); non-negative when probe and load
+        coincide (as in the paper cell), zero for modes the load does not
+        excite.
+    instantaneous : float
+        Compliance of the undamped modes, ``J(0+)`` (m/N); 0 when C0 is
+        positive definite.
+    L : float
+        Strut length (m), for the continuum factor: compliance in 1/Pa is
+        ``J(t)·2L``.
+    """
+
+    times: np.ndarray
+    weights: np.ndarray
+    instantaneous: float
+    L: float
+
+    @property
+    def static(self) -> float:
+        """Long-time (static) compliance ``J(∞) = J_inst + Σ ρ_k`` (m/N)."""
+        return float(self.instantaneous + self.weights.sum())
+
+    def significant(self, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+        """``(times, weights)`` of the modes with ``|ρ_k| > rtol·Σ|ρ|`` (the ones the load excites)."""
+        keep = np.abs(self.weights) > rtol * max(np.abs(self.weights).sum(), 1e-300)
+        return self.times[keep], self.weights[keep]
+
+    def compliance(self, t) -> np.ndarray:
+        """Creep compliance ``J(t)`` (m/N) at times ``t`` (s, ≥ 0); ``J(0) = J_inst``."""
+        t = _times(t)
+        x = np.multiply.outer(t, 1.0 / self.times)
+        return self.instantaneous + (-np.expm1(-x)) @ self.weights
+
+    def rate(self, t) -> np.ndarray:
+        """Creep rate ``dJ/dt`` (m/(N·s)) at times ``t`` (s)."""
+        t = _times(t)
+        return np.exp(-np.multiply.outer(t, 1.0 / self.times)) @ (self.weights / self.times)
+
+    def exponent(self, t) -> np.ndarray:
+        """Local power-law exponent ``d ln J/d ln t = t·J'(t)/J(t)`` (dimensionless), t > 0 (s)."""
+        t = positive_array("t (time)", t, unit="s")
+        return t * self.rate(t) / self.compliance(t)
+
+    def transfer(self, s) -> np.ndarray:
+        """``J(s) = J_inst + Σ ρ_k/(1 + s·τ_k)`` (m/N) at complex Laplace variables ``s`` (1/s)."""
+        s = np.asarray(s, dtype=complex)
+        return self.instantaneous + (1.0 / (1.0 + np.multiply.outer(s, self.times))) @ self.weights
+
+
+def _dense(M) -> np.ndarray:
+    return M.toarray() if sp.issparse(M) else np.asarray(M)
+
+
+def creep_spectrum(lin: LinearModel) -> CreepSpectrum:
+    """Retardation times and weights of the linear model (works for singular C0 too).
+
+    Solves the symmetric-definite pencil ``C0 v = τ K0 v`` (K0 positive
+    definite is guaranteed by :func:`tenscell.linearize`).
+
+    Parameters
+    ----------
+    lin : LinearModel
+
+    Returns
+    -------
+    CreepSpectrum
+    """
+    K0, C0 = _dense(lin.K0), _dense(lin.C0)
+    tau, V = scipy.linalg.eigh(C0, K0)
+    tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding
+    rho = (lin.D0 @ V) * (-lin.H0 @ V)
+    inst = tau <= _ZERO_TIME * max(tau.max(), 1e-300)
+    order = np.argsort(tau[~inst])
+    return CreepSpectrum(
+        times=tau[~inst][order], weights=rho[~inst][order], instantaneous=float(rho[inst].sum()), L=lin.L,
+    )
+
+
+def creep_compliance(lin: LinearModel, t, *, continuum: bool = False) -> np.ndarray:
+    """Creep compliance of the linear model: displacement per unit force step.
+
+    Parameters
+    ----------
+    lin : LinearModel
+    t : float or array_like
+        Times after the step (s), ≥ 0.
+    continuum : bool
+        Return ``J(t)·2L`` in 1/Pa (the continuum factor of ``G = (0.5/L)/J``)
+        instead of m/N.
+
+    Returns
+    -------
+    ndarray, same shape as ``t``
+        ``J(t)`` in m/N (or 1/Pa).
+    """
+    spec = creep_spectrum(lin)
+    J = spec.compliance(t)
+    return J * (2.0 * spec.L) if continuum else J
+
+
+@dataclass(frozen=True, eq=False)
+class StressRelaxation:
+    """Force response to a unit displacement step of the probe (linear model).
+
+    ``R(t) = impulse·δ(t) + equilibrium + Σ_i weights_i e^{−t/times_i}`` (N/m);
+    the relaxation modulus is ``G(t) = (0.5/L)·R(t)`` (Pa).
+
+    Attributes
+    ----------
+    times : ndarray, shape (k,)
+        Relaxation times θ_i of the clamped structure (s), ascending.
+    weights : ndarray, shape (k,)
+        Stiffness weights g_i (N/m).
+    equilibrium : float
+        Static stiffness ``k_∞ = 1/J(0)`` (N/m).
+    impulse : float
+        Coefficient η of the impulse at t = 0 (N·s/m): ``1/Σ_k ρ_k/τ_k`` when
+        C0 is positive definite, otherwise 0.
+    L : float
+        Strut length (m).
+    """
+
+    times: np.ndarray
+    weights: np.ndarray
+    equilibrium: float
+    impulse: float
+    L: float
+
+    @property
+    def initial(self) -> float:
+        """``R(0+) = k_∞ + Σ g_i`` (N/m), the regular part just after the step."""
+        return float(self.equilibrium + self.weights.sum())
+
+    def force(self, t) -> np.ndarray:
+        """Regular part of ``R(t)`` (N/m) at times ``t`` (s, ≥ 0); the impulse is in :attr:`impulse`."""
+        t = _times(t)
+        return self.equilibrium + np.exp(-np.multiply.outer(t, 1.0 / self.times)) @ self.weights
+
+    def modulus(self, t) -> np.ndarray:
+        """Relaxation modulus ``G(t) = (0.5/L)·R(t)`` (Pa), regular part, t ≥ 0 (s)."""
+        return (0.5 / self.L) * self.force(t)
+
+    @property
+    def viscosity(self) -> float:
+        """``(0.5/L)·η`` (Pa·s): equals ``lim G''/ω`` at high frequency."""
+        return (0.5 / self.L) * self.impulse
+
+    def laplace(self, s) -> np.ndarray:
+        """``R(s) = η + k_∞/s + Σ g_i θ_i/(1 + s θ_i)`` (N·s/m) at complex ``s`` (1/s); equals ``1/(s·J(s))``."""
+        s = np.asarray(s, dtype=complex)
+        return (self.impulse + self.equilibrium / s
+                + (1.0 / (1.0 + np.multiply.outer(s, self.times))) @ (self.weights * self.times))
+
+
+def _merge_modes(lam: np.ndarray, r: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+    """Drop unexcited modes and merge repeated rates (their residues add)."""
+    keep = np.abs(r) > 1e-12 * np.abs(r).sum()
+    lam, r = lam[keep], r[keep]
+    order = np.argsort(lam)
+    lam, r = lam[order], r[order]
+    out_l, out_r = [], []
+    for lk, rk in zip(lam, r):
+        if out_l and lk - out_l[-1] <= rtol * lk:
+            out_r[-1] += rk
+        else:
+            out_l.append(lk)
+            out_r.append(rk)
+    return np.array(out_l), np.array(out_r)
+
+
+def stress_relaxation(lin: LinearModel) -> StressRelaxation:
+    """Relaxation function of the linear model from the zeros of ``J(s)``.
+
+    The zeros are the finite eigenvalues of the bordered pencil
+    ``[[sI + Λ, w], [pᵀ, −J_inst]]`` (``p_k w_k = r_k``), polished by Newton
+    steps on ``J(s)``; the weights are the residues of ``1/(s·J(s))``.
+
+    Parameters
+    ----------
+    lin : LinearModel
+
+    Returns
+    -------
+    StressRelaxation
+
+    Raises
+    ------
+    ValueError
+        If ``J(s)`` has complex zeros (possible only when the probe differs
+        from the load), for which a sum of decaying exponentials with real
+        weights is not the right form.
+    """
+    spec = creep_spectrum(lin)
+    lam, r = _merge_modes(1.0 / spec.times, spec.weights / spec.times)
+    Jinst = spec.instantaneous
+    k = lam.size
+    J0 = spec.static
+    if k == 0:  # purely elastic response
+        return StressRelaxation(times=np.zeros(0), weights=np.zeros(0), equilibrium=1.0 / J0, impulse=0.0, L=spec.L)
+    p = np.sign(r) * np.sqrt(np.abs(r))
+    w = np.sqrt(np.abs(r))
+    M = np.zeros((k + 1, k + 1))
+    M[:k, :k] = np.diag(lam)
+    M[:k, k] = w
+    M[k, :k] = p
+    M[k, k] = -Jinst
+    B = np.diag(np.r_[np.ones(k), 0.0])
+    # (M + s B) x = 0  <=>  M x = s (−B) x
+    ev = scipy.linalg.eigvals(M, -B)
+    ev = ev[np.isfinite(ev)]
+    if ev.size and np.any(np.abs(ev.imag) > 1e-8 * np.abs(ev).max()):
+        raise ValueError(
+            f"J(s) of {lin.cell.describe()} has complex zeros (the probe is not the load point), "
+            "so its relaxation function is not a sum of real decaying exponentials"
+        )
+    z = np.sort(ev.real)
+
+    def J(s):
+        return Jinst + np.sum(r / (s + lam))
+
+    def dJ(s):
+        return -np.sum(r / (s + lam) ** 2)
+
+    for i in range(z.size):
+        for _ in range(3):
+            z[i] -= J(z[i]) / dJ(z[i])
+    if np.any(z >= 0):
+        raise ValueError(f"J(s) of {lin.cell.describe()} has a zero with non-negative real part: unstable clamped structure")
+    g = np.array([1.0 / (zi * dJ(zi)) for zi in z])
+    theta = -1.0 / z
+    order = np.argsort(theta)
+    impulse = 1.0 / r.sum() if Jinst == 0.0 else 0.0
+    return StressRelaxation(times=theta[order], weights=g[order], equilibrium=1.0 / J0, impulse=impulse, L=spec.L)
+
+
+def relaxation_modulus(lin: LinearModel, t) -> np.ndarray:
+    """Relaxation modulus ``G(t)`` (Pa) of the linear model at times ``t`` (s, ≥ 0).
+
+    The regular part only; the impulse at t = 0 (present when C0 is positive
+    definite) has weight :attr:`StressRelaxation.viscosity` (Pa·s).
+    """
+    return stress_relaxation(lin).modulus(t)
+
+
+def local_exponent(t, y) -> np.ndarray:
+    """Local power-law exponent ``d ln y/d ln t`` of sampled data (second-order differences).
+
+    Parameters
+    ----------
+    t : array_like, shape (k,)
+        Increasing times (s), > 0.
+    y : array_like, shape (..., k)
+        Positive values (e.g. J(t) in m/N).
+    """
+    t = positive_array("t (time)", t, unit="s")
+    y = positive_array("y", y)
+    if t.ndim != 1 or t.size < 3 or y.shape[-1] != t.size:
+        raise ValueError(f"t must be 1-D with at least 3 points matching y's last axis, got {t.shape} and {y.shape}")
+    if np.any(np.diff(t) <= 0):
+        raise ValueError("t must be strictly increasing")
+    return np.gradient(np.log(y), np.log(t), axis=-1)
+
+
+@dataclass(frozen=True)
+class PowerLawFit:
+    """Least-squares fit ``J(t) = A·t^α`` in log-log coordinates over a window.
+
+    Attributes
+    ----------
+    A : float
+        Prefactor, ``J`` at t = 1 s (units of J, e.g. m/N).
+    alpha : float
+        Exponent (dimensionless).
+    t_min, t_max : float
+        Window (s).
+    n : int
+        Points used.
+    rms_log : float
+        Root-mean-square of ``ln J − ln(A t^α)`` over the window (dimensionless).
+    max_rel : float
+        Largest ``|J/(A t^α) − 1|`` over the window.
+    """
+
+    A: float
+    alpha: float
+    t_min: float
+    t_max: float
+    n: int
+    rms_log: float
+    max_rel: float
+
+    def __call__(self, t) -> np.ndarray:
+        """``A·t^α`` at times ``t`` (s)."""
+        return self.A * np.asarray(t, dtype=float) ** self.alpha
+
+
+def fit_power_law(t, J, t_min: float | None = None, t_max: float | None = None) -> PowerLawFit:
+    """Fit ``J = A·t^α`` by linear least squares on ``(ln t, ln J)`` over ``[t_min, t_max]``.
+
+    Parameters
+    ----------
+    t : array_like, shape (k,)
+        Times (s), > 0.
+    J : array_like, shape (k,)
+        Positive values (m/N or 1/Pa).
+    t_min, t_max : float, optional
+        Window (s); defaults to the whole range.
+
+    Raises
+    ------
+    ValueError
+        For fewer than 2 points in the window, or non-positive data.
+    """
+    t = positive_array("t (time)", t, unit="s")
+    J = positive_array("J", J)
+    if t.shape != J.shape or t.ndim != 1:
+        raise ValueError(f"t and J must be 1-D of equal length, got {t.shape} and {J.shape}")
+    lo = float(t.min()) if t_min is None else positive_scalar("t_min", t_min, "s")
+    hi = float(t.max()) if t_max is None else positive_scalar("t_max", t_max, "s")
+    if hi <= lo:
+        raise ValueError(f"the fit window must have t_min < t_max, got [{lo!r}, {hi!r}] s")
+    sel = (t >= lo) & (t <= hi)
+    if sel.sum() < 2:
+        raise ValueError(f"the fit window [{lo:g}, {hi:g}] s contains {int(sel.sum())} point(s); need at least 2")
+    x, y = np.log(t[sel]), np.log(J[sel])
+    alpha, lnA = np.polyfit(x, y, 1)
+    res = y - (lnA + alpha * x)
+    return PowerLawFit(
+        A=float(np.exp(lnA)), alpha=float(alpha), t_min=lo, t_max=hi, n=int(sel.sum()),
+        rms_log=float(np.sqrt(np.mean(res ** 2))), max_rel=float(np.max(np.abs(np.expm1(res)))),
+    )
