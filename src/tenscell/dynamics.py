@@ -95,23 +95,15 @@ class SimulationError(ValueError):
 
 # ---- loads ---------------------------------------------------------------------------
 @dataclass(frozen=True)
-class SineForce:
-    """``F(t) = amplitude·sin(2π f t)`` at the load point, along its direction.
-
-    Parameters
-    ----------
-    amplitude : float
-        Force amplitude (N), > 0.
-    frequency_hz : float
-        Forcing frequency f (Hz), > 0.
-    """
+class _Sinusoid:
+    """``amplitude·sin(2π f t)``: shared by the force- and displacement-controlled loads."""
 
     amplitude: float
     frequency_hz: float
-    controls = "force"
+    _unit = ""
 
     def __post_init__(self):
-        object.__setattr__(self, "amplitude", positive_scalar("amplitude", self.amplitude, "N"))
+        object.__setattr__(self, "amplitude", positive_scalar("amplitude", self.amplitude, self._unit))
         object.__setattr__(self, "frequency_hz", positive_scalar("frequency", self.frequency_hz, "Hz"))
 
     @property
@@ -126,16 +118,48 @@ class SineForce:
 
     @property
     def phasor(self) -> complex:
-        """Complex amplitude X with ``F(t) = Re(X e^{iωt})`` (N): ``−i·amplitude``."""
+        """Complex amplitude X with ``value(t) = Re(X e^{iωt})``: ``−i·amplitude`` (N or m)."""
         return -1j * self.amplitude
 
     def value(self, t) -> float:
-        """Force F(t) (N)."""
+        """The force F(t) (N) or the prescribed displacement z(t) (m)."""
         return self.amplitude * np.sin(self.omega * t)
 
     def rate(self, t) -> float:
-        """dF/dt (N/s)."""
+        """Its time derivative (N/s or m/s)."""
         return self.amplitude * self.omega * np.cos(self.omega * t)
+
+
+@dataclass(frozen=True)
+class SineForce(_Sinusoid):
+    """``F(t) = amplitude·sin(2π f t)`` at the load point, along its direction.
+
+    Parameters
+    ----------
+    amplitude : float
+        Force amplitude (N), > 0.
+    frequency_hz : float
+        Forcing frequency f (Hz), > 0.
+    """
+
+    controls = "force"
+    _unit = "N"
+
+
+@dataclass(frozen=True)
+class SineDisplacement(_Sinusoid):
+    """Prescribed probe displacement ``z(t) = amplitude·sin(2π f t)``; the load force follows.
+
+    Parameters
+    ----------
+    amplitude : float
+        Displacement amplitude (m), > 0.
+    frequency_hz : float
+        Frequency f (Hz), > 0.
+    """
+
+    controls = "displacement"
+    _unit = "m"
 
 
 @dataclass(frozen=True)
@@ -166,50 +190,6 @@ class StepForce:
     def rate(self, t) -> float:
         """dF/dt = 0 for t > 0 (N/s)."""
         return 0.0
-
-
-@dataclass(frozen=True)
-class SineDisplacement:
-    """Prescribed probe displacement ``z(t) = amplitude·sin(2π f t)``; the load force follows.
-
-    Parameters
-    ----------
-    amplitude : float
-        Displacement amplitude (m), > 0.
-    frequency_hz : float
-        Frequency f (Hz), > 0.
-    """
-
-    amplitude: float
-    frequency_hz: float
-    controls = "displacement"
-
-    def __post_init__(self):
-        object.__setattr__(self, "amplitude", positive_scalar("amplitude", self.amplitude, "m"))
-        object.__setattr__(self, "frequency_hz", positive_scalar("frequency", self.frequency_hz, "Hz"))
-
-    @property
-    def omega(self) -> float:
-        """Angular frequency ω = 2πf (rad/s)."""
-        return 2.0 * math.pi * self.frequency_hz
-
-    @property
-    def period(self) -> float:
-        """Period 1/f (s)."""
-        return 1.0 / self.frequency_hz
-
-    @property
-    def phasor(self) -> complex:
-        """Complex amplitude with ``z(t) = Re(X e^{iωt})`` (m): ``−i·amplitude``."""
-        return -1j * self.amplitude
-
-    def value(self, t) -> float:
-        """Prescribed displacement z(t) (m)."""
-        return self.amplitude * np.sin(self.omega * t)
-
-    def rate(self, t) -> float:
-        """dz/dt (m/s)."""
-        return self.amplitude * self.omega * np.cos(self.omega * t)
 
 
 _LOADS = (SineForce, StepForce, SineDisplacement)
