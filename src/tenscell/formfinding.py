@@ -170,14 +170,20 @@ def rigid_body_modes(coords: Coordinates, q: np.ndarray | None = None, rtol: flo
         V = V @ Z
     if V.shape[1] == 0:
         return np.zeros((coords.n, 0))
-    # the generalized velocities realizing them: J q̇ = v node by node
-    Jg = np.zeros((nn, 3, coords.n + 1))
+    # the generalized velocities realizing them, block by block (a strut's or a point's coordinates
+    # are moved by at most two nodes): J_b q̇_b = v on those nodes, exact for a rigid motion
+    Qd = np.zeros((coords.n, V.shape[1]))
+    V3 = V.reshape(nn, 3, -1)
     idx = kin.index
+    blocks: dict = {}
     for i in range(nn):
-        for k in range(idx.shape[1]):
-            Jg[i, :, idx[i, k]] += kin.jac[i, :, k]
-    Jg = Jg[:, :, :-1].reshape(3 * nn, coords.n)
-    Qd, res, rank, sv = np.linalg.lstsq(Jg, V, rcond=None)
+        if idx[i, 0] >= 0:
+            blocks.setdefault(int(idx[i, 0]), []).append(i)
+    for nodes in blocks.values():
+        cols = idx[nodes[0]][idx[nodes[0]] >= 0]
+        Jb = np.concatenate([kin.jac[i][:, : cols.size] for i in nodes])
+        Vb = np.concatenate([V3[i] for i in nodes])
+        Qd[cols] = np.linalg.lstsq(Jb, Vb, rcond=None)[0]
     # keep the independent ones (a structure on one line has only 5 rigid motions)
     U, sv2, _ = np.linalg.svd(Qd, full_matrices=False)
     k = int(np.sum(sv2 > rtol * max(sv2.max(initial=0.0), 1e-300)))

@@ -73,12 +73,16 @@ __all__ = [
     "lattice_module_tensions",
     "SPHERE_STRUTS",
     "DEFAULT_OFFSET",
+    "LATTICE_STRUT_EA",
 ]
 
 #: numbers of struts of the built-in spherical tensegrities
 SPHERE_STRUTS = (6, 12, 30)
 #: default strut offset b/L of the lattice module (IFs in tension for b < 1/4)
 DEFAULT_OFFSET = 0.21
+#: suggested EA (N) of the lattices' elastic struts: stiff next to tendons of EA = 1 N, and well above the
+#: strut compression P·|T0| at the paper's prestresses, so the struts' axial stiffness (EA + P·T0)/l stays positive
+LATTICE_STRUT_EA = 1e3
 
 _PHI = (1.0 + math.sqrt(5.0)) / 2.0
 
