@@ -26,6 +26,11 @@ from .response import (
 )
 from .shapes import DEFAULT_DELTA, REGULAR_DELTA, if_free_delta, paper_cell, paper_structure
 from .structure import Point, Structure, StructureError
+from .structio import StructureFile, load_structure, load_structure_file, member_values, save_structure
+from .formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
+from .lattices import lattice_cell, lattice_structure, sphere_cell, sphere_structure
+from .krylov import krylov_compliance
+from .summary import relaxation_modes, summarize
 
 __version__ = "0.1.0"
 
@@ -36,4 +41,8 @@ __all__ = [
     "LinearModel", "linearize", "RelaxationSpectrum", "relaxation_spectrum", "NotPositiveDefiniteError",
     "compliance", "moduli", "frequency_response", "FrequencyResponse", "static_modulus", "viscosity_limit",
     "loss_tangent", "log_slope",
+    "StructureFile", "load_structure", "load_structure_file", "save_structure", "member_values",
+    "find_form", "FormFindingResult", "FormFindingError", "pin_jointed", "rigid_body_modes",
+    "sphere_cell", "sphere_structure", "lattice_cell", "lattice_structure", "krylov_compliance",
+    "summarize", "relaxation_modes",
 ]
