@@ -374,15 +374,16 @@ def _minimize(s, nodes, w, r, cable, it, max_iter, tol, mu, size0):
         T = w * (l - r)
         A = equilibrium_matrix(geom)
         g = A @ T
+        if np.max(np.abs(T)) <= 1e-9 * np.max(w) * size0:
+            raise FormFindingError(
+                f"{s.name}: no prestressable configuration found: every cable reached its rest length and the "
+                "structure is left without tension (slack); use smaller rest lengths"
+            )
         resid = _residual(A, T)
         if resid <= tol:
             return nodes, it, mu, resid
         if it >= max_iter:
-            raise FormFindingError(
-                f"{s.name}: no prestressable configuration found: form-finding did not converge in {max_iter} "
-                f"Newton steps (relative equilibrium residual {resid:.3g}, wanted {tol:g}); the topology may admit "
-                "no self-stress with these force densities, or the initial shape is too far from one"
-            )
+            raise _not_converged(s, max_iter, resid, tol)
         H = tangent_stiffness(geom, T, w)
         E0 = _energy(l, w, r)
         D = np.abs(H.diagonal())
@@ -393,7 +394,7 @@ def _minimize(s, nodes, w, r, cable, it, max_iter, tol, mu, size0):
             pred = -(g @ dq + 0.5 * dq @ (H @ dq))
             gn = member_geometry(coords, q + dq)
             En = _energy(gn.lengths, w, r)
-            if pred <= 1e-13 * E0:
+            if pred <= 1e-13 * E0 and resid < 1e-6:
                 # the energy change is lost in rounding near the minimum: judge the step by the residual
                 ok = _residual(equilibrium_matrix(gn), w * (gn.lengths - r)) < resid
             else:
@@ -406,7 +407,9 @@ def _minimize(s, nodes, w, r, cable, it, max_iter, tol, mu, size0):
                 nodes = positions(coords, q + dq)
                 break
             mu *= 4.0
-            if mu > 1e12 or it >= max_iter:
+            if it >= max_iter:
+                raise _not_converged(s, max_iter, resid, tol)
+            if mu > 1e12:
                 raise FormFindingError(
                     f"{s.name}: no prestressable configuration found: the energy stopped decreasing "
                     f"(relative equilibrium residual {resid:.3g} after {it} steps)"
@@ -420,6 +423,14 @@ def _minimize(s, nodes, w, r, cable, it, max_iter, tol, mu, size0):
             )
         if _size(nodes) < 1e-6 * size0:
             raise FormFindingError(f"{s.name}: no prestressable configuration found: the structure collapsed to a point")
+
+
+def _not_converged(s, max_iter, resid, tol) -> FormFindingError:
+    return FormFindingError(
+        f"{s.name}: no prestressable configuration found: form-finding did not converge in {max_iter} "
+        f"Newton steps (relative equilibrium residual {resid:.3g}, wanted {tol:g}); the topology may admit "
+        "no self-stress with these force densities, or the initial shape is too far from one"
+    )
 
 
 def _lm_step(H, D, g, mu):
