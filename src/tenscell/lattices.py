@@ -23,7 +23,9 @@ a stable prestressable configuration with every tendon in tension. Finally,
 as in the paper, the three nodes of one actin triangle are fixed (ball
 joints of three anchored struts), that triangle's three cables are dropped,
 and the structure is turned so that the base lies in z = 0 with the cell
-above it. The self-stress is the form-found one. Load and probe: vertical,
+above it. (For 6 and 12 struts the triangles are faces of the convex hull,
+so every node lies at z ≥ 0; the 30-strut sphere's triangles are slightly
+dented, and a few nodes reach 0.035·L below the base plane.) The self-stress is the form-found one. Load and probe: vertical,
 at the centre of the strut whose centre is highest.
 
 Multi-module lattices (:func:`lattice_cell`)
@@ -229,11 +231,10 @@ def sphere_structure(n_struts: int = 12, L: float = 1.0, if_force_density: float
                      fixed=(), load=probe, probe=probe, name=f"{n_struts}-strut sphere (free)")
     found = find_form(free, force_density={ACTIN: 1.0, INTERMEDIATE_FILAMENT: wif},
                       rest_length={ACTIN: 0.1 * L, INTERMEDIATE_FILAMENT: 0.0})
-    if not found.stable:  # pragma: no cover - checked for the built-in parameters by the tests
+    if found.stable is False:  # pragma: no cover - checked for the built-in parameters by the tests
         raise NotPrestressableError(f"the {n_struts}-strut sphere with if_force_density={wif:g} is not stable")
     x = found.structure.nodes
-    # anchor one actin triangle, as the paper does: turn it into the base plane z = 0, cell above
-    base = triangles[0]
+    base = _base_triangle(x[: len(X)], triangles)
     c = x[list(base)].mean(axis=0)
     nrm = np.cross(x[base[1]] - x[base[0]], x[base[2]] - x[base[0]])
     nrm /= np.linalg.norm(nrm)
@@ -256,6 +257,17 @@ def sphere_structure(n_struts: int = 12, L: float = 1.0, if_force_density: float
         name=f"{n_struts}-strut sphere" + ("" if intermediate_filaments else " without intermediate filaments"),
     )
     return st, np.asarray(found.tensions)[keep]
+
+
+def _base_triangle(x: np.ndarray, triangles) -> tuple[int, int, int]:
+    """The actin triangle to anchor: the one with the fewest nodes reaching below its plane (first on ties)."""
+    def dip(t):
+        nrm = np.cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]])
+        d = (x - x[t[0]]) @ (nrm / np.linalg.norm(nrm))
+        d = d if d.mean() > 0 else -d
+        return round(float(-d.min()), 9)
+
+    return min(triangles, key=dip)
 
 
 def _rotation_to_z(n: np.ndarray) -> np.ndarray:
