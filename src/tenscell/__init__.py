@@ -28,7 +28,7 @@ from .shapes import DEFAULT_DELTA, REGULAR_DELTA, if_free_delta, paper_cell, pap
 from .structure import Point, Structure, StructureError
 from .structio import StructureFile, load_structure, load_structure_file, member_values, save_structure
 from .formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
-from .lattices import lattice_cell, lattice_structure, sphere_cell, sphere_structure
+from .lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
 from .krylov import krylov_compliance
 from .summary import relaxation_modes, summarize
 
@@ -43,6 +43,7 @@ __all__ = [
     "loss_tangent", "log_slope",
     "StructureFile", "load_structure", "load_structure_file", "save_structure", "member_values",
     "find_form", "FormFindingResult", "FormFindingError", "pin_jointed", "rigid_body_modes",
-    "sphere_cell", "sphere_structure", "lattice_cell", "lattice_structure", "krylov_compliance",
+    "sphere_cell", "sphere_structure", "lattice_cell", "lattice_structure", "expanded_octahedron",
+    "krylov_compliance",
     "summarize", "relaxation_modes",
 ]

@@ -73,6 +73,7 @@ __all__ = [
     "lattice_structure",
     "lattice_cell",
     "lattice_module_tensions",
+    "expanded_octahedron",
     "SPHERE_STRUTS",
     "DEFAULT_OFFSET",
     "LATTICE_STRUT_EA",
@@ -336,6 +337,23 @@ def _module(L: float, b: float):
     d = math.sqrt(3.0 / 8.0) * L
     cables = [(i, j) for i in range(12) for j in range(i + 1, 12) if abs(np.linalg.norm(R[i] - R[j]) - d) < 1e-9 * L]
     return X, struts, cables
+
+
+def expanded_octahedron(L: float = 1.0, offset: float = 0.25) -> Structure:
+    """The free-standing 6-strut "expanded octahedron" (tensegrity icosahedron) with rigid struts.
+
+    Struts of length ``L`` (m) parallel to x, y and z in pairs at ±``offset``·L from the centre,
+    24 actin cables (the edges of length √(3/8)·L of the regular member, ``offset = 0.25``), no
+    fixed node (6 rigid-body motions), load and probe vertical at the centre of the x-strut at
+    z = +offset·L. At ``offset = 0.25`` it is prestressable (one self-stress, cables equal,
+    struts −√6 times a cable).
+    """
+    L = positive_scalar("L", L, "m")
+    b = _offset(offset)
+    X, struts, cables = _module(L, b * L)
+    p = Point(nodes=(5, 7), weights=(0.5, 0.5), direction=(0.0, 0.0, 1.0))
+    return Structure(nodes=X, struts=tuple(struts), tendons=tuple(cables), families=(ACTIN,) * len(cables),
+                     fixed=(), load=p, probe=p, name="6-strut expanded octahedron (free-standing)")
 
 
 def lattice_module_tensions(offset: float = DEFAULT_OFFSET, intermediate_filaments: bool = True) -> dict:
