@@ -266,3 +266,44 @@ def test_summary_reports_not_prestressable():
     s, cell, lin = summarize(st)
     assert not s.prestressable and cell is None and lin is None
     assert s.verdict.startswith("NOT prestressable") and s.rank == 24 and s.self_stress_dim == 9
+
+
+# ---- the show command ------------------------------------------------------------------
+def test_cli_show_paper_and_a_saved_lattice(tmp_path, capsys):
+    from tenscell.cli import main
+
+    assert main(["show", "paper", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "rank of A      24" in out and "self-stresses  9" in out and "prestressable and stable" in out
+    for name in ("paper_structure.png", "paper_modes.png", "paper_summary.txt"):
+        assert (tmp_path / name).stat().st_size > 0
+    lattice = tmp_path / "lattice.json"
+    assert main(["show", "sheet", "--size", "2x2", "--out", str(tmp_path), "--modes", "0", "--save", str(lattice)]) == 0
+    capsys.readouterr()
+    assert main(["show", str(lattice), "--out", str(tmp_path / "again"), "--modes", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "members        168 (actin 96, intermediate_filament 48, strut 24)" in out
+    assert (tmp_path / "again" / "lattice_structure.png").exists()
+    assert (tmp_path / "again" / "lattice_modes.png").exists()
+
+
+def test_cli_show_errors_are_one_line(tmp_path, capsys):
+    from tenscell.cli import main
+
+    bad = _small(tmp_path, _set(["tendons", 3, "nodes"], [4, 4]))
+    assert main(["show", str(bad), "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cell.json: tendon 3 joins node 4 to itself" in err[0]
+    assert main(["show", "nonesuch", "--out", str(tmp_path)]) == 2
+    assert "neither a file nor a built-in" in capsys.readouterr().err
+    assert not list(tmp_path.glob("*.png"))  # nothing half-written
+
+
+def test_cli_show_draws_a_structure_that_is_not_prestressable(tmp_path, capsys):
+    from tenscell.cli import main
+
+    path = tmp_path / "flat.json"
+    save_structure(path, tenscell.paper_structure(0.0, math.radians(60.0), 1.0))
+    assert main(["show", str(path), "--out", str(tmp_path)]) == 0
+    assert "NOT prestressable" in capsys.readouterr().out
+    assert (tmp_path / "flat_structure.png").exists() and not (tmp_path / "flat_modes.png").exists()

@@ -150,9 +150,9 @@ def _parse_member_values(text: str, name: str):
     if "=" in text:
         out = {}
         for item in text.split(","):
-            key, _, val = item.partition("=")
+            key, sep, val = item.partition("=")
             key = key.strip()
-            if not key or not _:
+            if not key or not sep:
                 raise ValueError(f"{name}: expected family=value items, got {item!r}")
             out[key] = float(parse_list(val, name)[0])
         return out

@@ -17,13 +17,12 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .coordinates import Coordinates, kinematics
 from .equilibrium import Cell, NotPrestressableError, equilibrate, equilibrium_matrix, member_geometry
 from .coordinates import make_coordinates
 from .formfinding import rigid_body_modes
-from .krylov import factorize_stiffness
+from .krylov import load_modes
 from .linear import LinearModel, NotPositiveDefiniteError, linearize
 from .structure import STRUT, Structure
 
@@ -251,17 +250,18 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     Solves ``C0 v = μ K0 v`` (K0 positive definite; μ = 1/λ, μ = 0 for an
     undamped mechanism) and keeps the largest μ. Free-standing structures
     are treated on the complement of their rigid-body motions. Dense models
-    use a full generalized eigensolver; sparse ones ARPACK with the sparse
-    factor of K0.
+    use a generalized eigensolver; sparse ones (more than 1500 coordinates)
+    return the slowest modes *that the load excites*
+    (:func:`tenscell.krylov.load_modes`).
     """
     if not (isinstance(k, (int, np.integer)) and k >= 1):
         raise ValueError(f"k (number of modes) must be a whole number >= 1, got {k!r}")
     n = lin.cell.n
     if sp.issparse(lin.K0):
-        k = min(k, n - 2)
-        factor = factorize_stiffness(lin)
-        Minv = spla.LinearOperator((n, n), matvec=factor.solve, dtype=float)
-        mu, V = spla.eigsh(sp.csr_matrix(lin.C0), k=k, M=sp.csr_matrix(lin.K0), Minv=Minv, which="LA")
+        # ARPACK does not converge in reasonable time on lattices, whose slowest rate is shared by
+        # one local mode per module; the Lanczos run from the load finds the slowest modes it excites
+        rates, V = load_modes(lin, min(k, n))
+        mu = 1.0 / rates
     else:
         Q = _complement(lin)
         K = Q.T @ lin.K0 @ Q
