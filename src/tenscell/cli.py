@@ -187,6 +187,7 @@ def _show_target(args):
 
 def _cmd_show(args) -> int:
     from . import plotting
+
     from ._io import write_text
     from .equilibrium import NotPrestressableError, equilibrate
     from .structio import member_values, save_structure
@@ -214,8 +215,14 @@ def _cmd_show(args) -> int:
     text = summary.text()
     modes = None
     if lin is not None and args.modes > 0:
-        modes = relaxation_modes(lin, args.modes)
-        text += "slowest modes  " + ", ".join(f"{r:.6g}" for r in modes.rates) + " 1/s\n"
+        try:
+            modes = relaxation_modes(lin, args.modes)
+            text += "slowest modes  " + ", ".join(f"{r:.6g}" for r in modes.rates) + " 1/s"
+            if modes.residuals is not None:
+                text += f" (the slowest the load excites; Ritz residuals <= {modes.residuals.max():.1g})"
+            text += "\n"
+        except RuntimeError as err:  # an eigensolver that did not converge: still draw the structure
+            text += f"slowest modes  not computed: {err}\n"
     sys.stdout.write(text)
     written = []
     write_text(out / f"{stem}_summary.txt", text)

@@ -237,11 +237,15 @@ class RelaxationModes:
         (dimensionless shape).
     vectors : ndarray, shape (n, k)
         The modes in generalized coordinates.
+    residuals : ndarray, shape (k,) or None
+        Relative Ritz residuals of approximate modes (sparse models); None
+        when exact (dense eigensolver).
     """
 
     rates: np.ndarray
     displacements: np.ndarray
     vectors: np.ndarray
+    residuals: np.ndarray | None = None
 
 
 def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
@@ -260,7 +264,7 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     if sp.issparse(lin.K0):
         # ARPACK does not converge in reasonable time on lattices, whose slowest rate is shared by
         # one local mode per module; the Lanczos run from the load finds the slowest modes it excites
-        rates, V = load_modes(lin, min(k, n))
+        rates, V, resid = load_modes(lin, min(k, n))
         mu = 1.0 / rates
     else:
         Q = _complement(lin)
@@ -270,11 +274,14 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
         k = min(k, m)
         mu, W = scipy.linalg.eigh(0.5 * (C + C.T), 0.5 * (K + K.T), subset_by_index=[m - k, m - 1])
         V = Q @ W
+        resid = None
     order = np.argsort(mu)[::-1][:k]
     mu, V = mu[order], V[:, order]
+    if resid is not None:
+        resid = resid[order]
     with np.errstate(divide="ignore"):
         rates = np.where(mu > 0, 1.0 / np.where(mu > 0, mu, 1.0), np.inf)
     disp = np.stack([node_displacements(lin.cell.coords, V[:, i]) for i in range(V.shape[1])])
     scale = np.abs(disp).reshape(disp.shape[0], -1).max(axis=1)
     disp = disp / np.where(scale > 0, scale, 1.0)[:, None, None]
-    return RelaxationModes(rates=rates, displacements=disp, vectors=V)
+    return RelaxationModes(rates=rates, displacements=disp, vectors=V, residuals=resid)
