@@ -403,7 +403,11 @@ def equilibrate(
         Strut direction coordinates (see :mod:`tenscell.coordinates`).
     T0 : ndarray, optional
         A self-stress to use instead of the computed one; it is checked
-        (``A T0 = 0``, cables in tension) and normalized.
+        (``A T0 = 0``, cables in tension) and normalized. Without it, the
+        state comes from the SVD of A (:func:`self_stress`), or for
+        structures above :data:`SPARSE_THRESHOLD` coordinates from a sparse
+        linear program (:func:`self_stress_lp`, and ``self_stress_dim`` is
+        then -1).
     parameters : dict, optional
         Named parameters to record in the cell.
 

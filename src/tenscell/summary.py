@@ -18,9 +18,8 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
-from .coordinates import Coordinates, kinematics
+from .coordinates import Coordinates, kinematics, make_coordinates
 from .equilibrium import Cell, NotPrestressableError, equilibrate, equilibrium_matrix, member_geometry
-from .coordinates import make_coordinates
 from .formfinding import rigid_body_modes
 from .krylov import load_modes
 from .linear import LinearModel, NotPositiveDefiniteError, linearize
