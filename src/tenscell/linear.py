@@ -148,7 +148,8 @@ def _require_positive_definite(K0, cell: Cell, P: float) -> None:
     if not ok:
         raise NotPositiveDefiniteError(
             f"K0 is not positive definite for {cell.describe()} at P={P:.6g} "
-            f"(smallest {'pivot' if sp.issparse(K0) else 'eigenvalue'} {lam:.3g}): the reference is not a stable equilibrium. "
+            f"(smallest {'pivot' if sp.issparse(K0) else 'eigenvalue'} {lam:.3g}): "
+            "the reference is not a stable equilibrium. "
             "For the paper cell keep delta between about 45.5° and 54.7° at alpha=0."
         )
 
