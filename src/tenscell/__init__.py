@@ -39,6 +39,11 @@ from .timedomain import (CreepSpectrum, PowerLawFit, StressRelaxation, creep_com
                          local_exponent, relaxation_modulus, stress_relaxation)
 from .dynamics import (SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response,
                        linearize_law, oscillatory_response, simulate)
+from .structio import StructureFile, load_structure, load_structure_file, member_values, save_structure
+from .formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
+from .lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
+from .krylov import krylov_compliance
+from .summary import relaxation_modes, summarize
 
 __version__ = "0.1.0"
 
@@ -59,4 +64,9 @@ __all__ = [
     "relaxation_modulus", "local_exponent", "PowerLawFit", "fit_power_law",
     "simulate", "SineForce", "StepForce", "SineDisplacement", "SimulationError", "linearize_law",
     "oscillatory_response", "amplitude_sweep", "creep_response",
+    "StructureFile", "load_structure", "load_structure_file", "save_structure", "member_values",
+    "find_form", "FormFindingResult", "FormFindingError", "pin_jointed", "rigid_body_modes",
+    "sphere_cell", "sphere_structure", "lattice_cell", "lattice_structure", "expanded_octahedron",
+    "krylov_compliance",
+    "summarize", "relaxation_modes",
 ]

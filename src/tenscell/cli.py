@@ -655,8 +655,151 @@ def _add_creep(sub) -> None:
 REPRODUCE_STAGES.append(("time domain (small-amplitude moduli, nonlinear loop, creep)", reproduce_dynamics))
 
 
+# ---- show (issue 6): any structure, its summary and 3D pictures ---------------------------
+#: built-in structures `tenscell show` knows by name
+SHOW_BUILTINS = ("paper", "sphere6", "sphere12", "sphere30", "sheet", "block")
+
+
+def _parse_member_values(text: str, name: str):
+    """``"1"`` -> 1.0; ``"strut=1000,default=1"`` -> dict by family; ``"1,2,3"`` -> array."""
+    text = str(text).strip()
+    if "=" in text:
+        out = {}
+        for item in text.split(","):
+            key, sep, val = item.partition("=")
+            key = key.strip()
+            if not key or not sep:
+                raise ValueError(f"{name}: expected family=value items, got {item!r}")
+            out[key] = float(parse_list(val, name)[0])
+        return out
+    vals = parse_list(text, name)
+    return float(vals[0]) if vals.size == 1 else vals
+
+
+def _show_target(args):
+    """(stem, cell or structure, EA, c, T0 or None) for a file or a built-in name."""
+    from . import lattices, paper_cell
+    from .structio import load_structure_file
+
+    target = args.target
+    if target in SHOW_BUILTINS:
+        lattice_ea = {"strut": lattices.LATTICE_STRUT_EA, "default": 1.0}
+        if target == "paper":
+            return "paper", paper_cell(L=args.L), 1.0, 1.0
+        if target.startswith("sphere"):
+            return target, lattices.sphere_cell(int(target[6:]), L=args.L), 1.0, 1.0
+        dims = [int(v) for v in parse_list(args.size.replace("x", ","), "--size")] if args.size else None
+        if target == "sheet":
+            nx, ny, nz = (dims + [1])[:3] if dims else (4, 4, 1)
+        else:
+            nx, ny, nz = dims if dims and len(dims) == 3 else (3, 3, 3)
+        return target, lattices.lattice_cell(nx, ny, nz, L=args.L), lattice_ea, 1.0
+    path = Path(target)
+    if not path.exists():
+        raise ValueError(f"show: {target!r} is neither a file nor a built-in ({', '.join(SHOW_BUILTINS)})")
+    sf = load_structure_file(path)
+    return path.stem, (sf.structure, sf.T0), sf.EA, sf.c
+
+
+def _cmd_show(args) -> int:
+    from . import plotting
+
+    from ._io import write_text
+    from .equilibrium import NotPrestressableError, equilibrate
+    from .structio import member_values, save_structure
+    from .summary import relaxation_modes, summarize
+
+    out = Path(args.out)
+    stem, obj, EA, c = _show_target(args)
+    if args.EA is not None:
+        EA = _parse_member_values(args.EA, "--EA")
+    if args.c is not None:
+        c = _parse_member_values(args.c, "--c")
+    if isinstance(obj, tuple):  # a file: use its self-stress when it has one
+        structure, T0 = obj
+        target = structure
+        if T0 is not None:
+            try:
+                target = equilibrate(structure, "local", T0=T0)
+            except NotPrestressableError:
+                target = structure
+    else:
+        target, structure = obj, obj.structure
+    EA = member_values(structure, EA, "--EA", "N")
+    c = member_values(structure, c, "--c", "N·s/m")
+    summary, cell, lin = summarize(target, P=args.P, EA=EA, c=c)
+    text = summary.text()
+    modes = None
+    if lin is not None and args.modes > 0:
+        try:
+            modes = relaxation_modes(lin, args.modes)
+            text += "slowest modes  " + ", ".join(f"{r:.6g}" for r in modes.rates) + " 1/s"
+            if modes.residuals is not None:
+                text += f" (the slowest the load excites; Ritz residuals <= {modes.residuals.max():.1g})"
+            text += "\n"
+        except RuntimeError as err:  # an eigensolver that did not converge: still draw the structure
+            text += f"slowest modes  not computed: {err}\n"
+    sys.stdout.write(text)
+    written = []
+    write_text(out / f"{stem}_summary.txt", text)
+    written.append(f"{stem}_summary.txt")
+    plotting.save(plotting.structure_3d(structure), out / f"{stem}_structure.png")
+    written.append(f"{stem}_structure.png")
+    if modes is not None:
+        plotting.save(plotting.relaxation_modes_3d(structure, modes.rates, modes.displacements),
+                      out / f"{stem}_modes.png")
+        written.append(f"{stem}_modes.png")
+    if args.save:
+        save_structure(args.save, structure, EA=EA, c=c, T0=None if cell is None else cell.T0)
+        written.append(str(args.save))
+    where = f" and {args.save}" if args.save else ""
+    print(f"wrote {', '.join(written[:3] if args.save else written)} in {out}/{where}", file=sys.stderr)
+    return 0
+
+
+def _add_show(sub) -> None:
+    p = sub.add_parser("show", help="summary and 3D pictures of any structure (file or built-in)",
+                       description="Print a structure's summary (counts, rank of A, self-stress dimension, "
+                                   "mechanisms, prestressability) and draw it in 3D with its slowest relaxation "
+                                   "modes. TARGET is a structure file (JSON, docs/structure-format.md) or one of: "
+                                   + ", ".join(SHOW_BUILTINS) + ".")
+    p.add_argument("target", metavar="TARGET", help="structure file or built-in name")
+    p.add_argument("--out", default="out", help="output directory for the PNGs and summary (default out/)")
+    p.add_argument("--modes", type=int, default=3, help="number of slowest relaxation modes to draw (0: none)")
+    p.add_argument("--P", type=float, default=1000.0, help="prestress P (N) for the stability verdict and modes")
+    p.add_argument("--EA", default=None,
+                   help="member stiffness EA (N): one value, family=value pairs (e.g. strut=1000,default=1) "
+                        "or one per member; default: the file's values, 1 N for built-ins "
+                        "(lattice struts 1000 N)")
+    p.add_argument("--c", default=None, help="member damping c (N·s/m), same forms as --EA; default 1")
+    p.add_argument("--L", type=float, default=1.0, help="strut length of a built-in (m, default 1)")
+    p.add_argument("--size", default=None, help="modules of a built-in lattice: NXxNY (sheet) or NXxNYxNZ (block)")
+    p.add_argument("--save", default=None, help="also write the structure to this JSON file")
+    p.set_defaults(func=_cmd_show)
+
+
+def reproduce_show(out: Path, log) -> None:
+    """`tenscell show paper`: the cell in 3D (paper Fig. 1 colours), its slowest modes and summary."""
+    from . import paper_cell, plotting
+    from ._io import write_text
+    from .summary import relaxation_modes, summarize
+
+    summary, cell, lin = summarize(paper_cell())
+    modes = relaxation_modes(lin, 3)
+    text = summary.text() + "slowest modes  " + ", ".join(f"{r:.6g}" for r in modes.rates) + " 1/s\n"
+    write_text(out / "show_paper_summary.txt", text)
+    plotting.save(plotting.structure_3d(cell.structure, title="paper cell (Fig. 1 colours)"),
+                  out / "show_paper_structure.png")
+    plotting.save(plotting.relaxation_modes_3d(cell.structure, modes.rates, modes.displacements),
+                  out / "show_paper_modes.png")
+    log("show_paper_structure.png, show_paper_modes.png, show_paper_summary.txt")
+
+
+REPRODUCE_STAGES.append(("3D view and summary of the paper cell (tenscell show paper)", reproduce_show))
+
+
 #: subcommand registrars, in the order they appear in --help
-COMMANDS = [_add_moduli, _add_reproduce, _add_fit, _add_simulate, _add_creep, _add_study]
+COMMANDS = [_add_moduli, _add_reproduce, _add_fit, _add_simulate, _add_creep, _add_study, _add_show]
 
 
 def build_parser() -> argparse.ArgumentParser:

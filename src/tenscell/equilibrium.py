@@ -37,6 +37,7 @@ __all__ = [
     "point_vector",
     "self_stress_basis",
     "self_stress",
+    "self_stress_lp",
     "equilibrate",
     "rest_lengths",
     "generalized_forces",
@@ -244,6 +245,64 @@ def _max_min_tension(N: np.ndarray, cable: np.ndarray) -> np.ndarray:
     return N @ res.x[:k]
 
 
+def self_stress_lp(
+    A,
+    families: tuple[str, ...],
+    equal_tension_groups: tuple[tuple[int, ...], ...] = (),
+    *,
+    describe: str = "this reference",
+) -> np.ndarray:
+    """A self-stress maximizing the smallest cable tension, by a sparse linear program.
+
+    For structures too large for the SVD of :func:`self_stress`: solves
+    ``max s`` subject to ``A T = 0``, equal tensions within each group,
+    ``T_j >= s`` on every cable and ``Σ_cables T_j = (number of cables)``
+    with scipy's HiGHS on the sparse ``A``. Returns ``T0`` normalized over the
+    cables (``‖T0_cables‖₂ = 1``).
+
+    Raises
+    ------
+    NotPrestressableError
+        If the best state leaves some cable without tension.
+    """
+    A = sp.csr_matrix(A)
+    n, m = A.shape
+    cable = np.array([f != STRUT for f in families])
+    nc = int(cable.sum())
+    rows = [sp.hstack([A, sp.csr_matrix((n, 1))])]
+    rhs = [np.zeros(n)]
+    for g in equal_tension_groups:
+        if len(g) > 1:
+            k = len(g) - 1
+            E = sp.csr_matrix((np.r_[np.ones(k), -np.ones(k)], (np.r_[np.arange(k), np.arange(k)], np.r_[np.full(k, g[0]), list(g[1:])])),
+                              shape=(k, m + 1))
+            rows.append(E)
+            rhs.append(np.zeros(k))
+    rows.append(sp.csr_matrix(np.r_[cable.astype(float), 0.0][None, :]))
+    rhs.append(np.array([float(nc)]))
+    A_eq = sp.vstack(rows).tocsr()
+    ci = np.flatnonzero(cable)
+    A_ub = sp.csr_matrix((np.r_[-np.ones(nc), np.ones(nc)], (np.r_[np.arange(nc), np.arange(nc)], np.r_[ci, np.full(nc, m)])),
+                         shape=(nc, m + 1))
+    c = np.zeros(m + 1)
+    c[-1] = -1.0
+    res = scipy.optimize.linprog(c, A_ub=A_ub, b_ub=np.zeros(nc), A_eq=A_eq, b_eq=np.concatenate(rhs),
+                                 bounds=[(None, None)] * m + [(None, 1.0)], method="highs")
+    if res.status != 0 or res.x is None:
+        raise NotPrestressableError(
+            f"{describe} is not prestressable: no self-stress with every cable in tension exists "
+            f"(linear program: {res.message})"
+        )
+    T, smin = res.x[:m], res.x[-1]
+    if smin <= 1e-9:
+        slack = np.flatnonzero(cable & (T <= 1e-9))
+        raise NotPrestressableError(
+            f"{describe} is not prestressable: every self-stress leaves {slack.size} tendon(s) without tension "
+            f"(indices {slack[:10].tolist()}{'...' if slack.size > 10 else ''}); a tensegrity needs every tendon strictly in tension"
+        )
+    return T / np.linalg.norm(T[cable])
+
+
 @dataclass(frozen=True, eq=False)
 class Cell:
     """A structure at its prestressable reference configuration.
@@ -271,7 +330,9 @@ class Cell:
     probe : ndarray, shape (n,)
         ``D0``: output row, probe displacement per unit ``q`` (m/m, m/rad).
     self_stress_dim : int
-        Dimension of the self-stress space ``null A(q0)``.
+        Dimension of the self-stress space ``null A(q0)``; -1 when not
+        computed (sparse-sized structures, where it would need a rank
+        decision on the full equilibrium matrix).
     parameters : mapping
         The named parameters the cell was built from (for messages and reports).
     L : float
@@ -345,7 +406,11 @@ def equilibrate(
         Strut direction coordinates (see :mod:`tenscell.coordinates`).
     T0 : ndarray, optional
         A self-stress to use instead of the computed one; it is checked
-        (``A T0 = 0``, cables in tension) and normalized.
+        (``A T0 = 0``, cables in tension) and normalized. Without it, the
+        state comes from the SVD of A (:func:`self_stress`), or for
+        structures above :data:`SPARSE_THRESHOLD` coordinates from a sparse
+        linear program (:func:`self_stress_lp`, and ``self_stress_dim`` is
+        then -1).
     parameters : dict, optional
         Named parameters to record in the cell.
 
@@ -360,10 +425,14 @@ def equilibrate(
     A = equilibrium_matrix(geom)
     label = _label(structure.name, parameters or {})
     if T0 is None:
-        T0, dim = self_stress(A, structure.families, structure.equal_tension_groups, describe=label)
+        if sp.issparse(A):
+            # large structures: no SVD; the self-stress space's dimension is then not computed (-1)
+            T0, dim = self_stress_lp(A, structure.families, structure.equal_tension_groups, describe=label), -1
+        else:
+            T0, dim = self_stress(A, structure.families, structure.equal_tension_groups, describe=label)
     else:
         T0 = _check_given_self_stress(A, structure.families, T0, label)
-        dim = self_stress_basis(A)[0].shape[1]
+        dim = -1 if sp.issparse(A) else self_stress_basis(A)[0].shape[1]
     l = geom.lengths
     Kp = assemble_hessian(geom, T0) + _weighted_gram(A, T0 / l)
     load = point_vector(coords, structure.load, kin)

@@ -1,0 +1,445 @@
+"""Structure files: a documented JSON format for any tensegrity.
+
+A structure file holds everything :class:`~tenscell.structure.Structure`
+needs (nodes, rigid struts anchored or free, tendons with their family, fixed
+nodes, load, probe, equal-tension groups) plus optional per-tendon material
+properties (EA, c) and an optional self-stress ``T0``. The format is
+described in ``docs/structure-format.md``; in short::
+
+    {
+      "format": "tenscell-structure", "version": 1,
+      "name": "two-strut example",
+      "units": {"length": "um", "force": "pN", "time": "s"},
+      "nodes": [{"name": "A", "xyz": [0, 0, 0]}, [1, 0, 0], ...],
+      "fixed": ["A"],
+      "struts": [["A", "C"], [2, 3]],
+      "tendons": [{"nodes": ["C", 3], "family": "actin", "EA": 1.0, "c": 1.0}, ...],
+      "load":  {"nodes": [2, 3], "weights": [0.5, 0.5], "direction": [0, 0, 1]},
+      "probe": {"nodes": [2, 3], "weights": [0.5, 0.5], "direction": [0, 0, 1]}
+    }
+
+Nodes may be referred to by index (from 0) or by name. Values are converted
+to SI on reading (m, N, s); :func:`save_structure` always writes SI.
+
+Every error is a :class:`~tenscell.structure.StructureError` (a ValueError)
+whose message starts with the file name and names the offending element,
+e.g. ``"cell.json: tendon 17 joins node 4 to itself"``.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ._io import write_text
+from .structure import Point, Structure, StructureError
+
+__all__ = [
+    "StructureFile",
+    "load_structure",
+    "load_structure_file",
+    "save_structure",
+    "structure_to_dict",
+    "structure_from_dict",
+    "member_values",
+    "FORMAT_NAME",
+    "FORMAT_VERSION",
+    "LENGTH_UNITS",
+    "FORCE_UNITS",
+    "TIME_UNITS",
+]
+
+FORMAT_NAME = "tenscell-structure"
+FORMAT_VERSION = 1
+
+#: accepted length units and their value in metres
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "nm": 1e-9}
+#: accepted force units and their value in newtons
+FORCE_UNITS = {"N": 1.0, "mN": 1e-3, "uN": 1e-6, "µN": 1e-6, "nN": 1e-9, "pN": 1e-12}
+#: accepted time units and their value in seconds
+TIME_UNITS = {"s": 1.0, "ms": 1e-3}
+
+_TOP_KEYS = {
+    "format", "version", "name", "description", "units", "nodes", "fixed", "struts", "tendons",
+    "equal_tension_groups", "load", "probe",
+}
+_NODE_KEYS = {"name", "xyz"}
+_TENDON_KEYS = {"nodes", "family", "EA", "c", "T0"}
+_POINT_KEYS = {"nodes", "weights", "direction"}
+
+
+@dataclass(frozen=True, eq=False)
+class StructureFile:
+    """The content of a structure file.
+
+    Attributes
+    ----------
+    structure : Structure
+        Node positions in m.
+    EA : ndarray, shape (m,)
+        Tendon stiffness (N); 1 N where the file gives none.
+    c : ndarray, shape (m,)
+        Tendon damping (N·s/m); 1 N·s/m where the file gives none.
+    T0 : ndarray, shape (m,) or None
+        A self-stress (dimensionless, any scale) if the file gives one for
+        every tendon; pass it to :func:`tenscell.equilibrate` (``T0=``) to
+        skip the search for one (useful for very large structures).
+    description : str
+        Free text from the file.
+    """
+
+    structure: Structure
+    EA: np.ndarray
+    c: np.ndarray
+    T0: np.ndarray | None = None
+    description: str = ""
+
+
+# ---- reading ------------------------------------------------------------------------
+def load_structure(path) -> Structure:
+    """Read a structure file (JSON) and return its :class:`Structure` (SI units).
+
+    Raises
+    ------
+    StructureError
+        For a malformed file; the message names the file and the element.
+    OSError
+        If the file cannot be read.
+    """
+    return load_structure_file(path).structure
+
+
+def load_structure_file(path) -> StructureFile:
+    """Read a structure file with its tendon properties and optional self-stress.
+
+    Parameters
+    ----------
+    path : str or Path
+        A JSON file in the format of ``docs/structure-format.md``.
+
+    Returns
+    -------
+    StructureFile
+    """
+    path = Path(path)
+    text = path.read_text(encoding="utf-8")
+    try:
+        obj = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise StructureError(f"{path.name}: not valid JSON (line {err.lineno}, column {err.colno}: {err.msg})") from None
+    try:
+        return structure_from_dict(obj, default_name=path.stem)
+    except StructureError as err:
+        raise StructureError(f"{path.name}: {err}") from None
+
+
+def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
+    """Build a :class:`StructureFile` from the parsed JSON object (see module docstring).
+
+    Raises
+    ------
+    StructureError
+        Naming the offending element.
+    """
+    if not isinstance(obj, dict):
+        raise StructureError("the top level must be a JSON object")
+    _unknown(obj, _TOP_KEYS, "the top level")
+    fmt = obj.get("format", FORMAT_NAME)
+    if fmt != FORMAT_NAME:
+        raise StructureError(f"'format' must be {FORMAT_NAME!r}, got {fmt!r}")
+    version = obj.get("version", FORMAT_VERSION)
+    if version != FORMAT_VERSION:
+        raise StructureError(f"'version' {version!r} is not supported (this tenscell reads version {FORMAT_VERSION})")
+    lu, fu, tu = _units(obj.get("units", {}))
+
+    if "nodes" not in obj:
+        raise StructureError("missing 'nodes'")
+    raw_nodes = obj["nodes"]
+    if not isinstance(raw_nodes, list) or not raw_nodes:
+        raise StructureError("'nodes' must be a non-empty list")
+    xyz, names = [], []
+    for i, nd in enumerate(raw_nodes):
+        if isinstance(nd, dict):
+            _unknown(nd, _NODE_KEYS, f"node {i}")
+            if "xyz" not in nd:
+                raise StructureError(f"node {i} has no 'xyz'")
+            name = nd.get("name")
+            if name is not None and not isinstance(name, str):
+                raise StructureError(f"node {i}: 'name' must be a string, got {name!r}")
+            names.append(name)
+            pos = nd["xyz"]
+        else:
+            names.append(None)
+            pos = nd
+        xyz.append(_vector(pos, 3, f"node {i} position"))
+    nodes = np.array(xyz) * lu
+    index = {}
+    for i, nm in enumerate(names):
+        if nm is None:
+            continue
+        if nm in index:
+            raise StructureError(f"node {i} repeats the name {nm!r} of node {index[nm]}")
+        index[nm] = i
+    n = len(xyz)
+
+    def ref(r, what):
+        if isinstance(r, bool):
+            raise StructureError(f"{what} refers to node {r!r}; use an index or a node name")
+        if isinstance(r, int):
+            if not 0 <= r < n:
+                raise StructureError(f"{what} refers to unknown node {r} (there are {n} nodes, 0 to {n - 1})")
+            return r
+        if isinstance(r, str):
+            if r not in index:
+                raise StructureError(f"{what} refers to unknown node {r!r}")
+            return index[r]
+        raise StructureError(f"{what} refers to node {r!r}; use an index or a node name")
+
+    fixed = [ref(r, "the fixed list") for r in _list(obj.get("fixed", []), "'fixed'")]
+    struts = []
+    for k, s in enumerate(_list(obj.get("struts", []), "'struts'")):
+        pair = s.get("nodes") if isinstance(s, dict) else s
+        if isinstance(s, dict):
+            _unknown(s, {"nodes"}, f"strut {k}")
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise StructureError(f"strut {k} must join exactly two nodes, got {pair!r}")
+        struts.append((ref(pair[0], f"strut {k}"), ref(pair[1], f"strut {k}")))
+
+    tendons, families, EA, c, T0 = [], [], [], [], []
+    raw_t = _list(obj.get("tendons", []), "'tendons'")
+    for j, t in enumerate(raw_t):
+        if not isinstance(t, dict):
+            raise StructureError(f"tendon {j} must be an object with 'nodes' and 'family'")
+        _unknown(t, _TENDON_KEYS, f"tendon {j}")
+        pair = t.get("nodes")
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise StructureError(f"tendon {j} must join exactly two nodes, got {pair!r}")
+        tendons.append((ref(pair[0], f"tendon {j}"), ref(pair[1], f"tendon {j}")))
+        fam = t.get("family")
+        if not isinstance(fam, str) or not fam:
+            raise StructureError(f"tendon {j} needs a 'family' (e.g. \"actin\", \"intermediate_filament\", \"strut\")")
+        families.append(fam)
+        EA.append(_positive(t.get("EA", 1.0 / fu), f"tendon {j}: EA") * fu)
+        c.append(_positive(t.get("c", 1.0 / (fu * tu / lu)), f"tendon {j}: c") * fu * tu / lu)
+        T0.append(t.get("T0"))
+    have_T0 = [v is not None for v in T0]
+    if any(have_T0) and not all(have_T0):
+        missing = have_T0.index(False)
+        raise StructureError(f"tendon {missing} has no 'T0' although other tendons do; give all or none")
+    T0a = None
+    if raw_t and all(have_T0):
+        T0a = np.array([_finite(v, f"tendon {j}: T0") for j, v in enumerate(T0)])
+
+    groups = []
+    for g, grp in enumerate(_list(obj.get("equal_tension_groups", []), "'equal_tension_groups'")):
+        if not isinstance(grp, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in grp):
+            raise StructureError(f"equal-tension group {g} must be a list of tendon indices")
+        groups.append(tuple(grp))
+
+    if "load" not in obj:
+        raise StructureError("missing 'load': say where the input force acts "
+                             "({\"nodes\": [...], \"weights\": [...], \"direction\": [x, y, z]})")
+    load = _point(obj["load"], "load", ref)
+    probe = _point(obj["probe"], "probe", ref) if "probe" in obj else load
+    name = obj.get("name", default_name)
+    if not isinstance(name, str):
+        raise StructureError(f"'name' must be a string, got {name!r}")
+    description = obj.get("description", "")
+    if not isinstance(description, str):
+        raise StructureError(f"'description' must be a string, got {description!r}")
+    node_names = tuple(nm if nm is not None else str(i) for i, nm in enumerate(names)) if index else ()
+    structure = Structure(
+        nodes=nodes, struts=tuple(struts), tendons=tuple(tendons), families=tuple(families), fixed=tuple(fixed),
+        load=load, probe=probe, equal_tension_groups=tuple(groups), name=name, node_names=node_names,
+    )
+    return StructureFile(structure=structure, EA=np.array(EA), c=np.array(c), T0=T0a, description=description)
+
+
+def _unknown(d: dict, allowed: set, where: str) -> None:
+    extra = sorted(set(d) - allowed)
+    if extra:
+        raise StructureError(f"{where} has unknown key {extra[0]!r}; allowed keys: {', '.join(sorted(allowed))}")
+
+
+def _list(v, what):
+    if not isinstance(v, list):
+        raise StructureError(f"{what} must be a list, got {type(v).__name__}")
+    return v
+
+
+def _finite(v, what) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise StructureError(f"{what} must be a finite number, got {v!r}")
+    return float(v)
+
+
+def _positive(v, what) -> float:
+    x = _finite(v, what)
+    if x <= 0:
+        raise StructureError(f"{what} must be > 0, got {v!r}")
+    return x
+
+
+def _vector(v, n, what) -> list[float]:
+    if not isinstance(v, list) or len(v) != n:
+        raise StructureError(f"{what} must be a list of {n} numbers, got {v!r}")
+    return [_finite(x, what) for x in v]
+
+
+def _units(u):
+    if not isinstance(u, dict):
+        raise StructureError("'units' must be an object like {\"length\": \"m\", \"force\": \"N\", \"time\": \"s\"}")
+    _unknown(u, {"length", "force", "time"}, "'units'")
+    out = []
+    for key, table, default in (("length", LENGTH_UNITS, "m"), ("force", FORCE_UNITS, "N"), ("time", TIME_UNITS, "s")):
+        name = u.get(key, default)
+        if name not in table:
+            raise StructureError(f"unknown {key} unit {name!r}; allowed: {', '.join(table)}")
+        out.append(table[name])
+    return out
+
+
+def _point(p, what, ref) -> Point:
+    if not isinstance(p, dict):
+        raise StructureError(f"'{what}' must be an object with 'nodes', 'weights' and 'direction'")
+    _unknown(p, _POINT_KEYS, f"the {what}")
+    nodes = [ref(r, f"the {what}") for r in _list(p.get("nodes", []), f"the {what}'s 'nodes'")]
+    if not nodes:
+        raise StructureError(f"the {what} needs at least one node")
+    weights = p.get("weights", [1.0 / len(nodes)] * len(nodes))
+    weights = _vector(weights, len(nodes), f"the {what}'s weights (one per node)")
+    direction = _vector(p.get("direction", [0.0, 0.0, 1.0]), 3, f"the {what}'s direction")
+    norm = math.sqrt(sum(d * d for d in direction))
+    if norm == 0:
+        raise StructureError(f"the {what}'s direction must not be the zero vector")
+    try:
+        return Point(nodes=tuple(nodes), weights=tuple(weights), direction=tuple(d / norm for d in direction))
+    except StructureError as err:
+        raise StructureError(f"the {what}: {err}") from None
+
+
+# ---- writing ------------------------------------------------------------------------
+def structure_to_dict(structure: Structure, EA=None, c=None, T0=None, description: str = "") -> dict:
+    """The JSON object of :func:`save_structure` (SI units).
+
+    Parameters
+    ----------
+    structure : Structure
+    EA, c : float or array_like, shape (m,), optional
+        Tendon stiffness (N) and damping (N·s/m) to record.
+    T0 : array_like, shape (m,), optional
+        A self-stress to record (dimensionless).
+    description : str
+    """
+    s = structure
+    m = s.n_tendons
+    EA = None if EA is None else np.broadcast_to(np.asarray(EA, dtype=float), (m,))
+    c = None if c is None else np.broadcast_to(np.asarray(c, dtype=float), (m,))
+    T0 = None if T0 is None else np.asarray(T0, dtype=float).reshape(m)
+    named = bool(s.node_names)
+    label = (lambda i: s.node_names[i]) if named else (lambda i: int(i))
+    nodes = []
+    for i, x in enumerate(s.nodes):
+        d = {"xyz": [float(v) for v in x]}
+        if named:
+            d = {"name": s.node_names[i], **d}
+        nodes.append(d)
+    tendons = []
+    for j, (a, b) in enumerate(s.tendons):
+        d = {"nodes": [label(a), label(b)], "family": s.families[j]}
+        if EA is not None:
+            d["EA"] = float(EA[j])
+        if c is not None:
+            d["c"] = float(c[j])
+        if T0 is not None:
+            d["T0"] = float(T0[j])
+        tendons.append(d)
+
+    def point(p):
+        return {"nodes": [label(i) for i in p.nodes], "weights": list(p.weights), "direction": list(p.direction)}
+
+    out = {
+        "format": FORMAT_NAME,
+        "version": FORMAT_VERSION,
+        "name": s.name,
+        "units": {"length": "m", "force": "N", "time": "s"},
+        "nodes": nodes,
+        "fixed": [label(i) for i in s.fixed],
+        "struts": [[label(a), label(b)] for a, b in s.struts],
+        "tendons": tendons,
+        "load": point(s.load),
+        "probe": point(s.probe),
+    }
+    if description:
+        out["description"] = description
+    if s.equal_tension_groups:
+        out["equal_tension_groups"] = [list(g) for g in s.equal_tension_groups]
+    return out
+
+
+def save_structure(path, structure: Structure, EA=None, c=None, T0=None, description: str = "") -> None:
+    """Write a structure file (JSON, SI units) atomically; one node or tendon per line.
+
+    Floats are written with ``repr`` precision, so reading the file back gives
+    bit-identical node positions.
+    """
+    obj = structure_to_dict(structure, EA=EA, c=c, T0=T0, description=description)
+    write_text(path, _dumps(obj))
+
+
+def _dumps(obj: dict) -> str:
+    """Readable JSON: scalars inline, list items one per line (large files stay diffable)."""
+    lines = ["{"]
+    keys = list(obj)
+    for k, key in enumerate(keys):
+        v = obj[key]
+        comma = "," if k < len(keys) - 1 else ""
+        if isinstance(v, list) and v and isinstance(v[0], (dict, list)):
+            lines.append(f"  {json.dumps(key)}: [")
+            for i, item in enumerate(v):
+                lines.append("    " + json.dumps(item, allow_nan=False) + ("," if i < len(v) - 1 else ""))
+            lines.append("  ]" + comma)
+        else:
+            lines.append(f"  {json.dumps(key)}: {json.dumps(v, allow_nan=False)}{comma}")
+    lines.append("}")
+    return "\n".join(lines) + "\n"
+
+
+# ---- per-member values --------------------------------------------------------------
+def member_values(structure: Structure, values, name: str = "value", unit: str = "") -> np.ndarray:
+    """Expand a per-member property to an array over the structure's tendons.
+
+    Parameters
+    ----------
+    structure : Structure
+    values : float, dict or array_like
+        One value for all members; a dict ``{family: value}`` (every family
+        present must be given; key ``"default"`` covers the rest); or one
+        value per member, shape (m,).
+    name, unit : str
+        For error messages, e.g. ``"EA"``, ``"N"``.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+    """
+    m = structure.n_tendons
+    if isinstance(values, dict):
+        out = np.empty(m)
+        for j, fam in enumerate(structure.families):
+            if fam in values:
+                out[j] = values[fam]
+            elif "default" in values:
+                out[j] = values["default"]
+            else:
+                raise ValueError(f"{name}: no value for family {fam!r} (tendon {j}); give it or a 'default'")
+        return out
+    arr = np.asarray(values, dtype=float)
+    if arr.ndim == 0:
+        return np.full(m, float(arr))
+    if arr.shape != (m,):
+        raise ValueError(f"{name} must be a scalar, a {{family: value}} dict or have shape ({m},){' (' + unit + ')' if unit else ''}, got shape {arr.shape}")
+    return arr.copy()

@@ -1,0 +1,286 @@
+"""What a structure is: counts, rank, self-stress, mechanisms, prestressability, lowest modes.
+
+:func:`summarize` answers the questions a user asks before trusting a new
+structure (the text of ``tenscell show``); :func:`relaxation_modes` gives
+the slowest relaxation modes as node displacement fields, ready for
+:func:`tenscell.plotting.structure_3d`.
+
+Free-standing structures (fewer than three fixed non-collinear nodes) keep
+rigid-body motions; their stiffness is singular along them, so stability and
+modes are computed on the complement of the rigid-body motions
+(:func:`tenscell.formfinding.rigid_body_modes`).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+
+from .coordinates import Coordinates, kinematics, make_coordinates
+from .equilibrium import Cell, NotPrestressableError, equilibrate, equilibrium_matrix, member_geometry
+from .formfinding import rigid_body_modes
+from .krylov import load_modes
+from .linear import LinearModel, NotPositiveDefiniteError, linearize
+from .structure import STRUT, Structure
+
+__all__ = ["StructureSummary", "summarize", "relaxation_modes", "RelaxationModes", "node_displacements"]
+
+
+@dataclass(frozen=True)
+class StructureSummary:
+    """Counts and verdicts for one structure.
+
+    Attributes
+    ----------
+    name : str
+    n_nodes, n_fixed, n_point_nodes : int
+    n_struts, n_anchored : int
+        Rigid struts, and those anchored by a ball joint.
+    members : tuple of (str, int)
+        Number of members per family (tendons, and elastic struts ``"strut"``).
+    n_coordinates : int
+        Generalized coordinates n.
+    rank : int
+        Rank of the equilibrium matrix A(q0); -1 if not computed (sparse size).
+    self_stress_dim : int
+        ``m − rank``; -1 if not computed.
+    mechanisms : int
+        Infinitesimal mechanisms ``n − rank`` (rigid-body motions included); -1 if not computed.
+    rigid_body_dof : int
+        Rigid-body motions the supports leave free.
+    prestressable : bool
+        A self-stress with every tendon in tension exists at the reference.
+    stable : bool or None
+        K0 positive definite (on the complement of rigid-body motions) at the
+        given P and EA; None if not prestressable or not checked.
+    min_tension : float
+        Smallest normalized tendon tension in T0 (NaN if not prestressable).
+    P, EA : float
+        The prestress (N) and a representative EA (N) used for ``stable``.
+    verdict : str
+        One sentence.
+    """
+
+    name: str
+    n_nodes: int
+    n_fixed: int
+    n_point_nodes: int
+    n_struts: int
+    n_anchored: int
+    members: tuple
+    n_coordinates: int
+    rank: int
+    self_stress_dim: int
+    mechanisms: int
+    rigid_body_dof: int
+    prestressable: bool
+    stable: bool | None
+    min_tension: float
+    P: float
+    verdict: str
+
+    def text(self) -> str:
+        """The summary as a few lines of text."""
+        fam = ", ".join(f"{k} {v}" for k, v in self.members)
+        unk = "not computed (sparse size)"
+        lines = [
+            f"structure      {self.name}",
+            f"nodes          {self.n_nodes} ({self.n_fixed} fixed, {self.n_point_nodes} point nodes)",
+            f"rigid struts   {self.n_struts} ({self.n_anchored} anchored by ball joints)",
+            f"members        {sum(v for _, v in self.members)} ({fam})",
+            f"coordinates    {self.n_coordinates}",
+            f"rank of A      {self.rank if self.rank >= 0 else unk}",
+            f"self-stresses  {self.self_stress_dim if self.self_stress_dim >= 0 else unk} (dimension of null A)",
+            f"mechanisms     {self.mechanisms if self.mechanisms >= 0 else unk} (n - rank A, "
+            f"including {self.rigid_body_dof} rigid-body motion(s))",
+            f"verdict        {self.verdict}",
+        ]
+        return "\n".join(lines) + "\n"
+
+
+def _rigid_dof(structure: Structure) -> int:
+    x = structure.nodes
+    f = list(structure.fixed)
+    if not f:
+        return 6
+    xf = x[f] - x[f].mean(axis=0)
+    rows = []
+    for p in xf:  # v = t + ω × p = 0 at every fixed node
+        P = np.array([[0, p[2], -p[1]], [-p[2], 0, p[0]], [p[1], -p[0], 0]])
+        rows.append(np.hstack([np.eye(3), P]))
+    return int(6 - np.linalg.matrix_rank(np.vstack(rows), tol=1e-9 * max(1.0, np.abs(xf).max())))
+
+
+def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "local"):
+    """Summarize a structure or cell; never raises for a non-prestressable structure.
+
+    Parameters
+    ----------
+    target : Structure or Cell
+    P : float
+        Prestress (N) for the stability verdict.
+    EA, c : float or array_like, shape (m,)
+        Member stiffness (N) and damping (N·s/m).
+    parametrization : {"local", "angles"}
+        Coordinates used when ``target`` is a Structure.
+
+    Returns
+    -------
+    summary : StructureSummary
+    cell : Cell or None
+        None when not prestressable.
+    lin : LinearModel or None
+        The linearized model when prestressable and stable, else None.
+    """
+    if isinstance(target, Cell):
+        cell, structure, reason = target, target.structure, ""
+    else:
+        structure = target
+        try:
+            cell, reason = equilibrate(structure, parametrization), ""
+        except NotPrestressableError as err:
+            cell, reason = None, str(err)
+    s = structure
+    fams: dict = {}
+    for f in s.families:
+        fams[f] = fams.get(f, 0) + 1
+    rigid = _rigid_dof(s)
+    if cell is not None:
+        n = cell.n
+        dim = cell.self_stress_dim
+        rank = cell.m - dim if dim >= 0 else -1
+    else:
+        coords = make_coordinates(s, parametrization)
+        A = equilibrium_matrix(member_geometry(coords, coords.q0))
+        n = coords.n
+        if sp.issparse(A):
+            rank = dim = -1
+        else:
+            rank = int(np.linalg.matrix_rank(A, tol=1e-10 * max(np.abs(A).max(), 1e-300)))
+            dim = s.n_tendons - rank
+    mech = n - rank if rank >= 0 else -1
+    stable, lin, min_t = None, None, float("nan")
+    if cell is None:
+        verdict = f"NOT prestressable: {reason}"
+    else:
+        cable = np.array([f != STRUT for f in s.families])
+        min_t = float(cell.T0[cable].min())
+        try:
+            lin = linearize(cell, P=P, EA=EA, c=c, check=rigid == 0)
+            if rigid:
+                stable = _stable_free(lin)
+                if stable is False:
+                    lin = None
+            else:
+                stable = True
+        except NotPositiveDefiniteError:
+            stable, lin = False, None
+        where = f"at P={P:g} N"
+        if stable:
+            verdict = (f"prestressable and stable: every tendon in tension (smallest normalized tension "
+                       f"{min_t:.4g}), K0 positive definite {where}")
+        elif stable is None:
+            verdict = (f"prestressable (smallest normalized tension {min_t:.4g}); stability of this free-standing "
+                       "structure not checked at this size")
+        else:
+            verdict = (f"prestressable (smallest normalized tension {min_t:.4g}) but NOT stable {where}: K0 is not "
+                       "positive definite" + (" on the complement of the rigid-body motions" if rigid else ""))
+        if rigid:
+            verdict += f"; free-standing: {rigid} rigid-body motion(s) excluded"
+    summary = StructureSummary(
+        name=s.name, n_nodes=s.n_nodes, n_fixed=len(s.fixed), n_point_nodes=len(s.point_nodes),
+        n_struts=len(s.struts), n_anchored=sum(s.is_anchored(k) for k in range(len(s.struts))),
+        members=tuple(sorted(fams.items())), n_coordinates=n, rank=rank, self_stress_dim=dim, mechanisms=mech,
+        rigid_body_dof=rigid, prestressable=cell is not None, stable=stable, min_tension=min_t, P=float(P),
+        verdict=verdict,
+    )
+    return summary, cell, lin
+
+
+def _complement(lin: LinearModel) -> np.ndarray:
+    R = rigid_body_modes(lin.cell.coords)
+    return scipy.linalg.null_space(R.T) if R.shape[1] else np.eye(lin.cell.n)
+
+
+def _stable_free(lin: LinearModel):
+    if sp.issparse(lin.K0):
+        return None
+    Q = _complement(lin)
+    K = Q.T @ lin.K0 @ Q
+    try:
+        np.linalg.cholesky(0.5 * (K + K.T))
+        return True
+    except np.linalg.LinAlgError:
+        return False
+
+
+def node_displacements(coords: Coordinates, v: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+    """Node displacements ``∂x/∂q · v`` (m per unit of v), shape (n_nodes, 3), for a coordinate vector ``v``."""
+    kin = kinematics(coords, coords.q0 if q is None else q)
+    vv = np.append(np.asarray(v, dtype=float), 0.0)  # index -1 reads the padding zero
+    return np.einsum("nxk,nk->nx", kin.jac, vv[kin.index])
+
+
+@dataclass(frozen=True, eq=False)
+class RelaxationModes:
+    """The slowest relaxation modes ``K0 v = λ C0 v``.
+
+    Attributes
+    ----------
+    rates : ndarray, shape (k,)
+        Relaxation rates λ (1/s), ascending.
+    displacements : ndarray, shape (k, n_nodes, 3)
+        Node displacements of each mode, scaled so the largest is 1
+        (dimensionless shape).
+    vectors : ndarray, shape (n, k)
+        The modes in generalized coordinates.
+    residuals : ndarray, shape (k,) or None
+        Relative Ritz residuals of approximate modes (sparse models); None
+        when exact (dense eigensolver).
+    """
+
+    rates: np.ndarray
+    displacements: np.ndarray
+    vectors: np.ndarray
+    residuals: np.ndarray | None = None
+
+
+def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
+    """The ``k`` slowest relaxation modes, also when C0 is singular or the structure is free-standing.
+
+    Solves ``C0 v = μ K0 v`` (K0 positive definite; μ = 1/λ, μ = 0 for an
+    undamped mechanism) and keeps the largest μ. Free-standing structures
+    are treated on the complement of their rigid-body motions. Dense models
+    use a generalized eigensolver; sparse ones (more than 1500 coordinates)
+    return the slowest modes *that the load excites*
+    (:func:`tenscell.krylov.load_modes`).
+    """
+    if not (isinstance(k, (int, np.integer)) and k >= 1):
+        raise ValueError(f"k (number of modes) must be a whole number >= 1, got {k!r}")
+    n = lin.cell.n
+    if sp.issparse(lin.K0):
+        # ARPACK does not converge in reasonable time on lattices, whose slowest rate is shared by
+        # one local mode per module; the Lanczos run from the load finds the slowest modes it excites
+        rates, V, resid = load_modes(lin, min(k, n))
+        mu = 1.0 / rates
+    else:
+        Q = _complement(lin)
+        K = Q.T @ lin.K0 @ Q
+        C = Q.T @ lin.C0 @ Q
+        m = K.shape[0]
+        k = min(k, m)
+        mu, W = scipy.linalg.eigh(0.5 * (C + C.T), 0.5 * (K + K.T), subset_by_index=[m - k, m - 1])
+        V = Q @ W
+        resid = None
+    order = np.argsort(mu)[::-1][:k]
+    mu, V = mu[order], V[:, order]
+    if resid is not None:
+        resid = resid[order]
+    with np.errstate(divide="ignore"):
+        rates = np.where(mu > 0, 1.0 / np.where(mu > 0, mu, 1.0), np.inf)
+    disp = np.stack([node_displacements(lin.cell.coords, V[:, i]) for i in range(V.shape[1])])
+    scale = np.abs(disp).reshape(disp.shape[0], -1).max(axis=1)
+    disp = disp / np.where(scale > 0, scale, 1.0)[:, None, None]
+    return RelaxationModes(rates=rates, displacements=disp, vectors=V, residuals=resid)
