@@ -2,7 +2,8 @@
 
 The pipeline, one module per stage::
 
-    structure -> coordinates -> equilibrium -> shapes -> linear -> response -> analyses -> plotting, cli
+    structure -> coordinates -> equilibrium -> shapes -> constitutive -> linear -> response
+              -> timedomain -> analyses (dynamics, fitting, sensitivity, variants, studies) -> plotting, cli
 
 Quick start::
 
@@ -12,61 +13,69 @@ Quick start::
     f = np.logspace(-2, 3, 61)                       # Hz
     Gp, Gpp = tenscell.moduli(lin, f)                # Pa
 """
+
+# structure -> coordinates -> equilibrium -> shapes
+from .structure import Point, Structure, StructureError
+from .structio import StructureFile, load_structure, load_structure_file, member_values, save_structure
 from .equilibrium import Cell, NotPrestressableError, equilibrate, rest_lengths
-from .linear import LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, relaxation_spectrum
+from .formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
+from .shapes import (
+    DEFAULT_DELTA, REGULAR_DELTA, cylindrical_cell, if_free_delta, paper_cell, paper_structure, regular_cell,
+    semiflexible_paper_cell,
+)
+from .lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
+# constitutive laws -> linearization -> response
+from .constitutive import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
+from .linear import (
+    LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, linearize_tangent, relaxation_spectrum,
+)
 from .response import (
-    FrequencyResponse,
-    compliance,
-    frequency_response,
-    log_slope,
-    loss_tangent,
-    moduli,
-    static_modulus,
+    FrequencyResponse, compliance, frequency_response, log_slope, loss_tangent, moduli, static_modulus,
     viscosity_limit,
 )
-from .shapes import DEFAULT_DELTA, REGULAR_DELTA, if_free_delta, paper_cell, paper_structure
-from .structure import Point, Structure, StructureError
-from .linear import linearize_tangent  # issue 5: variants, sensitivity, future work
-from .shapes import cylindrical_cell, regular_cell, semiflexible_paper_cell
+from .krylov import krylov_compliance
+from .timedomain import (
+    CreepSpectrum, PowerLawFit, StressRelaxation, creep_compliance, creep_spectrum, fit_power_law, local_exponent,
+    relaxation_modulus, stress_relaxation,
+)
+# analyses
+from .summary import relaxation_modes, summarize
+from .dynamics import (
+    SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, linearize_law,
+    oscillatory_response, simulate,
+)
+from .fitting import FitParameter, FitResult, fit
 from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table
 from .variants import (
     linearize_semiflexible, linearize_stiffening, loss_peak, no_if_study, prestress_map, references_study,
     semiflexible_study, stiffening_study,
 )
-from .fitting import FitParameter, FitResult, fit
-from .constitutive import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
-from .timedomain import (CreepSpectrum, PowerLawFit, StressRelaxation, creep_compliance, creep_spectrum, fit_power_law,
-                         local_exponent, relaxation_modulus, stress_relaxation)
-from .dynamics import (SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response,
-                       linearize_law, oscillatory_response, simulate)
-from .structio import StructureFile, load_structure, load_structure_file, member_values, save_structure
-from .formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
-from .lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
-from .krylov import krylov_compliance
-from .summary import relaxation_modes, summarize
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "Structure", "Point", "StructureError",
+    # structure and reference
+    "Structure", "Point", "StructureError", "StructureFile", "load_structure", "load_structure_file",
+    "member_values", "save_structure",
     "Cell", "equilibrate", "rest_lengths", "NotPrestressableError",
+    "FormFindingError", "FormFindingResult", "find_form", "pin_jointed", "rigid_body_modes",
     "paper_cell", "paper_structure", "if_free_delta", "DEFAULT_DELTA", "REGULAR_DELTA",
-    "LinearModel", "linearize", "RelaxationSpectrum", "relaxation_spectrum", "NotPositiveDefiniteError",
+    "cylindrical_cell", "regular_cell", "semiflexible_paper_cell",
+    "expanded_octahedron", "lattice_cell", "lattice_structure", "sphere_cell", "sphere_structure",
+    # laws, linearization, response
+    "LinearizationError", "PowerDashpot", "Voigt", "power_dashpot_law", "voigt_law",
+    "LinearModel", "linearize", "linearize_tangent", "RelaxationSpectrum", "relaxation_spectrum",
+    "NotPositiveDefiniteError",
     "compliance", "moduli", "frequency_response", "FrequencyResponse", "static_modulus", "viscosity_limit",
-    "loss_tangent", "log_slope",
-    "linearize_tangent", "cylindrical_cell", "regular_cell", "semiflexible_paper_cell",
+    "loss_tangent", "log_slope", "krylov_compliance",
+    "CreepSpectrum", "PowerLawFit", "StressRelaxation", "creep_compliance", "creep_spectrum", "fit_power_law",
+    "local_exponent", "relaxation_modulus", "stress_relaxation",
+    # analyses
+    "relaxation_modes", "summarize",
+    "SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep", "creep_response",
+    "linearize_law", "oscillatory_response", "simulate",
+    "fit", "FitResult", "FitParameter",
     "analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table",
     "linearize_semiflexible", "linearize_stiffening", "loss_peak", "no_if_study", "prestress_map",
     "references_study", "semiflexible_study", "stiffening_study",
-    "fit", "FitResult", "FitParameter",
-    "Voigt", "PowerDashpot", "voigt_law", "power_dashpot_law", "LinearizationError",
-    "CreepSpectrum", "creep_spectrum", "creep_compliance", "StressRelaxation", "stress_relaxation",
-    "relaxation_modulus", "local_exponent", "PowerLawFit", "fit_power_law",
-    "simulate", "SineForce", "StepForce", "SineDisplacement", "SimulationError", "linearize_law",
-    "oscillatory_response", "amplitude_sweep", "creep_response",
-    "StructureFile", "load_structure", "load_structure_file", "save_structure", "member_values",
-    "find_form", "FormFindingResult", "FormFindingError", "pin_jointed", "rigid_body_modes",
-    "sphere_cell", "sphere_structure", "lattice_cell", "lattice_structure", "expanded_octahedron",
-    "krylov_compliance",
-    "summarize", "relaxation_modes",
 ]
