@@ -46,6 +46,7 @@ from .equilibrium import (
     member_geometry,
     tangent_stiffness,
 )
+from .structio import member_values
 from .structure import STRUT, Structure
 
 __all__ = [
@@ -100,30 +101,11 @@ class FormFindingResult:
 
 
 def _force_density(structure: Structure, force_density) -> np.ndarray:
-    m = structure.n_tendons
     fams = structure.families
     if isinstance(force_density, dict):
-        w = np.empty(m)
-        for j, f in enumerate(fams):
-            if f == STRUT:
-                w[j] = np.nan
-                continue
-            if f in force_density:
-                w[j] = force_density[f]
-            elif "default" in force_density:
-                w[j] = force_density["default"]
-            else:
-                raise ValueError(f"force_density: no value for family {f!r} (tendon {j}); give it or a 'default' (N/m)")
-    else:
-        arr = np.asarray(force_density, dtype=float)
-        if arr.ndim == 0:
-            w = np.full(m, float(arr))
-        elif arr.shape == (m,):
-            w = arr.copy()
-        else:
-            raise ValueError(f"force_density must be a number, a {{family: value}} dict or have shape ({m},) (N/m), "
-                             f"got shape {arr.shape}")
-        w[[f == STRUT for f in fams]] = np.nan
+        force_density = {STRUT: np.nan, **force_density}  # struts carry no force density of their own
+    w = member_values(structure, force_density, name="force_density", unit="N/m")
+    w[[f == STRUT for f in fams]] = np.nan
     cable = np.array([f != STRUT for f in fams], dtype=bool)
     bad = cable & ~(np.isfinite(w) & (w > 0))
     if np.any(bad):
