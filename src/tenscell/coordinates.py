@@ -70,6 +70,7 @@ class Coordinates:
     lengths: np.ndarray  # strut lengths (m)
     frame: np.ndarray  # (n_struts, 3, 3): rows u_ref, e1, e2 (used by "local")
     point_start: np.ndarray  # first coordinate of each point node
+    tendon_nodes: np.ndarray  # (m, 2) node pairs of the working tendons, as an array once
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,11 +156,13 @@ def make_coordinates(structure: Structure, kind: str = "angles") -> Coordinates:
         labels += [f"X(node {p})", f"Y(node {p})", f"Z(node {p})"]
         pos += 3
     q0a = np.array(q0, dtype=float)
-    for a in (q0a, node_index, starts, anchored, frame, pstart):
+    tendon_nodes = np.asarray(s.tendons, dtype=int).reshape(-1, 2)
+    for a in (q0a, node_index, starts, anchored, frame, pstart, tendon_nodes):
         a.setflags(write=False)
     return Coordinates(
         structure=s, kind=kind, n=pos, q0=q0a, node_index=node_index, labels=tuple(labels),
         strut_start=starts, anchored=anchored, lengths=lengths, frame=frame, point_start=pstart,
+        tendon_nodes=tendon_nodes,
     )
 
 

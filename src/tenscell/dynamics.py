@@ -60,7 +60,7 @@ from scipy.integrate import solve_ivp
 from ._checks import finite_scalar, positive_array, positive_scalar
 from .constitutive import LinearizationError, TendonLaw
 from .coordinates import kinematics
-from .equilibrium import Cell, assemble_hessian, member_geometry, point_vector
+from .equilibrium import Cell, assemble_hessian, equilibrium_matrix, member_geometry, point_vector
 from .linear import LinearModel, NotPositiveDefiniteError
 from .response import compliance
 from .structure import STRUT
@@ -314,9 +314,6 @@ class EquationsOfMotion:
         geom0 = cell.geometry
         idx = np.where(geom0.index < 0, self.n, geom0.index)
         self._idx = idx
-        t = np.asarray(cell.structure.tendons, dtype=int).reshape(-1, 2)
-        self._ta, self._tb = t[:, 0], t[:, 1]
-        self._flatA = (idx * self.m + np.arange(self.m)[:, None]).ravel()
         self._flatK = (idx[:, :, None] * (self.n + 1) + idx[:, None, :]).ravel()
         self._memo: dict = {}
         self._warm: tuple | None = None
@@ -350,15 +347,12 @@ class EquationsOfMotion:
     def _geometry(self, q):
         # lengths and A(q) only: the member Hessians are needed by the Jacobian alone
         kin = kinematics(self.coords, q)
-        d = kin.x[self._ta] - kin.x[self._tb]
-        l = np.sqrt(np.einsum("mx,mx->m", d, d))
-        if np.any(l <= 0):
-            raise SimulationError(f"tendon {int(np.flatnonzero(l <= 0)[0])} has zero length")
-        e = d / l[:, None]
-        grad = np.concatenate([np.einsum("mxk,mx->mk", kin.jac[self._ta], e),
-                               -np.einsum("mxk,mx->mk", kin.jac[self._tb], e)], axis=1)
-        A = np.bincount(self._flatA, weights=grad.ravel(), minlength=(self.n + 1) * self.m)
-        A = A.reshape(self.n + 1, self.m)[: self.n]
+        try:
+            geom = member_geometry(self.coords, q, kin, hessians=False)
+        except ValueError as err:  # a tendon collapsed to zero length
+            raise SimulationError(str(err)) from None
+        l, grad = geom.lengths, geom.grad
+        A = equilibrium_matrix(geom, sparse=False)
         st = self.cell.structure
         g = point_vector(self.coords, st.load, kin)
         D = g if st.probe == st.load else point_vector(self.coords, st.probe, kin)

@@ -64,8 +64,8 @@ class MemberGeometry:
         Member lengths (m).
     grad : ndarray, shape (m, 10)
         ``∂l_j/∂q`` on the member's local coordinate block (m/rad or 1).
-    hess : ndarray, shape (m, 10, 10)
-        ``∂²l_j/∂q²`` on the same block.
+    hess : ndarray, shape (m, 10, 10), or None
+        ``∂²l_j/∂q²`` on the same block (None if not requested).
     index : ndarray of int, shape (m, 10)
         Global coordinate indices of the block, -1 where unused.
     n : int
@@ -79,22 +79,28 @@ class MemberGeometry:
     n: int
 
 
-def member_geometry(coords: Coordinates, q: np.ndarray, kin: NodeKinematics | None = None) -> MemberGeometry:
+def member_geometry(coords: Coordinates, q: np.ndarray, kin: NodeKinematics | None = None, *,
+                    hessians: bool = True) -> MemberGeometry:
     """Member lengths, gradients and Hessians at ``q`` (all analytic).
 
     With ``d = x_a − x_b``, ``l = |d|``, ``e = d/l`` and ``M = [J_a, −J_b]``
     the chain rule gives ``∇l = Mᵀe`` and
     ``∇²l = Mᵀ (I − eeᵀ)/l M + Σ_x e_x (H_a ⊕ −H_b)_x``.
+    With ``hessians=False`` the (costlier) Hessians are skipped and ``hess``
+    is None: enough for lengths, A(q) and C(q).
     """
     kin = kinematics(coords, q) if kin is None else kin
-    t = np.asarray(coords.structure.tendons, dtype=int).reshape(-1, 2)
-    a, b = t[:, 0], t[:, 1]
+    a, b = coords.tendon_nodes[:, 0], coords.tendon_nodes[:, 1]
     d = kin.x[a] - kin.x[b]
     l = np.linalg.norm(d, axis=1)
     if np.any(l <= 0):
         j = int(np.flatnonzero(l <= 0)[0])
         raise ValueError(f"tendon {j} has zero length in this configuration")
     e = d / l[:, None]
+    index = np.concatenate([kin.index[a], kin.index[b]], axis=1)
+    if not hessians:
+        grad = np.concatenate([np.einsum("mxk,mx->mk", kin.jac[a], e), -np.einsum("mxk,mx->mk", kin.jac[b], e)], axis=1)
+        return MemberGeometry(lengths=l, grad=grad, hess=None, index=index, n=coords.n)
     M = np.concatenate([kin.jac[a], -kin.jac[b]], axis=2)  # (m, 3, 10)
     grad = np.einsum("mxk,mx->mk", M, e)
     proj = (np.eye(3)[None] - e[:, :, None] * e[:, None, :]) / l[:, None, None]
@@ -102,7 +108,6 @@ def member_geometry(coords: Coordinates, q: np.ndarray, kin: NodeKinematics | No
     w = kin.hess.shape[-1]
     hess[:, :w, :w] += np.einsum("mx,mxkl->mkl", e, kin.hess[a])
     hess[:, w:, w:] -= np.einsum("mx,mxkl->mkl", e, kin.hess[b])
-    index = np.concatenate([kin.index[a], kin.index[b]], axis=1)
     return MemberGeometry(lengths=l, grad=grad, hess=hess, index=index, n=coords.n)
 
 
@@ -119,10 +124,13 @@ def equilibrium_matrix(geom: MemberGeometry, sparse: bool | None = None):
     m, w = geom.grad.shape
     rows = geom.index.ravel()
     cols = np.repeat(np.arange(m), w)
-    keep = rows >= 0
-    A = sp.csr_matrix((geom.grad.ravel()[keep], (rows[keep], cols[keep])), shape=(geom.n, m))
     use_sparse = _use_sparse(geom.n) if sparse is None else sparse
-    return A if use_sparse else A.toarray()
+    if not use_sparse:
+        # dense: one bincount (the -1 padding lands in a dropped extra row), on the time integrator's hot path
+        flat = np.where(rows >= 0, rows, geom.n) * m + cols
+        return np.bincount(flat, weights=geom.grad.ravel(), minlength=(geom.n + 1) * m).reshape(geom.n + 1, m)[:-1]
+    keep = rows >= 0
+    return sp.csr_matrix((geom.grad.ravel()[keep], (rows[keep], cols[keep])), shape=(geom.n, m))
 
 
 def assemble_hessian(geom: MemberGeometry, weights: np.ndarray, sparse: bool | None = None):
