@@ -12,15 +12,28 @@ __all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text"]
 
 
 @contextlib.contextmanager
-def atomic_path(path):
-    """Yield a temporary path beside ``path``; move it into place only if the block succeeds."""
+def atomic_path(path, *, make_parents: bool = True):
+    """Yield a temporary path beside ``path``; move it into place only if the block succeeds.
+
+    The finished file is flushed to disk before the rename; it keeps the
+    permissions of the file it replaces (0644 for a new file). With
+    ``make_parents=False`` a missing directory raises OSError instead of
+    being created.
+    """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    if make_parents:
+        path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix or ".tmp", dir=path.parent)
     os.close(fd)
     try:
         yield Path(tmp)
-        os.chmod(tmp, 0o644)
+        with open(tmp, "rb+") as fh:
+            os.fsync(fh.fileno())
+        try:
+            mode = path.stat().st_mode & 0o777
+        except OSError:
+            mode = 0o644  # mkstemp makes 0600; a new output file gets the usual mode
+        os.chmod(tmp, mode)
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

@@ -25,12 +25,13 @@ from __future__ import annotations
 import csv
 import math
 import os
-import tempfile
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
+
+from ._io import atomic_path
 
 __all__ = [
     "DataError",
@@ -524,34 +525,13 @@ def write_csv(data: RheologyData, path: str | os.PathLike[str]) -> None:
     if data.G_loss_sd is not None:
         columns.append((_LOSS_SD, data.G_loss_sd))
 
-    directory = target.parent
-    fd, tmp_name = tempfile.mkstemp(
-        dir=directory, prefix=f".{target.name}.", suffix=".tmp"
-    )
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            for comment in data.comments:
-                fh.write(f"# {comment}\n" if comment else "#\n")
-            writer = csv.writer(fh, lineterminator="\n")
-            writer.writerow([name for name, _ in columns])
-            for i in range(data.n):
-                writer.writerow([_format(arr[i]) for _, arr in columns])
-            fh.flush()
-            os.fsync(fh.fileno())
-        # mkstemp creates the file mode 0600; keep an existing file's mode,
-        # otherwise use the usual mode for a data file.
-        try:
-            mode = target.stat().st_mode & 0o777
-        except OSError:
-            mode = 0o644
-        os.chmod(tmp_name, mode)
-        os.replace(tmp_name, target)
-    except BaseException:
-        try:
-            os.unlink(tmp_name)
-        except FileNotFoundError:
-            pass
-        raise
+    with atomic_path(target, make_parents=False) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
+        for comment in data.comments:
+            fh.write(f"# {comment}\n" if comment else "#\n")
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow([name for name, _ in columns])
+        for i in range(data.n):
+            writer.writerow([_format(arr[i]) for _, arr in columns])
 
 
 def bundled_names() -> tuple[str, ...]:
