@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 import tenscell
-from tenscell.constitutive import voigt_law
+from tenscell.laws import voigt_law
 from tenscell.dynamics import EquationsOfMotion, SineForce, simulate
 
 CYCLES = 20

@@ -26,7 +26,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tenscell import fitting
-from tenscell.data import bundled
+from tenscell.io.data import bundled
 
 
 def _time(fn, repeat):

@@ -29,8 +29,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import tenscell
-from tenscell.krylov import krylov_compliance
-from tenscell.structio import member_values
+from tenscell.linear.krylov import krylov_compliance
+from tenscell.io.structure_files import member_values
 
 SHAPES = [(2, 2, 1), (3, 2, 2), (3, 3, 3), (5, 4, 4), (6, 6, 6), (8, 8, 8), (11, 11, 12), (13, 13, 13), (17, 17, 17)]
 HEADLINE = (11, 11, 12)  # 10 934 nodes

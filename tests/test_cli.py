@@ -92,7 +92,7 @@ def test_reproduce_homogeneous_outputs(tmp_path):
 
 
 def test_failed_write_leaves_no_file(tmp_path, monkeypatch):
-    from tenscell import _io
+    from tenscell.io import outputs as _io
 
     target = tmp_path / "x.csv"
 

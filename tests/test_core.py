@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tenscell
-from tenscell.equilibrium import generalized_forces, member_geometry, tangent_stiffness
-from tenscell.coordinates import kinematics
+from tenscell.model.equilibrium import generalized_forces, member_geometry, tangent_stiffness
+from tenscell.model.coordinates import kinematics
 from tenscell.response import _direct
 
 F_WIDE = np.logspace(-3, 5, 161)  # Hz

@@ -14,7 +14,7 @@ import pytest
 import scipy.integrate
 
 import tenscell
-from tenscell.constitutive import voigt_law
+from tenscell.laws import voigt_law
 from tenscell.dynamics import creep_response
 from tenscell.timedomain import (
     creep_compliance,

@@ -1,4 +1,4 @@
-"""Tests for tenscell.data: reading, validating and writing rheology CSV files."""
+"""Tests for tenscell.io.data: reading, validating and writing rheology CSV files."""
 
 from __future__ import annotations
 
@@ -12,8 +12,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import tenscell.data as data_module
-from tenscell.data import (
+import tenscell.io.data as data_module
+from tenscell.io.data import (
     DataError,
     RheologyData,
     bundled,

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import tenscell
-from tenscell.constitutive import (
+from tenscell.laws import (
     LinearizationError,
     PowerDashpot,
     Voigt,

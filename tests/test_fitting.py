@@ -17,7 +17,7 @@ from threadpoolctl import threadpool_limits
 import tenscell
 from tenscell import fitting
 from tenscell.cli import main as cli_main
-from tenscell.data import DataError, RheologyData, bundled, write_csv
+from tenscell.io.data import DataError, RheologyData, bundled, write_csv
 
 F5 = np.logspace(-2, 3, 7)
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import tenscell
-from tenscell.formfinding import FormFindingError, find_form, pin_jointed
-from tenscell.lattices import _module
-from tenscell.structure import Point, Structure
+from tenscell.model.formfinding import FormFindingError, find_form, pin_jointed
+from tenscell.model.lattices import _module
+from tenscell.model.structure import Point, Structure
 
 SQRT38 = math.sqrt(3.0 / 8.0)
 

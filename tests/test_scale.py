@@ -10,12 +10,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import tenscell
-import tenscell.equilibrium as equilibrium
-from tenscell._sparse import NotPositiveDefinite, factorize_spd, nested_dissection
-from tenscell.equilibrium import self_stress_lp
-from tenscell.krylov import krylov_compliance
-from tenscell.lattices import lattice_module_tensions
-from tenscell.structio import member_values
+import tenscell.model.equilibrium as equilibrium
+from tenscell.linear.sparse import NotPositiveDefinite, factorize_spd, nested_dissection
+from tenscell.model.equilibrium import self_stress_lp
+from tenscell.linear.krylov import krylov_compliance
+from tenscell.model.lattices import lattice_module_tensions
+from tenscell.io.structure_files import member_values
 
 FREQS = np.logspace(-2, 3, 40)
 
@@ -132,7 +132,7 @@ def test_lp_self_stress_matches_svd():
     T = self_stress_lp(sp.csr_matrix(cell.A), cell.structure.families, cell.structure.equal_tension_groups)
     np.testing.assert_allclose(T, cell.T0, atol=1e-10)
     bad = tenscell.paper_structure(0.0, math.radians(60.0), 1.0)
-    co = tenscell.coordinates.make_coordinates(bad)
+    co = tenscell.model.coordinates.make_coordinates(bad)
     A = equilibrium.equilibrium_matrix(equilibrium.member_geometry(co, co.q0), sparse=True)
     with pytest.raises(tenscell.NotPrestressableError):
         self_stress_lp(A, bad.families, bad.equal_tension_groups)

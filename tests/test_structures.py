@@ -9,10 +9,10 @@ import pytest
 import scipy.linalg
 
 import tenscell
-from tenscell.formfinding import pin_jointed, rigid_body_modes
-from tenscell.lattices import _module
-from tenscell.structio import load_structure, load_structure_file, member_values, save_structure, structure_to_dict
-from tenscell.structure import Point, Structure, StructureError
+from tenscell.model.formfinding import pin_jointed, rigid_body_modes
+from tenscell.model.lattices import _module
+from tenscell.io.structure_files import load_structure, load_structure_file, member_values, save_structure, structure_to_dict
+from tenscell.model.structure import Point, Structure, StructureError
 from tenscell.summary import relaxation_modes, summarize
 
 FREQS = np.logspace(-2, 3, 25)

@@ -22,10 +22,12 @@ from tenscell import (
     paper_cell,
     static_modulus,
 )
-from tenscell import cli, shapes, stiffening, variants
-from tenscell.equilibrium import generalized_forces
-from tenscell.linear import linearize_tangent, relaxation_spectrum
-from tenscell.structure import INTERMEDIATE_FILAMENT, STRUT
+from tenscell import cli, stiffening
+from tenscell.model import shapes
+from tenscell.studies import variants
+from tenscell.model.equilibrium import generalized_forces
+from tenscell.linear.linearize import linearize_tangent, relaxation_spectrum
+from tenscell.model.structure import INTERMEDIATE_FILAMENT, STRUT
 
 F = np.logspace(-2, 3, 21)
 

@@ -15,25 +15,25 @@ Quick start::
 """
 
 # structure -> coordinates -> equilibrium -> shapes
-from .structure import Point, Structure, StructureError
-from .structio import StructureFile, load_structure, load_structure_file, member_values, save_structure
-from .equilibrium import Cell, NotPrestressableError, equilibrate, rest_lengths
-from .formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
-from .shapes import (
+from .model.structure import Point, Structure, StructureError
+from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
+from .model.equilibrium import Cell, NotPrestressableError, equilibrate, rest_lengths
+from .model.formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
+from .model.shapes import (
     DEFAULT_DELTA, REGULAR_DELTA, cylindrical_cell, if_free_delta, paper_cell, paper_structure, regular_cell,
     semiflexible_paper_cell,
 )
-from .lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
+from .model.lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
 # constitutive laws -> linearization -> response
-from .constitutive import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
-from .linear import (
+from .laws import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
+from .linear.linearize import (
     LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, linearize_tangent, relaxation_spectrum,
 )
 from .response import (
     FrequencyResponse, compliance, frequency_response, log_slope, loss_tangent, moduli, static_modulus,
     viscosity_limit,
 )
-from .krylov import krylov_compliance
+from .linear.krylov import krylov_compliance
 from .timedomain import (
     CreepSpectrum, PowerLawFit, StressRelaxation, creep_compliance, creep_spectrum, fit_power_law, local_exponent,
     relaxation_modulus, stress_relaxation,
@@ -46,7 +46,7 @@ from .dynamics import (
 )
 from .fitting import FitParameter, FitResult, fit
 from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table
-from .variants import (
+from .studies.variants import (
     linearize_semiflexible, linearize_stiffening, loss_peak, no_if_study, prestress_map, references_study,
     semiflexible_study, stiffening_study,
 )

@@ -96,8 +96,9 @@ def _add_moduli(sub) -> None:
 
 def reproduce_homogeneous(out: Path, log) -> None:
     """Paper Figs. 2–3 and claims.md into ``out``."""
-    from . import plotting, studies
-    from ._io import write_csv_rows, write_text
+    from . import plotting
+    from .studies import claims as studies
+    from .io.outputs import write_csv_rows, write_text
 
     study = studies.homogeneous_study()
     header = ["prestress", "frequency_Hz", "G_storage", "G_loss"]
@@ -115,8 +116,8 @@ def reproduce_homogeneous(out: Path, log) -> None:
 def reproduce_dynamics(out: Path, log) -> None:
     """Time-domain checks into ``out/dynamics``: small-amplitude moduli, a nonlinear loop, creep."""
     from . import paper_cell, plotting
-    from ._io import write_json
-    from .constitutive import voigt_law
+    from .io.outputs import write_json
+    from .laws import voigt_law
     from .dynamics import creep_response, oscillatory_response
     from .timedomain import creep_spectrum
 
@@ -194,7 +195,7 @@ def _fit_rows(result, baseline):
 def _fit_outputs(result, baseline, title):
     """Everything a fit writes, computed before any file is touched: {file name: writer}."""
     from . import fitting, plotting
-    from ._io import write_csv_rows, write_json, write_text
+    from .io.outputs import write_csv_rows, write_json, write_text
 
     doc = result.to_dict()
     doc["baseline"] = {k: v for k, v in baseline.to_dict().items()
@@ -226,7 +227,7 @@ def _run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_sta
 
 def _cmd_fit(args) -> int:
     from . import fitting
-    from .data import read_csv
+    from .io.data import read_csv
 
     data = read_csv(args.data, min_points=fitting.required_points(args.tendons, args.damping))
     result, baseline = _run_fit(data, args.tendons, args.damping, args.starts, args.seed, args.jobs,
@@ -269,7 +270,7 @@ def _add_fit(sub) -> None:
 
 def reproduce_fit(out: Path, log) -> None:
     """Paper Figs. 4 and 5: heterogeneous fits to the bundled data, each beside its homogeneous baseline."""
-    from .data import bundled
+    from .io.data import bundled
 
     for name, stem, title in (
         ("stamenovic2002", "fig4_prestress_fit", "Fig. 4: moduli versus prestress at 0.1 Hz (Stamenović 2002)"),
@@ -291,8 +292,9 @@ REPRODUCE_STAGES.append(("heterogeneous fits (Figs. 4-5)", reproduce_fit))
 
 # ---- studies of the discussion's variants and the future work (issue 5) ----------------------
 def _study_no_if(out: Path, log, args=None) -> None:
-    from . import plotting, variants
-    from ._io import write_csv_rows, write_text
+    from . import plotting
+    from .studies import variants
+    from .io.outputs import write_csv_rows, write_text
 
     s = variants.no_if_study()
     rows = ((P, f, a, b, c, d) for (P, f, a, b), (_, _, c, d) in zip(s.without.rows(), s.with_ifs.rows()))
@@ -308,7 +310,7 @@ def _study_no_if(out: Path, log, args=None) -> None:
 
 def _study_sensitivity(out: Path, log, args=None) -> None:
     from . import plotting, sensitivity
-    from ._io import write_csv_rows, write_text
+    from .io.outputs import write_csv_rows, write_text
 
     draws = getattr(args, "draws", 200)
     seed = getattr(args, "seed", 0)
@@ -339,8 +341,9 @@ def _study_sensitivity(out: Path, log, args=None) -> None:
 
 
 def _study_references(out: Path, log, args=None) -> None:
-    from . import plotting, variants
-    from ._io import write_csv_rows, write_text
+    from . import plotting
+    from .studies import variants
+    from .io.outputs import write_csv_rows, write_text
 
     s = variants.references_study()
     mp = s.map
@@ -358,8 +361,9 @@ def _study_references(out: Path, log, args=None) -> None:
 
 
 def _study_semiflexible(out: Path, log, args=None) -> None:
-    from . import plotting, variants
-    from ._io import write_csv_rows, write_text
+    from . import plotting
+    from .studies import variants
+    from .io.outputs import write_csv_rows, write_text
 
     s = variants.semiflexible_study()
     f = s.frequency_hz
@@ -374,8 +378,9 @@ def _study_semiflexible(out: Path, log, args=None) -> None:
 
 
 def _study_stiffening(out: Path, log, args=None) -> None:
-    from . import plotting, variants
-    from ._io import write_csv_rows, write_text
+    from . import plotting
+    from .studies import variants
+    from .io.outputs import write_csv_rows, write_text
 
     s = variants.stiffening_study()
     write_csv_rows(out / "stiffening.csv", ["b", "prestress", "frequency_Hz", "G_storage", "G_loss", "G_static", "IF_tangent_N_per_m"],
@@ -447,7 +452,7 @@ def _add_law_options(p) -> None:
 
 def _law_from_args(args):
     """(cell, law, solver options) from the model and law options."""
-    from .constitutive import power_dashpot_law, voigt_law
+    from .laws import power_dashpot_law, voigt_law
 
     cell, EA, c = model_from_args(args)
     P = parse_list(args.prestress, "--prestress")
@@ -464,7 +469,7 @@ def _law_from_args(args):
 
 def _cmd_simulate(args) -> int:
     from . import plotting
-    from ._io import write_csv_rows, write_json
+    from .io.outputs import write_csv_rows, write_json
     from .dynamics import amplitude_sweep, oscillatory_response
 
     cell, law, solver = _law_from_args(args)
@@ -553,8 +558,8 @@ def _add_simulate(sub) -> None:
 
 def _cmd_creep(args) -> int:
     from . import plotting
-    from ._io import write_csv_rows, write_json
-    from .constitutive import LinearizationError
+    from .io.outputs import write_csv_rows, write_json
+    from .laws import LinearizationError
     from .dynamics import creep_response, linearize_law
     from .timedomain import creep_spectrum, fit_power_law, local_exponent, stress_relaxation
 
@@ -678,8 +683,9 @@ def _parse_member_values(text: str, name: str):
 
 def _show_target(args):
     """(stem, cell or structure, EA, c, T0 or None) for a file or a built-in name."""
-    from . import lattices, paper_cell
-    from .structio import load_structure_file
+    from . import paper_cell
+    from .model import lattices
+    from .io.structure_files import load_structure_file
 
     target = args.target
     if target in SHOW_BUILTINS:
@@ -704,9 +710,9 @@ def _show_target(args):
 def _cmd_show(args) -> int:
     from . import plotting
 
-    from ._io import write_text
-    from .equilibrium import NotPrestressableError, equilibrate
-    from .structio import member_values, save_structure
+    from .io.outputs import write_text
+    from .model.equilibrium import NotPrestressableError, equilibrate
+    from .io.structure_files import member_values, save_structure
     from .summary import relaxation_modes, summarize
 
     out = Path(args.out)
@@ -781,7 +787,7 @@ def _add_show(sub) -> None:
 def reproduce_show(out: Path, log) -> None:
     """`tenscell show paper`: the cell in 3D (paper Fig. 1 colours), its slowest modes and summary."""
     from . import paper_cell, plotting
-    from ._io import write_text
+    from .io.outputs import write_text
     from .summary import relaxation_modes, summarize
 
     summary, cell, lin = summarize(paper_cell())

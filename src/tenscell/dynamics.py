@@ -6,7 +6,7 @@ The paper's Eq. (6) without inertia (massless struts and nodes):
 
 with the exact ``A(q) = ∂l/∂q``, ``−H(q) = (∂x_load/∂q)ᵀ d`` (the load point's
 virtual displacement along the load direction d) and a tendon law
-``T(l, l')`` from :mod:`tenscell.constitutive`. For the Voigt law the
+``T(l, l')`` from :mod:`tenscell.laws`. For the Voigt law the
 equation is linear in the velocities, ``C(q)·q' = −A(q)·T_el(q) − H(q)·F(t)``
 with ``C(q) = Σ c_j a_j a_jᵀ``; for a nonlinear dashpot it is solved for ``q'``
 by a Newton iteration at every evaluation. Either way the state is
@@ -19,7 +19,7 @@ theorem:
 − F·∇²(d·x_load)]``,
 
 ``C_eff = Σ_j ∂T_j/∂l' a_j a_jᵀ`` over the taut tendons (the exact member
-Hessians come from :func:`tenscell.equilibrium.member_geometry`).
+Hessians come from :func:`tenscell.model.equilibrium.member_geometry`).
 
 **Slack.** Tendons are cables: each carries ``max(0, T(l, l'))``, spring
 and dashpot alike, so a tendon whose tension would become negative goes
@@ -58,12 +58,12 @@ import scipy.linalg
 from scipy.integrate import solve_ivp
 
 from ._checks import finite_scalar, positive_array, positive_scalar
-from .constitutive import LinearizationError, TendonLaw
-from .coordinates import kinematics
-from .equilibrium import Cell, assemble_hessian, equilibrium_matrix, member_geometry, point_vector
-from .linear import LinearModel, NotPositiveDefiniteError
+from .laws import LinearizationError, TendonLaw
+from .model.coordinates import kinematics
+from .model.equilibrium import Cell, assemble_hessian, equilibrium_matrix, member_geometry, point_vector
+from .linear.linearize import LinearModel, NotPositiveDefiniteError
 from .response import compliance
-from .structure import STRUT
+from .model.structure import STRUT
 from .timedomain import creep_spectrum
 
 __all__ = [
@@ -272,7 +272,7 @@ class EquationsOfMotion:
     ----------
     cell : Cell
     law : TendonLaw
-        One entry per working tendon (e.g. :func:`tenscell.constitutive.voigt_law`).
+        One entry per working tendon (e.g. :func:`tenscell.laws.voigt_law`).
     loading : SineForce, StepForce or SineDisplacement
 
     Notes

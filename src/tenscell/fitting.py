@@ -3,7 +3,7 @@
 The paper (Sultan, Stamenović & Ingber 2004, Figs. 4–5) fits tendon
 stiffnesses, the damping c, the prestress P and the strut length L so that the
 model's G', G'' match measured data; a homogeneous cell cannot do it. This
-module does the same for any :class:`tenscell.data.RheologyData`.
+module does the same for any :class:`tenscell.io.data.RheologyData`.
 
 Parameters and units
 --------------------
@@ -51,9 +51,9 @@ import scipy.sparse as sp
 from threadpoolctl import threadpool_limits
 
 from ._checks import positive_scalar
-from .data import DataError, RheologyData
-from .equilibrium import Cell
-from .linear import linearize
+from .io.data import DataError, RheologyData
+from .model.equilibrium import Cell
+from .linear.linearize import linearize
 from .response import compliance, log_slope
 
 __all__ = [
@@ -519,10 +519,10 @@ def make_problem(
         Unknown modes, bad bounds or fixed values, a cell with singular
         damping, or too few data points (:func:`required_points`).
     """
-    from .shapes import paper_cell
+    from .model.shapes import paper_cell
 
     if not isinstance(data, RheologyData):
-        raise ValueError(f"data must be a tenscell.data.RheologyData, got {type(data).__name__}")
+        raise ValueError(f"data must be a tenscell.io.data.RheologyData, got {type(data).__name__}")
     _choice("tendons", tendons, TENDON_MODES)
     _choice("damping", damping, DAMPING_MODES)
     cell = paper_cell() if cell is None else cell
@@ -1038,7 +1038,7 @@ def fit(
     Parameters
     ----------
     data : RheologyData
-        Frequency or prestress sweep (see :mod:`tenscell.data`).
+        Frequency or prestress sweep (see :mod:`tenscell.io.data`).
     cell : Cell, optional
         Reference cell; default :func:`tenscell.paper_cell` (strut length 1 m).
     tendons : {"per-tendon", "per-family", "uniform"}
@@ -1076,7 +1076,7 @@ def fit(
     ValueError
         Bad options, data or cell (see :func:`make_problem`).
     """
-    from .shapes import paper_cell
+    from .model.shapes import paper_cell
 
     t_begin = time.monotonic()
     cell = paper_cell() if cell is None else cell

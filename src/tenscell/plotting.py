@@ -11,7 +11,7 @@ matplotlib.use("Agg")  # files, not windows: tenscell runs on headless machines
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ._io import atomic_path  # noqa: E402
+from .io.outputs import atomic_path  # noqa: E402
 from .response import FrequencyResponse  # noqa: E402
 
 __all__ = [
@@ -105,7 +105,7 @@ def save(fig, path) -> None:
 def no_if_figure(study, title: str = "Without intermediate filaments: G'' has a peak"):
     """G', G'' against f for each prestress, without IFs (solid) and with them (dashed); peaks marked.
 
-    ``study`` is a :class:`tenscell.variants.NoIFStudy`.
+    ``study`` is a :class:`tenscell.studies.variants.NoIFStudy`.
     """
     w, i = study.without, study.with_ifs
     with plt.rc_context(STYLE):
@@ -196,7 +196,7 @@ def monte_carlo_figure(results, bound: float = 0.08, title: str = "Monte Carlo o
 
 
 def reference_map_figure(mp, if_free_curve=None, title: str = "Valid references q0(α, δ) of the paper cell"):
-    """The validity map of :func:`tenscell.variants.prestress_map`, with the IF-free curve δ*(α)."""
+    """The validity map of :func:`tenscell.studies.variants.prestress_map`, with the IF-free curve δ*(α)."""
     from matplotlib.colors import ListedColormap
 
     a, d = np.degrees(mp.alpha), np.degrees(mp.delta)
@@ -283,7 +283,7 @@ def fit_figure(data, curves, title: str | None = None):
 
     Parameters
     ----------
-    data : tenscell.data.RheologyData
+    data : tenscell.io.data.RheologyData
         The measurements: G' filled circles, G'' open circles.
     curves : sequence of tenscell.fitting.FitCurve
         One panel each (e.g. the heterogeneous fit, then the homogeneous

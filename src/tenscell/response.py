@@ -14,9 +14,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._checks import positive_array
-from .equilibrium import Cell
-from .krylov import factorize_stiffness, krylov_compliance
-from .linear import LinearModel, _cholesky_or_none, _spectrum_or_none, linearize
+from .model.equilibrium import Cell
+from .linear.krylov import factorize_stiffness, krylov_compliance
+from .linear.linearize import LinearModel, _cholesky_or_none, _spectrum_or_none, linearize
 
 __all__ = [
     "compliance",
@@ -44,7 +44,7 @@ def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     Through the relaxation spectrum when C0 is positive definite, by direct
     complex solves otherwise (singular C0); sparse models (more than
     ``SPARSE_THRESHOLD`` coordinates) use one factorization and a shifted
-    Lanczos iteration (:func:`tenscell.krylov.krylov_compliance`, relative
+    Lanczos iteration (:func:`tenscell.linear.krylov.krylov_compliance`, relative
     accuracy 1e-12).
 
     Parameters
@@ -75,7 +75,7 @@ def compliance(lin: LinearModel, f_hz) -> np.ndarray:
 def _direct(lin: LinearModel, w: np.ndarray) -> np.ndarray:
     b = -lin.H0
     if sp.issparse(lin.K0):
-        # large models: one factorization and a shifted Lanczos run for all frequencies (tenscell.krylov)
+        # large models: one factorization and a shifted Lanczos run for all frequencies (tenscell.linear.krylov)
         return krylov_compliance(lin, w / (2 * np.pi)).J
     Z = lin.K0[None, :, :] + 1j * w[:, None, None] * lin.C0[None, :, :]
     x = np.linalg.solve(Z, np.broadcast_to(b.astype(complex), (w.size, b.size))[..., None])[..., 0]

@@ -38,10 +38,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._checks import finite_scalar, positive_array, positive_scalar
-from .linear import LinearModel, linearize
+from .linear.linearize import LinearModel, linearize
 from .response import compliance
-from .shapes import paper_cell
-from .structure import STRUT
+from .model.shapes import paper_cell
+from .model.structure import STRUT
 
 __all__ = [
     "Elasticities",
@@ -130,7 +130,7 @@ def _family_tag(family: str) -> str:
 def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Elasticities:
     """Exact elasticities of G for every EA_j, every c_j and P of a linear model.
 
-    Works for any dense :class:`~tenscell.linear.LinearModel` built by
+    Works for any dense :class:`~tenscell.linear.linearize.LinearModel` built by
     :func:`tenscell.linearize` (where ``K0 = P·Kp + Σ EA_j a_j a_jᵀ/l_j``),
     including singular C0 (direct solves).
 

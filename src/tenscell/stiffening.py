@@ -14,7 +14,7 @@ strain-stiffening biopolymer networks.
 The linearization about a prestressed reference needs, per member, the rest
 length that gives the reference tension (the inverse law) and the tangent
 stiffness there; :func:`tangent_at_tension` returns both, and
-:func:`tenscell.linear.linearize_tangent` builds the linear model from them.
+:func:`tenscell.linear.linearize.linearize_tangent` builds the linear model from them.
 
 Pure functions of arrays (broadcasting); this module sits at the constitutive
 stage of the pipeline and imports nothing later.

@@ -8,7 +8,7 @@ the slowest relaxation modes as node displacement fields, ready for
 Free-standing structures (fewer than three fixed non-collinear nodes) keep
 rigid-body motions; their stiffness is singular along them, so stability and
 modes are computed on the complement of the rigid-body motions
-(:func:`tenscell.formfinding.rigid_body_modes`).
+(:func:`tenscell.model.formfinding.rigid_body_modes`).
 """
 from __future__ import annotations
 
@@ -18,12 +18,12 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
-from .coordinates import Coordinates, kinematics, make_coordinates
-from .equilibrium import Cell, NotPrestressableError, equilibrate, equilibrium_matrix, member_geometry
-from .formfinding import rigid_body_modes
-from .krylov import load_modes
-from .linear import LinearModel, NotPositiveDefiniteError, linearize
-from .structure import STRUT, Structure
+from .model.coordinates import Coordinates, kinematics, make_coordinates
+from .model.equilibrium import Cell, NotPrestressableError, equilibrate, equilibrium_matrix, member_geometry
+from .model.formfinding import rigid_body_modes
+from .linear.krylov import load_modes
+from .linear.linearize import LinearModel, NotPositiveDefiniteError, linearize
+from .model.structure import STRUT, Structure
 
 __all__ = ["StructureSummary", "summarize", "relaxation_modes", "RelaxationModes", "node_displacements"]
 
@@ -255,7 +255,7 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     are treated on the complement of their rigid-body motions. Dense models
     use a generalized eigensolver; sparse ones (more than 1500 coordinates)
     return the slowest modes *that the load excites*
-    (:func:`tenscell.krylov.load_modes`).
+    (:func:`tenscell.linear.krylov.load_modes`).
     """
     if not (isinstance(k, (int, np.integer)) and k >= 1):
         raise ValueError(f"k (number of modes) must be a whole number >= 1, got {k!r}")

@@ -40,7 +40,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from ._checks import positive_array, positive_scalar
-from .linear import LinearModel
+from .linear.linearize import LinearModel
 
 __all__ = [
     "CreepSpectrum",

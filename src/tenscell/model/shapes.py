@@ -11,7 +11,7 @@ following ``docs/model-notes.md``:
   the 3 base edges) and 12 intermediate filaments to a centre node at O;
 * load and probe: vertical, at the centre of strut B1D1.
 
-This module sits after :mod:`tenscell.equilibrium` because a built-in cell
+This module sits after :mod:`tenscell.model.equilibrium` because a built-in cell
 is a *prestressable* reference: building one needs the self-stress (and, for
 the cell without intermediate filaments, the curve δ*(α) on which a
 self-stress exists).
@@ -23,7 +23,7 @@ import math
 import numpy as np
 import scipy.optimize
 
-from ._checks import finite_scalar, positive_scalar
+from .._checks import finite_scalar, positive_scalar
 from .coordinates import kinematics, make_coordinates
 from .equilibrium import Cell, NotPrestressableError, equilibrate, equilibrium_matrix, member_geometry
 from .structure import ACTIN, INTERMEDIATE_FILAMENT, Point, Structure
@@ -332,7 +332,7 @@ def semiflexible_paper_cell(
     m). With intermediate filaments: 30 coordinates (10 point nodes) and 39
     members; without: 27 coordinates and 27 members. Give the struts their
     axial stiffness and damping through
-    :func:`tenscell.variants.linearize_semiflexible`.
+    :func:`tenscell.studies.variants.linearize_semiflexible`.
     """
     rigid = paper_cell(alpha, delta, L, intermediate_filaments)
     p = dict(rigid.parameters)

@@ -411,7 +411,7 @@ def equilibrate(
     structure : Structure
         Its node positions are the reference configuration q0.
     parametrization : {"angles", "local"}
-        Strut direction coordinates (see :mod:`tenscell.coordinates`).
+        Strut direction coordinates (see :mod:`tenscell.model.coordinates`).
     T0 : ndarray, optional
         A self-stress to use instead of the computed one; it is checked
         (``A T0 = 0``, cables in tension) and normalized. Without it, the

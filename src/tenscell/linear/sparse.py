@@ -6,12 +6,12 @@ here and told to keep diagonal pivots (``SymmetricMode``,
 with ``U = D Lᵀ``. By Sylvester's law of inertia the matrix is positive
 definite exactly when every pivot ``D_ii`` is positive and no row was
 interchanged, so one factorization both proves positive definiteness and
-serves the solves (the Lanczos iteration of :mod:`tenscell.krylov`).
+serves the solves (the Lanczos iteration of :mod:`tenscell.linear.krylov`).
 
 The ordering is George's nested dissection on the matrix graph: a
 breadth-first level structure from a pseudo-peripheral vertex, the middle
 level as separator, recursively; separators are numbered last. On the 3D
-lattices of :mod:`tenscell.lattices` it gives several times less fill than
+lattices of :mod:`tenscell.model.lattices` it gives several times less fill than
 SuperLU's own column orderings.
 """
 from __future__ import annotations
@@ -214,7 +214,7 @@ def factorize_spd(A, what: str = "the matrix", points: np.ndarray | None = None)
 def coordinate_locations(coords) -> np.ndarray:
     """A location (m) for each generalized coordinate: the mean reference position of the nodes it moves.
 
-    ``coords`` is a :class:`tenscell.coordinates.Coordinates`; returns shape (n, 3). Used for the
+    ``coords`` is a :class:`tenscell.model.coordinates.Coordinates`; returns shape (n, 3). Used for the
     geometric nested-dissection ordering.
     """
     x = coords.structure.nodes

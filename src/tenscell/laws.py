@@ -33,7 +33,7 @@ Laws
 
 Rest lengths ``l0`` come from the prestress through the paper's Eq. (11):
 build laws with :func:`voigt_law` or :func:`power_dashpot_law`, which call
-:func:`tenscell.equilibrium.rest_lengths`.
+:func:`tenscell.model.equilibrium.rest_lengths`.
 """
 from __future__ import annotations
 
@@ -43,7 +43,7 @@ from typing import Protocol
 import numpy as np
 
 from ._checks import finite_scalar, positive_array, positive_scalar
-from .equilibrium import Cell, rest_lengths
+from .model.equilibrium import Cell, rest_lengths
 
 __all__ = [
     "TendonLaw",

@@ -4,7 +4,7 @@ For a model with tens of thousands of coordinates a sparse factorization
 per frequency is too slow. Instead, with a real shift ``σ > 0``:
 
 * factor ``Kσ = K0 + σ·C0`` once (symmetric positive definite; nested
-  dissection ordering, :mod:`tenscell._sparse`);
+  dissection ordering, :mod:`tenscell.linear.sparse`);
 * run the symmetric Lanczos iteration on ``Op = Kσ⁻¹·C0`` in the
   ``Kσ``-inner product, from ``x0 = Kσ⁻¹·b`` (b = −H0 = D0 for the usual
   probe = load), with full reorthogonalization. After ``k`` steps
@@ -39,9 +39,9 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ._checks import positive_array
-from ._sparse import NotPositiveDefinite, SymmetricFactor, coordinate_locations, factorize_spd
-from .linear import LinearModel, NotPositiveDefiniteError
+from .._checks import positive_array
+from .sparse import NotPositiveDefinite, SymmetricFactor, coordinate_locations, factorize_spd
+from .linearize import LinearModel, NotPositiveDefiniteError
 
 __all__ = ["KrylovResponse", "krylov_compliance", "factorize_stiffness", "default_shift", "load_modes"]
 

@@ -1,6 +1,6 @@
 """Generalized coordinates q -> node positions, with exact derivatives.
 
-Every movable part of a :class:`~tenscell.structure.Structure` owns a block of
+Every movable part of a :class:`~tenscell.model.structure.Structure` owns a block of
 generalized coordinates, laid out in this order: the struts in the
 structure's order, then the point nodes in index order.
 

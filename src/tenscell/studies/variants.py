@@ -26,11 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
-from ._checks import finite_scalar, positive_array, positive_scalar
-from .equilibrium import Cell, NotPrestressableError
-from .linear import LinearModel, NotPositiveDefiniteError, linearize, linearize_tangent
-from .response import FrequencyResponse, compliance, frequency_response, static_modulus
-from .shapes import (
+from .._checks import finite_scalar, positive_array, positive_scalar
+from ..model.equilibrium import Cell, NotPrestressableError
+from ..linear.linearize import LinearModel, NotPositiveDefiniteError, linearize, linearize_tangent
+from ..response import FrequencyResponse, compliance, frequency_response, static_modulus
+from ..model.shapes import (
     REGULAR_DELTA,
     cylindrical_cell,
     if_free_delta,
@@ -38,8 +38,8 @@ from .shapes import (
     regular_cell,
     semiflexible_paper_cell,
 )
-from .stiffening import tangent_at_tension
-from .structure import INTERMEDIATE_FILAMENT, STRUT
+from ..stiffening import tangent_at_tension
+from ..model.structure import INTERMEDIATE_FILAMENT, STRUT
 
 __all__ = [
     "LossPeak",
@@ -503,7 +503,7 @@ def _strut_indices(cell: Cell) -> np.ndarray:
     if idx.size == 0:
         raise ValueError(
             f"{cell.describe()} has no elastic struts (members of family 'strut'); "
-            "build it with tenscell.shapes.semiflexible_paper_cell or semiflexible_structure"
+            "build it with tenscell.model.shapes.semiflexible_paper_cell or semiflexible_structure"
         )
     return idx
 
@@ -516,7 +516,7 @@ def euler_critical_prestress(cell: Cell, EI: float) -> float:
     Parameters
     ----------
     cell : Cell
-        With elastic struts (:func:`tenscell.shapes.semiflexible_paper_cell`).
+        With elastic struts (:func:`tenscell.model.shapes.semiflexible_paper_cell`).
     EI : float
         Bending stiffness of a strut (N·m²).
     """
@@ -548,7 +548,7 @@ def linearize_semiflexible(
     Parameters
     ----------
     cell : Cell
-        From :func:`tenscell.shapes.semiflexible_paper_cell` (struts last).
+        From :func:`tenscell.model.shapes.semiflexible_paper_cell` (struts last).
     P : float
         Prestress (N).
     EA, c : float or array_like over the tendons

@@ -2,7 +2,7 @@
 
 A :class:`Structure` lists nodes, rigid struts, tendons, fixed nodes, one load
 and one probe. It knows nothing about equilibrium or dynamics; the later
-stages (:mod:`tenscell.coordinates`, :mod:`tenscell.equilibrium`, ...) read it.
+stages (:mod:`tenscell.model.coordinates`, :mod:`tenscell.model.equilibrium`, ...) read it.
 
 Conventions
 -----------

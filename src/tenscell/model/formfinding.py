@@ -13,7 +13,7 @@ length exactly because the coordinates do) satisfy ``A(q)·T = 0`` with
 self-stress ``T`` known by construction (the force-density method). A
 *minimum* of ``E`` is moreover stable with spring constants ``w_j``, so the
 search minimizes ``E`` by a damped Newton iteration (Levenberg–Marquardt,
-exact analytic gradient and Hessian from :mod:`tenscell.equilibrium`,
+exact analytic gradient and Hessian from :mod:`tenscell.model.equilibrium`,
 solved with scipy). The strut directions are re-charted at every step
 (``"local"`` coordinates around the current shape), so struts may turn by
 any angle.
@@ -46,7 +46,7 @@ from .equilibrium import (
     member_geometry,
     tangent_stiffness,
 )
-from .structio import member_values
+from ..io.structure_files import member_values
 from .structure import STRUT, Structure
 
 __all__ = [
@@ -231,7 +231,7 @@ def find_form(
         Convergence threshold on the relative equilibrium residual
         ``‖A·T‖/(max|A|·‖T‖)``.
     parametrization : {"local", "angles"}
-        Coordinates of the returned cell (see :mod:`tenscell.coordinates`).
+        Coordinates of the returned cell (see :mod:`tenscell.model.coordinates`).
 
     Returns
     -------

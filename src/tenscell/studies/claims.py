@@ -11,11 +11,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .equilibrium import Cell
-from .linear import linearize
-from .response import FrequencyResponse, frequency_response, log_slope
-from .sensitivity import perturbation_table
-from .shapes import paper_cell
+from ..model.equilibrium import Cell
+from ..linear.linearize import linearize
+from ..response import FrequencyResponse, frequency_response, log_slope
+from ..sensitivity import perturbation_table
+from ..model.shapes import paper_cell
 
 __all__ = [
     "HomogeneousStudy",

@@ -19,9 +19,9 @@ import scipy.linalg
 import scipy.linalg.lapack
 import scipy.sparse as sp
 
-from ._checks import positive_array, positive_scalar
-from ._sparse import NotPositiveDefinite, coordinate_locations, factorize_spd
-from .equilibrium import Cell, _weighted_gram, assemble_hessian, rest_lengths
+from .._checks import positive_array, positive_scalar
+from .sparse import NotPositiveDefinite, coordinate_locations, factorize_spd
+from ..model.equilibrium import Cell, _weighted_gram, assemble_hessian, rest_lengths
 
 __all__ = [
     "LinearModel",

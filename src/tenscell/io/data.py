@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._io import atomic_path
+from .outputs import atomic_path
 
 __all__ = [
     "DataError",

@@ -16,7 +16,7 @@ octahedron, cuboctahedron or icosidodecahedron; every vertex has degree 4):
   20 triangles + 12 pentagons for 30), so every node has four cables;
 * one intermediate filament from every node to a nucleus (point) node.
 
-The rough shape is then form-found (:func:`tenscell.formfinding.find_form`)
+The rough shape is then form-found (:func:`tenscell.model.formfinding.find_form`)
 with actin force density 1 N/m and rest length ``0.1·L`` and intermediate
 filament force density ``if_force_density`` (default 0.2 N/m), which gives
 a stable prestressable configuration with every tendon in tension. Finally,
@@ -62,7 +62,7 @@ import numpy as np
 import scipy.linalg
 from scipy.spatial import ConvexHull
 
-from ._checks import positive_scalar
+from .._checks import positive_scalar
 from .equilibrium import Cell, NotPrestressableError, equilibrate
 from .formfinding import find_form
 from .structure import ACTIN, INTERMEDIATE_FILAMENT, STRUT, Point, Structure

@@ -1,6 +1,6 @@
 """Structure files: a documented JSON format for any tensegrity.
 
-A structure file holds everything :class:`~tenscell.structure.Structure`
+A structure file holds everything :class:`~tenscell.model.structure.Structure`
 needs (nodes, rigid struts anchored or free, tendons with their family, fixed
 nodes, load, probe, equal-tension groups) plus optional per-tendon material
 properties (EA, c) and an optional self-stress ``T0``. The format is
@@ -21,7 +21,7 @@ described in ``docs/structure-format.md``; in short::
 Nodes may be referred to by index (from 0) or by name. Values are converted
 to SI on reading (m, N, s); :func:`save_structure` always writes SI.
 
-Every error is a :class:`~tenscell.structure.StructureError` (a ValueError)
+Every error is a :class:`~tenscell.model.structure.StructureError` (a ValueError)
 whose message starts with the file name and names the offending element,
 e.g. ``"cell.json: tendon 17 joins node 4 to itself"``.
 """
@@ -34,8 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ._io import write_text
-from .structure import Point, Structure, StructureError
+from .outputs import write_text
+from ..model.structure import Point, Structure, StructureError
 
 __all__ = [
     "StructureFile",

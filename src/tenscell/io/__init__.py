@@ -1,0 +1,1 @@
+"""Files in and out: measured data, structure files, output sets."""

@@ -1,0 +1,1 @@
+"""Linearization about the reference and its linear algebra (dense and sparse)."""

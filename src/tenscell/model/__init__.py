@@ -1,0 +1,1 @@
+"""What a structure is and where it rests: members, coordinates, equilibrium, reference shapes."""

@@ -1,0 +1,1 @@
+"""The paper's studies: claims, variants of the discussion, future work."""
