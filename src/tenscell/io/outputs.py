@@ -1,14 +1,38 @@
-"""Atomic output: a failed run leaves no half-written file."""
+"""Atomic output: a failed run leaves no half-written file, and a run's files appear as a set.
+
+Two levels:
+
+:func:`atomic_path`
+    one file: written beside its target, flushed, renamed into place.
+:class:`OutputSet`
+    a run's whole output directory: validated before any computation, filled
+    in a staging directory beside the target, and swapped into place only when
+    the run succeeded, replacing the previous set as a whole, with a
+    ``manifest.json`` (command, version, time, files). On any failure or
+    interrupt the previous set is untouched and the staging directory is
+    removed; staging left by a killed run (SIGKILL) is removed by the next run
+    that writes beside it.
+"""
 from __future__ import annotations
 
 import contextlib
 import csv
+import ctypes
+import ctypes.util
+import datetime as _dt
 import json
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text"]
+__all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text", "OutputSet", "OutputLocationError",
+           "check_output_dir", "MANIFEST"]
+
+#: name of the manifest file written into every output set
+MANIFEST = "manifest.json"
+_STAGING = ".tenscell-staging-"
+_OLD = ".tenscell-old-"
 
 
 @contextlib.contextmanager
@@ -69,3 +93,161 @@ def write_text(path, text: str) -> None:
     """Write a text file atomically."""
     with atomic_path(path) as tmp:
         tmp.write_text(text)
+
+
+class OutputLocationError(ValueError):
+    """The output location cannot receive a run's files (message names the flag)."""
+
+
+def check_output_dir(path, flag: str = "--out") -> Path:
+    """Validate an output directory before any computation; return it as a Path.
+
+    It may be missing (it is created), an empty directory, or a directory
+    that holds a previous tenscell output set (it has a ``manifest.json``) —
+    anything else could hold a user's own files, which a run must not replace.
+    Its parent must exist or be creatable and be writable.
+
+    Raises
+    ------
+    OutputLocationError
+        With a one-line message naming ``flag``.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise OutputLocationError(f"{flag} {path}: exists and is not a directory")
+    if path.is_dir() and any(path.iterdir()) and not (path / MANIFEST).is_file():
+        raise OutputLocationError(
+            f"{flag} {path}: directory is not empty and holds no tenscell {MANIFEST}; "
+            "choose a new or empty directory (a run replaces its output directory as a whole)")
+    parent = path.absolute().parent
+    probe = parent
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir():
+        raise OutputLocationError(f"{flag} {path}: {probe} is not a directory")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise OutputLocationError(f"{flag} {path}: {probe} is not writable")
+    return path
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _clean_stale(target: Path) -> None:
+    """Remove staging left by dead runs beside ``target``; restore a set a dead run moved aside."""
+    parent = target.absolute().parent
+    if not parent.is_dir():
+        return
+    for entry in parent.glob(f".{target.name}{_STAGING}*"):
+        pid = entry.name.rsplit("-", 1)[-1]
+        if not pid.isdigit() or not _pid_alive(int(pid)):
+            shutil.rmtree(entry, ignore_errors=True)
+    for entry in parent.glob(f".{target.name}{_OLD}*"):
+        pid = entry.name.rsplit("-", 1)[-1]
+        if pid.isdigit() and _pid_alive(int(pid)):
+            continue
+        if not target.exists():
+            os.rename(entry, target)  # a run died between its two renames: the old set comes back
+        else:
+            shutil.rmtree(entry, ignore_errors=True)
+
+
+_RENAME_EXCHANGE = 2
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Atomically swap two directories (Linux renameat2); False where unsupported."""
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True)
+        fn = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    at_fdcwd = -100
+    rc = fn(at_fdcwd, os.fsencode(str(a)), at_fdcwd, os.fsencode(str(b)), _RENAME_EXCHANGE)
+    return rc == 0
+
+
+class OutputSet:
+    """A run's output directory, committed as a whole.
+
+    Parameters
+    ----------
+    target : path
+        The output directory (validated by :func:`check_output_dir` at construction).
+    command : str
+        What produced the set, recorded in the manifest (e.g. ``"tenscell fit data.csv"``).
+    flag : str
+        The option that named ``target``, for error messages.
+
+    Use::
+
+        out = OutputSet(args.out, command="tenscell fit ...")   # validate first
+        ...                                                        # compute
+        with out as d:                                             # d: the staging directory
+            write_csv_rows(d / "fit.csv", header, rows)
+        # here the complete set is at args.out
+
+    Entering may happen long after construction; everything written inside
+    the block goes to the staging directory, and leaving it without an
+    exception moves the set into place. An exception (including
+    KeyboardInterrupt) removes the staging directory and leaves the previous
+    set as it was.
+    """
+
+    def __init__(self, target, *, command: str = "", flag: str = "--out"):
+        self.target = check_output_dir(target, flag)
+        self.command = command
+        self.flag = flag
+        self.staging: Path | None = None
+        _clean_stale(self.target)
+
+    def __enter__(self) -> Path:
+        check_output_dir(self.target, self.flag)
+        parent = self.target.absolute().parent
+        parent.mkdir(parents=True, exist_ok=True)
+        self.staging = parent / f".{self.target.name}{_STAGING}{os.getpid()}"
+        shutil.rmtree(self.staging, ignore_errors=True)
+        self.staging.mkdir()
+        return self.staging
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        staging, self.staging = self.staging, None
+        assert staging is not None
+        if exc_type is not None:
+            shutil.rmtree(staging, ignore_errors=True)
+            return False
+        try:
+            self._write_manifest(staging)
+            self._commit(staging)
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
+        return False
+
+    def _write_manifest(self, staging: Path) -> None:
+        from .. import __version__
+        files = sorted(str(p.relative_to(staging)) for p in staging.rglob("*") if p.is_file())
+        write_json(staging / MANIFEST, {
+            "command": self.command, "tenscell_version": __version__,
+            "finished_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            "files": files})
+
+    def _commit(self, staging: Path) -> None:
+        target = self.target.absolute()
+        if not target.exists():
+            os.rename(staging, target)
+            return
+        if _exchange(staging, target):
+            shutil.rmtree(staging, ignore_errors=True)  # now holds the previous set
+            return
+        old = target.parent / f".{target.name}{_OLD}{os.getpid()}"
+        os.rename(target, old)
+        os.rename(staging, target)
+        shutil.rmtree(old, ignore_errors=True)
