@@ -11,8 +11,8 @@ matplotlib.use("Agg")  # files, not windows: tenscell runs on headless machines
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .io.outputs import atomic_path  # noqa: E402
-from .response import FrequencyResponse  # noqa: E402
+from ..io.outputs import atomic_path  # noqa: E402
+from ..response import FrequencyResponse  # noqa: E402
 
 __all__ = [
     "fig2_prestress",
