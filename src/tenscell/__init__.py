@@ -17,7 +17,7 @@ Quick start::
 # structure -> coordinates -> equilibrium -> shapes
 from .model.structure import Point, Structure, StructureError
 from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
-from .model.equilibrium import Cell, NotPrestressableError, equilibrate, rest_lengths
+from .model.equilibrium import Cell, NotPrestressableError, equilibrate
 from .model.formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
 from .model.shapes import (
     DEFAULT_DELTA, REGULAR_DELTA, cylindrical_cell, if_free_delta, paper_cell, paper_structure, regular_cell,
@@ -25,9 +25,13 @@ from .model.shapes import (
 )
 from .model.lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
 # constitutive laws -> linearization -> response
-from .laws import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
+from .laws import (
+    CompositeLaw, LinearSpring, LinearizationError, PowerDashpot, StiffeningFilament, Tangent, TendonLaw, Voigt,
+    family_laws, power_dashpot_law, rest_lengths, stiffening_law, voigt_law,
+)
 from .linear.linearize import (
-    LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, linearize_tangent, relaxation_spectrum,
+    LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, linearize_law, linearize_tangent,
+    relaxation_spectrum,
 )
 from .response import (
     FrequencyResponse, compliance, frequency_response, log_slope, loss_tangent, moduli, static_modulus,
@@ -41,8 +45,8 @@ from .timedomain import (
 # analyses
 from .summary import relaxation_modes, summarize
 from .dynamics import (
-    SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, linearize_law,
-    oscillatory_response, simulate,
+    SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, oscillatory_response,
+    simulate,
 )
 from .fitting import FitParameter, FitResult, fit
 from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table
@@ -57,14 +61,15 @@ __all__ = [
     # structure and reference
     "Structure", "Point", "StructureError", "StructureFile", "load_structure", "load_structure_file",
     "member_values", "save_structure",
-    "Cell", "equilibrate", "rest_lengths", "NotPrestressableError",
+    "Cell", "equilibrate", "NotPrestressableError",
     "FormFindingError", "FormFindingResult", "find_form", "pin_jointed", "rigid_body_modes",
     "paper_cell", "paper_structure", "if_free_delta", "DEFAULT_DELTA", "REGULAR_DELTA",
     "cylindrical_cell", "regular_cell", "semiflexible_paper_cell",
     "expanded_octahedron", "lattice_cell", "lattice_structure", "sphere_cell", "sphere_structure",
     # laws, linearization, response
-    "LinearizationError", "PowerDashpot", "Voigt", "power_dashpot_law", "voigt_law",
-    "LinearModel", "linearize", "linearize_tangent", "RelaxationSpectrum", "relaxation_spectrum",
+    "TendonLaw", "Tangent", "Voigt", "PowerDashpot", "StiffeningFilament", "LinearSpring", "CompositeLaw",
+    "family_laws", "rest_lengths", "voigt_law", "power_dashpot_law", "stiffening_law", "LinearizationError",
+    "LinearModel", "linearize", "linearize_law", "linearize_tangent", "RelaxationSpectrum", "relaxation_spectrum",
     "NotPositiveDefiniteError",
     "compliance", "moduli", "frequency_response", "FrequencyResponse", "static_modulus", "viscosity_limit",
     "loss_tangent", "log_slope", "krylov_compliance",
@@ -73,7 +78,7 @@ __all__ = [
     # analyses
     "relaxation_modes", "summarize",
     "SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep", "creep_response",
-    "linearize_law", "oscillatory_response", "simulate",
+    "oscillatory_response", "simulate",
     "fit", "FitResult", "FitParameter",
     "analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table",
     "linearize_semiflexible", "linearize_stiffening", "loss_peak", "no_if_study", "prestress_map",

@@ -60,8 +60,8 @@ from scipy.integrate import solve_ivp
 from ._checks import finite_scalar, positive_array, positive_scalar
 from .laws import LinearizationError, TendonLaw
 from .model.coordinates import kinematics
-from .model.equilibrium import Cell, assemble_hessian, equilibrium_matrix, member_geometry, point_vector
-from .linear.linearize import LinearModel, NotPositiveDefiniteError
+from .model.equilibrium import Cell, equilibrium_matrix, member_geometry, point_vector, tangent_stiffness
+from .linear.linearize import LinearModel, linearize_law
 from .response import compliance
 from .model.structure import STRUT
 from .timedomain import creep_spectrum
@@ -302,8 +302,13 @@ class EquationsOfMotion:
     def __init__(self, cell: Cell, law: TendonLaw, loading):
         if not isinstance(loading, _LOADS):
             raise ValueError(f"loading must be a SineForce, StepForce or SineDisplacement, got {type(loading).__name__}")
-        if getattr(law, "m", None) != cell.m:
-            raise ValueError(f"the tendon law has {getattr(law, 'm', '?')} tendons but the cell has {cell.m}")
+        if not isinstance(law, TendonLaw):
+            raise ValueError(f"law must be a tenscell.laws.TendonLaw, got {type(law).__name__}")
+        if law.l0 is None:
+            raise ValueError("the tendon law has no rest lengths: place it at the cell's reference with "
+                             "law.at_prestress(cell, P) (or build it with voigt_law, power_dashpot_law, stiffening_law)")
+        if law.m != cell.m:
+            raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
         self.cell, self.law, self.loading = cell, law, loading
         self.coords = cell.coords
         self.q0 = np.asarray(cell.q0, dtype=float)
@@ -646,9 +651,8 @@ class Simulation:
 def _scale(eq: EquationsOfMotion, loading) -> float:
     """Size of the expected displacement of the coordinates (m or rad), for absolute tolerances."""
     law, cell = eq.law, eq.cell
-    A = cell.A.toarray() if hasattr(cell.A, "toarray") else np.asarray(cell.A)
-    T = law.elastic(cell.lengths)
-    K = assemble_hessian(cell.geometry, T, sparse=False) + (A * law.stiffness_at_rest(cell.lengths)) @ A.T
+    K = tangent_stiffness(cell.geometry, law.elastic(cell.lengths), law.stiffness_at_rest(cell.lengths))
+    K = K.toarray() if hasattr(K, "toarray") else K
     x = np.linalg.lstsq(K, np.asarray(cell.load), rcond=None)[0]
     if loading.controls == "displacement":
         zx = float(np.asarray(cell.probe) @ x)
@@ -809,56 +813,6 @@ def _concat(a: Simulation, b: Simulation) -> Simulation:
         cell=a.cell, law=a.law, loading=a.loading, t=cat(a.t, b.t), q=cat(a.q, b.q), force=cat(a.force, b.force),
         z=cat(a.z, b.z), u=cat(a.u, b.u), u_rate=cat(a.u_rate, b.u_rate), tensions=cat(a.tensions, b.tensions),
         power=cat(a.power, b.power), taut=cat(a.taut, b.taut), events=a.events + new, stats=stats,
-    )
-
-
-# ---- linearization of a law -----------------------------------------------------------
-def linearize_law(cell: Cell, law: TendonLaw) -> LinearModel:
-    """The linear model of a cell with any tendon law, about its reference at rest.
-
-    ``K0 = Σ T_j ∇²l_j + Σ (∂T_j/∂l) a_j a_jᵀ`` and ``C0 = Σ (∂T_j/∂l')|₀ a_j a_jᵀ``
-    with the exact law's rate derivative at ``l' = 0`` (for a power-law
-    dashpot with β > 1 that is 0, so ``C0 = 0`` and ``G'' = 0``).
-
-    Returns
-    -------
-    LinearModel
-        ``P`` is the projection of the reference tensions on ``T0`` (N);
-        ``EA`` holds ``l0·∂T/∂l`` (N), ``c`` the linearized damping (N·s/m).
-
-    Raises
-    ------
-    LinearizationError
-        If the law has no linearization at rest (power-law dashpot, β < 1).
-    ValueError
-        If the law's rest lengths do not hold the cell in equilibrium at its reference.
-    NotPositiveDefiniteError
-        If K0 is not positive definite.
-    """
-    if getattr(law, "m", None) != cell.m:
-        raise ValueError(f"the tendon law has {getattr(law, 'm', '?')} tendons but the cell has {cell.m}")
-    A = cell.A.toarray() if hasattr(cell.A, "toarray") else np.asarray(cell.A)
-    l = cell.lengths
-    T = law.elastic(l)
-    resid = np.abs(A @ T).max()
-    if resid > 1e-8 * max(np.abs(A).max() * np.abs(T).max(), 1e-300):
-        raise ValueError(
-            f"the tendon law's rest lengths do not hold {cell.describe()} in equilibrium at its reference "
-            f"(|A·T| = {resid:.3g} N); build it with voigt_law/power_dashpot_law, which use Eq. (11)"
-        )
-    c0 = np.asarray(law.damping_at_rest(l), dtype=float)  # raises LinearizationError for β < 1
-    k = np.asarray(law.stiffness_at_rest(l), dtype=float)
-    K0 = assemble_hessian(cell.geometry, T, sparse=False) + (A * k) @ A.T
-    C0 = (A * c0) @ A.T
-    try:
-        np.linalg.cholesky(K0)
-    except np.linalg.LinAlgError:
-        raise NotPositiveDefiniteError(
-            f"K0 of {cell.describe()} with this tendon law is not positive definite: the reference is not stable"
-        ) from None
-    return LinearModel(
-        cell=cell, P=float(T @ cell.T0), EA=k * law.l0, c=c0, K0=K0, C0=C0,
-        H0=-np.asarray(cell.load), D0=np.asarray(cell.probe), l0=np.asarray(law.l0),
     )
 
 
