@@ -319,6 +319,11 @@ class TendonLaw:
         placed = self.at_tension(l, T)
         return placed.stiffness_at_rest(l), placed.damping_at_rest(l)
 
+    def _reference(self, l, T) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(l0, k, c)`` at a reference in one pass (what a linearization needs)."""
+        k, c = self.tangent_at_rest(l, T)
+        return self.rest_lengths(l, T), k, c
+
     def parameter_values(self, m: int) -> np.ndarray:
         """The parameters as an array of shape ``(p, m)``."""
         return np.array([np.broadcast_to(np.asarray(getattr(self, n), dtype=float), (m,)) for n in self.names],
@@ -379,7 +384,13 @@ class TendonLaw:
 
 def _refs(l, T) -> tuple[np.ndarray, np.ndarray]:
     l = np.asarray(l, dtype=float)
-    return l, np.broadcast_to(np.asarray(T, dtype=float), l.shape)
+    T = np.asarray(T, dtype=float)
+    return l, (T if T.shape == l.shape else np.broadcast_to(T, l.shape))
+
+
+def _per(x, shape) -> np.ndarray:
+    """A parameter as an array of ``shape`` (no copy when it already is one)."""
+    return x if np.shape(x) == shape else np.broadcast_to(np.asarray(x, dtype=float), shape).copy()
 
 
 # ---- the linear spring part shared by Voigt and the power-law dashpot --------------------------------
@@ -404,7 +415,7 @@ class _SpringEA(TendonLaw):
         """
         l, T = _refs(l, T)
         d = self.EA + T
-        if np.any(d <= 0):
+        if not d.min() > 0:
             j = int(np.flatnonzero(np.broadcast_to(d, l.shape) <= 0)[0])
             raise ValueError(
                 f"EA must exceed the compression −T = {-np.broadcast_to(T, l.shape)[j]:.6g} N of member {j} "
@@ -459,9 +470,11 @@ class Voigt(_SpringEA):
 
     def tangent_at_rest(self, l, T):
         """``((EA + T)/l, c)``."""
+        return self._reference(l, T)[1:]
+
+    def _reference(self, l, T):
         l, T = _refs(l, T)
-        self.rest_lengths(l, T)  # the same validity as placing the law there
-        return self._spring_tangent(l, T), np.broadcast_to(self.c, l.shape).astype(float)
+        return self.rest_lengths(l, T), self._spring_tangent(l, T), _per(self.c, l.shape)
 
     def tangent(self, l, T) -> Tangent:
         """Exact: ``∂k/∂T = ∂k/∂EA = 1/l``, ``∂c/∂c = 1``."""

@@ -261,7 +261,11 @@ def _from_law(cell: Cell, P: float, law, *, check: bool, T=None, EA=None, l0=Non
     TP = P * cell.T0
     if T is None or np.abs(T - TP).max() <= 1e-12 * np.abs(TP).max():
         T = TP
-    k, c = law.tangent_at_rest(l, T)
+    if own:
+        (k, c), l0 = law.tangent_at_rest(l, T), law.l0
+    else:
+        l0_law, k, c = law._reference(l, T)
+        l0 = l0_law if l0 is None else l0
     k, c = np.asarray(k, dtype=float), np.asarray(c, dtype=float)
     if not (np.all(np.isfinite(k)) and np.all(np.isfinite(c))):
         raise ValueError("the tendon law gave a non-finite tangent stiffness or damping at the reference")
@@ -274,11 +278,7 @@ def _from_law(cell: Cell, P: float, law, *, check: bool, T=None, EA=None, l0=Non
     C0 = _weighted_gram(A, c)
     if check:
         _require_positive_definite(K0, cell, P)
-    if own:
-        placed, l0 = law, law.l0
-    else:
-        l0 = law.rest_lengths(l, T) if l0 is None else l0
-        placed = law._placed(l0)
+    placed = law if own else law._placed(l0)
     return LinearModel(
         cell=cell, P=P, EA=EA if EA is not None else k * l - T, c=c, K0=K0, C0=C0, H0=-np.asarray(cell.load),
         D0=np.asarray(cell.probe), l0=np.asarray(l0, dtype=float), law=placed,
