@@ -241,7 +241,7 @@ def test_elasticities_match_finite_differences_through_the_law(name):
 
 def test_stiffening_prestress_elasticity_is_fixed():
     """The issue's case: IFs with b = 1 at P = 1000. The Voigt formula gave ∂lnG'/∂lnP = 0.67; FD gives 1.06."""
-    from tenscell.studies.variants import linearize_stiffening
+    from tenscell.studies.stiffening import linearize_stiffening
 
     lin = linearize_stiffening(CELL, P0, b=1.0)
     el = analytic_elasticities(lin, [1.0])

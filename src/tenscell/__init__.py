@@ -50,10 +50,10 @@ from .dynamics import (
 )
 from .fitting import FitParameter, FitResult, fit
 from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table
-from .studies.variants import (
-    linearize_semiflexible, linearize_stiffening, loss_peak, no_if_study, prestress_map, references_study,
-    semiflexible_study, stiffening_study,
-)
+from .studies.no_if import loss_peak, no_if_study
+from .studies.references import prestress_map, references_study
+from .studies.semiflexible import linearize_semiflexible, semiflexible_study
+from .studies.stiffening import linearize_stiffening, stiffening_study
 
 __version__ = "0.1.0"
 

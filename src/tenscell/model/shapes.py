@@ -332,7 +332,7 @@ def semiflexible_paper_cell(
     m). With intermediate filaments: 30 coordinates (10 point nodes) and 39
     members; without: 27 coordinates and 27 members. Give the struts their
     axial stiffness and damping through
-    :func:`tenscell.studies.variants.linearize_semiflexible`.
+    :func:`tenscell.studies.semiflexible.linearize_semiflexible`.
     """
     rigid = paper_cell(alpha, delta, L, intermediate_filaments)
     p = dict(rigid.parameters)

@@ -105,7 +105,7 @@ def save(fig, path) -> None:
 def no_if_figure(study, title: str = "Without intermediate filaments: G'' has a peak"):
     """G', G'' against f for each prestress, without IFs (solid) and with them (dashed); peaks marked.
 
-    ``study`` is a :class:`tenscell.studies.variants.NoIFStudy`.
+    ``study`` is a :class:`tenscell.studies.no_if.NoIFStudy`.
     """
     w, i = study.without, study.with_ifs
     with plt.rc_context(STYLE):
@@ -196,7 +196,7 @@ def monte_carlo_figure(results, bound: float = 0.08, title: str = "Monte Carlo o
 
 
 def reference_map_figure(mp, if_free_curve=None, title: str = "Valid references q0(α, δ) of the paper cell"):
-    """The validity map of :func:`tenscell.studies.variants.prestress_map`, with the IF-free curve δ*(α)."""
+    """The validity map of :func:`tenscell.studies.references.prestress_map`, with the IF-free curve δ*(α)."""
     from matplotlib.colors import ListedColormap
 
     a, d = np.degrees(mp.alpha), np.degrees(mp.delta)

@@ -8,15 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ._axes import axes_or_new as _axes
+
 __all__ = ["simulation_axes", "harmonics_axes", "loop_axes", "amplitude_sweep_axes", "creep_axes"]
-
-
-def _axes(ax):
-    if ax is None:
-        import matplotlib.pyplot as plt
-
-        _, ax = plt.subplots(constrained_layout=True)
-    return ax
 
 
 def simulation_axes(sim, ax=None, **kw):
