@@ -64,6 +64,8 @@ def _quiet_broken_pipe() -> int:
 
 def main(argv=None) -> int:
     """Entry point of the ``tenscell`` command; returns the exit status."""
+    # The command writes files and never opens windows; the library itself never chooses a backend.
+    os.environ.setdefault("MPLBACKEND", "Agg")
     args = None
     try:
         try:

@@ -43,12 +43,13 @@ def fit_outputs(result, baseline, title):
     from .. import fitting, plotting
     from ..io.outputs import write_csv_rows, write_json, write_text
     from ..io.tables import fit_table
+    from ..reports.fit import fit_markdown
 
     doc = result.to_dict()
     doc["baseline"] = {k: v for k, v in baseline.to_dict().items()
                        if k in ("tendons", "damping", "rms_log10_error", "converged", "time_s", "parameters")}
     header, rows = fit_table(result, baseline)
-    markdown = fitting.fit_markdown(result, baseline, title=title)
+    markdown = fit_markdown(result, baseline, title=title)
     curves = [fitting.model_curve(result), fitting.model_curve(baseline, label="homogeneous baseline")]
     fig = plotting.fit_figure(result.data, curves, title=title)
     return {
