@@ -147,11 +147,11 @@ class Elasticities:
             "dlnGstorage_dlnp": self.storage.ravel(), "dlnGloss_dlnp": self.loss.ravel(),
         })
 
-    def plot(self, ax=None, which: str = "storage", **kw):
-        """Elasticities of G' (or G'' with ``which="loss"``) against f: P, geometry and each group's sum."""
-        from .plotting.studies import elasticities_axes
+    def plot(self, ax=None, **kw):
+        """Elasticities of G' and G'' against f (groups, largest members) on a pair of axes (or a new figure)."""
+        from .plotting.variants import elasticities_figure
 
-        return elasticities_axes(self, ax=ax, which=which, **kw)
+        return elasticities_figure(self, axes=ax, **kw)
 
 
 def _family_tag(family: str) -> str:
@@ -578,10 +578,10 @@ class MonteCarloResult:
         return dataframe(cols, {"spread": self.spread, "seed": self.seed, "label": self.label})
 
     def plot(self, ax=None, **kw):
-        """Histogram of the largest change of G' and G'' per valid draw; returns the axes."""
-        from .plotting.studies import monte_carlo_axes
+        """Histograms of the largest change of G' and G'' per valid draw, on a pair of axes (or a new figure)."""
+        from .plotting.variants import monte_carlo_figure
 
-        return monte_carlo_axes(self, ax=ax, **kw)
+        return monte_carlo_figure([self], axes=ax, **kw)
 
 
 def monte_carlo(

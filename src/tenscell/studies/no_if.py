@@ -144,10 +144,10 @@ class NoIFStudy:
         }, {"EA_N": self.EA, "c_Ns_per_m": self.c, "window_Hz": self.window_hz})
 
     def plot(self, ax=None, **kw):
-        """Peak frequency of G'' against prestress (log-log) with the window's upper end; returns the axes."""
-        from ..plotting.studies import no_if_axes
+        """G', G'' against f with and without IFs, peaks marked, on a pair of axes (or a new figure); returns them."""
+        from ..plotting.variants import no_if_figure
 
-        return no_if_axes(self, ax=ax, **kw)
+        return no_if_figure(self, axes=ax, **kw)
 
 
 def no_if_study(

@@ -85,9 +85,9 @@ class ReferenceMap:
 
     def plot(self, ax=None, **kw):
         """The validity map over (α, δ) in degrees; returns the axes."""
-        from ..plotting.studies import reference_map_axes
+        from ..plotting.variants import reference_map_figure
 
-        return reference_map_axes(self, ax=ax, **kw)
+        return reference_map_figure(self, ax=ax, **kw)
 
 
 def prestress_map(
@@ -181,10 +181,12 @@ class ReferencesStudy:
                           "G_storage_Pa": cols[3], "G_loss_Pa": cols[4]}, {"EA_N": self.EA, "c_Ns_per_m": self.c})
 
     def plot(self, ax=None, P: float | None = None, **kw):
-        """G' (solid) and G'' (dashed) of every reference against f at prestress ``P`` (default: the middle one)."""
-        from ..plotting.studies import references_axes
+        """G' and G'' of every reference against f at prestress ``P`` (default: the middle one), on a pair of axes."""
+        from ..plotting.variants import references_figure
 
-        return references_axes(self, ax=ax, P=P, **kw)
+        first = next(iter(self.responses.values()))
+        P = float(first.prestress[first.prestress.size // 2]) if P is None else float(P)
+        return references_figure(self.responses, P, axes=ax, **kw)
 
 
 def references_study(

@@ -198,10 +198,10 @@ class SemiflexibleStudy:
                          {"prestress_N": self.P, "EA_N": self.EA, "c_Ns_per_m": self.c, "c_strut_Ns_per_m": self.c_strut})
 
     def plot(self, ax=None, **kw):
-        """Largest relative difference from rigid struts against EA_s (log-log) with a 1/EA_s guide."""
-        from ..plotting.studies import semiflexible_axes
+        """Convergence to rigid struts against EA_s, and the 1 Hz moduli, on a pair of axes (or a new figure)."""
+        from ..plotting.variants import semiflexible_figure
 
-        return semiflexible_axes(self, ax=ax, **kw)
+        return semiflexible_figure(self, axes=ax, **kw)
 
 
 def semiflexible_study(

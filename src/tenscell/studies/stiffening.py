@@ -106,10 +106,10 @@ class StiffeningStudy:
         }, {"EA_N": self.EA, "c_Ns_per_m": self.c, "family": self.family})
 
     def plot(self, ax=None, **kw):
-        """G'(P) at the frequency nearest 1 Hz for each b; returns the axes."""
-        from ..plotting.studies import stiffening_axes
+        """G'(P) and G''(P) near 1 Hz for each b, on a pair of axes (or a new figure); returns them."""
+        from ..plotting.variants import stiffening_figure
 
-        return stiffening_axes(self, ax=ax, **kw)
+        return stiffening_figure(self, axes=ax, **kw)
 
 
 def stiffening_study(
