@@ -324,5 +324,9 @@ class OutputSet:
             return
         old = target.parent / f".{target.name}{_OLD}{os.getpid()}"
         os.rename(target, old)
-        os.rename(staging, target)
+        try:
+            os.rename(staging, target)
+        except BaseException:
+            os.rename(old, target)  # the previous set goes back; a crash right here is undone by _clean_stale
+            raise
         shutil.rmtree(old, ignore_errors=True)

@@ -94,17 +94,25 @@ def bin_log_frequency(data, max_points: int = DEFAULT_MAX_POINTS):
         _, inverse = np.unique(group, return_inverse=True)
         inverse = inverse.ravel()
 
-    def mean(x, w=None):
+    nb = int(inverse.max()) + 1
+
+    def log_mean(x, w=None):
+        """Weighted mean in log10, exact where a bin's values are all equal (a prestress level, one point)."""
         w = np.ones(n) if w is None else w
-        return np.bincount(inverse, weights=w * x) / np.bincount(inverse, weights=w)
+        out = 10.0 ** (np.bincount(inverse, weights=w * np.log10(x), minlength=nb)
+                       / np.bincount(inverse, weights=w, minlength=nb))
+        lo, hi = np.full(nb, np.inf), np.full(nb, -np.inf)
+        np.minimum.at(lo, inverse, x)
+        np.maximum.at(hi, inverse, x)
+        return np.where(lo == hi, lo, out)
 
     s2, l2 = ws**2, wl**2
-    freq = 10.0 ** mean(np.log10(f))
-    Gs = 10.0 ** mean(np.log10(data.G_storage), s2)
-    Gl = 10.0 ** mean(np.log10(data.G_loss), l2)
-    w_s = np.sqrt(np.bincount(inverse, weights=s2))
-    w_l = np.sqrt(np.bincount(inverse, weights=l2))
-    prestress = None if data.prestress is None else 10.0 ** mean(np.log10(data.prestress))
+    freq = log_mean(f)
+    Gs = log_mean(data.G_storage, s2)
+    Gl = log_mean(data.G_loss, l2)
+    w_s = np.sqrt(np.bincount(inverse, weights=s2, minlength=nb))
+    w_l = np.sqrt(np.bincount(inverse, weights=l2, minlength=nb))
+    prestress = None if data.prestress is None else log_mean(data.prestress)
     rule = (f"{_NOTE}{n} to {freq.size} points by tenscell.io.thinning.bin_log_frequency "
             f"(max_points={max_points}): equal log10-f bins per prestress, weighted log means, weight sqrt(sum w^2)")
     return RheologyData(
