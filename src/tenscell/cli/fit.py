@@ -34,6 +34,9 @@ def register(sub) -> None:
                    help="RMS of the log10 errors (decades) the fit must reach")
     p.add_argument("--baseline-starts", type=integer(1, 10_000), default=2,
                    help="starts for the homogeneous baseline fit")
+    p.add_argument("--max-points", type=integer(4, 100_000), default=100,
+                   help="fit at most this many points: denser data is binned in log frequency per prestress "
+                        "(weighted log means; the rule is in tenscell.io.thinning and the report)")
     add_out(p)
     p.set_defaults(func=run)
 
@@ -78,11 +81,16 @@ def run(args) -> int:
     import sys
 
     from .. import fitting
+    from .._progress import stage
     from ..io.data import read_csv
     from ..io.outputs import OutputSet
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     data = read_csv(args.data, min_points=fitting.required_points(args.tendons, args.damping))
+    if data.n > args.max_points:
+        raw_n = data.n
+        data = data.binned(args.max_points)
+        stage(f"{raw_n:,} points binned to {data.n:,} in log frequency (--max-points {args.max_points})")
     result, baseline = run_fit(data, args.tendons, args.damping, args.starts, args.seed, args.jobs,
                                args.tolerance, args.baseline_starts)
     outputs = fit_outputs(result, baseline, title=f"Tensegrity fit to {Path(args.data).name}")

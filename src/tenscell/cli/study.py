@@ -128,7 +128,7 @@ def register(sub) -> None:
                                    "references (valid q0(α, δ), regular and cylindrical cells), semiflexible (elastic "
                                    "struts), stiffening (strain-stiffening IFs).")
     p.add_argument("name", choices=sorted(STUDIES), help="which study")
-    add_out(p, default="out/study")
+    add_out(p, derived="study-NAME")
     p.add_argument("--draws", type=integer(1, 100_000), default=200, help="Monte Carlo draws per set (sensitivity)")
     p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="Monte Carlo seed (sensitivity)")
     p.set_defaults(func=run)
@@ -140,7 +140,7 @@ def run(args) -> int:
 
     from ..io.outputs import OutputSet
 
-    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")
     t = time.perf_counter()
     with out as d:
         STUDIES[args.name](d, lambda msg: print(f"tenscell: {msg}", file=sys.stderr, flush=True), args)

@@ -7,6 +7,7 @@ import numpy as np
 
 from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
 from ..io.data import RheologyData
+from ..io.thinning import binning_notes
 
 __all__ = ["fit_markdown"]
 
@@ -34,6 +35,7 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
     verdict = "**converged**" if result.converged else "**NOT converged**"
     out += [
         f"- Data: `{d.source}`: {d.n} points, {d.kind} sweep.",
+        *(f"- Data thinned: {note}." for note in binning_notes(d)),
         f"- Model: {result.cell.describe()}; stiffness {result.tendons}, damping {result.damping}; "
         f"{result.problem.n_free} free parameters against {result.problem.n_residuals} residuals.",
         f"- RMS of the log10 errors: **{result.rms_log10_error:.5f}** decades "
