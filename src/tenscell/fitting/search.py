@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -37,6 +36,7 @@ import scipy.optimize
 from threadpoolctl import threadpool_limits
 
 from .._checks import positive_scalar
+from .._parallel import Workers
 from .._progress import progress_bar
 from ..model.equilibrium import Cell
 from .problem import _LN10, _PENALTY, _SHARE_WEIGHT, FitProblem, as_datasets, make_problem
@@ -250,10 +250,6 @@ def _step(problem: FitProblem, chain: _Chain, settings: _Settings, max_nfev: int
     return chain
 
 
-def _step_task(args):
-    return _step(*args)
-
-
 def _best(chains) -> _Chain:
     """The start whose state the fit returns: the lowest cost among states that met the tolerance, else the lowest cost."""
     met = [ch for ch in chains if ch.met_theta is not None]
@@ -262,17 +258,16 @@ def _best(chains) -> _Chain:
 
 def _rounds(problem, chains, settings, jobs, polish_effort, bar):
     """Advance the starts round by round until a stopping rule holds (module docstring); returns the stop reason."""
-    pool = ProcessPoolExecutor(max_workers=min(jobs, len(chains))) if jobs > 1 and len(chains) > 1 else None
     budget = None  # evaluations left for polishing, once the tolerance is met
-    try:
+    # worker processes kept across rounds, stopped cleanly on Ctrl-C (tenscell._parallel)
+    with Workers(min(jobs, len(chains))) as workers:
         while True:
             active = [k for k, ch in enumerate(chains) if not ch.finished]
             if not active:
                 return "every start finished"
             cap = settings.max_nfev if budget is None else max(1, min(settings.max_nfev, budget // len(active)))
-            tasks = [(problem, chains[k], settings, cap) for k in active]
             spent = sum(chains[k].nfev for k in active)
-            done = list(pool.map(_step_task, tasks)) if pool is not None else [_step_task(t) for t in tasks]
+            done = workers.starmap(_step, [(problem, chains[k], settings, cap) for k in active])
             for k, ch in zip(active, done):
                 chains[k] = ch
             spent = sum(chains[k].nfev for k in active) - spent
@@ -287,9 +282,6 @@ def _rounds(problem, chains, settings, jobs, polish_effort, bar):
                 budget -= spent
                 if budget <= 0:
                     return "polished as long as reaching the tolerance allowed"
-    finally:
-        if pool is not None:
-            pool.shutdown(cancel_futures=True)
 
 
 def _merged_history(chains):

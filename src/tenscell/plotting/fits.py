@@ -1,94 +1,147 @@
-"""Figures of fits: data against the fitted model per data set, the compactness front, the stiffness histogram.
+"""Measured moduli against fitted models (paper Figs. 4–5, joint fits), the compactness front, stiffness histograms.
 
 Nothing here computes physics beyond evaluating a fitted model on a grid
-(:func:`tenscell.fitting.model_curve`); every function draws on ``ax`` when
-given and returns it, or makes a figure and returns it.
+(:func:`tenscell.fitting.model_curve`).
 """
 from __future__ import annotations
 
-import matplotlib.pyplot as plt
+from typing import TYPE_CHECKING, Sequence
+
 import numpy as np
+from matplotlib.axes import Axes
 
-from . import STYLE
+from ._style import new_axes, new_panels, styled
 
-__all__ = ["plot_fit", "fit_panels", "compactness_front", "stiffness_histogram"]
+if TYPE_CHECKING:
+    from ..io.data import RheologyData
+
+__all__ = ["fit_figure", "data_points", "plot_fit", "fit_panels", "compactness_front", "stiffness_histogram"]
 
 
-def _short(source: str) -> str:
-    return source.replace("\\", "/").rsplit("/", 1)[-1]
+def _x_axis(data: RheologyData) -> str:
+    """``"prestress"`` for a sweep over prestress at one frequency, else ``"frequency"``."""
+    from ..fitting.result import data_axis
+
+    return data_axis(data)
 
 
-def plot_fit(result, ax=None, *, dataset: int | None = None, baseline=None, n: int = 200):
-    """Data (circles) and fitted model (lines) of one data set on ``ax``.
+def data_points(data: RheologyData, ax: Axes, **kw) -> Axes:
+    """Measured G' (filled circles) and G'' (open circles) on ``ax`` against f or prestress."""
+    x = data.prestress if _x_axis(data) == "prestress" else data.frequency_hz
+    ax.plot(x, data.G_storage, "o", color="C0", label="G′ data", **kw)
+    ax.plot(x, data.G_loss, "o", mfc="none", color="C3", label="G″ data", **kw)
+    return ax
 
-    With ``ax`` None and ``dataset`` None, every data set gets a panel of a
-    new figure and the array of axes is returned; otherwise the given (or a
-    new) axes. ``baseline`` (a fit of the same data sets) is drawn dotted.
-    Frequency sweeps on log-log axes against f (Hz); prestress sweeps on
-    linear axes against prestress (Pa), as in the paper.
-    """
-    from ..fitting.result import model_curve
 
-    if ax is None and dataset is None and len(result.datasets) > 1:
-        return fit_panels(result, baseline=baseline, n=n).axes
-    if ax is None:
-        with plt.rc_context(STYLE):
-            _, ax = plt.subplots(figsize=(4.4, 3.6), constrained_layout=True)
-    k = 0 if dataset is None else int(dataset)
-    fit = result.fits[k]
-    d = fit.data
-    cv = model_curve(result, n=n, dataset=k)
-    ax.plot(fit.x, d.G_storage, "o", color="C0", label="G′ data")
-    ax.plot(fit.x, d.G_loss, "o", mfc="none", color="C3", label="G″ data")
-    ax.plot(cv.x, cv.G_storage, "-", color="C0", label=f"G′ {cv.label}")
-    ax.plot(cv.x, cv.G_loss, "--", color="C3", label=f"G″ {cv.label}")
-    if baseline is not None:
-        bv = model_curve(baseline, n=n, dataset=k, label="homogeneous")
-        ax.plot(bv.x, bv.G_storage, ":", color="C0", label="G′ homogeneous")
-        ax.plot(bv.x, bv.G_loss, ":", color="C3", label="G″ homogeneous")
-    if fit.axis == "frequency":
+def _axis_labels(ax: Axes, kind: str) -> None:
+    if kind == "frequency":
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("frequency f (Hz)")
     else:
         ax.set_xlabel("prestress (Pa)")
         ax.set_ylim(bottom=0.0)
-    ax.set_ylabel("modulus (Pa)")
-    at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else
-          f" at {fit.prestress_fitted_pa:.4g} Pa (fitted)" if fit.prestress_fitted_pa is not None else "")
-    ax.set_title(f"{_short(d.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}")
+
+
+@styled
+def fit_figure(data: RheologyData, curves: Sequence, title: str | None = None,
+               axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """Measured moduli as circles and fitted models as lines, one panel per model (paper Figs. 4–5).
+
+    Parameters
+    ----------
+    data : tenscell.io.data.RheologyData
+        The measurements: G' filled circles, G'' open circles.
+    curves : sequence of tenscell.fitting.FitCurve
+        One panel each (e.g. the heterogeneous fit, then the homogeneous
+        baseline); G' solid line, G'' dashed.
+    title : str, optional
+        Figure title (only on a new figure).
+    axes : sequence of Axes, optional
+        One per curve; default a new figure with the panels side by side.
+
+    Returns
+    -------
+    ndarray of Axes, shape (len(curves),)
+
+    Frequency sweeps are drawn on log-log axes against f (Hz); prestress
+    sweeps on linear axes against prestress (Pa), as in the paper.
+    """
+    ax = new_panels(axes, len(curves), (4.2 * len(curves), 3.6), title=title, sharey=True)
+    for a, cv in zip(ax, curves):
+        data_points(data, a)
+        a.plot(cv.x, cv.G_storage, "-", color="C0", label="G′ model")
+        a.plot(cv.x, cv.G_loss, "--", color="C3", label="G″ model")
+        _axis_labels(a, _x_axis(data))
+        a.set_title(f"{cv.label}: rms log10 error {cv.rms_log10_error:.3g}")
+    ax[0].set_ylabel("modulus (Pa)")
+    ax[0].legend(loc="best")
     return ax
 
 
-def fit_panels(result, baseline=None, title: str | None = None, n: int = 200):
-    """A figure with one panel per data set of ``result`` (the combined figure of a joint fit)."""
-    k = len(result.datasets)
-    with plt.rc_context(STYLE):
-        fig, axes = plt.subplots(1, k, figsize=(4.4 * k, 3.8), constrained_layout=True, squeeze=False)
-        for i, ax in enumerate(axes[0]):
-            plot_fit(result, ax=ax, dataset=i, baseline=baseline, n=n)
-        axes[0][0].legend(loc="best")
-        if title:
-            fig.suptitle(title)
-    return fig
+def _short(source: str) -> str:
+    return source.replace("\\", "/").rsplit("/", 1)[-1]
 
 
-def compactness_front(decades, rms, tolerance: float | None = None, knee: float | None = None, ax=None,
-                      title: str | None = None):
+@styled
+def plot_fit(result, ax: Axes | None = None, *, dataset: int | None = None, baseline=None, n: int = 200):
+    """Data (circles) and fitted model (lines) of one data set of a fit on ``ax``.
+
+    With ``ax`` and ``dataset`` both None and several data sets, every data
+    set gets a panel of a new figure (:func:`fit_panels`) and the array of
+    axes is returned; otherwise the given (or a new) axes. ``baseline`` (a
+    fit of the same data sets, e.g. the homogeneous one) is drawn dotted.
+    Frequency sweeps on log-log axes against f (Hz); prestress sweeps on
+    linear axes against prestress (Pa), as in the paper.
+    """
+    from ..fitting.result import model_curve
+
+    if ax is None and dataset is None and len(result.datasets) > 1:
+        return fit_panels(result, baseline=baseline, n=n)
+    ax = new_axes(ax, (4.4, 3.6))
+    k = 0 if dataset is None else int(dataset)
+    fit = result.fits[k]
+    cv = model_curve(result, n=n, dataset=k)
+    data_points(fit.data, ax)
+    ax.plot(cv.x, cv.G_storage, "-", color="C0", label=f"G′ {cv.label}")
+    ax.plot(cv.x, cv.G_loss, "--", color="C3", label=f"G″ {cv.label}")
+    if baseline is not None:
+        bv = model_curve(baseline, n=n, dataset=k, label="homogeneous")
+        ax.plot(bv.x, bv.G_storage, ":", color="C0", label="G′ homogeneous")
+        ax.plot(bv.x, bv.G_loss, ":", color="C3", label="G″ homogeneous")
+    _axis_labels(ax, fit.axis)
+    ax.set_ylabel("modulus (Pa)")
+    at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else
+          f" at {fit.prestress_fitted_pa:.4g} Pa (fitted)" if fit.prestress_fitted_pa is not None else "")
+    ax.set_title(f"{_short(fit.data.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}")
+    return ax
+
+
+@styled
+def fit_panels(result, baseline=None, title: str | None = None, n: int = 200,
+               axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """One panel per data set of ``result`` (the combined figure of a joint fit); returns the axes."""
+    ax = new_panels(axes, len(result.datasets), (4.4 * len(result.datasets), 3.8), title=title)
+    for i, a in enumerate(ax):
+        plot_fit(result, ax=a, dataset=i, baseline=baseline, n=n)
+    ax[0].legend(loc="best")
+    return ax
+
+
+@styled
+def compactness_front(decades, rms, tolerance: float | None = None, knee: float | None = None,
+                      ax: Axes | None = None, title: str | None = None) -> Axes:
     """Best RMS log10 error reached against the bound on the stiffness spread (decades).
 
     ``knee`` (decades) is marked if given; ``tolerance`` drawn as a line.
-    Returns the axes.
     """
-    if ax is None:
-        with plt.rc_context(STYLE):
-            _, ax = plt.subplots(figsize=(4.8, 3.6), constrained_layout=True)
+    ax = new_axes(ax, (4.8, 3.6))
     ax.semilogy(decades, rms, "o-", color="C0", label="best RMS reached")
     if tolerance is not None:
         ax.axhline(tolerance, color="0.4", ls="--", lw=1, label=f"tolerance {tolerance:g}")
     if knee is not None:
         ax.axvline(knee, color="C3", ls=":", lw=1.2, label=f"narrowest within tolerance: {knee:g}")
-    ax.set_xlabel("bound on the stiffness spread, log10(max EA / min EA) (decades)")
+    ax.set_xlabel("bound on the stiffness spread (decades)")
     ax.set_ylabel("RMS log10 error (decades)")
     ax.legend(loc="best")
     if title:
@@ -96,14 +149,13 @@ def compactness_front(decades, rms, tolerance: float | None = None, knee: float 
     return ax
 
 
-def stiffness_histogram(EA, ax=None, title: str | None = None, families=None):
-    """Histogram of log10 tendon stiffness (N), by family when ``families`` (one label per tendon) is given."""
-    if ax is None:
-        with plt.rc_context(STYLE):
-            _, ax = plt.subplots(figsize=(4.8, 3.6), constrained_layout=True)
+@styled
+def stiffness_histogram(EA, ax: Axes | None = None, title: str | None = None, families=None) -> Axes:
+    """Histogram of log10 tendon stiffness (N), stacked by family when ``families`` (one label per tendon) is given."""
+    ax = new_axes(ax, (4.8, 3.6))
     x = np.log10(np.asarray(EA, dtype=float))
-    bins = np.linspace(np.floor(x.min()), np.ceil(x.max()) + 1e-9, max(4, int(np.ceil(x.max()) - np.floor(x.min())) * 2
-                                                                      + 1))
+    lo, hi = np.floor(x.min()), np.ceil(x.max())
+    bins = np.arange(lo, max(hi, lo + 1) + 0.5, 0.5)
     if families is None:
         ax.hist(x, bins=bins, color="C0")
     else:

@@ -1,0 +1,65 @@
+"""CSV layouts of the tables tenscell writes: (header, rows) from results, in one place.
+
+The moduli layout is the prestress-sweep layout that :func:`tenscell.io.data.read_csv`
+reads (``prestress_Pa, frequency_Hz, G_storage_Pa, G_loss_Pa``), so a table
+written by ``tenscell moduli`` or ``reproduce`` can be fitted by ``tenscell fit``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["MODULI_HEADER", "moduli_table", "fit_table", "check_finite_rows"]
+
+#: header of every (P, f, G', G'') table; the same names the data reader accepts
+MODULI_HEADER = ["prestress_Pa", "frequency_Hz", "G_storage_Pa", "G_loss_Pa"]
+
+
+def moduli_table(response):
+    """(header, rows) of a :class:`~tenscell.response.FrequencyResponse`, prestress-major."""
+    return list(MODULI_HEADER), response.rows()
+
+
+def fit_table(result, baseline):
+    """(header, rows) of fit.csv: data, model and homogeneous baseline at each point of each data set.
+
+    ``prestress_Pa`` is the data's own (stated) prestress, or for a data set
+    whose prestress was fitted in a joint fit the fitted value; empty for a
+    frequency sweep fitted alone.
+    """
+    header = ["dataset", "source", "prestress_Pa", "frequency_Hz", "G_storage_Pa", "G_loss_Pa",
+              "G_storage_model_Pa", "G_loss_model_Pa", "log10_error_storage", "log10_error_loss",
+              "G_storage_baseline_Pa", "G_loss_baseline_Pa"]
+    rows = []
+    for f, b in zip(result.fits, baseline.fits):
+        d, n = f.data, f.data.n
+        for i in range(n):
+            P = float(d.prestress[i]) if d.prestress is not None else (
+                "" if f.prestress_fitted_pa is None else f.prestress_fitted_pa)
+            rows.append([f.index, d.source, P, float(d.frequency_hz[i]), float(d.G_storage[i]), float(d.G_loss[i]),
+                         float(f.G_storage_model[i]), float(f.G_loss_model[i]), float(f.residuals[i]),
+                         float(f.residuals[n + i]), float(b.G_storage_model[i]), float(b.G_loss_model[i])])
+    return header, rows
+
+
+def check_finite_rows(rows, what: str, inputs: str = ""):
+    """Yield ``rows`` unchanged; ValueError at the first row with an inf or NaN number.
+
+    A non-finite modulus means the inputs left the range where float64 resolves
+    the model; the message says which inputs to change.
+    """
+    for row in rows:
+        for v in row:
+            if isinstance(v, float) and not math.isfinite(v):
+                raise ValueError(f"{what} is not finite ({v!r}) at {tuple(row)[:2]}; "
+                                 f"the inputs{(' ' + inputs) if inputs else ''} are beyond what float64 resolves")
+        yield row
+
+
+def finite(array, what: str) -> np.ndarray:
+    """``array`` if all finite, else ValueError naming ``what``."""
+    arr = np.asarray(array)
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{what} is not finite for these inputs; reduce the extreme values")
+    return arr
