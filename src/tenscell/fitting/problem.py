@@ -56,6 +56,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from .._checks import positive_scalar
+from .._results import format_repr
 from ..io.data import DataError, RheologyData
 from ..laws import Voigt
 from ..model.equilibrium import Cell
@@ -137,7 +138,7 @@ class _Evaluation:
 # ---------------------------------------------------------------------------------
 # the problem: model, data, parameter layout
 # ---------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class FitProblem:
     """The linear model of a cell against one or several data sets, with a parameter layout.
 
@@ -211,6 +212,15 @@ class FitProblem:
     prestress_matters: bool
     min_prestress_share: float | None = None
     max_decades: float | None = None
+
+    def __repr__(self) -> str:
+        opts = [f"{k}={v:g}" for k, v in (("min_prestress_share", self.min_prestress_share),
+                                         ("max_decades", self.max_decades)) if v is not None]
+        return format_repr(
+            f"FitProblem: {self.n_datasets} data set(s), {self.n_points} points, {self.n_groups} prestress(es)",
+            f"{self.n_free} free of {self.n_params} parameters (stiffness {self.tendons}, damping {self.damping}); "
+            f"{self.n_residuals} residuals" + (f"; {', '.join(opts)}" if opts else ""),
+        )
 
     # -- layout -------------------------------------------------------------------
     @property
