@@ -118,8 +118,7 @@ def _study_compactness(out: Path, log, args=None) -> None:
     datasets = read_datasets(args.data, args.prestress, 1)
     s = compactness_study(datasets, args.decades, damping=args.damping, starts=args.starts, seed=args.seed,
                           jobs=args.jobs, tolerance=args.tolerance)
-    write_csv_rows(out / "compactness.csv", ["max_decades", "rms_log10_error", "spread_decades", "within_tolerance"],
-                   s.rows())
+    write_csv_rows(out / "compactness.csv", s.HEADER, s.rows())
     plotting.save(s.plot(title="Best fit against the bound on the stiffness spread"), out / "compactness_front.png")
     written = "compactness.csv, compactness_front.png, compactness.md"
     knee = s.knee_fit
@@ -167,7 +166,7 @@ def register(sub) -> None:
     g.add_argument("--prestress", action="append", metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     g.add_argument("--damping", choices=("uniform", "per-family"), default="uniform", help="damping c")
-    g.add_argument("--starts", type=integer(1, 10_000), default=2, help="starts per bound")
+    g.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per bound")
     g.add_argument("--jobs", type=integer(1, 256), default=1, help="worker processes over the starts")
     g.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.01,
                    help="RMS of the log10 errors (decades) a fit must reach")
