@@ -277,6 +277,20 @@ class FitProblem:
             for n, v, a, b, u, fr, d in zip(self.names, vals, lo, hi, self.units, self.free, self.descriptions)
         )
 
+    def gauge(self) -> np.ndarray:
+        """The exact strut-length gauge in log-parameter space, shape (n_params,).
+
+        ``(P, EA, c, L) -> (λ²P, λ²EA, λc, λL)`` leaves G unchanged, i.e. the
+        moduli are constant along ``phi + t·gauge()`` for every t: 2 for each
+        stiffness and for ``P`` (or ``s``), 1 for each damping and for ``L``.
+        It is a gauge of the fit only if every parameter it moves is free.
+        """
+        g = np.empty(self.n_params)
+        g[: self.n_ea] = 2.0
+        g[self.n_ea: self.n_ea + self.n_c] = 1.0
+        g[-2], g[-1] = 2.0, 1.0
+        return g
+
     def effective_properties(self, theta):
         """(EA (m,), c (m,), P (groups,)) on the reference cell (N, N·s/m, N) equivalent to ``theta``."""
         return self._effective(self.full(theta))

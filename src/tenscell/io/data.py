@@ -292,13 +292,8 @@ def _parse_header(raw: list[str], source: str, line: int) -> list[str]:
     return canonical
 
 
-def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
-    comments: list[str] = []
-    columns: list[str] | None = None
-    header_line = 0
-    values: dict[str, list[float]] = {}
-    row_lines: list[int] = []
-
+def _csv_lines(text: str, source: str, comments: list[str]):
+    """Yield ``(line number, fields)`` of every non-blank, non-comment line; comments go to ``comments``."""
     # Split on "\n" only (the file was opened in universal-newline mode), so
     # that line numbers agree with what an editor shows; str.splitlines()
     # would also break on form feeds and other rare separators.
@@ -310,10 +305,19 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
             comments.append(stripped[1:].strip())
             continue
         try:
-            fields = next(csv.reader([line], strict=True))
+            yield lineno, next(csv.reader([line], strict=True))
         except csv.Error as exc:
             raise _error(source, f"malformed CSV: {exc}", lineno) from exc
 
+
+def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
+    comments: list[str] = []
+    columns: list[str] | None = None
+    header_line = 0
+    values: dict[str, list[float]] = {}
+    row_lines: list[int] = []
+
+    for lineno, fields in _csv_lines(text, source, comments):
         if columns is None:
             columns = _parse_header(fields, source, lineno)
             header_line = lineno
