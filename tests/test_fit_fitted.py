@@ -101,3 +101,56 @@ def test_linearize_law_accepts_a_fitted_cell_and_rejects_wrong_rest_lengths(cell
     object.__setattr__(bad, "l0", np.asarray(bad.l0) * (1 - 1e-9))  # a genuine departure from Eq. (11)
     with pytest.raises(ValueError, match="do not hold"):
         linearize_law(cell, bad)
+
+
+# --- from a real fit ------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def small_fits():
+    from tenscell.fitting import fit
+    from tenscell.io.data import bundled
+
+    kw = dict(starts=1, hops=2, seed=0, progress=False)
+    return (fit(bundled("fabry2001"), tendons="per-family", fixed={"L": 0.8}, **kw),
+            fit(bundled("stamenovic2002"), tendons="uniform", **kw))
+
+
+def test_fit_json_rebuilds_the_fitted_cell_to_rounding(small_fits, tmp_path):
+    for result in small_fits:
+        d = result.data
+        path = tmp_path / "fit.json"
+        path.write_text(json.dumps(result.to_dict()))
+        back = load_fit(path)
+        assert back.L == pytest.approx(result.L, rel=1e-15)
+        if d.kind == "prestress":
+            for p in np.unique(d.prestress):
+                sel = d.prestress == p
+                np.testing.assert_allclose(np.array(back.moduli(d.frequency_hz[sel], p)),
+                                           np.array(result.moduli(d.frequency_hz[sel], prestress_pa=p)), rtol=1e-12)
+        else:
+            np.testing.assert_allclose(np.array(back.moduli(d.frequency_hz)), np.array(result.moduli(d.frequency_hz)),
+                                       rtol=1e-12)
+        # the linear model is the fitted cell's, at the fitted strut length
+        assert result.linear.cell.strut_length == pytest.approx(result.L)
+        np.testing.assert_array_equal(result.linear.EA, result.EA)
+
+
+def test_report_has_identifiability_comparison_and_creep_sections(small_fits):
+    from tenscell.fitting.models import compare_models
+    from tenscell.reports.fit import fit_markdown
+
+    freq, pres = small_fits
+    md = fit_markdown(freq, comparison=compare_models(freq))
+    ident = freq.identifiability()
+    creep = freq.predicted_creep()
+    assert "## How well the data determine the parameters" in md
+    assert f"see **{ident.rank} independent parameter combinations**" in md
+    assert "## Against the phenomenological standard" in md and "structural damping (power law)" in md
+    assert "## Predicted creep of the fitted cell" in md and f"t^**{creep.alpha:.3g}**" in md
+    assert "not raw measurements" in md  # the bundled files say they are generated from published laws
+    # L fixed: no gauge to remove, plain labels
+    assert not ident.gauge_removed and ident.fixed == ("L",) and "c" in ident.labels
+    md2 = fit_markdown(pres)
+    assert "## Against the phenomenological standard" not in md2 and "## Predicted creep" in md2
+    doc = pres.to_dict()
+    assert doc["model"]["s_m2"] == pytest.approx(pres.value("s")) and doc["identifiability"]["gauge_removed"]
+    assert doc["predicted_creep"]["window_s"] == [0.1, 10.0]

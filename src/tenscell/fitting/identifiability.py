@@ -96,7 +96,9 @@ class Identifiability:
         The same, in gauge-invariant form when the gauge was removed (``"c/L"``,
         ``"EA[3]/L²"``, ``"P/L²"``).
     values : ndarray, shape (p,)
-        Their values (SI units of the plain parameters).
+        Their values: of the labelled combination when the gauge was removed
+        (``EA/L²`` in N/m², ``c/L`` in N·s/m², ``P/L²`` in N/m², ``s/L²``
+        dimensionless), else of the plain parameter (SI units).
     singular_values : ndarray, shape (min(n, p),)
         Of the weighted Jacobian with respect to the ln-parameters, descending
         (decades of residual per e-fold).
@@ -270,7 +272,9 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
     n = r.size
     names = tuple(problem.names[i] for i in np.flatnonzero(keep))
     labels = tuple(_gauge_label(nm, g[i] if gauge_removed else 0) for nm, i in zip(names, np.flatnonzero(keep)))
-    values = np.array([pars[i].value for i in np.flatnonzero(keep)])
+    # with the gauge removed each parameter stands for its gauge-invariant combination: report that value
+    L_fit = pars[l_index].value
+    values = np.array([pars[i].value / (L_fit ** g[i] if gauge_removed else 1.0) for i in np.flatnonzero(keep)])
 
     U, s, Vt = np.linalg.svd(J, full_matrices=True) if J.size else (None, np.zeros(0), np.zeros((0, 0)))
     rank = int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0 else 0

@@ -260,6 +260,35 @@ class FitResult:
             Gs[sel], Gl[sel] = G.real, G.imag
         return Gs, Gl
 
+    # -- the fitted cell as a model, and what the data determine ---------------------------------
+    @property
+    def model(self):
+        """The fitted cell as a :class:`~tenscell.fitting.fitted.FittedModel` (cell at the fitted L, EA, c, P or s)."""
+        from .fitted import FittedModel, scaled_cell
+
+        vals = self.problem.values(self.theta)
+        pre = {"s": float(vals[-2]), "prestress_pa": tuple(np.unique(self.data.prestress))} \
+            if self.problem.kind == "prestress" else {"P": float(vals[-2])}
+        return FittedModel(cell=scaled_cell(self.cell, self.L), EA=self.EA, c=self.c, source=self.data.source, **pre)
+
+    @property
+    def linear(self):
+        """The linear model of the fitted cell (a prestress sweep's at its median measured prestress)."""
+        return self.model.linear()
+
+    def identifiability(self, rtol: float = 1e-8):
+        """Rank, standard errors, correlations and determined combinations (:mod:`tenscell.fitting.identifiability`)."""
+        from .identifiability import identifiability
+
+        known = self.data.G_storage_sd is not None and self.data.G_loss_sd is not None
+        return identifiability(self.problem, self.theta, sigma_known=known, rtol=rtol)
+
+    def predicted_creep(self, t_min: float = 0.1, t_max: float = 10.0, n: int = 41):
+        """Creep compliance (1/Pa) of the fitted cell over [t_min, t_max] s and its power-law exponent."""
+        from .fitted import predicted_creep
+
+        return predicted_creep(self.linear, t_min, t_max, n)
+
     # -- output ---------------------------------------------------------------------
     def to_dict(self) -> dict:
         """JSON-ready summary: parameters, rms_log10_error, converged, time taken, alternatives..."""
@@ -293,6 +322,9 @@ class FitResult:
             "start_rms": list(self.start_rms),
             "alternatives": [a.to_dict() for a in self.alternatives],
             "history": [{"time_s": t, "rms_log10_error": r} for t, r in self.history],
+            "identifiability": self.identifiability().to_dict(),
+            "predicted_creep": self.predicted_creep().to_dict(),
+            "model": self.model.to_dict(),
         }
 
     def _interior_text(self) -> str:

@@ -40,6 +40,7 @@ __all__ = [
     "write_csv",
     "bundled",
     "bundled_names",
+    "generated_note",
 ]
 
 # Canonical spellings, used for writing and in messages; matching is on the
@@ -587,3 +588,26 @@ def bundled(name: str) -> RheologyData:
     except (OSError, UnicodeDecodeError) as exc:
         raise _error(source, f"cannot read bundled file: {exc}") from exc
     return _parse_text(text, source, min_points=1)
+
+
+def generated_note(data) -> str | None:
+    """A phrase saying the data are generated from a published fit law, when their file's comments say so.
+
+    The bundled data sets are not raw measurements: each file's comments say
+    it was generated from a published law. Reports, figures and claims that
+    call them data repeat it; this reads it from the comments (``"not raw
+    measurements"`` or ``"generated from"``) rather than from the file name.
+
+    Parameters
+    ----------
+    data : RheologyData or CreepData
+        Anything with ``comments``.
+
+    Returns
+    -------
+    str or None
+    """
+    text = " ".join(getattr(data, "comments", ()) or ()).lower()
+    if "not raw measurement" in text or "generated from" in text:
+        return "generated from a published fit law, not raw measurements (the file's own comments say so)"
+    return None

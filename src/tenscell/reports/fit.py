@@ -7,8 +7,17 @@ import numpy as np
 
 from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
 from ..io.data import RheologyData
+from .fit_analysis import comparison_section, creep_section, identifiability_section, provenance_line
 
 __all__ = ["fit_markdown"]
+
+
+def _creep_part(result: FitResult) -> list[str]:
+    creep = result.predicted_creep()
+    lo, hi = creep.window
+    # the frequencies matching the creep window, at the same prestress as the creep (a sweep's median)
+    _, s1, _ = frequency_slopes(result, 1 / (2 * math.pi * hi), 1 / (2 * math.pi * lo), 200)
+    return creep_section(creep, (float(s1.min()), float(s1.max())))
 
 
 def _data_slopes(data: RheologyData):
@@ -17,8 +26,10 @@ def _data_slopes(data: RheologyData):
     return float(a1), float(b1), float(a2), float(b2)
 
 
-def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None) -> str:
-    """A markdown report: verdict, parameters (bounds hit), error table, the homogeneous baseline beside it.
+def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None,
+                 comparison=None) -> str:
+    """A markdown report: verdict, parameters (bounds hit), error table, the homogeneous baseline beside it,
+    identifiability, the model comparison and the predicted creep of the fitted cell.
 
     Parameters
     ----------
@@ -26,6 +37,8 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
         The (heterogeneous) fit.
     baseline : FitResult, optional
         The homogeneous fit (``tendons="uniform"``) of the same data.
+    comparison : ModelComparison, optional
+        From :func:`tenscell.fitting.models.compare_models`.
     """
     d = result.data
     title = title or f"Fit of the tensegrity model to {d.source}"
@@ -44,6 +57,9 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
         f"- Tendon stiffness spread: {lo:.3g} to {hi:.3g} N ({dec:.1f} decades){result._interior_text()}.",
         "",
     ]
+    note = provenance_line(d)
+    if note:
+        out += [note, ""]
     if baseline is not None:
         out += ["## Heterogeneous fit versus the homogeneous baseline", "",
                 "| model | stiffness | free parameters | RMS log10 error | converged |", "|---|---|---|---|---|"]
@@ -106,6 +122,10 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
             row += f" {Bs[i]:.4g} | {Bl[i]:.4g} |"
         out.append(row)
     out.append("")
+    out += identifiability_section(result.identifiability())
+    if comparison is not None:
+        out += comparison_section(comparison)
+    out += _creep_part(result)
     if result.alternatives:
         out += ["## Other solutions that fit almost as well", "",
                 "| start | RMS log10 error | c (N·s/m) | stiffness spread (decades) |", "|---|---|---|---|"]
