@@ -150,7 +150,7 @@ def test_report_has_identifiability_comparison_and_creep_sections(small_fits):
     # L fixed: no gauge to remove, plain labels
     assert not ident.gauge_removed and ident.fixed == ("L",) and "c" in ident.labels
     md2 = fit_markdown(pres)
-    assert "## Against the phenomenological standard" not in md2 and "## Predicted creep" in md2
+    assert "no prestress dependence" in md2 and "## Predicted creep" in md2
     doc = pres.to_dict()
     assert doc["model"]["s_m2"] == pytest.approx(pres.value("s")) and doc["identifiability"]["gauge_removed"]
     assert doc["predicted_creep"]["window_s"] == [0.1, 10.0]

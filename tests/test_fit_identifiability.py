@@ -140,3 +140,17 @@ def test_parameters_at_bounds_are_excluded(cell):
     assert "P/L²" not in ident.labels
     # a perfect fit with unknown σ: the errors are zero, and the noise level is estimated as zero
     assert ident.sigma == pytest.approx(0.0, abs=1e-8)
+
+
+def test_gauge_of_a_joint_problem_with_a_fitted_data_prestress(cell):
+    """Joint fit: a prestress sweep (scale s) and a frequency sweep whose prestress is fitted (P_data, in Pa)."""
+    from tenscell.io.data import bundled
+
+    p = make_problem([bundled("stamenovic2002"), bundled("fabry2001")], cell, tendons="per-family")
+    assert "P_data[1]" in p.names and "s" in p.names
+    g = p.gauge()
+    assert g[p.names.index("P_data[1]")] == 0.0 and g[p.names.index("s")] == 2.0
+    phi = np.random.default_rng(3).normal(0.0, 0.3, p.n_params)
+    np.testing.assert_allclose(np.array(p.moduli(phi + 0.6 * g)), np.array(p.moduli(phi)), rtol=1e-10)
+    J = p.jacobian(phi)
+    assert np.linalg.norm(J @ g) <= 1e-10 * np.linalg.norm(J)

@@ -112,9 +112,10 @@ class FittedModel:
                 raise ValueError("prestress_pa (Pa) is required: the fit scales measured prestresses by s")
         return float(self.s) * positive_scalar("prestress_pa", prestress_pa, "Pa")
 
-    def linear(self, prestress_pa: float | None = None) -> LinearModel:
-        """The linear model at the fitted parameters (see :meth:`prestress`)."""
-        return linearize(self.cell, P=self.prestress(prestress_pa), EA=self.EA, c=self.c)
+    def linear(self, prestress_pa: float | None = None, *, P_N: float | None = None) -> LinearModel:
+        """The linear model at the fitted parameters (see :meth:`prestress`), or at model prestress ``P_N`` (N)."""
+        P = self.prestress(prestress_pa) if P_N is None else positive_scalar("P_N", P_N, "N")
+        return linearize(self.cell, P=P, EA=self.EA, c=self.c)
 
     def moduli(self, f_hz, prestress_pa: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """G′, G″ (Pa) at frequencies ``f_hz`` (Hz) through the core pipeline."""

@@ -137,13 +137,9 @@ class StructuralDampingProblem:
 
     def jacobian_fd(self, theta, step: float = 1e-6) -> np.ndarray:
         """Central finite differences of :meth:`residuals` (the reference for tests)."""
-        theta = np.asarray(theta, dtype=float)
-        out = np.empty((self.y_obs.size, theta.size))
-        for k in range(theta.size):
-            e = np.zeros_like(theta)
-            e[k] = step
-            out[:, k] = (self.residuals(theta + e) - self.residuals(theta - e)) / (2 * step)
-        return out
+        from .problem import _central
+
+        return _central(self.residuals, theta, step)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -216,10 +212,15 @@ class StructuralDampingFit:
                          {"model": "structural damping", "phi0_rad_per_s": self.phi0})
 
 
+def _one_prestress(data: RheologyData) -> bool:
+    """A frequency sweep: no prestress column, or one stated prestress for every point."""
+    return data.prestress is None or np.unique(data.prestress).size == 1
+
+
 def _frequency_sweep(data, what: str) -> RheologyData:
     if not isinstance(data, RheologyData):
         raise ValueError(f"{what}: data must be a tenscell.io.data.RheologyData, got {type(data).__name__}")
-    if data.kind != "frequency":
+    if not _one_prestress(data):
         raise DataError(f"{data.source}: {what} needs a frequency sweep; the structural-damping law has no "
                         "prestress dependence to fit a prestress sweep with")
     return data
@@ -338,8 +339,8 @@ def split_holdout(data: RheologyData, f_min: float, f_max: float) -> tuple[Rheol
     f_max = positive_scalar("holdout f_max", f_max, "Hz")
     if not f_min < f_max:
         raise ValueError(f"holdout: FMIN must be below FMAX, got {f_min:g}:{f_max:g} Hz")
-    if data.kind != "frequency":
-        raise ValueError(f"holdout: {data.source} is a {data.kind} sweep; a frequency window needs a frequency sweep")
+    if not _one_prestress(data):
+        raise ValueError(f"holdout: {data.source} is a prestress sweep; a frequency window needs a frequency sweep")
     held = (data.frequency_hz >= f_min) & (data.frequency_hz <= f_max)
     if not held.any() or held.all():
         raise ValueError(f"holdout: the window {f_min:g}:{f_max:g} Hz holds {int(held.sum())} of the {data.n} points "
@@ -468,7 +469,8 @@ def compare_models(result, *, homogeneous=None, structural: StructuralDampingFit
     Parameters
     ----------
     result : FitResult
-        The (heterogeneous) tensegrity fit; its data are the training data.
+        The (heterogeneous) tensegrity fit; its data are the training data
+        (several data sets for a joint fit: the law then is left out).
     homogeneous : FitResult, optional
         The homogeneous tensegrity (``tendons="uniform"``) fitted to the same data.
     structural : StructuralDampingFit or bool
@@ -486,8 +488,8 @@ def compare_models(result, *, homogeneous=None, structural: StructuralDampingFit
     -------
     ModelComparison
     """
-    data = result.data
-    sigma_known = data.G_storage_sd is not None and data.G_loss_sd is not None
+    datasets = result.datasets
+    sigma_known = all(d.G_storage_sd is not None and d.G_loss_sd is not None for d in datasets)
     w = result.problem.weights
     rows = []
 
@@ -503,8 +505,9 @@ def compare_models(result, *, homogeneous=None, structural: StructuralDampingFit
     if homogeneous is not None and homogeneous is not result:
         add("homogeneous tensegrity", homogeneous.problem.residuals(homogeneous.theta),
             _tensegrity_params(homogeneous), homogeneous.rms_log10_error, homogeneous.moduli)
-    if structural is True and data.kind == "frequency":
-        structural = fit_structural_damping(data)
+    if structural is True:  # the law has no prestress dependence: one frequency sweep only
+        one = len(datasets) == 1 and _one_prestress(datasets[0])
+        structural = fit_structural_damping(datasets[0]) if one else None
     if isinstance(structural, StructuralDampingFit):
         add("structural damping (power law)", structural.weighted_residuals, structural.n_params,
             structural.rms_log10_error, structural.moduli)

@@ -200,6 +200,26 @@ class RheologyData:
         """Number of data points."""
         return int(self.frequency_hz.shape[0])
 
+    def with_prestress(self, prestress_pa: float) -> "RheologyData":
+        """A copy that states the prestress (Pa) at which the data were measured (a constant ``prestress`` column).
+
+        A frequency sweep that states its prestress can be fitted jointly
+        with prestress sweeps on one prestress scale
+        (:func:`tenscell.fitting.fit`). Raises DataError if the data already
+        state prestresses, or for a non-positive value.
+        """
+        if self.prestress is not None:
+            raise _error(self.source, "the data already state their prestress (a prestress column)")
+        try:
+            p = float(prestress_pa)
+        except (TypeError, ValueError):
+            raise _error(self.source, f"prestress {prestress_pa!r} is not a number (Pa)") from None
+        if not (math.isfinite(p) and p > 0):
+            raise _error(self.source, f"prestress {prestress_pa!r} Pa must be a finite number > 0")
+        return RheologyData(frequency_hz=self.frequency_hz, G_storage=self.G_storage, G_loss=self.G_loss,
+                            prestress=np.full(self.n, p), G_storage_sd=self.G_storage_sd,
+                            G_loss_sd=self.G_loss_sd, source=self.source, comments=self.comments)
+
     @property
     def weights_storage(self) -> np.ndarray:
         """Weights for residuals of log10 G', shape (n,).

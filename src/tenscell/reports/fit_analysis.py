@@ -15,7 +15,8 @@ import numpy as np
 from ..fitting.identifiability import GAUGE
 from ._format import num, pct, table
 
-__all__ = ["identifiability_section", "comparison_section", "creep_section", "provenance_line"]
+__all__ = ["identifiability_section", "comparison_section", "creep_section", "provenance_line",
+           "section_provenance", "section_identifiability", "section_comparison", "section_creep"]
 
 
 def _factor(se: float) -> str:
@@ -164,3 +165,43 @@ def creep_section(creep, frequency_slope: tuple | None = None) -> list[str]:
     out += ["*What this does not show*: the creep of the linear model (small steps); a large step can slacken "
             "tendons (`tenscell creep` simulates it).", ""]
     return out
+
+
+# ---- the sections of tenscell.reports.fit (signature (result, baseline) -> lines) -----------------
+def section_provenance(result, baseline=None) -> list[str]:
+    """A note for every data set whose file says it was generated from a published law."""
+    out = []
+    for d in result.datasets:
+        line = provenance_line(d)
+        if line:
+            out += [line, ""]
+    return out
+
+
+def section_identifiability(result, baseline=None) -> list[str]:
+    """How well the data determine the parameters (:meth:`FitResult.identifiability`)."""
+    return identifiability_section(result.identifiability())
+
+
+def section_comparison(result, baseline=None, comparison=None) -> list[str]:
+    """The model comparison: ``comparison`` if given (e.g. with held-out data), else computed here."""
+    from ..fitting.models import compare_models
+
+    if comparison is None:
+        comparison = compare_models(result, homogeneous=baseline)
+    out = comparison_section(comparison)
+    if not any(s.name.startswith("structural") for s in comparison.scores):
+        out.insert(2, "The structural-damping law describes one frequency sweep; it has no prestress dependence "
+                      "and is not fitted to prestress sweeps or joint data.")
+        out.insert(3, "")
+    return out
+
+
+def section_creep(result, baseline=None) -> list[str]:
+    """Predicted creep of the fitted cell, beside the fitted G′ slope over the matching frequencies."""
+    from ..fitting.result import frequency_slopes
+
+    creep = result.predicted_creep()
+    lo, hi = creep.window
+    _, s1, _ = frequency_slopes(result, 1 / (2 * math.pi * hi), 1 / (2 * math.pi * lo), 200)
+    return creep_section(creep, (float(s1.min()), float(s1.max())))
