@@ -90,3 +90,47 @@ def test_fitted_cell_with_inert_prestress_refuses_a_nonlinear_run_but_gives_line
     assert cli_main(["creep", "--from-fit", str(path), "--out", str(tmp_path / "c")]) == 0
     assert cli_main(["creep", "--from-fit", str(path), "--amplitude", "1e-12", "--out", str(tmp_path / "d")]) == 2
     assert "integration noise" in capsys.readouterr().err
+
+
+# --- fit: --bound, --fix, --holdout --------------------------------------------------------------
+@pytest.mark.parametrize("flag,match", [
+    (["--bound", "EA=1e3:1e-3"], "--bound: EA: the lower bound 1000 N must be below the upper bound 0.001 N"),
+    (["--bound", "X=1:2"], "unknown parameter kind 'X'"),
+    (["--bound", "c=1"], "c: expected LO:HI in N·s/m"),
+    (["--fix", "L"], "expected NAME=VALUE"),
+    (["--fix", "L=-1"], "--fix: -1 is out of range"),
+    (["--bound", "s=1:2"], "--bound s=1:2: no parameter of kind 's'"),
+    (["--fix", "c_actin=1"], "--fix c_actin=1: no parameter named 'c_actin'"),
+    (["--fix", "L=5000"], "--fix L=5000: outside its bounds"),
+    (["--holdout", "10:1"], "FMIN 10 Hz must be below FMAX 1 Hz"),
+    (["--holdout", "1e5:1e6"], "holds 0 of the 16 points"),
+])
+def test_fit_flags_refused_naming_the_flag(tmp_path, capsys, flag, match):
+    out = tmp_path / "fit"
+    assert cli_main(["fit", "bundled:fabry2001", "--tendons", "uniform", *flag, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert match in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_fit_with_bound_fix_and_holdout(tmp_path):
+    out = tmp_path / "fit"
+    code = cli_main(["fit", "bundled:fabry2001", "--tendons", "per-family", "--damping", "per-family",
+                     "--fix", "L=1", "--fix", "c_actin=2", "--bound", "EA=1e-2:1e6", "--holdout", "0.3:3",
+                     "--starts", "1", "--baseline-starts", "1", "--out", str(out)])
+    assert code in (0, 1)
+    doc = json.loads((out / "fit.json").read_text())
+    pars = {p["name"]: p for p in doc["parameters"]}
+    assert pars["L"]["value"] == 1.0 and not pars["L"]["vary"]
+    assert pars["c_actin"]["value"] == 2.0 and not pars["c_actin"]["vary"]
+    assert pars["EA_actin"]["lower"] == pytest.approx(1e-2) and pars["EA_actin"]["upper"] == pytest.approx(1e6)
+    assert doc["n_points"] == 16 - 3  # 0.3..3 Hz holds 3 of the 16 frequencies (0.46, 1, 2.2 Hz)
+    cmp_ = doc["model_comparison"]
+    assert cmp_["holdout_Hz"] == [0.3, 3.0] and cmp_["n_holdout_points"] == 3
+    rows = {m["model"]: m for m in cmp_["models"]}
+    assert rows["structural damping (power law)"]["holdout_rms_log10_error"] < 1e-3  # the law the data came from
+    assert all(m["holdout_rms_log10_error"] is not None for m in cmp_["models"])
+    # fixing c and L breaks the gauge: L is not analysed (fixed), no combination is relabelled
+    assert not doc["identifiability"]["gauge_removed"]
+    md = (out / "report.md").read_text()
+    assert "held-out RMS log10 error" in md and "that no model was fitted to" in md

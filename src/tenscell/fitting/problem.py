@@ -707,11 +707,9 @@ def _apply_fixed(names, kinds, lower, upper, fixed, damping, L_ref, P_med):
     for i, k in enumerate(kinds):  # a data set's own prestress starts at the others' median
         if k == "P_data" and lower[i] < math.log(P_med) < upper[i]:
             fixed_log[i] = math.log(P_med)
-    allowed = (["c"] if damping == "uniform" else []) + [n for n, k in zip(names, kinds) if k in ("P", "s", "P_data")]
-    allowed.append("L")
     for key, value in dict(fixed or {}).items():
-        if key not in allowed:
-            raise ValueError(f"fixed: cannot fix {key!r}; fixable here: {', '.join(allowed)}")
+        if key not in names:  # any parameter may be held fixed (a stiffness group, a damping, a prestress, L)
+            raise ValueError(f"fixed: cannot fix {key!r}; parameters here: {', '.join(names)}")
         v = positive_scalar(f"fixed[{key!r}]", value)
         i = names.index(key)
         if not lower[i] <= math.log(v) <= upper[i]:
@@ -786,9 +784,11 @@ def make_problem(
         s in [1e-10, 1e4]·S/P_m, P_data in [1e-3, 1e3]·P_m, L in
         [1e-3, 1e3]·L_cell.
     fixed : dict, optional
-        Scalar parameters to hold fixed, by name: ``"c"`` (uniform damping
-        only), any prestress parameter (``"P"``, ``"s"``, ``"P_data[k]"``...)
-        and ``"L"``, with values in SI units (Pa for ``P_data``).
+        Parameters to hold fixed, by name (any of :attr:`FitProblem.names`:
+        ``"L"``, ``"c"`` or ``"c_actin"``, ``"EA_intermediate_filament"``,
+        ``"EA[3]"``, a prestress ``"P"``, ``"s"``, ``"P_data[k]"``...), with
+        values in SI units (Pa for ``P_data``). Fixing any of EA, c, P (or
+        s) or L removes the strut-length gauge (and makes L identifiable).
     min_prestress_share : float in (0, 1), optional
         Lower bound on the prestress share of the static stiffness at every
         prestress of the data (module docstring).
