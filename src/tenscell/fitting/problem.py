@@ -56,7 +56,9 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from .._checks import positive_scalar
+from .._results import format_repr
 from ..io.data import DataError, RheologyData
+from ..laws import Voigt
 from ..model.equilibrium import Cell
 from .result import FitParameter
 
@@ -77,37 +79,46 @@ _PENALTY = 10.0
 _SHARE_WEIGHT = 30.0
 
 
-def _whiten(Lc, A, Kp, load, probe):
-    """A, Kp, load, probe in the basis where C0 = Lc Lcᵀ becomes the identity."""
+def _whiten(Lc, A, H, load, probe):
+    """A, H (symmetric), load, probe in the basis where C0 = Lc Lcᵀ becomes the identity."""
     solve = scipy.linalg.solve_triangular
     B = solve(Lc, A, lower=True, check_finite=False)
-    X = solve(Lc, Kp, lower=True, check_finite=False)
-    Kpt = solve(Lc, X.T, lower=True, check_finite=False)
+    X = solve(Lc, H, lower=True, check_finite=False)
+    Ht = solve(Lc, X.T, lower=True, check_finite=False)
     bt = solve(Lc, load, lower=True, check_finite=False)
     Dt = solve(Lc, probe, lower=True, check_finite=False)
-    return B, 0.5 * (Kpt + Kpt.T), bt, Dt
+    return B, 0.5 * (Ht + Ht.T), bt, Dt
 
 
-def _tangents(EA, c, lengths):
-    """Tangent stiffness k_j (N/m) and damping η_j (N·s/m) of the Voigt tendons, with d k/d ln EA and d η/d ln c.
+def _tangents(EA, c, lengths, T0, P):
+    """The Voigt law's tangents at tensions ``P_g·T0`` for every prestress group (the one place the fit meets the law).
 
-    The one place where the fit meets the tendon law.
+    Returns ``(k, dk, dk_dT·T0, eta, deta)``: tangent stiffness ``k`` (groups, m)
+    in N/m with its derivative by ``ln EA_j`` and the prestress derivative
+    ``∂k/∂P = (∂k/∂T)·T0`` (groups, m); tangent damping ``η`` (m,) in N·s/m with
+    its derivative by ``ln c_j``. From :meth:`tenscell.laws.Voigt.tangent`.
     """
-    k = EA / lengths
-    return k, k, c, c
+    g, m = P.size, EA.size
+    law = Voigt._trusted(EA=np.tile(EA, g), c=np.tile(c, g))
+    tg = law.tangent(np.tile(lengths, g), (P[:, None] * T0[None]).ravel())
+    i_ea, i_c = tg.row("EA"), tg.row("c")
+    shape = (g, m)
+    k = tg.k.reshape(shape)
+    dk = (tg.dk[i_ea] * law.EA).reshape(shape)
+    kP = (tg.dk_dT * np.tile(T0, g)).reshape(shape)
+    eta, deta = tg.c[:m], tg.dc[i_c][:m] * c
+    return k, dk, kP, eta, deta
 
 
 @dataclass(frozen=True, eq=False)
 class _Spectrum:
     """The relaxation spectrum of the model at one parameter vector, per prestress group."""
 
-    EA: np.ndarray  # (m,) effective stiffness on the reference cell (N)
-    c: np.ndarray  # (m,) effective damping (N·s/m)
-    P: np.ndarray  # (groups,) effective prestress (N)
-    dk: np.ndarray  # (m,) d k_j / d ln EA_j (N/m)
+    P: np.ndarray  # (groups,) effective prestress (N) on the reference cell
+    dk: np.ndarray  # (groups, m) d k_j / d ln EA_j (N/m)
     deta: np.ndarray  # (m,) d η_j / d ln c_j (N·s/m)
     B: np.ndarray  # (n, m) whitened tendon directions
-    Kpt: np.ndarray  # (n, n) whitened geometric stiffness
+    Kpt: np.ndarray  # (groups, n, n) whitened ∂K0/∂P = Σ T0_j ∇²l_j + Σ (∂k_j/∂P) a_j a_jᵀ
     lam: np.ndarray  # (groups, n) relaxation rates (1/s)
     W: np.ndarray  # (groups, n, n) C0-orthonormal modes (whitened)
     alpha: np.ndarray  # (groups, n) probe projections
@@ -127,7 +138,7 @@ class _Evaluation:
 # ---------------------------------------------------------------------------------
 # the problem: model, data, parameter layout
 # ---------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class FitProblem:
     """The linear model of a cell against one or several data sets, with a parameter layout.
 
@@ -178,7 +189,8 @@ class FitProblem:
     # cell (reference strut length L_ref)
     A: np.ndarray
     lengths: np.ndarray
-    Kp: np.ndarray
+    T0: np.ndarray
+    H: np.ndarray
     load: np.ndarray
     probe: np.ndarray
     L_ref: float
@@ -200,6 +212,15 @@ class FitProblem:
     prestress_matters: bool
     min_prestress_share: float | None = None
     max_decades: float | None = None
+
+    def __repr__(self) -> str:
+        opts = [f"{k}={v:g}" for k, v in (("min_prestress_share", self.min_prestress_share),
+                                         ("max_decades", self.max_decades)) if v is not None]
+        return format_repr(
+            f"FitProblem: {self.n_datasets} data set(s), {self.n_points} points, {self.n_groups} prestress(es)",
+            f"{self.n_free} free of {self.n_params} parameters (stiffness {self.tendons}, damping {self.damping}); "
+            f"{self.n_residuals} residuals" + (f"; {', '.join(opts)}" if opts else ""),
+        )
 
     # -- layout -------------------------------------------------------------------
     @property
@@ -269,32 +290,37 @@ class FitProblem:
         return EA / lam**2, c / lam, P / lam**2
 
     def _whitening(self, eta):
-        """(B, Kpt, bt, Dt): A, Kp, load, probe in the basis where C0 = I."""
+        """(B, Ht, bt, Dt): A, the prestress Hessian, load and probe in the basis where C0 = I."""
         if self.n_c == 1:  # C0 = c·A Aᵀ: rescale the precomputed basis
             s = 1.0 / math.sqrt(eta[0])
-            B0, Kpt0, bt0, Dt0 = self.white_unit
-            return B0 * s, Kpt0 * (s * s), bt0 * s, Dt0 * s
+            B0, Ht0, bt0, Dt0 = self.white_unit
+            return B0 * s, Ht0 * (s * s), bt0 * s, Dt0 * s
         try:
             Lc = np.linalg.cholesky((self.A * eta) @ self.A.T)
         except np.linalg.LinAlgError:
             return None
-        return _whiten(Lc, self.A, self.Kp, self.load, self.probe)
+        return _whiten(Lc, self.A, self.H, self.load, self.probe)
 
     def _spectrum(self, phi) -> _Spectrum | None:
-        """Relaxation spectrum per prestress group; None where the model is not a stable cell."""
+        """Relaxation spectrum per prestress group; None where the model is not a stable cell.
+
+        ``K0 = P·Σ T0_j ∇²l_j + Σ k_j a_j a_jᵀ`` with the law's tangent
+        stiffness ``k_j`` at tension ``P·T0_j`` (it depends on P), ``C0 = Σ η_j a_j a_jᵀ``.
+        """
         EA, c, P = self._effective(phi)
-        k, dk, eta, deta = _tangents(EA, c, self.lengths)
+        k, dk, kP, eta, deta = _tangents(EA, c, self.lengths, self.T0, P)
         wh = self._whitening(eta)
         if wh is None:
             return None
-        B, Kpt, bt, Dt = wh
-        KE = (B * k) @ B.T
-        lam, W = np.linalg.eigh(P[:, None, None] * Kpt[None] + KE[None])
+        B, Ht, bt, Dt = wh
+        Kt = P[:, None, None] * Ht[None] + np.matmul(B[None] * k[:, None, :], B.T[None])
+        lam, W = np.linalg.eigh(Kt)
         if not np.all(lam > 0):
             return None
         alpha = np.einsum("gnk,n->gk", W, Dt)  # probe projections, D0·v_k
         beta = np.einsum("gnk,n->gk", W, bt)  # load projections, −H0·v_k
-        return _Spectrum(EA=EA, c=c, P=P, dk=dk, deta=deta, B=B, Kpt=Kpt, lam=lam, W=W, alpha=alpha, beta=beta)
+        Kpt = Ht[None] + np.matmul(B[None] * kP[:, None, :], B.T[None])
+        return _Spectrum(P=P, dk=dk, deta=deta, B=B, Kpt=Kpt, lam=lam, W=W, alpha=alpha, beta=beta)
 
     def _evaluate(self, phi, jac: bool, share: bool = False) -> _Evaluation | None:
         """Moduli (and, if asked, their log-derivatives and the prestress share); None if unstable."""
@@ -314,7 +340,7 @@ class FitProblem:
     def _modal(self, spec):
         """AV = a_jᵀ v_k (groups, m, n) and M = Vᵀ Kp V (groups, n, n)."""
         AV = np.matmul(spec.B.T[None], spec.W)
-        M = np.matmul(np.transpose(spec.W, (0, 2, 1)), np.matmul(spec.Kpt[None], spec.W))
+        M = np.matmul(np.transpose(spec.W, (0, 2, 1)), np.matmul(spec.Kpt, spec.W))
         return AV, M
 
     def _to_params(self, d_EA, d_c, d_P):
@@ -343,7 +369,7 @@ class FitProblem:
             ay = np.einsum("imk,ik->im", AV[g], aR)
             dJ_P = -np.einsum("ik,ikl,il->i", aR, M[g], bR) * spec.P[g]
         pr = ax * ay
-        dJ_EA = -pr * spec.dk  # EA_j ∂J/∂EA_j
+        dJ_EA = -pr * spec.dk[g]  # EA_j ∂J/∂EA_j
         dJ_c = -1j * self.omega[:, None] * pr * spec.deta  # c_j ∂J/∂c_j
         d_P = np.zeros((J.size, self.n_groups), dtype=complex)
         d_P[np.arange(J.size), g] = dJ_P
@@ -371,7 +397,7 @@ class FitProblem:
         dQ = -spec.dk * (ay * au + av * ax)
         dJ0 = -spec.dk * ay * ax
         d_EA = dQ / Q[:, None] - dJ0 / J0[:, None]
-        # by the group's own ln P (∂K0 = P Kp)
+        # by the group's own ln P (∂K0 = P Kp; the Voigt law's ∂k/∂T does not depend on T or EA)
         R = np.sum(My * Mx / lam, axis=1)  # yᵀ Kp K0⁻¹ Kp x
         d_P = np.diag(1.0 - 2.0 * P * R / Q + P * Q / J0)
         return share, self._to_params(d_EA, np.zeros_like(d_EA), d_P)
@@ -721,9 +747,12 @@ def _apply_fixed(names, kinds, lower, upper, fixed, damping, L_ref, P_med):
 
 
 def _cell_matrices(cell: Cell):
-    """Dense A, symmetric Kp and the Cholesky factor of A Aᵀ; ValueError if C0 would be singular."""
-    A = cell.A.toarray() if sp.issparse(cell.A) else np.asarray(cell.A, dtype=float)
-    Kp = cell.Kp.toarray() if sp.issparse(cell.Kp) else np.asarray(cell.Kp, dtype=float)
+    """Dense A, the symmetric prestress Hessian Σ T0_j ∇²l_j and the Cholesky factor of A Aᵀ.
+
+    ValueError if C0 would be singular.
+    """
+    dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M, dtype=float)  # noqa: E731
+    A, H = dense(cell.A), dense(cell.prestress_hessian)
     AAt = A @ A.T
     ev = np.linalg.eigvalsh(AAt)
     # Cholesky alone can pass a singular matrix on rounding noise; compare with its scale
@@ -733,7 +762,7 @@ def _cell_matrices(cell: Cell):
             "undamped, e.g. the cell without intermediate filaments), so its relaxation spectrum, which the fit "
             "uses, does not exist; fit a cell with a positive definite C0"
         )
-    return A, 0.5 * (Kp + Kp.T), np.linalg.cholesky(AAt)
+    return A, 0.5 * (H + H.T), np.linalg.cholesky(AAt)
 
 
 def _check_options(min_prestress_share, max_decades):
@@ -814,7 +843,7 @@ def make_problem(
     cell = paper_cell() if cell is None else cell
     if not isinstance(cell, Cell):
         raise ValueError(f"cell must be a tenscell Cell, got {type(cell).__name__}")
-    A, Kp, chol = _cell_matrices(cell)
+    A, H, chol = _cell_matrices(cell)
 
     ea_groups, ea_names, ea_desc, c_groups, c_names, c_desc = _stiffness_layout(cell, tendons, damping)
     p_names, p_units, p_desc, p_kinds, groups, point_group = _prestress_layout(datasets)
@@ -849,8 +878,8 @@ def make_problem(
         names=names, units=units, descriptions=descs, kinds=kinds, lower=lower, upper=upper, free=free,
         fixed_log=fixed_log, tendons=tendons, damping=damping, n_ea=len(ea_names), n_c=len(c_names),
         ea_groups=np.asarray(ea_groups), c_groups=np.asarray(c_groups),
-        A=A, lengths=np.asarray(cell.lengths, dtype=float), Kp=Kp, load=load, probe=probe, L_ref=L_ref,
-        white_unit=_whiten(chol, A, Kp, load, probe),
+        A=A, lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float), H=H, load=load,
+        probe=probe, L_ref=L_ref, white_unit=_whiten(chol, A, H, load, probe),
         sources=tuple(d.source for d in datasets),
         omega=2 * np.pi * np.concatenate([d.frequency_hz for d in datasets]),
         dataset_index=np.concatenate([np.full(d.n, k) for k, d in enumerate(datasets)]),

@@ -278,6 +278,8 @@ def _rounds(problem, chains, settings, jobs, polish_effort, bar):
                 return "met the polish target"
             if budget is None and best.met_theta is not None:
                 budget = int(polish_effort * sum(ch.nfev for ch in chains))
+                if budget <= 0:
+                    return "met the tolerance (no polishing asked)"
             elif budget is not None:
                 budget -= spent
                 if budget <= 0:
@@ -327,7 +329,7 @@ def fit(
     tolerance: float = 0.01,
     hops: int = 30,
     patience: int = 6,
-    max_nfev: int = 300,
+    max_nfev: int = 100,
     polish: float = 0.2,
     polish_effort: float = 0.5,
     bounds: dict | None = None,
