@@ -267,10 +267,11 @@ class Pencil:
     def modes(self) -> Modes:
         """The dense modal decomposition ``C0 v = τ K0 v``: one Cholesky, one symmetric eigensolve.
 
-        The pencil is whitened by C0 when C0 is positive definite (the rates
-        λ = 1/τ are then eigenvalues of ``Lc⁻¹K0Lc⁻ᵀ``, the identity the
-        prestress grids use too), otherwise by K0's factor from the check
-        (undamped modes get τ = 0). Either way K0 is checked first.
+        The pencil is whitened by K0's factor from the positive-definiteness
+        check, so the modes are K0-orthonormal and ``Σ ρ_k = D0ᵀK0⁻¹b`` holds to
+        round-off whatever the conditioning of C0: the static compliance
+        (creep J(∞), G'(0)) stays exact for fitted cells whose damping spans
+        many decades, and undamped modes get τ = 0 without a special case.
         """
         if self.sparse:
             raise ValueError(
@@ -278,17 +279,9 @@ class Pencil:
                 "use Pencil.retardation() (Lanczos) instead"
             )
         L = self.cholesky  # the positive-definiteness check
-        Lc = self.damping_cholesky
-        if Lc is not None:
-            lam, U = np.linalg.eigh(_whiten(Lc, np.asarray(self.K0)))
-            Vc = _tri(Lc, U, lower=True, trans="T", check_finite=False)  # C0-orthonormal, VᵀK0V = diag(λ)
-            lam, Vc = lam[::-1], Vc[:, ::-1]  # τ ascending
-            tau = 1.0 / lam
-            V = Vc * np.sqrt(tau)
-        else:
-            tau, U = np.linalg.eigh(_whiten(L, np.asarray(self.C0)))
-            tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding
-            V = _tri(L, U, lower=True, trans="T", check_finite=False)
+        tau, U = np.linalg.eigh(_whiten(L, np.asarray(self.C0)))
+        tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding
+        V = _tri(L, U, lower=True, trans="T", check_finite=False)
         return Modes(tau=tau, vectors=V, weights=(self.probe @ V) * (self.load @ V))
 
     # -- sparse: factors and Lanczos runs per shift ----------------------------------------------------
