@@ -19,7 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.optimize
-from threadpoolctl import threadpool_limits
 
 from .._checks import positive_scalar
 from .._progress import progress_bar
@@ -27,6 +26,7 @@ from ..io.data import RheologyData
 from ..model.equilibrium import Cell
 from .problem import _LN10, _PENALTY, FitProblem, make_problem
 from .result import FitAlternative, FitResult
+from .._threads import limited
 
 __all__ = ["fit"]
 
@@ -161,7 +161,7 @@ def _run_chain(problem: FitProblem, start: int, seed_seq, hops: int, patience: i
     """One start: initial guess, least squares, then monotonic basin hopping."""
     # The matrices are tiny (n ~ 24): BLAS threads only add overhead, and on a
     # shared machine they make each evaluation ~10x slower.
-    with threadpool_limits(limits=1, user_api="blas"):
+    with limited():  # one place for BLAS threads (tenscell._threads), overridable by the user
         return _hop(problem, start, seed_seq, hops, patience, max_nfev, t_begin, target)
 
 

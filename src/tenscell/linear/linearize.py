@@ -23,6 +23,7 @@ from ..model.equilibrium import Cell, rest_lengths
 from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
 )
+from .._threads import hot_path
 
 __all__ = [
     "LinearModel",
@@ -110,6 +111,7 @@ class LinearModel:
         self.__dict__.update(state)
 
 
+@hot_path
 def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
     """Linearize the cell's equations of motion at prestress ``P``.
 
@@ -152,6 +154,7 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     return lin
 
 
+@hot_path
 def linearize_tangent(cell: Cell, P: float, k, c=1.0, *, l0=None, check: bool = True) -> LinearModel:
     """Linearize with given tangent stiffnesses ``k_j = dT_j/dl_j`` of the members at the reference.
 

@@ -59,6 +59,7 @@ import scipy.sparse as sp
 from ..model.equilibrium import weighted_gram
 from .krylov import DEFAULT_BAND_HZ, LanczosRun, converge, default_shift
 from .sparse import NotPositiveDefinite, factorize_spd
+from .._threads import hot_path
 
 __all__ = [
     "NotPositiveDefiniteError",
@@ -429,7 +430,12 @@ class RelaxationSpectrum:
     residues : ndarray, shape (k,)
         ``r_k = (D0·v_k)(−H0·v_k)`` (m/(N·s)); non-negative when probe = load.
     modes : ndarray, shape (n, k)
-        C0-orthonormal eigenvectors (Ritz vectors for sparse models) as columns.
+        C0-orthonormal eigenvectors as columns. For sparse models these are
+        the Ritz vectors, exact eigenvectors only where a Ritz pair has
+        converged: a cluster of (nearly) equal rates, such as a lattice's
+        identical local modes, is represented by fewer Ritz pairs carrying its
+        total weight (what J needs; see :func:`tenscell.relaxation_modes` for
+        converged slowest modes).
     error_estimate : float
         Relative accuracy of the spectrum's ``J`` (0 for the dense, exact decomposition).
     """
@@ -450,6 +456,7 @@ class RelaxationSpectrum:
         return self.residues / self.rates
 
 
+@hot_path
 def relaxation_spectrum(lin) -> RelaxationSpectrum:
     """Solve ``K0 v = λ C0 v`` (rates λ in 1/s, ``vᵀC0v = 1``), dense or sparse.
 
@@ -493,6 +500,7 @@ def relaxation_spectrum(lin) -> RelaxationSpectrum:
 
 
 # ---- grids of prestresses ---------------------------------------------------------------------------
+@hot_path
 def prestress_grid_compliance(Kp, K_material, C0, load, probe, P: np.ndarray, w: np.ndarray,
                               describe: str = "the model") -> np.ndarray | None:
     """``J(iω)`` (m/N) of the dense pencils ``(P·Kp + K_material, C0)`` for many prestresses at once.
