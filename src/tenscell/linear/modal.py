@@ -54,6 +54,7 @@ from functools import cached_property
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 import scipy.sparse as sp
 
 from ..model.equilibrium import weighted_gram
@@ -157,13 +158,21 @@ def modal_compliance(tau: np.ndarray, rho: np.ndarray, w: np.ndarray) -> np.ndar
     return parts[..., 0, :] - 1j * (w * parts[..., 1, :])
 
 
-_tri = scipy.linalg.solve_triangular
+def _tri(L: np.ndarray, B: np.ndarray, trans: int = 0) -> np.ndarray:
+    """``L⁻¹B`` (``L⁻ᵀB`` with trans=1) for a lower-triangular L: LAPACK trtrs without the wrapper's checks."""
+    X, info = _trtrs(L, B, lower=1, trans=trans)
+    if info != 0:  # pragma: no cover - L comes from a successful Cholesky
+        raise np.linalg.LinAlgError(f"triangular solve failed (info={info})")
+    return X
+
+
+_trtrs = scipy.linalg.lapack.dtrtrs
 
 
 def _whiten(L: np.ndarray, M: np.ndarray) -> np.ndarray:
     """``L⁻¹ M L⁻ᵀ`` (symmetrized) for a lower-triangular L, with M of shape (n, n)."""
-    X = _tri(L, M, lower=True, check_finite=False)
-    X = _tri(L, X.T, lower=True, check_finite=False)
+    X = _tri(L, M)
+    X = _tri(L, X.T)
     return 0.5 * (X + X.T)
 
 
@@ -282,14 +291,14 @@ class Pencil:
         Lc = self.damping_cholesky
         if Lc is not None:
             lam, U = np.linalg.eigh(_whiten(Lc, np.asarray(self.K0)))
-            Vc = _tri(Lc, U, lower=True, trans="T", check_finite=False)  # C0-orthonormal, VᵀK0V = diag(λ)
-            lam, Vc = lam[::-1], Vc[:, ::-1]  # τ ascending
+            Vc = _tri(Lc, U, trans=1)  # C0-orthonormal, VᵀK0V = diag(λ)
+            lam, Vc = lam[::-1], Vc[:, ::-1]  # τ = 1/λ ascending
             tau = 1.0 / lam
-            V = Vc * np.sqrt(tau)
+            V = Vc * np.sqrt(tau)  # K0-normalized
         else:
             tau, U = np.linalg.eigh(_whiten(L, np.asarray(self.C0)))
             tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding
-            V = _tri(L, U, lower=True, trans="T", check_finite=False)
+            V = _tri(L, U, trans=1)
         return Modes(tau=tau, vectors=V, weights=(self.probe @ V) * (self.load @ V))
 
     # -- sparse: factors and Lanczos runs per shift ----------------------------------------------------
@@ -524,8 +533,8 @@ def prestress_grid_compliance(Kp, K_material, C0, load, probe, P: np.ndarray, w:
     if Lc is None:
         return None
     Kpt, Kmt = _whiten(Lc, np.asarray(Kp)), _whiten(Lc, np.asarray(K_material))
-    bt = _tri(Lc, load, lower=True, check_finite=False)
-    dt = _tri(Lc, probe, lower=True, check_finite=False)
+    bt = _tri(Lc, np.asarray(load, dtype=float))
+    dt = _tri(Lc, np.asarray(probe, dtype=float))
     lam, U = np.linalg.eigh(P[:, None, None] * Kpt + Kmt)
     bad = np.flatnonzero(lam[:, 0] <= 0)
     if bad.size:
