@@ -92,7 +92,7 @@ def run(shape):
     G = Gp + 1j * Gpp
     row = {"shape": shape, "nodes": cell.structure.n_nodes, "dof": cell.n, "build": t1 - t0, "linearize": t2 - t1,
            "moduli": t3 - t2, "total": t3 - t0, "factorizations": count.n,
-           "steps": max(r.steps for runs in lin.pencil._runs.values() for r in runs)}
+           "steps": max((r.steps for runs in lin.pencil._runs.values() for r in runs), default=0)}
     J_old, t_check, t_mod, fill = _old_moduli(cell, lin)
     row.update(old_linearize=t_check, old_moduli=t_mod, old_fill=fill,
                diff=float(np.max(np.abs(modal.modulus(J_old, lin.L) - G) / np.abs(G))))

@@ -301,6 +301,18 @@ class Pencil:
             V = _tri(L, U, trans=1)
         return Modes(tau=tau, vectors=V, weights=(self.probe @ V) * (self.load @ V))
 
+    def resolvent(self, w, rhs: np.ndarray) -> np.ndarray:
+        """``x(ω) = (K0 + iωC0)⁻¹ rhs`` for every ω (rad/s), shape (nf, n), from the modal decomposition (dense).
+
+        ``(K0 + iωC0)⁻¹ = V diag(1/(1 + iωτ)) Vᵀ``; the pencil is symmetric, so
+        this also gives ``(K0 + iωC0)⁻ᵀ rhs``. For elasticities and other
+        derivatives of J (:func:`tenscell.analytic_elasticities`).
+        """
+        m = self.modes
+        V = m.vectors
+        g = 1.0 / (1.0 + 1j * np.multiply.outer(np.atleast_1d(np.asarray(w, dtype=float)), m.tau))
+        return (g * (np.asarray(rhs, dtype=float) @ V)) @ V.T
+
     # -- sparse: factors and Lanczos runs per shift ----------------------------------------------------
     def factor(self, shift: float = 0.0):
         """Sparse Cholesky factor of ``K0 + shift·C0`` (shift in rad/s, ≥ 0), computed once per shift."""
