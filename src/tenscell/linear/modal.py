@@ -19,17 +19,18 @@ Positive definiteness (:attr:`Pencil.cholesky`)
     ``check=True`` computes it) and it is kept for every later solve.
 
 Dense modal decomposition (:attr:`Pencil.modes`)
-    With ``K0 = L Lᵀ`` from the check, one symmetric eigensolve of the
-    whitened damping ``L⁻¹ C0 L⁻ᵀ = U diag(τ) Uᵀ`` gives ``C0 v = τ K0 v``
-    with ``V = L⁻ᵀU`` (``VᵀK0V = I``, τ ≥ 0 in s, τ = 0 for a mode the
+    One Cholesky and one symmetric eigensolve of the whitened pencil (by C0
+    when it is positive definite, else by K0's factor from the check) give
+    ``C0 v = τ K0 v`` with ``VᵀK0V = I`` (τ ≥ 0 in s, τ = 0 for a mode the
     tendons do not damp), and
 
         J(s) = D0 (K0 + s·C0)⁻¹ b = Σ_k ρ_k / (1 + s·τ_k),  ρ_k = (D0·v_k)(b·v_k),  b = −H0,
 
     which serves the compliance at every frequency, creep and relaxation at
-    every time, and the relaxation spectrum ``λ = 1/τ``. Singular C0 needs no
-    special case. Grids of prestresses use the same identity with C0 whitened
-    once for all P (:func:`prestress_grid_compliance`).
+    every time, the relaxation spectrum ``λ = 1/τ`` and the resolvent
+    ``(K0 + iωC0)⁻¹`` of the elasticities. Singular C0 needs no special case.
+    Grids of prestresses use the same identity with C0 whitened once for all
+    P (:func:`prestress_grid_compliance`).
 
 Sparse models (:meth:`Pencil.lanczos_runs`)
     Besides the Cholesky of K0 (the check, and static solves), one Cholesky of
