@@ -189,11 +189,9 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
     f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
     w = 2 * np.pi * f
     dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M)  # noqa: E731
-    K0, C0, Kp, A = dense(lin.K0), dense(lin.C0), dense(lin.Kp), dense(lin.cell.A)
-    Z = K0[None] + 1j * w[:, None, None] * C0[None]
-    b = (-lin.H0).astype(complex)
-    X = np.linalg.solve(Z, np.broadcast_to(b, (f.size, b.size))[..., None])[..., 0]
-    Y = np.linalg.solve(np.transpose(Z, (0, 2, 1)), np.broadcast_to(lin.D0.astype(complex), X.shape)[..., None])[..., 0]
+    Kp, A = dense(lin.Kp), dense(lin.cell.A)
+    X = lin.pencil.resolvent(w, -lin.H0)  # the model's one modal decomposition (tenscell.linear.modal)
+    Y = lin.pencil.resolvent(w, lin.D0)  # Z = K0 + iωC0 is symmetric: Z⁻ᵀD0 = Z⁻¹D0
     J = X @ lin.D0
     prod = (Y @ A) * (X @ A)  # (nf, m): (yᵀa_j)(a_jᵀx)
     cell, l = lin.cell, lin.cell.lengths
