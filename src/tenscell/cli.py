@@ -821,6 +821,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     for add in COMMANDS:
         add(sub)
+    from ._cli_population import register as _add_population
+    _add_population(sub)
     return parser
 
 

@@ -77,7 +77,7 @@ def parameter_distributions(table, columns=(), ax=None, title: str | None = "Fit
                 a.errorbar(k + 0.3, med, yerr=[[med - q25], [q75 - med]], fmt="s", color="k", ms=4, capsize=3)
             vals = ok[col].to_numpy(float)
             vals = vals[np.isfinite(vals)]
-            if vals.size and np.all(vals > 0) and vals.max() / vals.min() > 20:
+            if vals.size and np.all(vals > 0) and vals.max() / vals.min() > 3:
                 a.set_yscale("log")
             a.set_xticks(range(len(conds)), [c or "all" for c in conds], rotation=30 if len(conds) > 3 else 0)
             a.set_title(_LABELS.get(col, col))

@@ -1,0 +1,189 @@
+"""``tenscell synth-population`` and ``tenscell fit-population``: populations of cells on Dask.
+
+(Moves to ``tenscell/cli/population.py`` when the CLI becomes a package.)
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+TENDON_MODES = ("per-tendon", "per-family", "uniform")
+DAMPING_MODES = ("uniform", "per-family")
+MODELS = ("tensegrity", "powerlaw")
+#: suffix of the work directory kept beside --out while a population fit runs
+PARTIAL_SUFFIX = ".partial"
+
+
+def _integer(lo: int):
+    def convert(text):
+        try:
+            v = int(str(text).strip())
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if v < lo:
+            raise argparse.ArgumentTypeError(f"{v} is out of range; allowed at least {lo}")
+        return v
+    convert.__name__ = "integer"
+    return convert
+
+
+def _fraction(text):
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not 0.0 <= v < 10.0:
+        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed 0 <= value < 10")
+    return v
+
+
+def _positive(text):
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not 0.0 < v < float("inf"):
+        raise argparse.ArgumentTypeError(f"{text} must be a finite number > 0")
+    return v
+
+
+def _freq(text):
+    """``a:b:n`` (n log-spaced points from a to b Hz) or a comma list (Hz)."""
+    import numpy as np
+
+    try:
+        if ":" in text:
+            a, b, n = text.split(":")
+            a, b, n = float(a), float(b), int(n)
+            if not (0 < a < b and n >= 2):
+                raise ValueError
+            return tuple(np.logspace(np.log10(a), np.log10(b), n))
+        vals = tuple(float(x) for x in text.split(","))
+        if not all(0 < v < float("inf") for v in vals):
+            raise ValueError
+        return vals
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a:b:n (0 < a < b, n >= 2) or a comma list of "
+                                         "frequencies > 0 (Hz)") from None
+
+
+def add_cluster_options(p) -> None:
+    """``--workers N | --scheduler ADDRESS``: where the tasks run (shared by every Dask command)."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=_integer(0), default=None,
+                   help="local Dask workers started for this run (default: one per CPU; 0: no Dask, in this process)")
+    g.add_argument("--scheduler", default=None,
+                   help="an existing Dask scheduler: tcp://HOST:PORT or a scheduler file (dask scheduler "
+                        "--scheduler-file F)")
+
+
+def register(sub) -> None:
+    p = sub.add_parser(
+        "synth-population", help="write a synthetic population of cells (known generating parameters)",
+        description="Draw cells from the tensegrity model (log-normal EA per family, c, P) or from the "
+                    "structural-damping power law (log-normal G0, normal exponent x), add measurement noise, and "
+                    "write one CSV per cell (<condition>/<cell>.csv) and _generating_parameters.csv into --out.")
+    p.add_argument("--cells", type=_integer(1), required=True, help="number of cells")
+    p.add_argument("--out", required=True, help="output directory (created, or replaced as a whole)")
+    p.add_argument("--model", choices=MODELS, default="tensegrity", help="generator")
+    p.add_argument("--conditions", nargs="+", default=None, metavar="NAME[:PARAM=FACTOR,...]",
+                   help="conditions, e.g. control histamine:P=2 (cells split evenly; factors scale the medians)")
+    p.add_argument("--noise", type=_fraction, default=0.02, help="relative noise of G', G'' (0.02 = 2%%)")
+    p.add_argument("--spread", type=_fraction, default=0.2,
+                   help="standard deviation of log10 of each log-normal parameter (decades)")
+    p.add_argument("--freq", type=_freq, default=None, help="frequencies: a:b:n or a comma list (Hz; default "
+                   "0.01:100:13)")
+    p.add_argument("--seed", type=_integer(0), default=0, help="random seed")
+    p.set_defaults(func=run_synth)
+
+    p = sub.add_parser(
+        "fit-population", help="fit every cell of a population (Dask), write a tidy table, figures, report",
+        description="Fit the tensegrity model to each cell of INPUT (a directory of per-cell CSV files, "
+                    "a glob, or one long table with a 'cell' column and optionally 'condition') on a Dask "
+                    "cluster: a local one by default, an existing one with --scheduler. Each cell's record is "
+                    "written as it completes into OUT.partial/; an interrupted run continues with --resume. "
+                    "The output set (population.csv/.parquet, summary.csv, cells.jsonl, report.md, figures) "
+                    "appears in --out only when every cell has a record. See docs/populations.md.")
+    p.add_argument("input", help="directory, glob (quote it) or long table (.csv/.parquet)")
+    p.add_argument("--out", required=True, help="output directory (created, or replaced as a whole)")
+    add_cluster_options(p)
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted run from its work directory, fitting only the missing cells")
+    p.add_argument("--work-dir", default=None, help=f"where cell records are kept while running "
+                   f"(default: OUT{PARTIAL_SUFFIX}; removed when the output set is written)")
+    p.add_argument("--seed", type=_integer(0), default=0, help="run seed (each cell's seed derives from it and its id)")
+    p.add_argument("--tendons", choices=TENDON_MODES, default="per-family", help="stiffness parametrization")
+    p.add_argument("--damping", choices=DAMPING_MODES, default="uniform", help="damping parametrization")
+    p.add_argument("--starts", type=_integer(1), default=4, help="starts per cell")
+    p.add_argument("--hops", type=_integer(0), default=2, help="basin-hopping moves per start")
+    p.add_argument("--tolerance", type=_positive, default=0.02, help="RMS log10 error (decades) counted as converged")
+    p.add_argument("--truth", default=None,
+                   help="generating parameters to check recovery against (default: INPUT/_generating_parameters.csv "
+                        "when present)")
+    p.set_defaults(func=run_fit)
+
+
+def run_synth(args) -> int:
+    from .io.outputs import OutputSet
+    from .population.synth import parse_condition, synth_population
+
+    out = OutputSet(args.out, command=_command("synth-population"), flag="--out")
+    conds = [parse_condition(c, args.model) for c in args.conditions] if args.conditions else None
+    pop = synth_population(args.cells, model=args.model, conditions=conds, noise=args.noise,
+                           spread_decades=args.spread, frequency_hz=args.freq, seed=args.seed)
+    with out as d:
+        pop.write(d)
+    print(f"tenscell synth-population: {len(pop.cells)} {args.model} cells written to {out.target}/", file=sys.stderr)
+    return 0
+
+
+def _truth(args):
+    from .population.synth import GENERATING_FILE
+
+    if args.truth is not None:
+        if not Path(args.truth).is_file():
+            raise ValueError(f"--truth {args.truth}: no such file")
+        return args.truth
+    guess = Path(args.input) / GENERATING_FILE
+    return str(guess) if guess.is_file() else None
+
+
+def run_fit(args) -> int:
+    import shutil
+
+    from .io.outputs import OutputSet
+    from .population import _engine
+    from .population.run import PopulationFitOptions, fit_population
+    from .population.sources import read_sources
+
+    out = OutputSet(args.out, command=_command("fit-population"), flag="--out")
+    work = Path(args.work_dir) if args.work_dir else Path(str(out.target).rstrip("/") + PARTIAL_SUFFIX)
+    if args.scheduler is not None:
+        _engine.check_scheduler(args.scheduler)
+    if args.resume and not work.is_dir():
+        raise ValueError(f"--resume: no unfinished run in {work}")
+    truth = _truth(args)
+    options = PopulationFitOptions(tendons=args.tendons, damping=args.damping, starts=args.starts, hops=args.hops,
+                                   tolerance=args.tolerance)
+    sources = read_sources(args.input)
+    try:
+        result = fit_population(sources, options=options, seed=args.seed, workers=args.workers,
+                                scheduler=args.scheduler, work_dir=work, resume=args.resume)
+    except KeyboardInterrupt:
+        print(f"tenscell fit-population: interrupted; finished cells are kept in {work}/; "
+              "run the same command with --resume to continue", file=sys.stderr)
+        raise
+    with out as d:
+        result.write(d, truth=truth)
+    shutil.rmtree(work, ignore_errors=True)
+    t = result.table
+    n_ok = int((t["status"] == "ok").sum())
+    print(f"tenscell fit-population: {len(t)} cells, {n_ok} fitted ({int(t['converged'].sum())} converged), "
+          f"{len(t) - n_ok} failed; {result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
+    return 0
+
+
+def _command(name: str) -> str:
+    import shlex
+    return "tenscell " + shlex.join(sys.argv[1:]) if sys.argv[1:2] == [name] else f"tenscell {name}"
