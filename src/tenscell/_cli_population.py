@@ -116,7 +116,7 @@ def register(sub) -> None:
     p.add_argument("--tendons", choices=TENDON_MODES, default="per-family", help="stiffness parametrization")
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform", help="damping parametrization")
     p.add_argument("--starts", type=_integer(1), default=4, help="starts per cell")
-    p.add_argument("--hops", type=_integer(0), default=2, help="basin-hopping moves per start")
+    p.add_argument("--hops", type=_integer(0), default=1, help="basin-hopping moves per start")
     p.add_argument("--tolerance", type=_positive, default=0.02, help="RMS log10 error (decades) counted as converged")
     p.add_argument("--truth", default=None,
                    help="generating parameters to check recovery against (default: INPUT/_generating_parameters.csv "

@@ -21,13 +21,13 @@ Resumable
 The default per-cell model is deliberately small (:class:`PopulationFitOptions`):
 one stiffness per tendon family, one damping, the prestress, the strut length
 fixed at the cell's own (it is an exact gauge of the moduli, so fixing it makes
-the fitted values comparable between cells), 4 starts of 2 basin-hopping
-moves, tolerance 0.02 decades (about 5 %, the scatter of a single cell's
+the fitted values comparable between cells), 4 starts of 1 basin-hopping
+move, tolerance 0.02 decades (about 5 %, the scatter of a single cell's
 moduli): a few tenths of a second per cell, and parameters a population can be
 summarised by. Starts matter more than moves here: with one start about a
 third of the cells land in the basin where the prestress sits at its lower
 bound and EA compensates (RMS nearly as small), with four none did in our
-synthetic trials. Any other :func:`~tenscell.fitting.fit` setting can be chosen.
+synthetic trials; more moves per start did not change that. Any other :func:`~tenscell.fitting.fit` setting can be chosen.
 """
 from __future__ import annotations
 
@@ -83,7 +83,7 @@ class PopulationFitOptions:
     tendons: str = "per-family"
     damping: str = "uniform"
     starts: int = 4
-    hops: int = 2
+    hops: int = 1
     patience: int = 6
     max_nfev: int = 300
     tolerance: float = 0.02

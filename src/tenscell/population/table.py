@@ -235,8 +235,9 @@ def read_table(path):
     path = str(path)
     if path.endswith((".parquet", ".pq")):
         return pd.read_parquet(path)
-    df = pd.read_csv(path, keep_default_na=False, na_values=[""])
-    return df.fillna({c: "" for c in _TEXT if c in df.columns and c != "converged"})
+    text = [c for c in _TEXT if c != "converged"]
+    df = pd.read_csv(path, keep_default_na=False, na_values=[""], dtype={c: "str" for c in text})
+    return df.fillna({c: "" for c in text if c in df.columns})
 
 
 def condition_summary(table, parameter_columns=()):
@@ -297,7 +298,8 @@ def recovery(table, truth):
     import pandas as pd
 
     if not isinstance(truth, pd.DataFrame):
-        truth = pd.read_csv(truth, keep_default_na=False, na_values=[""]).fillna({"condition": ""})
+        truth = pd.read_csv(truth, keep_default_na=False, na_values=[""], dtype={"cell": "str", "condition": "str"})
+        truth = truth.fillna({"condition": ""})
     truth = truth.copy()
     truth["cell"] = truth["cell"].astype(str)
     fitted = table[table["status"] == "ok"]
