@@ -26,6 +26,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from tenscell import fitting
+from tenscell.fitting.search import _initial_guess
 from tenscell.io.data import bundled
 
 
@@ -41,7 +42,7 @@ def bench_jacobian():
     print("== Jacobian of the residuals: analytic vs central finite differences (one BLAS thread, as in the fit)")
     for name in ("fabry2001", "stamenovic2002"):
         problem = fitting.make_problem(bundled(name))
-        theta = fitting._initial_guess(problem, np.random.default_rng(0))
+        theta = _initial_guess(problem, np.random.default_rng(0))
         with threadpool_limits(limits=1, user_api="blas"):
             t_an = _time(lambda: problem.jacobian(theta), 200)
             t_fd = _time(lambda: problem.jacobian_fd(theta), 20)

@@ -16,6 +16,8 @@ from threadpoolctl import threadpool_limits
 
 import tenscell
 from tenscell import fitting
+from tenscell.fitting.search import _initial_guess
+from tenscell.reports.fit import fit_markdown
 from tenscell.cli import main as cli_main
 from tenscell.io.data import DataError, RheologyData, bundled, write_csv
 
@@ -80,7 +82,7 @@ def test_problem_moduli_match_core_frequency(cell, tendons, damping):
     data = bundled("fabry2001")
     pr = fitting.make_problem(data, cell, tendons=tendons, damping=damping)
     rng = np.random.default_rng(5)
-    theta = fitting._initial_guess(pr, rng) + rng.normal(0, 0.5, pr.n_free)
+    theta = _initial_guess(pr, rng) + rng.normal(0, 0.5, pr.n_free)
     theta[-1] = math.log(2.3)  # a strut length other than the reference
     vals = pr.values(theta)
     EA = vals[: pr.n_ea][pr.ea_groups]
@@ -126,7 +128,7 @@ def _check_jacobian(pr, theta, step=1e-5):
 def test_jacobian_matches_finite_differences(cell, name, tendons, damping):
     pr = fitting.make_problem(bundled(name), cell, tendons=tendons, damping=damping)
     rng = np.random.default_rng(11)
-    theta = fitting._initial_guess(pr, rng) + rng.normal(0, 0.3, pr.n_free)
+    theta = _initial_guess(pr, rng) + rng.normal(0, 0.3, pr.n_free)
     _check_jacobian(pr, theta)
 
 
@@ -221,7 +223,7 @@ def test_not_converged_is_said(cell):
     assert "did not reach" in r.message
     assert r.to_dict()["converged"] is False
     assert "NOT converged" in r.report()
-    assert "NOT converged" in fitting.fit_markdown(r)
+    assert "NOT converged" in fit_markdown(r)
 
 
 def test_result_records(cell):

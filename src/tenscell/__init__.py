@@ -1,9 +1,9 @@
 """tenscell: tensegrity models of the cytoskeleton and the rheology they predict.
 
-The pipeline, one module per stage::
+The pipeline, one stage per subpackage or module::
 
-    structure -> coordinates -> equilibrium -> shapes -> constitutive -> linear -> response
-              -> timedomain -> analyses (dynamics, fitting, sensitivity, variants, studies) -> plotting, cli
+    model (structure -> coordinates -> equilibrium -> shapes) -> laws -> linear -> response
+          -> timedomain -> analyses (dynamics, fitting, sensitivity, studies) -> io, plotting, cli
 
 Quick start::
 
@@ -12,70 +12,117 @@ Quick start::
     lin = tenscell.linearize(cell, P=1000.0, EA=1.0, c=1.0)
     f = np.logspace(-2, 3, 61)                       # Hz
     Gp, Gpp = tenscell.moduli(lin, f)                # Pa
-"""
 
-# structure -> coordinates -> equilibrium -> shapes
-from .model.structure import Point, Structure, StructureError
-from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
-from .model.equilibrium import Cell, NotPrestressableError, equilibrate, rest_lengths
-from .model.formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
-from .model.shapes import (
-    DEFAULT_DELTA, REGULAR_DELTA, cylindrical_cell, if_free_delta, paper_cell, paper_structure, regular_cell,
-    semiflexible_paper_cell,
-)
-from .model.lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
-# constitutive laws -> linearization -> response
-from .laws import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
-from .linear.linearize import (
-    LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, linearize_tangent, relaxation_spectrum,
-)
-from .response import (
-    FrequencyResponse, compliance, frequency_response, log_slope, loss_tangent, moduli, static_modulus,
-    viscosity_limit,
-)
-from .linear.krylov import krylov_compliance
-from .timedomain import (
-    CreepSpectrum, PowerLawFit, StressRelaxation, creep_compliance, creep_spectrum, fit_power_law, local_exponent,
-    relaxation_modulus, stress_relaxation,
-)
-# analyses
-from .summary import relaxation_modes, summarize
-from .dynamics import (
-    SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, linearize_law,
-    oscillatory_response, simulate,
-)
-from .fitting import FitParameter, FitResult, fit
-from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table
-from .studies.variants import (
-    linearize_semiflexible, linearize_stiffening, loss_peak, no_if_study, prestress_map, references_study,
-    semiflexible_study, stiffening_study,
-)
+``import tenscell`` loads nothing heavy: each public name below is imported
+from its module the first time it is used (PEP 562), so the command line and
+scripts that need one corner of the package do not pay for all of it.
+"""
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
-__all__ = [
+# Public name -> the module (relative to this package) that defines it.
+# To export a new name: add it to its module's tuple here AND to the
+# TYPE_CHECKING imports below (tests/test_startup.py checks that both agree).
+_EXPORTS: dict[str, tuple[str, ...]] = {
     # structure and reference
-    "Structure", "Point", "StructureError", "StructureFile", "load_structure", "load_structure_file",
-    "member_values", "save_structure",
-    "Cell", "equilibrate", "rest_lengths", "NotPrestressableError",
-    "FormFindingError", "FormFindingResult", "find_form", "pin_jointed", "rigid_body_modes",
-    "paper_cell", "paper_structure", "if_free_delta", "DEFAULT_DELTA", "REGULAR_DELTA",
-    "cylindrical_cell", "regular_cell", "semiflexible_paper_cell",
-    "expanded_octahedron", "lattice_cell", "lattice_structure", "sphere_cell", "sphere_structure",
+    "model.structure": ("Point", "Structure", "StructureError"),
+    "io.structure_files": ("StructureFile", "load_structure", "load_structure_file", "member_values",
+                           "save_structure"),
+    "model.equilibrium": ("Cell", "NotPrestressableError", "equilibrate", "rest_lengths"),
+    "model.formfinding": ("FormFindingError", "FormFindingResult", "find_form", "pin_jointed", "rigid_body_modes"),
+    "model.shapes": ("DEFAULT_DELTA", "REGULAR_DELTA", "cylindrical_cell", "if_free_delta", "paper_cell",
+                     "paper_structure", "regular_cell", "semiflexible_paper_cell"),
+    "model.lattices": ("expanded_octahedron", "lattice_cell", "lattice_structure", "sphere_cell",
+                       "sphere_structure"),
     # laws, linearization, response
-    "LinearizationError", "PowerDashpot", "Voigt", "power_dashpot_law", "voigt_law",
-    "LinearModel", "linearize", "linearize_tangent", "RelaxationSpectrum", "relaxation_spectrum",
-    "NotPositiveDefiniteError",
-    "compliance", "moduli", "frequency_response", "FrequencyResponse", "static_modulus", "viscosity_limit",
-    "loss_tangent", "log_slope", "krylov_compliance",
-    "CreepSpectrum", "PowerLawFit", "StressRelaxation", "creep_compliance", "creep_spectrum", "fit_power_law",
-    "local_exponent", "relaxation_modulus", "stress_relaxation",
+    "laws": ("LinearizationError", "PowerDashpot", "Voigt", "power_dashpot_law", "voigt_law"),
+    "linear.linearize": ("LinearModel", "NotPositiveDefiniteError", "RelaxationSpectrum", "linearize",
+                         "linearize_tangent", "relaxation_spectrum"),
+    "response": ("FrequencyResponse", "compliance", "frequency_response", "log_slope", "loss_tangent", "moduli",
+                 "static_modulus", "viscosity_limit"),
+    "linear.krylov": ("krylov_compliance",),
+    "timedomain": ("CreepSpectrum", "PowerLawFit", "StressRelaxation", "creep_compliance", "creep_spectrum",
+                   "fit_power_law", "local_exponent", "relaxation_modulus", "stress_relaxation"),
     # analyses
-    "relaxation_modes", "summarize",
-    "SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep", "creep_response",
-    "linearize_law", "oscillatory_response", "simulate",
-    "fit", "FitResult", "FitParameter",
-    "analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table",
-    "linearize_semiflexible", "linearize_stiffening", "loss_peak", "no_if_study", "prestress_map",
-    "references_study", "semiflexible_study", "stiffening_study",
-]
+    "summary": ("relaxation_modes", "summarize"),
+    "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
+                 "creep_response", "linearize_law", "oscillatory_response", "simulate"),
+    "fitting": ("FitParameter", "FitResult", "fit"),
+    "sensitivity": ("analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table"),
+    "studies.variants": ("linearize_semiflexible", "linearize_stiffening", "loss_peak", "no_if_study",
+                         "prestress_map", "references_study", "semiflexible_study", "stiffening_study"),
+}
+
+_WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
+
+__all__ = list(_WHERE)
+
+
+def __getattr__(name: str) -> Any:
+    """Import a public name, or a submodule (``tenscell.plotting``), on first use."""
+    module = _WHERE.get(name)
+    if module is not None:
+        value = getattr(importlib.import_module(f".{module}", __name__), name)
+    elif not name.startswith("_"):
+        try:
+            value = importlib.import_module(f".{name}", __name__)
+        except ModuleNotFoundError as err:
+            if err.name != f"{__name__}.{name}":
+                raise  # the submodule exists but one of its imports is missing
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def _submodules() -> list[str]:
+    import pkgutil
+
+    return [m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_")]
+
+
+def __dir__() -> list[str]:
+    return sorted({"__version__", *__all__, *_submodules()})
+
+
+if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
+    from .dynamics import (
+        SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, linearize_law,
+        oscillatory_response, simulate,
+    )
+    from .fitting import FitParameter, FitResult, fit
+    from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
+    from .laws import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
+    from .linear.krylov import krylov_compliance
+    from .linear.linearize import (
+        LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, linearize_tangent, relaxation_spectrum,
+    )
+    from .model.equilibrium import Cell, NotPrestressableError, equilibrate, rest_lengths
+    from .model.formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
+    from .model.lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
+    from .model.shapes import (
+        DEFAULT_DELTA, REGULAR_DELTA, cylindrical_cell, if_free_delta, paper_cell, paper_structure, regular_cell,
+        semiflexible_paper_cell,
+    )
+    from .model.structure import Point, Structure, StructureError
+    from .response import (
+        FrequencyResponse, compliance, frequency_response, log_slope, loss_tangent, moduli, static_modulus,
+        viscosity_limit,
+    )
+    from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table
+    from .studies.variants import (
+        linearize_semiflexible, linearize_stiffening, loss_peak, no_if_study, prestress_map, references_study,
+        semiflexible_study, stiffening_study,
+    )
+    from .summary import relaxation_modes, summarize
+    from .timedomain import (
+        CreepSpectrum, PowerLawFit, StressRelaxation, creep_compliance, creep_spectrum, fit_power_law,
+        local_exponent, relaxation_modulus, stress_relaxation,
+    )
+    from . import dynamics, fitting, io, laws, linear, model, plotting, reports, response, sensitivity, studies
+    from . import summary, timedomain

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -196,12 +197,13 @@ def _fit_outputs(result, baseline, title):
     """Everything a fit writes, computed before any file is touched: {file name: writer}."""
     from . import fitting, plotting
     from .io.outputs import write_csv_rows, write_json, write_text
+    from .reports.fit import fit_markdown
 
     doc = result.to_dict()
     doc["baseline"] = {k: v for k, v in baseline.to_dict().items()
                        if k in ("tendons", "damping", "rms_log10_error", "converged", "time_s", "parameters")}
     header, rows = _fit_rows(result, baseline)
-    markdown = fitting.fit_markdown(result, baseline, title=title)
+    markdown = fit_markdown(result, baseline, title=title)
     curves = [fitting.model_curve(result), fitting.model_curve(baseline, label="homogeneous baseline")]
     fig = plotting.fit_figure(result.data, curves, title=title)
     return {
@@ -828,6 +830,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     """Entry point of the ``tenscell`` command; returns the exit status."""
+    # The command writes files and never opens windows; the library itself never chooses a backend.
+    os.environ.setdefault("MPLBACKEND", "Agg")
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

@@ -21,7 +21,6 @@ from types import MappingProxyType
 
 import numpy as np
 import scipy.linalg
-import scipy.optimize
 import scipy.sparse as sp
 
 from .coordinates import Coordinates, NodeKinematics, kinematics, make_coordinates
@@ -244,7 +243,9 @@ def _max_min_tension(N: np.ndarray, cable: np.ndarray) -> np.ndarray:
     c[-1] = -1.0
     A_ub = np.hstack([-Nc, np.ones((Nc.shape[0], 1))])
     A_eq = np.hstack([Nc.sum(axis=0)[None], [[0.0]]])
-    res = scipy.optimize.linprog(
+    from scipy.optimize import linprog  # here, not at import: scipy.optimize costs ~0.25 s to load
+
+    res = linprog(
         c, A_ub=A_ub, b_ub=np.zeros(Nc.shape[0]), A_eq=A_eq, b_eq=[1.0],
         bounds=[(None, None)] * k + [(None, 1.0)], method="highs",
     )
@@ -294,8 +295,10 @@ def self_stress_lp(
                          shape=(nc, m + 1))
     c = np.zeros(m + 1)
     c[-1] = -1.0
-    res = scipy.optimize.linprog(c, A_ub=A_ub, b_ub=np.zeros(nc), A_eq=A_eq, b_eq=np.concatenate(rhs),
-                                 bounds=[(None, None)] * m + [(None, 1.0)], method="highs")
+    from scipy.optimize import linprog  # here, not at import (see _max_min_tension)
+
+    res = linprog(c, A_ub=A_ub, b_ub=np.zeros(nc), A_eq=A_eq, b_eq=np.concatenate(rhs),
+                  bounds=[(None, None)] * m + [(None, 1.0)], method="highs")
     if res.status != 0 or res.x is None:
         raise NotPrestressableError(
             f"{describe} is not prestressable: no self-stress with every cable in tension exists "

@@ -21,7 +21,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.optimize
 
 from .._checks import finite_scalar, positive_scalar
 from .coordinates import kinematics, make_coordinates
@@ -137,7 +136,9 @@ def if_free_delta(alpha: float = 0.0) -> float:
     i = min(brackets, key=lambda k: abs(grid[k] - REGULAR_DELTA))
     if vals[i] == 0:
         return float(grid[i])
-    return float(scipy.optimize.brentq(lambda d: _if_free_det(alpha, d), grid[i], grid[i + 1], xtol=1e-15))
+    from scipy.optimize import brentq  # here, not at import: scipy.optimize is slow to load
+
+    return float(brentq(lambda d: _if_free_det(alpha, d), grid[i], grid[i + 1], xtol=1e-15))
 
 
 def paper_cell(
@@ -511,13 +512,15 @@ def find_cylindrical_reference(
         T = z[5:][orbit]
         return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
 
+    from scipy.optimize import least_squares  # here, not at import (see if_free_delta)
+
     lb = np.concatenate([np.full(5, -np.inf), np.full(n_orb, min_tension)])
     rng = np.random.default_rng(seed)
     reasons = []
     for k in range(max(int(n_starts), 1)):
         p = p0 if k == 0 else p0 + 0.3 * rng.standard_normal(5)
         z0 = np.concatenate([p, np.full(n_orb, 1.0 / math.sqrt(base.n_tendons))])
-        res = scipy.optimize.least_squares(residual, z0, bounds=(lb, np.inf), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        res = least_squares(residual, z0, bounds=(lb, np.inf), xtol=1e-15, ftol=1e-15, gtol=1e-15)
         eq = float(np.linalg.norm(residual(res.x)))
         if eq > 1e-12:
             reasons.append(f"start {k}: no equilibrium (residual {eq:.2g})")

@@ -1,0 +1,36 @@
+"""Heterogeneous fits of the linear tensegrity model to measured cell rheology.
+
+The paper (Sultan, Stamenović & Ingber 2004, Figs. 4–5) fits tendon
+stiffnesses, the damping c, the prestress P and the strut length L so that the
+model's G', G'' match measured data; a homogeneous cell cannot do it. This
+package does the same for any :class:`tenscell.io.data.RheologyData`:
+
+- :mod:`~tenscell.fitting.problem`: the parameter layout, residuals and their
+  analytic Jacobian (:class:`FitProblem`, :func:`make_problem`);
+- :mod:`~tenscell.fitting.search`: starts, basin hopping, least squares,
+  stopping (:func:`fit`);
+- :mod:`~tenscell.fitting.result`: what a fit returns (:class:`FitResult`,
+  :class:`FitParameter`, model curves and slopes).
+
+The Markdown report is :func:`tenscell.reports.fit.fit_markdown`.
+"""
+from .problem import DAMPING_MODES, TENDON_MODES, FitProblem, make_problem, required_points
+from .result import (FitAlternative, FitCurve, FitParameter, FitResult, frequency_slopes, model_curve,
+                     prestress_slopes)
+from .search import fit
+
+__all__ = [
+    "TENDON_MODES",
+    "DAMPING_MODES",
+    "FitParameter",
+    "FitAlternative",
+    "FitResult",
+    "FitCurve",
+    "FitProblem",
+    "make_problem",
+    "fit",
+    "model_curve",
+    "frequency_slopes",
+    "prestress_slopes",
+    "required_points",
+]

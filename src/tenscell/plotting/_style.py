@@ -1,0 +1,126 @@
+"""The house look, the axes helpers every plot function shares, and :func:`save`.
+
+Nothing here chooses a backend or touches the global ``rcParams``: the style
+is applied through :func:`matplotlib.pyplot.rc_context` only while tenscell
+creates and fills a figure of its own. When the caller passes ``ax=`` (or
+``axes=``) the drawing follows the caller's settings.
+"""
+from __future__ import annotations
+
+import functools
+import inspect
+from contextlib import nullcontext
+from typing import Any, Callable, Sequence, TypeVar
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from ..io.outputs import atomic_path
+
+__all__ = ["STYLE", "style", "styled", "colors", "new_axes", "new_panels", "moduli_panels", "figure_of", "save",
+           "label_moduli"]
+
+#: rcParams applied (as a context, never globally) to figures tenscell creates
+STYLE: dict[str, Any] = {
+    "font.size": 10,
+    "axes.labelsize": 10,
+    "axes.titlesize": 10,
+    "legend.fontsize": 8,
+    "figure.dpi": 150,
+    "savefig.dpi": 200,
+    "axes.grid": True,
+    "grid.alpha": 0.3,
+}
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+
+def style():
+    """A context manager applying :data:`STYLE` (``with plotting.style(): ...``)."""
+    return plt.rc_context(STYLE)
+
+
+def styled(func: F) -> F:
+    """Run ``func`` inside :func:`style` when it makes its own figure (its ``ax``/``axes`` argument is None)."""
+    sig = inspect.signature(func)
+    name = "ax" if "ax" in sig.parameters else "axes"
+
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        given = sig.bind_partial(*args, **kwargs).arguments.get(name)
+        with style() if given is None else nullcontext():
+            return func(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]
+
+
+def colors(n: int) -> np.ndarray:
+    """``n`` colours along viridis (dark to yellow-green), shape (n, 4)."""
+    return plt.cm.viridis(np.linspace(0.0, 0.9, n))
+
+
+def new_axes(ax: Axes | None = None, figsize: tuple[float, float] = (5.6, 4.2), projection: str | None = None) -> Axes:
+    """``ax`` itself, or the axes of a new figure of size ``figsize`` (inches)."""
+    if ax is not None:
+        if projection is not None and getattr(ax, "name", None) != projection:
+            raise ValueError(f"ax: this plot needs a {projection!r} axes (add_subplot(projection={projection!r}))")
+        return ax
+    fig = plt.figure(figsize=figsize, layout="constrained")
+    return fig.add_subplot(projection=projection)
+
+
+def new_panels(axes: Sequence[Axes] | None, n: int, figsize: tuple[float, float], *, title: str | None = None,
+               vertical: bool = False, **subplots_kw) -> np.ndarray:
+    """``n`` axes as an array: the caller's (checked for count) or a new figure's, titled ``title``."""
+    if axes is not None:
+        out = np.asarray(axes, dtype=object).ravel()
+        if out.size != n:
+            raise ValueError(f"axes: this plot draws {n} panel(s), got {out.size} axes")
+        return out
+    shape = (n, 1) if vertical else (1, n)
+    fig, out = plt.subplots(*shape, figsize=figsize, layout="constrained", squeeze=False, **subplots_kw)
+    if title:
+        fig.suptitle(title)
+    return out.ravel()
+
+
+def moduli_panels(title: str | None = None, figsize: tuple[float, float] = (8.0, 3.4)) -> tuple[Figure, np.ndarray]:
+    """A new figure with two side-by-side axes for G' (left) and G'' (right): ``(fig, axes)``."""
+    with style():
+        axes = new_panels(None, 2, figsize, title=title)
+    return axes[0].figure, axes
+
+
+def label_moduli(axes: Sequence[Axes], xlabel: str) -> None:
+    """Label a G' | G'' pair of axes."""
+    for ax, name in zip(axes, ("G′", "G″")):
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(f"{name} (Pa)")
+
+
+def figure_of(obj: Any) -> Figure:
+    """The figure behind a Figure, an Axes, or an array/sequence of Axes."""
+    if isinstance(obj, Figure):
+        return obj
+    if isinstance(obj, Axes):
+        return obj.figure  # type: ignore[return-value]
+    first = np.asarray(obj, dtype=object).ravel()
+    if first.size and isinstance(first[0], Axes):
+        return first[0].figure
+    raise TypeError(f"save: expected a Figure or Axes, got {type(obj).__name__}")
+
+
+def save(fig: Any, path) -> None:
+    """Save a figure atomically (PNG, PDF or SVG by extension) and close it.
+
+    ``fig`` may be a Figure or what a plot function returned (an Axes or an
+    array of Axes).
+    """
+    figure = figure_of(fig)
+    try:
+        with atomic_path(path) as tmp:
+            figure.savefig(tmp, format=str(path).rsplit(".", 1)[-1])
+    finally:
+        plt.close(figure)

@@ -1,0 +1,54 @@
+"""``import tenscell`` is light, and every public name still resolves (lazily)."""
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import tenscell
+
+HEAVY = ("scipy", "scipy.optimize", "matplotlib", "pandas")
+
+
+def _loaded_after(code: str) -> set[str]:
+    probe = f"{code}; import sys; print(' '.join(m for m in {HEAVY!r} if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    return set(out.stdout.split())
+
+
+def test_import_tenscell_loads_no_heavy_module():
+    assert _loaded_after("import tenscell") == set()
+
+
+def test_building_the_paper_cell_needs_no_optimizer_or_plotting():
+    # scipy.optimize is imported inside the functions that call it (LP, root finding), not at import
+    assert not {"scipy.optimize", "matplotlib", "pandas"} & _loaded_after("import tenscell; tenscell.paper_cell()")
+
+
+def test_every_public_name_resolves_to_its_module():
+    for name in tenscell.__all__:
+        obj = getattr(tenscell, name)
+        module = tenscell._WHERE[name]
+        assert obj is getattr(sys.modules[f"tenscell.{module}"], name), name
+
+
+def test_type_checking_imports_match_the_lazy_table():
+    tree = ast.parse(Path(tenscell.__file__).read_text())
+    block = next(n for n in tree.body if isinstance(n, ast.If) and getattr(n.test, "id", "") == "TYPE_CHECKING")
+    seen = {}
+    for node in block.body:
+        if isinstance(node, ast.ImportFrom) and node.module:
+            for alias in node.names:
+                seen[alias.name] = node.module
+    assert {n: m for n, m in seen.items() if n in tenscell._WHERE} == tenscell._WHERE
+    assert set(tenscell._WHERE) <= set(seen)
+
+
+def test_submodules_as_attributes_and_unknown_names():
+    assert tenscell.plotting.__name__ == "tenscell.plotting"
+    assert "plotting" in dir(tenscell) and "paper_cell" in dir(tenscell)
+    with pytest.raises(AttributeError, match="no attribute 'no_such_thing'"):
+        tenscell.no_such_thing
+    with pytest.raises(AttributeError):
+        tenscell._private_probe
