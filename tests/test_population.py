@@ -31,6 +31,16 @@ FAST = PopulationFitOptions(starts=4, hops=0)
 VOLATILE = ["time_s", "source"]  # wall time, and the file path (differs between copies of the data)
 
 
+def cli(argv) -> int:
+    """Exit status of the tenscell command (argparse errors included)."""
+    from tenscell.cli import main
+
+    try:
+        return main([str(a) for a in argv])
+    except SystemExit as stop:
+        return stop.code
+
+
 def same_table(a: pd.DataFrame, b: pd.DataFrame) -> None:
     a = a.drop(columns=VOLATILE).sort_values("cell").reset_index(drop=True)
     b = b.drop(columns=VOLATILE).sort_values("cell").reset_index(drop=True)
@@ -255,8 +265,7 @@ def test_external_scheduler_on_loopback(serial, population, tmp_path):
                                        "--host", "127.0.0.1", "--no-dashboard", "--no-nanny"], env=env,
                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         out = tmp_path / "fits"
-        from tenscell.cli import main
-        code = main(["fit-population", str(small), "--out", str(out), "--scheduler", str(sched_file),
+        code = cli(["fit-population", str(small), "--out", str(out), "--scheduler", str(sched_file),
                      "--starts", str(FAST.starts), "--hops", str(FAST.hops), "--seed", "7"])
         assert code == 0
         ref = serial.table[serial.table["cell"].isin([c.cell for c in population.cells[:3]])]
@@ -290,21 +299,20 @@ def test_recovery_of_the_generating_distribution(serial, population):
 
 
 def test_cli_synth_fit_resume_and_outputs(tmp_path, monkeypatch):
-    from tenscell.cli import main
     from tenscell.population.table import read_table
 
     monkeypatch.setenv("TENSCELL_PROGRESS", "0")
     pop, fits = tmp_path / "pop", tmp_path / "fits"
-    assert main(["synth-population", "--cells", "4", "--out", str(pop), "--seed", "2", "--conditions", "a", "b:c=2"]) == 0
+    assert cli(["synth-population", "--cells", "4", "--out", str(pop), "--seed", "2", "--conditions", "a", "b:c=2"]) == 0
     assert (pop / "_generating_parameters.csv").is_file() and (pop / "manifest.json").is_file()
     # an interrupted run leaves fits.partial/ and no output set; --resume completes it
     work = Path(str(fits) + ".partial")
     srcs = read_sources(pop)
     fit_population(list(srcs[:2]), options=FAST, seed=0, workers=0, work_dir=work, progress=False)
     fast = ["--workers", "0", "--starts", str(FAST.starts), "--hops", str(FAST.hops)]
-    assert main(["fit-population", str(pop), "--out", str(fits), *fast]) == 2
+    assert cli(["fit-population", str(pop), "--out", str(fits), *fast]) == 2
     assert not fits.exists()
-    assert main(["fit-population", str(pop), "--out", str(fits), *fast, "--resume"]) == 0
+    assert cli(["fit-population", str(pop), "--out", str(fits), *fast, "--resume"]) == 0
     assert not work.exists()
     names = set(os.listdir(fits))
     assert {"population.csv", "population.parquet", "summary.csv", "cells.jsonl", "report.md", "parameters.png",
@@ -316,8 +324,8 @@ def test_cli_synth_fit_resume_and_outputs(tmp_path, monkeypatch):
     assert abs(rec[("a", "c_Ns_per_m")]) < 0.02 and abs(rec[("b", "c_Ns_per_m")]) < 0.02  # the condition's c ×2
     assert set(pq["condition"]) == {"a", "b"}
     # bad input: one line, exit 2, nothing computed
-    assert main(["fit-population", str(tmp_path / "none"), "--out", str(tmp_path / "o2")]) == 2
-    assert main(["fit-population", str(pop), "--out", str(tmp_path / "o3"), "--scheduler", "nowhere"]) == 2
+    assert cli(["fit-population", str(tmp_path / "none"), "--out", str(tmp_path / "o2")]) == 2
+    assert cli(["fit-population", str(pop), "--out", str(tmp_path / "o3"), "--scheduler", "nowhere"]) == 2
     assert not (tmp_path / "o2").exists() and not (tmp_path / "o3").exists()
 
 
@@ -326,3 +334,68 @@ def test_import_tenscell_does_not_import_dask():
             "print(any(m.split('.')[0] in ('dask', 'distributed', 'pyarrow') for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+# ---- large studies ------------------------------------------------------------------------------
+def test_monte_carlo_draws_is_the_monte_carlo_loop():
+    """The per-draw pure function gives monte_carlo's numbers for monte_carlo's own factors."""
+    from tenscell.sensitivity import monte_carlo, monte_carlo_draws
+
+    mc = monte_carlo(6, seed=3, progress=False)
+    cs, cl, reasons = monte_carlo_draws(mc.factors)
+    assert np.array_equal(cs, mc.change_storage, equal_nan=True) and np.array_equal(cl, mc.change_loss, equal_nan=True)
+    assert tuple(reasons) == mc.reasons
+
+
+def test_monte_carlo_study_streams_resumes_and_is_deterministic(tmp_path, client):
+    from tenscell.population.studies import monte_carlo_study, read_study
+    from tenscell.sensitivity import monte_carlo_draws
+
+    f = np.logspace(-1, 2, 7)
+    kw = dict(spread=0.1, parameters="material", f_hz=f, chunk=5, seed=4, progress=False)
+    a = monte_carlo_study(20, tmp_path / "a", workers=0, **kw)
+    assert a.n_parts == 4 and a.n_rows == 20
+    df = read_study(tmp_path / "a")
+    assert list(df["draw"]) == list(range(20))
+    factors = df[[c for c in df.columns if c.startswith("factor_")]].to_numpy()
+    cs, _, _ = monte_carlo_draws(factors, parameters="material", f_hz=f)
+    assert np.array_equal(cs, df["change_storage"].to_numpy(), equal_nan=True)
+    # an interrupted study (two parts lost) resumed on the cluster: the same rows
+    for p in sorted((tmp_path / "a" / "parts").glob("*.parquet"))[1:3]:
+        p.unlink()
+    b = monte_carlo_study(20, tmp_path / "a", client=client, resume=True, **kw)
+    assert b.n_resumed == 2
+    pd.testing.assert_frame_equal(df, read_study(tmp_path / "a"))
+    assert b.summary == a.summary
+    with pytest.raises(ValueError, match="different settings"):
+        monte_carlo_study(20, tmp_path / "a", workers=0, resume=True, **{**kw, "seed": 5})
+
+
+def test_sweep_study_homogeneous_rows_are_the_model(tmp_path):
+    import tenscell
+    from tenscell.population.studies import sweep_study
+
+    f = np.logspace(-1, 1, 3)
+    r = sweep_study([10.0, 100.0], [0.0, 1.0], tmp_path / "s", f_hz=f, realizations=3, workers=0, progress=False)
+    df = r.to_dataframe()
+    assert len(df) == r.n_rows == 2 * 2 * 3 * 3
+    hom = df[(df["heterogeneity_decades"] == 0) & (df["prestress_N"] == 10.0)]
+    Gs, Gl = tenscell.moduli(tenscell.linearize(tenscell.paper_cell(), P=10.0, EA=1.0, c=1.0), f)
+    for _, g in hom.groupby("realization"):
+        assert np.allclose(g["G_storage_Pa"], Gs, rtol=1e-12) and np.allclose(g["G_loss_Pa"], Gl, rtol=1e-12)
+    het = df[df["heterogeneity_decades"] == 1.0].groupby("realization")["G_storage_Pa"].first()
+    assert het.nunique() == 3  # heterogeneous realizations differ
+    med = r.medians()
+    assert len(med) == 2 * 2 * 3 and (med["G_storage_Pa_q25"] <= med["G_storage_Pa_q75"]).all()
+
+
+def test_cli_large_study(tmp_path, monkeypatch):
+    monkeypatch.setenv("TENSCELL_PROGRESS", "0")
+    out = tmp_path / "mc"
+    assert cli(["large-study", "monte-carlo", "--draws", "6", "--chunk", "3", "--parameters", "material",
+                 "--out", str(out), "--workers", "0"]) == 0
+    assert {"parts", "study.json", "summary.json", "report.md", "manifest.json"} <= set(os.listdir(out))
+    assert len(os.listdir(out / "parts")) == 2 and not Path(str(out) + ".partial").exists()
+    assert "6 draws" in (out / "report.md").read_text()
+    assert cli(["large-study", "sweep", "--prestress", "1,10", "--heterogeneity", "0,-1", "--out",
+                 str(tmp_path / "sw")]) == 2

@@ -68,6 +68,23 @@ def _freq(text):
                                          "frequencies > 0 (Hz)") from None
 
 
+def _positive_list(text):
+    return tuple(_positive(x) for x in str(text).split(","))
+
+
+def _nonnegative_list(text):
+    out = []
+    for x in str(text).split(","):
+        try:
+            v = float(x)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{x!r} is not a number") from None
+        if not 0.0 <= v < float("inf"):
+            raise argparse.ArgumentTypeError(f"{x} must be a finite number >= 0")
+        out.append(v)
+    return tuple(out)
+
+
 def add_cluster_options(p) -> None:
     """``--workers N | --scheduler ADDRESS``: where the tasks run (shared by every Dask command)."""
     g = p.add_mutually_exclusive_group()
@@ -122,6 +139,35 @@ def register(sub) -> None:
                    help="generating parameters to check recovery against (default: INPUT/_generating_parameters.csv "
                         "when present)")
     p.set_defaults(func=run_fit)
+
+    p = sub.add_parser(
+        "large-study", help="Monte Carlo sensitivity or parameter sweeps on Dask, streamed to Parquet",
+        description="Large studies on the population engine: chunks run as Dask tasks and each chunk's rows are "
+                    "written to OUT.partial/parts/ as it completes (10^5 draws never sit in memory); --resume "
+                    "continues an interrupted study. The output set (parts/, study.json, summary.json, report.md) "
+                    "appears in --out when every chunk is written.")
+    kinds = p.add_subparsers(dest="study", metavar="STUDY")
+    kinds.required = True
+    mc = kinds.add_parser("monte-carlo", help="simultaneous ±spread perturbations of every parameter")
+    mc.add_argument("--draws", type=_integer(1), required=True, help="number of draws")
+    mc.add_argument("--spread", type=_fraction, default=0.10, help="uniform ±spread of every factor (fraction < 1)")
+    mc.add_argument("--parameters", choices=("all", "material"), default="all",
+                    help="perturb EA_j, c_j, P and the geometry (all) or only the material parameters")
+    mc.add_argument("--chunk", type=_integer(1), default=1000, help="draws per task and per Parquet part")
+    mc.add_argument("--no-factors", action="store_true", help="do not store each draw's factors")
+    sw = kinds.add_parser("sweep", help="prestress × heterogeneity × frequency, several realizations each")
+    sw.add_argument("--prestress", type=_positive_list, required=True, help="prestresses P (N), comma list")
+    sw.add_argument("--heterogeneity", type=_nonnegative_list, required=True,
+                    help="standard deviations of log10 EA_j (decades), comma list")
+    sw.add_argument("--freq", type=_freq, default=None, help="frequencies: a:b:n or a comma list (Hz; default "
+                    "0.01:1000:51)")
+    sw.add_argument("--realizations", type=_integer(1), default=20, help="cells per (P, σ)")
+    for q in (mc, sw):
+        q.add_argument("--out", required=True, help="output directory (created, or replaced as a whole)")
+        add_cluster_options(q)
+        q.add_argument("--resume", action="store_true", help="continue an interrupted study")
+        q.add_argument("--seed", type=_integer(0), default=0, help="random seed")
+        q.set_defaults(func=run_study)
 
 
 def run_synth(args) -> int:
@@ -181,6 +227,46 @@ def run_fit(args) -> int:
     n_ok = int((t["status"] == "ok").sum())
     print(f"tenscell fit-population: {len(t)} cells, {n_ok} fitted ({int(t['converged'].sum())} converged), "
           f"{len(t) - n_ok} failed; {result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
+    return 0
+
+
+def run_study(args) -> int:
+    import shutil
+
+    from .io.outputs import OutputSet, write_json, write_text
+    from .population import _engine
+    from .population.studies import PARTS, monte_carlo_study, sweep_study
+    from .reports.population import study_markdown
+
+    out = OutputSet(args.out, command=_command("large-study"), flag="--out")
+    work = Path(str(out.target).rstrip("/") + PARTIAL_SUFFIX)
+    if args.scheduler is not None:
+        _engine.check_scheduler(args.scheduler)
+    if args.resume and not work.is_dir():
+        raise ValueError(f"--resume: no unfinished study in {work}")
+    where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed)
+    try:
+        if args.study == "monte-carlo":
+            result = monte_carlo_study(args.draws, work, spread=args.spread, parameters=args.parameters,
+                                       chunk=args.chunk, keep_factors=not args.no_factors, **where)
+        else:
+            result = sweep_study(args.prestress, args.heterogeneity, work, f_hz=args.freq,
+                                 realizations=args.realizations, **where)
+    except KeyboardInterrupt:
+        print(f"tenscell large-study: interrupted; finished parts are kept in {work}/; "
+              "run the same command with --resume to continue", file=sys.stderr)
+        raise
+    with out as d:
+        (work / PARTS).rename(d / PARTS)
+        shutil.copy2(work / "study.json", d / "study.json")
+        write_json(d / "summary.json", result.summary)
+        if result.kind == "sweep":
+            med = result.medians()
+            med.to_csv(d / "medians.csv", index=False)
+        write_text(d / "report.md", study_markdown(result))
+    shutil.rmtree(work, ignore_errors=True)
+    print(f"tenscell large-study {args.study}: {result.n_rows} rows in {result.n_parts} parts; "
+          f"{result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0
 
 

@@ -11,7 +11,7 @@ import warnings
 import matplotlib.pyplot as plt
 import numpy as np
 
-from . import STYLE, _colors
+from ._style import colors, label_moduli, new_panels, styled
 
 __all__ = ["parameter_distributions", "population_moduli"]
 
@@ -28,6 +28,7 @@ def _conditions(table):
     return conds or [""]
 
 
+@styled
 def parameter_distributions(table, columns=(), ax=None, title: str | None = "Fitted parameters per condition",
                             extra=("rms_log10_error", "prestress_elasticity_storage")):
     """One panel per quantity: each fitted cell as a jittered point, with the median and quartiles per condition.
@@ -51,39 +52,39 @@ def parameter_distributions(table, columns=(), ax=None, title: str | None = "Fit
     cols = [c for c in (*columns, *extra) if c in ok.columns]
     cols = [c for c in cols if ok[c].nunique(dropna=True) > 1] or cols[:1]
     conds = _conditions(table)
-    colors = _colors(max(len(conds), 1))
-    with plt.rc_context(STYLE):
-        if ax is None:
-            n = len(cols)
-            ncol = min(n, 3)
-            fig, axes = plt.subplots(math.ceil(n / ncol), ncol, figsize=(3.2 * ncol, 2.8 * math.ceil(n / ncol)),
-                                     constrained_layout=True, squeeze=False)
-            for a in axes.flat[n:]:
-                a.set_visible(False)
-            axes = axes.flat[:n]
-            if title:
-                fig.suptitle(title)
-        else:
-            axes = np.atleast_1d(ax).ravel()
-        rng = np.random.default_rng(0)  # jitter only: the same picture every time
-        for a, col in zip(axes, cols):
-            for k, cond in enumerate(conds):
-                v = ok.loc[ok["condition"] == cond, col].to_numpy(float)
-                v = v[np.isfinite(v)]
-                if not v.size:
-                    continue
-                a.plot(k + 0.15 * rng.uniform(-1, 1, v.size), v, "o", ms=3, alpha=0.5, color=colors[k])
-                q25, med, q75 = np.percentile(v, [25, 50, 75])
-                a.errorbar(k + 0.3, med, yerr=[[med - q25], [q75 - med]], fmt="s", color="k", ms=4, capsize=3)
-            vals = ok[col].to_numpy(float)
-            vals = vals[np.isfinite(vals)]
-            if vals.size and np.all(vals > 0) and vals.max() / vals.min() > 3:
-                a.set_yscale("log")
-            a.set_xticks(range(len(conds)), [c or "all" for c in conds], rotation=30 if len(conds) > 3 else 0)
-            a.set_title(_LABELS.get(col, col))
+    palette = colors(max(len(conds), 1))
+    if ax is None:
+        n = len(cols)
+        ncol = min(n, 3)
+        fig, grid = plt.subplots(math.ceil(n / ncol), ncol, figsize=(3.2 * ncol, 2.8 * math.ceil(n / ncol)),
+                                 layout="constrained", squeeze=False)
+        for a in grid.flat[n:]:
+            a.set_visible(False)
+        axes = grid.ravel()[:n]
+        if title:
+            fig.suptitle(title)
+    else:
+        axes = np.atleast_1d(np.asarray(ax, dtype=object)).ravel()
+    rng = np.random.default_rng(0)  # jitter only: the same picture every time
+    for a, col in zip(axes, cols):
+        for k, cond in enumerate(conds):
+            v = ok.loc[ok["condition"] == cond, col].to_numpy(float)
+            v = v[np.isfinite(v)]
+            if not v.size:
+                continue
+            a.plot(k + 0.15 * rng.uniform(-1, 1, v.size), v, "o", ms=3, alpha=0.5, color=palette[k])
+            q25, med, q75 = np.percentile(v, [25, 50, 75])
+            a.errorbar(k + 0.3, med, yerr=[[med - q25], [q75 - med]], fmt="s", color="k", ms=4, capsize=3)
+        vals = ok[col].to_numpy(float)
+        vals = vals[np.isfinite(vals)]
+        if vals.size and np.all(vals > 0) and vals.max() / vals.min() > 3:
+            a.set_yscale("log")
+        a.set_xticks(range(len(conds)), [c or "all" for c in conds], rotation=30 if len(conds) > 3 else 0)
+        a.set_title(_LABELS.get(col, col))
     return np.asarray(axes)
 
 
+@styled
 def population_moduli(result, ax=None, title: str | None = "Population moduli: median and interquartile band"):
     """G′ (left) and G″ (right) against f: fitted median line and band, data median and quartiles, per condition.
 
@@ -91,6 +92,7 @@ def population_moduli(result, ax=None, title: str | None = "Population moduli: m
     ----------
     result : PopulationResult
     ax : pair of Axes, optional
+        G′ and G″ panels; default a new figure.
 
     Returns
     -------
@@ -98,32 +100,25 @@ def population_moduli(result, ax=None, title: str | None = "Population moduli: m
     """
     f = result.frequency_hz
     conds = _conditions(result.table)
-    colors = _colors(max(len(conds), 1))
+    palette = colors(max(len(conds), 1))
     cond_of = result.table["condition"].to_numpy()
-    with plt.rc_context(STYLE):
-        if ax is None:
-            fig, axes = plt.subplots(1, 2, figsize=(8.0, 3.4), constrained_layout=True)
-            if title:
-                fig.suptitle(title)
-        else:
-            axes = np.atleast_1d(ax).ravel()
-        for a, kind, sym in ((axes[0], "storage", "G′"), (axes[1], "loss", "G″")):
-            for k, cond in enumerate(conds):
-                sel = cond_of == cond
-                model, data = result.curves[f"model_{kind}"][sel], result.curves[f"data_{kind}"][sel]
-                have = np.isfinite(model).sum(axis=0) >= 1
-                if not have.any():
-                    continue
-                with warnings.catch_warnings():  # all-NaN columns of one condition: a gap, not an error
-                    warnings.simplefilter("ignore", RuntimeWarning)
-                    mq = np.nanpercentile(model[:, have], [25, 50, 75], axis=0)
-                    dq = np.nanpercentile(data[:, have], [25, 50, 75], axis=0)
-                label = cond or "all cells"
-                a.fill_between(f[have], mq[0], mq[2], color=colors[k], alpha=0.25, lw=0)
-                a.loglog(f[have], mq[1], color=colors[k], label=f"{label}: fit")
-                a.errorbar(f[have][::2], dq[1][::2], yerr=[(dq[1] - dq[0])[::2], (dq[2] - dq[1])[::2]], fmt="o",
-                           ms=3, color=colors[k], mfc="none", capsize=2, lw=0.8, label=f"{label}: data")
-            a.set_xlabel("f (Hz)")
-            a.set_ylabel(f"{sym} (Pa)")
-        axes[0].legend(loc="best")
+    axes = new_panels(ax, 2, (8.0, 3.4), title=title)
+    for a, kind in ((axes[0], "storage"), (axes[1], "loss")):
+        for k, cond in enumerate(conds):
+            sel = cond_of == cond
+            model, data = result.curves[f"model_{kind}"][sel], result.curves[f"data_{kind}"][sel]
+            have = np.isfinite(model).sum(axis=0) >= 1
+            if not have.any():
+                continue
+            with warnings.catch_warnings():  # all-NaN columns of one condition: a gap, not an error
+                warnings.simplefilter("ignore", RuntimeWarning)
+                mq = np.nanpercentile(model[:, have], [25, 50, 75], axis=0)
+                dq = np.nanpercentile(data[:, have], [25, 50, 75], axis=0)
+            label = cond or "all cells"
+            a.fill_between(f[have], mq[0], mq[2], color=palette[k], alpha=0.25, lw=0)
+            a.loglog(f[have], mq[1], color=palette[k], label=f"{label}: fit")
+            a.errorbar(f[have][::2], dq[1][::2], yerr=[(dq[1] - dq[0])[::2], (dq[2] - dq[1])[::2]], fmt="o",
+                       ms=3, color=palette[k], mfc="none", capsize=2, lw=0.8, label=f"{label}: data")
+    label_moduli(axes, "f (Hz)")
+    axes[0].legend(loc="best")
     return np.asarray(axes)

@@ -206,8 +206,8 @@ class PopulationResult:
         if truth is not None:
             rec = recovery(self.table, truth)
             _write_frame(d / "recovery.csv", rec, write_csv_rows)
-        save(np.ravel(self.plot())[0].figure, d / "parameters.png")
-        save(self.plot_moduli()[0].figure, d / "moduli.png")
+        save(self.plot(), d / "parameters.png")
+        save(self.plot_moduli(), d / "moduli.png")
         write_text(d / "report.md", population_markdown(self, recovery_table=rec))
         return sorted(p.name for p in d.iterdir())
 

@@ -5,7 +5,7 @@ import numpy as np
 
 from ._format import num, table
 
-__all__ = ["population_markdown"]
+__all__ = ["population_markdown", "study_markdown"]
 
 
 def _cell_counts(result) -> str:
@@ -80,3 +80,39 @@ def population_markdown(result, recovery_table=None, title: str = "Population fi
         "- Differences between conditions are descriptive here; no test of significance is made.\n",
     ]
     return "".join(parts)
+
+
+def study_markdown(result) -> str:
+    """The report of a streamed study (:class:`~tenscell.population.studies.StudyResult`)."""
+    s, st = result.summary, result.settings
+    if result.kind == "monte-carlo":
+        what = "all parameters (EA_j, c_j, P, L, δ, α)" if st["parameters"] == "all" else "EA_j, c_j and P"
+        lines = [
+            "# Monte Carlo sensitivity study\n",
+            f"{st['n']} draws of simultaneous uniform ±{num(100 * st['spread'], 3)}% perturbations of {what} of "
+            f"the paper cell at P = {num(st['P'])} N, over {len(st['frequency_Hz'])} frequencies from "
+            f"{num(min(st['frequency_Hz']))} to {num(max(st['frequency_Hz']))} Hz; seed {st['seed']}, "
+            f"{result.n_parts} chunks of {st['chunk']} draws.\n",
+            table(["quantity", "value"], [
+                ["valid draws", s["n_valid"]],
+                [f"fraction with every change ≤ {num(100 * s['bound'], 3)}%", num(s["fraction_within_bound"])],
+                ["largest change of G′: median, 95th percentile, max",
+                 ", ".join(num(s[f"change_storage_p{q}"]) for q in (50, 95, 100))],
+                ["largest change of G″: median, 95th percentile, max",
+                 ", ".join(num(s[f"change_loss_p{q}"]) for q in (50, 95, 100))],
+            ]),
+            "\nEach draw's change is the largest relative change over frequency. This does not say which "
+            "parameter causes a change (the factors are in the parts for that), and invalid draws (no valid "
+            "reference) are left out of the fractions.\n",
+        ]
+    else:
+        lines = [
+            "# Sweep: prestress × heterogeneity × frequency\n",
+            f"{len(st['prestress_N'])} prestresses × {len(st['heterogeneity_decades'])} heterogeneities × "
+            f"{len(st['frequency_Hz'])} frequencies, {st['realizations']} realizations each (tendon stiffness "
+            f"EA·10^(σz), median EA {num(st['EA'])} N, c {num(st['c'])} N·s/m); {result.n_rows} rows. "
+            "Medians and quartiles over realizations are in medians.csv.\n",
+            "\nThe realizations share their stiffness patterns across (P, σ); differences between σ values are "
+            "therefore not independent samples.\n",
+        ]
+    return "".join(lines)
