@@ -24,7 +24,39 @@ import os
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
-__all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "n_threads"]
+__all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "n_threads", "open_work_dir", "WorkDirError"]
+
+
+class WorkDirError(ValueError):
+    """A work directory holds a different or unfinished run (one line naming it)."""
+
+
+def open_work_dir(path, settings_file: str, settings: dict, resume: bool) -> Path:
+    """Prepare the work directory of a resumable run: new or empty, or an unfinished run with the same settings.
+
+    ``settings`` are written to ``path/settings_file``. Raises :class:`WorkDirError`
+    when the directory holds an unfinished run and ``resume`` is False, a run
+    with other settings, or files of something else.
+    """
+    import json
+
+    from ..io.outputs import write_json
+
+    path = Path(path)
+    info = path / settings_file
+    if info.is_file():
+        if not resume:
+            raise WorkDirError(f"{path}: holds an unfinished run; resume it (--resume) or remove the directory")
+        old = json.loads(info.read_text())
+        diff = sorted(k for k in set(old) | set(settings) if old.get(k) != settings.get(k))
+        if diff:
+            raise WorkDirError(f"{path}: the unfinished run used different settings ({', '.join(diff)}); "
+                               "resume with the same settings or remove the directory")
+    elif path.exists() and any(path.iterdir()):
+        raise WorkDirError(f"{path}: exists, is not empty and holds no {settings_file}")
+    path.mkdir(parents=True, exist_ok=True)
+    write_json(info, settings)
+    return path
 
 
 class TaskLost(Exception):

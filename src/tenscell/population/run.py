@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import positive_scalar
+from ._engine import WorkDirError, open_work_dir
 from .sources import CellSource, read_sources
 
 __all__ = ["PopulationFitOptions", "cell_seed", "fit_cell", "fit_population", "CURVE_FREQUENCIES", "STATUSES",
@@ -54,10 +55,6 @@ CURVE_FREQUENCIES = np.logspace(-4, 4, 81)
 STATUSES = ("ok", "data_error", "fit_error", "worker_lost")
 _RUN_FILE = "run.json"
 _CELLS = "cells"
-
-
-class WorkDirError(ValueError):
-    """The work directory holds a different or unfinished run (one line naming it)."""
 
 
 @dataclass(frozen=True)
@@ -267,21 +264,8 @@ class _WorkDir:
 
     def open(self, config: dict, resume: bool) -> dict[str, dict]:
         """Check the directory against ``config``; return the finished records (empty unless resuming)."""
-        from ..io.outputs import write_json
-
-        run = self.path / _RUN_FILE
-        if run.is_file():
-            if not resume:
-                raise WorkDirError(f"{self.path}: holds an unfinished run; resume it (--resume) or remove the directory")
-            old = json.loads(run.read_text())
-            diff = sorted(k for k in set(old) | set(config) if old.get(k) != config.get(k))
-            if diff:
-                raise WorkDirError(f"{self.path}: the unfinished run used different settings ({', '.join(diff)}); "
-                                   "resume with the same settings or remove the directory")
-        elif self.path.exists() and any(self.path.iterdir()):
-            raise WorkDirError(f"{self.path}: exists, is not empty and holds no {_RUN_FILE}")
-        self.cells.mkdir(parents=True, exist_ok=True)
-        write_json(run, config)
+        open_work_dir(self.path, _RUN_FILE, config, resume)
+        self.cells.mkdir(exist_ok=True)
         return self.records() if resume else {}
 
     def records(self) -> dict[str, dict]:

@@ -26,7 +26,6 @@ stream is seeded by ``(seed, chunk)``), so an interrupted study resumes
 """
 from __future__ import annotations
 
-import json
 import math
 import time
 from dataclasses import dataclass
@@ -119,21 +118,10 @@ def _write_part(path: Path, columns: dict) -> None:
 
 def _open_study(directory: Path, settings: dict, resume: bool) -> set[int]:
     """Check the directory against the settings; the chunk indices already written (resume only)."""
-    from ..io.outputs import write_json
+    from ._engine import open_work_dir
 
-    directory = Path(directory)
-    info = directory / _STUDY_FILE
-    if info.is_file():
-        if not resume:
-            raise ValueError(f"{directory}: holds a study; resume it (resume=True / --resume) or remove it")
-        old = json.loads(info.read_text())
-        diff = sorted(k for k in set(old) | set(settings) if old.get(k) != settings.get(k))
-        if diff:
-            raise ValueError(f"{directory}: the study there used different settings ({', '.join(diff)})")
-    elif directory.exists() and any(directory.iterdir()):
-        raise ValueError(f"{directory}: exists, is not empty and holds no {_STUDY_FILE}")
-    (directory / PARTS).mkdir(parents=True, exist_ok=True)
-    write_json(info, settings)
+    directory = open_work_dir(directory, _STUDY_FILE, settings, resume)
+    (directory / PARTS).mkdir(exist_ok=True)
     if not resume:
         return set()
     return {int(p.stem.split("-")[1]) for p in (directory / PARTS).glob("part-*.parquet")}
