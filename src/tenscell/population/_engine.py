@@ -24,7 +24,7 @@ import os
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
-__all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "n_threads", "open_work_dir", "WorkDirError"]
+__all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir", "WorkDirError"]
 
 
 class WorkDirError(ValueError):
@@ -61,6 +61,10 @@ def open_work_dir(path, settings_file: str, settings: dict, resume: bool) -> Pat
 
 class TaskLost(Exception):
     """A task whose workers kept dying (Dask gave up on it); carries Dask's message."""
+
+
+class SchedulerLost(ConnectionError):
+    """The connection to the Dask scheduler was lost: the run stops; what was written is kept."""
 
 
 def check_scheduler(address: str, flag: str = "--scheduler") -> str:
@@ -140,6 +144,8 @@ def stream(client, fn: Callable, items: Iterable[tuple[object, tuple]], *, windo
         for tag, args in items:
             yield tag, fn(*args)
         return
+    from concurrent.futures import CancelledError
+
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
 
@@ -168,9 +174,13 @@ def stream(client, fn: Callable, items: Iterable[tuple[object, tuple]], *, windo
                 result = fut.result()
             except KilledWorker as err:
                 result = TaskLost(f"the workers running it died repeatedly ({err})")
+            except CancelledError:
+                # only a lost scheduler cancels our futures; the finished results are already written
+                raise SchedulerLost("lost the Dask scheduler; the finished results are kept: "
+                                    "run the same command with --resume when the cluster is back") from None
             fut.release()
             yield tag, result
             submit_next()
     finally:
-        if pending:
+        if pending and client.status == "running":
             client.cancel([f for _, f in pending.values()])
