@@ -32,13 +32,10 @@ VOLATILE = ["time_s", "source"]  # wall time, and the file path (differs between
 
 
 def cli(argv) -> int:
-    """Exit status of the tenscell command (argparse errors included)."""
+    """Exit status of the tenscell command."""
     from tenscell.cli import main
 
-    try:
-        return main([str(a) for a in argv])
-    except SystemExit as stop:
-        return stop.code
+    return main([str(a) for a in argv])
 
 
 def same_table(a: pd.DataFrame, b: pd.DataFrame) -> None:

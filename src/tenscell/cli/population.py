@@ -1,94 +1,24 @@
-"""``tenscell synth-population`` and ``tenscell fit-population``: populations of cells on Dask.
-
-(Moves to ``tenscell/cli/population.py`` when the CLI becomes a package.)
-"""
+"""``tenscell synth-population``, ``fit-population`` and ``large-study``: populations and large studies on Dask."""
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
+from ._args import add_out, frequencies, integer, number, number_list
+
+#: the fit's parametrizations (as in tenscell.fitting; written out so that building the parser stays light)
 TENDON_MODES = ("per-tendon", "per-family", "uniform")
 DAMPING_MODES = ("uniform", "per-family")
+#: synthetic population generators (tenscell.population.synth.MODELS)
 MODELS = ("tensegrity", "powerlaw")
-#: suffix of the work directory kept beside --out while a population fit runs
+#: suffix of the work directory kept beside --out while a run is under way
 PARTIAL_SUFFIX = ".partial"
-
-
-def _integer(lo: int):
-    def convert(text):
-        try:
-            v = int(str(text).strip())
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
-        if v < lo:
-            raise argparse.ArgumentTypeError(f"{v} is out of range; allowed at least {lo}")
-        return v
-    convert.__name__ = "integer"
-    return convert
-
-
-def _fraction(text):
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not 0.0 <= v < 10.0:
-        raise argparse.ArgumentTypeError(f"{text} is out of range; allowed 0 <= value < 10")
-    return v
-
-
-def _positive(text):
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not 0.0 < v < float("inf"):
-        raise argparse.ArgumentTypeError(f"{text} must be a finite number > 0")
-    return v
-
-
-def _freq(text):
-    """``a:b:n`` (n log-spaced points from a to b Hz) or a comma list (Hz)."""
-    import numpy as np
-
-    try:
-        if ":" in text:
-            a, b, n = text.split(":")
-            a, b, n = float(a), float(b), int(n)
-            if not (0 < a < b and n >= 2):
-                raise ValueError
-            return tuple(np.logspace(np.log10(a), np.log10(b), n))
-        vals = tuple(float(x) for x in text.split(","))
-        if not all(0 < v < float("inf") for v in vals):
-            raise ValueError
-        return vals
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a:b:n (0 < a < b, n >= 2) or a comma list of "
-                                         "frequencies > 0 (Hz)") from None
-
-
-def _positive_list(text):
-    return tuple(_positive(x) for x in str(text).split(","))
-
-
-def _nonnegative_list(text):
-    out = []
-    for x in str(text).split(","):
-        try:
-            v = float(x)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{x!r} is not a number") from None
-        if not 0.0 <= v < float("inf"):
-            raise argparse.ArgumentTypeError(f"{x} must be a finite number >= 0")
-        out.append(v)
-    return tuple(out)
 
 
 def add_cluster_options(p) -> None:
     """``--workers N | --scheduler ADDRESS``: where the tasks run (shared by every Dask command)."""
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=_integer(0), default=None,
+    g.add_argument("--workers", type=integer(0, 4096), default=None,
                    help="local Dask workers started for this run (default: one per CPU; 0: no Dask, in this process)")
     g.add_argument("--scheduler", default=None,
                    help="an existing Dask scheduler: tcp://HOST:PORT or a scheduler file (dask scheduler "
@@ -101,17 +31,17 @@ def register(sub) -> None:
         description="Draw cells from the tensegrity model (log-normal EA per family, c, P) or from the "
                     "structural-damping power law (log-normal G0, normal exponent x), add measurement noise, and "
                     "write one CSV per cell (<condition>/<cell>.csv) and _generating_parameters.csv into --out.")
-    p.add_argument("--cells", type=_integer(1), required=True, help="number of cells")
-    p.add_argument("--out", required=True, help="output directory (created, or replaced as a whole)")
+    p.add_argument("--cells", type=integer(1, 10_000_000), required=True, help="number of cells")
+    add_out(p)
     p.add_argument("--model", choices=MODELS, default="tensegrity", help="generator")
     p.add_argument("--conditions", nargs="+", default=None, metavar="NAME[:PARAM=FACTOR,...]",
                    help="conditions, e.g. control histamine:P=2 (cells split evenly; factors scale the medians)")
-    p.add_argument("--noise", type=_fraction, default=0.02, help="relative noise of G', G'' (0.02 = 2%%)")
-    p.add_argument("--spread", type=_fraction, default=0.2,
+    p.add_argument("--noise", type=number(0.0, 1.0), default=0.02, help="relative noise of G', G'' (0.02 = 2%%)")
+    p.add_argument("--spread", type=number(0.0, 10.0, "decades"), default=0.2,
                    help="standard deviation of log10 of each log-normal parameter (decades)")
-    p.add_argument("--freq", type=_freq, default=None, help="frequencies: a:b:n or a comma list (Hz; default "
+    p.add_argument("--freq", type=frequencies(100_000), default=None, help="frequencies: a:b:n or a comma list (Hz; default "
                    "0.01:100:13)")
-    p.add_argument("--seed", type=_integer(0), default=0, help="random seed")
+    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed")
     p.set_defaults(func=run_synth)
 
     p = sub.add_parser(
@@ -123,18 +53,18 @@ def register(sub) -> None:
                     "The output set (population.csv/.parquet, summary.csv, cells.jsonl, report.md, figures) "
                     "appears in --out only when every cell has a record. See docs/populations.md.")
     p.add_argument("input", help="directory, glob (quote it) or long table (.csv/.parquet)")
-    p.add_argument("--out", required=True, help="output directory (created, or replaced as a whole)")
+    add_out(p)
     add_cluster_options(p)
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run from its work directory, fitting only the missing cells")
     p.add_argument("--work-dir", default=None, help=f"where cell records are kept while running "
                    f"(default: OUT{PARTIAL_SUFFIX}; removed when the output set is written)")
-    p.add_argument("--seed", type=_integer(0), default=0, help="run seed (each cell's seed derives from it and its id)")
+    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="run seed (each cell's seed derives from it and its id)")
     p.add_argument("--tendons", choices=TENDON_MODES, default="per-family", help="stiffness parametrization")
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform", help="damping parametrization")
-    p.add_argument("--starts", type=_integer(1), default=4, help="starts per cell")
-    p.add_argument("--hops", type=_integer(0), default=1, help="basin-hopping moves per start")
-    p.add_argument("--tolerance", type=_positive, default=0.02, help="RMS log10 error (decades) counted as converged")
+    p.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per cell")
+    p.add_argument("--hops", type=integer(0, 10_000), default=1, help="basin-hopping moves per start")
+    p.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.02, help="RMS log10 error (decades) counted as converged")
     p.add_argument("--truth", default=None,
                    help="generating parameters to check recovery against (default: INPUT/_generating_parameters.csv "
                         "when present)")
@@ -149,32 +79,32 @@ def register(sub) -> None:
     kinds = p.add_subparsers(dest="study", metavar="STUDY")
     kinds.required = True
     mc = kinds.add_parser("monte-carlo", help="simultaneous ±spread perturbations of every parameter")
-    mc.add_argument("--draws", type=_integer(1), required=True, help="number of draws")
-    mc.add_argument("--spread", type=_fraction, default=0.10, help="uniform ±spread of every factor (fraction < 1)")
+    mc.add_argument("--draws", type=integer(1, 10**9), required=True, help="number of draws")
+    mc.add_argument("--spread", type=number(0.0, 1.0, open_lo=True), default=0.10, help="uniform ±spread of every factor (fraction < 1)")
     mc.add_argument("--parameters", choices=("all", "material"), default="all",
                     help="perturb EA_j, c_j, P and the geometry (all) or only the material parameters")
-    mc.add_argument("--chunk", type=_integer(1), default=1000, help="draws per task and per Parquet part")
+    mc.add_argument("--chunk", type=integer(1, 10**7), default=1000, help="draws per task and per Parquet part")
     mc.add_argument("--no-factors", action="store_true", help="do not store each draw's factors")
     sw = kinds.add_parser("sweep", help="prestress × heterogeneity × frequency, several realizations each")
-    sw.add_argument("--prestress", type=_positive_list, required=True, help="prestresses P (N), comma list")
-    sw.add_argument("--heterogeneity", type=_nonnegative_list, required=True,
+    sw.add_argument("--prestress", type=number_list(quantity="prestress"), required=True, help="prestresses P (N), comma list")
+    sw.add_argument("--heterogeneity", type=number_list(0.0, 10.0, "decades"), required=True,
                     help="standard deviations of log10 EA_j (decades), comma list")
-    sw.add_argument("--freq", type=_freq, default=None, help="frequencies: a:b:n or a comma list (Hz; default "
+    sw.add_argument("--freq", type=frequencies(100_000), default=None, help="frequencies: a:b:n or a comma list (Hz; default "
                     "0.01:1000:51)")
-    sw.add_argument("--realizations", type=_integer(1), default=20, help="cells per (P, σ)")
+    sw.add_argument("--realizations", type=integer(1, 10**6), default=20, help="cells per (P, σ)")
     for q in (mc, sw):
-        q.add_argument("--out", required=True, help="output directory (created, or replaced as a whole)")
+        add_out(q)
         add_cluster_options(q)
         q.add_argument("--resume", action="store_true", help="continue an interrupted study")
-        q.add_argument("--seed", type=_integer(0), default=0, help="random seed")
+        q.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed")
         q.set_defaults(func=run_study)
 
 
 def run_synth(args) -> int:
-    from .io.outputs import OutputSet
-    from .population.synth import parse_condition, synth_population
+    from ..io.outputs import OutputSet
+    from ..population.synth import parse_condition, synth_population
 
-    out = OutputSet(args.out, command=_command("synth-population"), flag="--out")
+    out = OutputSet(args.out, command=args.command_line, flag="--out")
     conds = [parse_condition(c, args.model) for c in args.conditions] if args.conditions else None
     pop = synth_population(args.cells, model=args.model, conditions=conds, noise=args.noise,
                            spread_decades=args.spread, frequency_hz=args.freq, seed=args.seed)
@@ -185,7 +115,7 @@ def run_synth(args) -> int:
 
 
 def _truth(args):
-    from .population.synth import GENERATING_FILE
+    from ..population.synth import GENERATING_FILE
 
     if args.truth is not None:
         if not Path(args.truth).is_file():
@@ -198,12 +128,12 @@ def _truth(args):
 def run_fit(args) -> int:
     import shutil
 
-    from .io.outputs import OutputSet
-    from .population import _engine
-    from .population.run import PopulationFitOptions, fit_population
-    from .population.sources import read_sources
+    from ..io.outputs import OutputSet
+    from ..population import _engine
+    from ..population.run import PopulationFitOptions, fit_population
+    from ..population.sources import read_sources
 
-    out = OutputSet(args.out, command=_command("fit-population"), flag="--out")
+    out = OutputSet(args.out, command=args.command_line, flag="--out")
     work = Path(args.work_dir) if args.work_dir else Path(str(out.target).rstrip("/") + PARTIAL_SUFFIX)
     if args.scheduler is not None:
         _engine.check_scheduler(args.scheduler)
@@ -233,12 +163,12 @@ def run_fit(args) -> int:
 def run_study(args) -> int:
     import shutil
 
-    from .io.outputs import OutputSet, write_json, write_text
-    from .population import _engine
-    from .population.studies import PARTS, monte_carlo_study, sweep_study
-    from .reports.population import study_markdown
+    from ..io.outputs import OutputSet, write_json, write_text
+    from ..population import _engine
+    from ..population.studies import PARTS, monte_carlo_study, sweep_study
+    from ..reports.population import study_markdown
 
-    out = OutputSet(args.out, command=_command("large-study"), flag="--out")
+    out = OutputSet(args.out, command=args.command_line, flag="--out")
     work = Path(str(out.target).rstrip("/") + PARTIAL_SUFFIX)
     if args.scheduler is not None:
         _engine.check_scheduler(args.scheduler)
@@ -268,8 +198,3 @@ def run_study(args) -> int:
     print(f"tenscell large-study {args.study}: {result.n_rows} rows in {result.n_parts} parts; "
           f"{result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0
-
-
-def _command(name: str) -> str:
-    import shlex
-    return "tenscell " + shlex.join(sys.argv[1:]) if sys.argv[1:2] == [name] else f"tenscell {name}"
