@@ -79,7 +79,8 @@ def main():
     (r1, t1), (r2, t2) = runs[1], runs[2]
     overhead = (t1 - t_loop) / args.cells
     print(f"speed-up 1 -> 2 workers:  {t1 / t2:.2f}x (goal >= 1.7)")
-    print(f"Dask overhead per cell:   {1000 * overhead:+.1f} ms = {100 * overhead / per_fit:+.1f}% of a fit (goal <= 5%)")
+    print(f"Dask overhead per cell:   {1000 * overhead:+.1f} ms = {100 * overhead / per_fit:+.1f}% of a fit "
+          "(goal <= 5%)")
 
     cols = [c for c in r1.table.columns if c not in ("time_s", "source")]
     same = r1.table[cols].equals(r2.table[cols]) and all(

@@ -300,23 +300,31 @@ def test_cli_synth_fit_resume_and_outputs(tmp_path, monkeypatch):
 
     monkeypatch.setenv("TENSCELL_PROGRESS", "0")
     pop, fits = tmp_path / "pop", tmp_path / "fits"
-    assert cli(["synth-population", "--cells", "4", "--out", str(pop), "--seed", "2", "--conditions", "a", "b:c=2"]) == 0
+    assert cli(["synth-population", "--cells", "6", "--out", pop, "--seed", "2", "--conditions", "a", "b:c=2"]) == 0
     assert (pop / "_generating_parameters.csv").is_file() and (pop / "manifest.json").is_file()
-    # an interrupted run leaves fits.partial/ and no output set; --resume completes it
+    # Ctrl-C during a run (a separate process): exit 130, no output set, the finished records kept
     work = Path(str(fits) + ".partial")
-    srcs = read_sources(pop)
-    fit_population(list(srcs[:2]), options=FAST, seed=0, workers=0, work_dir=work, progress=False)
     fast = ["--workers", "0", "--starts", str(FAST.starts), "--hops", str(FAST.hops)]
-    assert cli(["fit-population", str(pop), "--out", str(fits), *fast]) == 2
+    proc = subprocess.Popen([sys.executable, "-m", "tenscell", "fit-population", str(pop), "--out", str(fits), *fast],
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not list(work.glob("cells/*.json")) and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and "--resume" in err
     assert not fits.exists()
-    assert cli(["fit-population", str(pop), "--out", str(fits), *fast, "--resume"]) == 0
+    n_done = len(list(work.glob("cells/*.json")))
+    assert 1 <= n_done < 6
+    assert cli(["fit-population", pop, "--out", fits, *fast]) == 2  # a leftover run is not overwritten
+    assert cli(["fit-population", pop, "--out", fits, *fast, "--resume"]) == 0
     assert not work.exists()
     names = set(os.listdir(fits))
     assert {"population.csv", "population.parquet", "summary.csv", "cells.jsonl", "report.md", "parameters.png",
             "moduli.png", "recovery.csv", "manifest.json"} <= names
     csv, pq = read_table(fits / "population.csv"), read_table(fits / "population.parquet")
     pd.testing.assert_frame_equal(csv, pq, check_dtype=False)
-    assert len(pq) == 4 and "2 cell record(s) came from an interrupted run" in (fits / "report.md").read_text()
+    assert len(pq) == 6 and f"{n_done} cell record(s) came from an interrupted run" in (fits / "report.md").read_text()
     rec = pd.read_csv(fits / "recovery.csv").set_index(["condition", "quantity"])["median_error"]
     assert abs(rec[("a", "c_Ns_per_m")]) < 0.02 and abs(rec[("b", "c_Ns_per_m")]) < 0.02  # the condition's c ×2
     assert set(pq["condition"]) == {"a", "b"}

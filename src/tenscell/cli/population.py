@@ -5,10 +5,7 @@ import sys
 from pathlib import Path
 
 from ._args import add_out, frequencies, integer, number, number_list
-
-#: the fit's parametrizations (as in tenscell.fitting; written out so that building the parser stays light)
-TENDON_MODES = ("per-tendon", "per-family", "uniform")
-DAMPING_MODES = ("uniform", "per-family")
+from .fit import DAMPING_MODES, TENDON_MODES
 #: synthetic population generators (tenscell.population.synth.MODELS)
 MODELS = ("tensegrity", "powerlaw")
 #: suffix of the work directory kept beside --out while a run is under way
@@ -26,6 +23,12 @@ def add_cluster_options(p) -> None:
 
 
 def register(sub) -> None:
+    _register_synth(sub)
+    _register_fit(sub)
+    _register_study(sub)
+
+
+def _register_synth(sub) -> None:
     p = sub.add_parser(
         "synth-population", help="write a synthetic population of cells (known generating parameters)",
         description="Draw cells from the tensegrity model (log-normal EA per family, c, P) or from the "
@@ -39,11 +42,13 @@ def register(sub) -> None:
     p.add_argument("--noise", type=number(0.0, 1.0), default=0.02, help="relative noise of G', G'' (0.02 = 2%%)")
     p.add_argument("--spread", type=number(0.0, 10.0, "decades"), default=0.2,
                    help="standard deviation of log10 of each log-normal parameter (decades)")
-    p.add_argument("--freq", type=frequencies(100_000), default=None, help="frequencies: a:b:n or a comma list (Hz; default "
-                   "0.01:100:13)")
+    p.add_argument("--freq", type=frequencies(100_000), default=None,
+                   help="frequencies: a:b:n or a comma list (Hz; default 0.01:100:13)")
     p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed")
     p.set_defaults(func=run_synth)
 
+
+def _register_fit(sub) -> None:
     p = sub.add_parser(
         "fit-population", help="fit every cell of a population (Dask), write a tidy table, figures, report",
         description="Fit the tensegrity model to each cell of INPUT (a directory of per-cell CSV files, "
@@ -59,17 +64,21 @@ def register(sub) -> None:
                    help="continue an interrupted run from its work directory, fitting only the missing cells")
     p.add_argument("--work-dir", default=None, help=f"where cell records are kept while running "
                    f"(default: OUT{PARTIAL_SUFFIX}; removed when the output set is written)")
-    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="run seed (each cell's seed derives from it and its id)")
+    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0,
+                   help="run seed (each cell's seed derives from it and its id)")
     p.add_argument("--tendons", choices=TENDON_MODES, default="per-family", help="stiffness parametrization")
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform", help="damping parametrization")
     p.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per cell")
     p.add_argument("--hops", type=integer(0, 10_000), default=1, help="basin-hopping moves per start")
-    p.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.02, help="RMS log10 error (decades) counted as converged")
+    p.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.02,
+                   help="RMS log10 error (decades) counted as converged")
     p.add_argument("--truth", default=None,
                    help="generating parameters to check recovery against (default: INPUT/_generating_parameters.csv "
                         "when present)")
     p.set_defaults(func=run_fit)
 
+
+def _register_study(sub) -> None:
     p = sub.add_parser(
         "large-study", help="Monte Carlo sensitivity or parameter sweeps on Dask, streamed to Parquet",
         description="Large studies on the population engine: chunks run as Dask tasks and each chunk's rows are "
@@ -80,17 +89,19 @@ def register(sub) -> None:
     kinds.required = True
     mc = kinds.add_parser("monte-carlo", help="simultaneous ±spread perturbations of every parameter")
     mc.add_argument("--draws", type=integer(1, 10**9), required=True, help="number of draws")
-    mc.add_argument("--spread", type=number(0.0, 1.0, open_lo=True), default=0.10, help="uniform ±spread of every factor (fraction < 1)")
+    mc.add_argument("--spread", type=number(0.0, 1.0, open_lo=True), default=0.10,
+                    help="uniform ±spread of every factor (fraction < 1)")
     mc.add_argument("--parameters", choices=("all", "material"), default="all",
                     help="perturb EA_j, c_j, P and the geometry (all) or only the material parameters")
     mc.add_argument("--chunk", type=integer(1, 10**7), default=1000, help="draws per task and per Parquet part")
     mc.add_argument("--no-factors", action="store_true", help="do not store each draw's factors")
     sw = kinds.add_parser("sweep", help="prestress × heterogeneity × frequency, several realizations each")
-    sw.add_argument("--prestress", type=number_list(quantity="prestress"), required=True, help="prestresses P (N), comma list")
+    sw.add_argument("--prestress", type=number_list(quantity="prestress"), required=True,
+                    help="prestresses P (N), comma list")
     sw.add_argument("--heterogeneity", type=number_list(0.0, 10.0, "decades"), required=True,
                     help="standard deviations of log10 EA_j (decades), comma list")
-    sw.add_argument("--freq", type=frequencies(100_000), default=None, help="frequencies: a:b:n or a comma list (Hz; default "
-                    "0.01:1000:51)")
+    sw.add_argument("--freq", type=frequencies(100_000), default=None,
+                    help="frequencies: a:b:n or a comma list (Hz; default 0.01:1000:51)")
     sw.add_argument("--realizations", type=integer(1, 10**6), default=20, help="cells per (P, σ)")
     for q in (mc, sw):
         add_out(q)

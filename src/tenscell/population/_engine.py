@@ -24,7 +24,8 @@ import os
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
-__all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir", "WorkDirError"]
+__all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
+           "WorkDirError"]
 
 
 class WorkDirError(ValueError):

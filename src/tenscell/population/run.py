@@ -22,12 +22,13 @@ The default per-cell model is deliberately small (:class:`PopulationFitOptions`)
 one stiffness per tendon family, one damping, the prestress, the strut length
 fixed at the cell's own (it is an exact gauge of the moduli, so fixing it makes
 the fitted values comparable between cells), 4 starts of 1 basin-hopping
-move, tolerance 0.02 decades (about 5 %, the scatter of a single cell's
-moduli): a few tenths of a second per cell, and parameters a population can be
-summarised by. Starts matter more than moves here: with one start about a
-third of the cells land in the basin where the prestress sits at its lower
-bound and EA compensates (RMS nearly as small), with four none did in our
-synthetic trials; more moves per start did not change that. Any other :func:`~tenscell.fitting.fit` setting can be chosen.
+move, tolerance 0.02 decades (about 5 %): a few tenths of a second per cell,
+and parameters a population can be summarised by. Starts matter more than
+moves here: with one start about a third of synthetic cells land in the basin
+where the prestress sits at its lower bound and EA compensates (RMS nearly as
+small); with four, 6 of 200 in the benchmark; more moves per start did not
+change that. Such cells are flagged (``parameters_at_bound``). Any other
+:func:`~tenscell.fitting.fit` setting can be chosen.
 """
 from __future__ import annotations
 

@@ -170,7 +170,7 @@ class PopulationResult:
         return condition_summary(self.table, self.parameter_columns)
 
     def plot(self, ax=None, **kw):
-        """Distributions of the fitted parameters per condition (:func:`tenscell.plotting.population.parameter_distributions`)."""
+        """Distributions of the fitted parameters per condition (see :mod:`tenscell.plotting.population`)."""
         from ..plotting.population import parameter_distributions
 
         return parameter_distributions(self.table, self.parameter_columns, ax=ax, **kw)
