@@ -54,7 +54,7 @@ def population_markdown(result, recovery_table=None, title: str = "Population fi
     parts = [
         f"# {title}\n",
         f"{result.n_cells} cells; each fitted with the tensegrity model (tendon stiffness {o.tendons}, "
-        f"damping {o.damping}, strut length {fixed}), {o.starts} start(s) of {o.hops} basin-hopping moves, "
+        f"damping {o.damping}, strut length {fixed}), {o.starts} start(s) of {o.hops} basin-hopping move(s) each, "
         f"tolerance {num(o.tolerance)} decades RMS; run seed {result.seed} (each cell's seed derives from it "
         f"and the cell id). {result.n_resumed} cell record(s) came from an interrupted run. "
         f"Wall time {num(result.elapsed_s, 3)} s on {result.n_workers or 'no'} Dask worker(s).\n",
