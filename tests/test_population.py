@@ -228,7 +228,8 @@ def test_resume_after_interruption_gives_the_same_table(serial, pop_dir, client,
     srcs = read_sources(pop_dir)
     # an interrupted run: only the first cells got their records
     first = fit_population(list(srcs[:4]), options=FAST, seed=7, workers=0, work_dir=work, progress=False)
-    assert len(list((work / "cells").glob("*.json"))) == 4 and first.n_resumed == 0
+    assert len([p for p in (work / "cells").glob("*.json") if not p.name.startswith(".")]) == 4
+    assert first.n_resumed == 0
     with pytest.raises(WorkDirError, match="resume"):
         fit_population(pop_dir, options=FAST, seed=7, workers=0, work_dir=work)
     with pytest.raises(WorkDirError, match="seed"):
@@ -307,14 +308,17 @@ def test_cli_synth_fit_resume_and_outputs(tmp_path, monkeypatch):
     fast = ["--workers", "0", "--starts", str(FAST.starts), "--hops", str(FAST.hops)]
     proc = subprocess.Popen([sys.executable, "-m", "tenscell", "fit-population", str(pop), "--out", str(fits), *fast],
                             stderr=subprocess.PIPE, text=True)
+    def records():  # finished records (not atomic_path's temporary .*.json files)
+        return [p for p in work.glob("cells/*.json") if not p.name.startswith(".")]
+
     deadline = time.monotonic() + 120
-    while not list(work.glob("cells/*.json")) and time.monotonic() < deadline and proc.poll() is None:
+    while not records() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.02)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 130 and "--resume" in err
     assert not fits.exists()
-    n_done = len(list(work.glob("cells/*.json")))
+    n_done = len(records())
     assert 1 <= n_done < 6
     assert cli(["fit-population", pop, "--out", fits, *fast]) == 2  # a leftover run is not overwritten
     assert cli(["fit-population", pop, "--out", fits, *fast, "--resume"]) == 0
@@ -404,3 +408,14 @@ def test_cli_large_study(tmp_path, monkeypatch):
     assert "6 draws" in (out / "report.md").read_text()
     assert cli(["large-study", "sweep", "--prestress", "1,10", "--heterogeneity", "0,-1", "--out",
                  str(tmp_path / "sw")]) == 2
+
+
+def test_scheduler_address_forms(tmp_path):
+    f = tmp_path / "scheduler.json"
+    f.write_text("{}")
+    assert _engine.check_scheduler("tcp://127.0.0.1:8786") == "tcp://127.0.0.1:8786"
+    assert _engine.check_scheduler("127.0.0.1:8786") == "127.0.0.1:8786"
+    assert _engine.check_scheduler(str(f)) == str(f)
+    for bad in ("", "nowhere", "tcp://host:port", str(tmp_path / "missing.json")):
+        with pytest.raises(ValueError, match="--scheduler"):
+            _engine.check_scheduler(bad)

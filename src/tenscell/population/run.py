@@ -272,6 +272,8 @@ class _WorkDir:
     def records(self) -> dict[str, dict]:
         out = {}
         for p in sorted(self.cells.glob("*.json")):
+            if p.name.startswith("."):
+                continue  # a record being written (atomic_path's temporary file), or left by a killed writer
             try:
                 rec = json.loads(p.read_text())
             except (OSError, ValueError):
