@@ -41,6 +41,7 @@ __all__ = [
     "write_csv",
     "bundled",
     "bundled_names",
+    "generated_note",
 ]
 
 # Canonical spellings, used for writing and in messages; matching is on the
@@ -337,13 +338,8 @@ def _parse_header(raw: list[str], source: str, line: int) -> list[str]:
     return canonical
 
 
-def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
-    comments: list[str] = []
-    columns: list[str] | None = None
-    header_line = 0
-    values: dict[str, list[float]] = {}
-    row_lines: list[int] = []
-
+def _csv_lines(text: str, source: str, comments: list[str]):
+    """Yield ``(line number, fields)`` of every non-blank, non-comment line; comments go to ``comments``."""
     # Split on "\n" only (the file was opened in universal-newline mode), so
     # that line numbers agree with what an editor shows; str.splitlines()
     # would also break on form feeds and other rare separators.
@@ -355,10 +351,19 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
             comments.append(stripped[1:].strip())
             continue
         try:
-            fields = next(csv.reader([line], strict=True))
+            yield lineno, next(csv.reader([line], strict=True))
         except csv.Error as exc:
             raise _error(source, f"malformed CSV: {exc}", lineno) from exc
 
+
+def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
+    comments: list[str] = []
+    columns: list[str] | None = None
+    header_line = 0
+    values: dict[str, list[float]] = {}
+    row_lines: list[int] = []
+
+    for lineno, fields in _csv_lines(text, source, comments):
         if columns is None:
             columns = _parse_header(fields, source, lineno)
             header_line = lineno
@@ -639,3 +644,26 @@ def bundled(name: str) -> RheologyData:
     except (OSError, UnicodeDecodeError) as exc:
         raise _error(source, f"cannot read bundled file: {exc}") from exc
     return _parse_text(text, source, min_points=1)
+
+
+def generated_note(data) -> str | None:
+    """A phrase saying the data are generated from a published fit law, when their file's comments say so.
+
+    The bundled data sets are not raw measurements: each file's comments say
+    it was generated from a published law. Reports, figures and claims that
+    call them data repeat it; this reads it from the comments (``"not raw
+    measurements"`` or ``"generated from"``) rather than from the file name.
+
+    Parameters
+    ----------
+    data : RheologyData or CreepData
+        Anything with ``comments``.
+
+    Returns
+    -------
+    str or None
+    """
+    text = " ".join(getattr(data, "comments", ()) or ()).lower()
+    if "not raw measurement" in text or "generated from" in text:
+        return "generated from a published fit law, not raw measurements (the file's own comments say so)"
+    return None

@@ -16,6 +16,7 @@ from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
 from ._format import num, table
+from .fit_analysis import section_comparison, section_creep, section_identifiability, section_provenance
 
 __all__ = ["fit_markdown", "SECTIONS", "section_summary", "section_datasets", "section_baseline", "section_shape",
            "section_prestress", "section_stiffness", "section_parameters", "section_errors",
@@ -205,12 +206,15 @@ def section_alternatives(result: FitResult, baseline=None) -> list[str]:
 
 
 #: the report's sections, in order
-SECTIONS = [section_summary, section_datasets, section_baseline, section_shape, section_prestress,
-            section_stiffness, section_parameters, section_errors, section_alternatives]
+SECTIONS = [section_summary, section_provenance, section_datasets, section_baseline, section_shape,
+            section_prestress, section_identifiability, section_comparison, section_creep, section_stiffness,
+            section_parameters, section_errors, section_alternatives]
 
 
-def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None) -> str:
-    """A Markdown report: verdict, each data set, prestress activity, parameters, errors, baseline beside it.
+def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None,
+                 comparison=None) -> str:
+    """A Markdown report: verdict, each data set, prestress activity, identifiability, model comparison,
+    predicted creep, parameters, errors, baseline beside it.
 
     Parameters
     ----------
@@ -219,10 +223,14 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
     baseline : FitResult, optional
         The homogeneous fit (``tendons="uniform"``) of the same data.
     title : str, optional
+    comparison : ModelComparison, optional
+        From :func:`tenscell.fitting.models.compare_models` (e.g. with held-out
+        data); computed from ``result`` and ``baseline`` when not given.
     """
     if title is None:
         title = "Fit of the tensegrity model to " + " and ".join(f"`{_name(d.source)}`" for d in result.datasets)
     out = [f"# {title}", ""]
     for section in SECTIONS:
-        out += section(result, baseline)
+        out += section(result, baseline, comparison=comparison) if section is section_comparison \
+            else section(result, baseline)
     return "\n".join(out)
