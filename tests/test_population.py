@@ -20,8 +20,7 @@ import pandas as pd
 import pytest
 
 from tenscell.population import (
-    PopulationFitOptions, cell_seed, fit_population, read_sources, recovery, structural_damping_modulus,
-    synth_population,
+    PopulationFitOptions, cell_seed, fit_population, read_sources, recovery, synth_population,
 )
 from tenscell.population import _engine
 from tenscell.population.run import WorkDirError, fit_cell
@@ -72,19 +71,6 @@ def serial(pop_dir):
 
 
 # ---- synthetic populations ---------------------------------------------------------------------
-def test_structural_damping_law_invariants():
-    """G' slope = x − 1 and G''/G' = η = tan(π(x−1)/2) without the Newtonian term; μ adds ωμ to G'' only."""
-    f = np.logspace(-2, 2, 9)
-    x = 1.2
-    G = structural_damping_modulus(f, 1000.0, x, mu=0.0)
-    assert np.allclose(np.diff(np.log(G.real)) / np.diff(np.log(f)), x - 1, rtol=1e-12)
-    assert np.allclose(G.imag / G.real, math.tan(math.pi * (x - 1) / 2), rtol=1e-12)
-    G_mu = structural_damping_modulus(f, 1000.0, x, mu=0.5)
-    assert np.allclose(G_mu.real, G.real) and np.allclose(G_mu.imag - G.imag, 2 * np.pi * f * 0.5)
-    with pytest.raises(ValueError, match="x"):
-        structural_damping_modulus(f, 1000.0, 2.0)
-
-
 def test_synthetic_tensegrity_cells_are_the_model(population):
     """Noise-free synthetic data equal the linear model at the recorded generating parameters."""
     import tenscell
@@ -162,7 +148,7 @@ def test_cell_seed_is_stable_and_distinct():
 def test_fit_cell_derivatives_against_finite_differences(population):
     """The table's ∂lnG'/∂lnP and ∂lnG'/∂lnf (analytic, sum rule over c) match central differences."""
     import tenscell
-    from tenscell.population.run import _fitted_linear_model, _summarize
+    from tenscell.population.run import _summarize
 
     data = population.cells[0].data
     res = tenscell.fit(data, seed=1, progress=False, **FAST.fit_kwargs(tenscell.paper_cell()))
@@ -171,8 +157,7 @@ def test_fit_cell_derivatives_against_finite_differences(population):
     P = res.prestress_model()[0]
 
     def Gp(P_, f_):
-        lin = _fitted_linear_model(res, P_)
-        return tenscell.moduli(lin, [f_])[0][0]
+        return tenscell.moduli(res.model.linear(P_N=P_), [f_])[0][0]
 
     e_P = (math.log(Gp(P * math.exp(h), f0)) - math.log(Gp(P * math.exp(-h), f0))) / (2 * h)
     slope = (math.log(Gp(P, f0 * math.exp(h))) - math.log(Gp(P, f0 * math.exp(-h)))) / (2 * h)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import importlib
 
 _EXPORTS = {
-    "synth_population": "synth", "SyntheticPopulation": "synth", "structural_damping_modulus": "synth",
+    "synth_population": "synth", "SyntheticPopulation": "synth",
     "parse_condition": "synth", "Condition": "synth",
     "CellSource": "sources", "read_sources": "sources",
     "fit_population": "run", "PopulationFitOptions": "run", "fit_cell": "run", "cell_seed": "run",

@@ -11,7 +11,8 @@ Two generators:
     uses by default, so the generating parameters can be compared one by one.
 ``model="powerlaw"``
     each cell follows the structural-damping law used for cells (Fabry et al.
-    2001), :func:`structural_damping_modulus`, with a log-normal G0 and a normal
+    2001), :func:`tenscell.fitting.models.structural_damping_moduli` with
+    Φ0 = 2π·f0, with a log-normal G0 and a normal
     exponent x. The tensegrity fit then cannot return G0 and x; recovery is
     checked on what both share: G' at the reference frequency and the
     log-slope of G' there (``x − 1`` for the law).
@@ -43,7 +44,6 @@ __all__ = [
     "POWERLAW_MEDIANS",
     "Condition",
     "parse_condition",
-    "structural_damping_modulus",
     "SyntheticCell",
     "SyntheticPopulation",
     "synth_population",
@@ -62,37 +62,6 @@ TENSEGRITY_MEDIANS = {"EA_actin": 1000.0, "EA_intermediate_filament": 100.0, "c"
 POWERLAW_MEDIANS = {"G0": 1000.0, "x": 1.20, "mu": 0.25, "f0": 1.0}
 _TENSEGRITY_UNITS = {"EA_actin": "N", "EA_intermediate_filament": "N", "c": "Ns_per_m", "P": "N"}
 _POWERLAW_UNITS = {"G0": "Pa", "x": "", "mu": "Pa_s"}
-
-
-def structural_damping_modulus(f_hz, G0: float, x: float, mu: float = 0.0, f0: float = 1.0) -> np.ndarray:
-    """The structural-damping law of cells, ``G*(ω) = G0 (ω/Φ0)^(x−1)(1+iη)Γ(2−x)cos(π(x−1)/2) + iωμ``.
-
-    With ``η = tan(π(x−1)/2)``, ``ω = 2πf`` and ``Φ0 = 2π f0``.
-
-    Parameters
-    ----------
-    f_hz : array_like, shape (n,)
-        Frequencies (Hz), > 0.
-    G0 : float
-        Modulus scale (Pa), > 0.
-    x : float
-        Power-law exponent, 1 ≤ x < 2 (x − 1 is G''s and G''s log-slope; x = 1 is elastic).
-    mu : float
-        Newtonian viscosity (Pa·s), ≥ 0.
-    f0 : float
-        Scale frequency (Hz), > 0.
-
-    Returns
-    -------
-    ndarray of complex, shape (n,)
-        ``G' + iG''`` (Pa).
-    """
-    f = np.asarray(f_hz, dtype=float)
-    if not 1.0 <= x < 2.0:
-        raise ValueError(f"x (power-law exponent) must be in [1, 2), got {x!r}")
-    a = math.pi * (x - 1.0) / 2.0
-    w = 2 * math.pi * f
-    return G0 * (f / f0) ** (x - 1.0) * (1 + 1j * math.tan(a)) * math.gamma(2.0 - x) * math.cos(a) + 1j * w * mu
 
 
 @dataclass(frozen=True)
@@ -249,7 +218,9 @@ def _powerlaw_cell(rng, medians, spread, cond, f):
     x = 1.0 + (medians["x"] - 1.0) * cond.factor("x") * (1 + spread * math.log(10) * rng.standard_normal())
     x = float(np.clip(x, 1.0 + 1e-3, 1.9))
     mu = medians["mu"] * cond.factor("mu")
-    G = structural_damping_modulus(f, G0, x, mu, medians["f0"])
+    from ..fitting.models import structural_damping_moduli
+
+    G = structural_damping_moduli(2 * math.pi * f, G0, x, mu, 2 * math.pi * medians["f0"])
     return {"G0_Pa": G0, "x": x, "mu_Pa_s": mu, "f0_Hz": medians["f0"]}, G
 
 
