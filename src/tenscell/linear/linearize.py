@@ -37,7 +37,7 @@ class NotPositiveDefiniteError(ValueError):
     """K0 is not positive definite: the reference is not a stable equilibrium."""
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class LinearModel:
     """The linearized cell at one prestress and one set of tendon properties.
 
@@ -93,6 +93,43 @@ class LinearModel:
     def tensions(self) -> np.ndarray:
         """Tendon tensions at the reference, ``P·T0`` (N)."""
         return self.P * self.cell.T0
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from .._results import format_repr, span
+
+        return format_repr(
+            f"LinearModel of {self.cell.describe()} at P = {self.P:.6g} N",
+            f"{self.cell.n} coordinates, {self.cell.m} tendons; {'sparse' if sp.issparse(self.K0) else 'dense'} "
+            "K0, C0",
+            f"EA {span(self.EA, 'N')}; c {span(self.c, 'N·s/m')}; tensions {span(self.tensions, 'N')}",
+            f"strut length L = {self.L:.4g} m",
+        )
+
+    def to_dataframe(self):
+        """One row per tendon: the cell's columns and ``EA_N, c_Ns_per_m, rest_length_m, tension_N``."""
+        df = self.cell.to_dataframe()
+        df["EA_N"] = self.EA
+        df["c_Ns_per_m"] = self.c
+        df["rest_length_m"] = self.l0
+        df["tension_N"] = self.tensions
+        df.attrs["P_N"] = self.P
+        return df
+
+    def plot(self, axes=None, f_hz=None, **kw):
+        """G' and G'' of this model against frequency (log-log), on a pair of axes.
+
+        ``f_hz`` defaults to 61 frequencies from 0.01 to 1000 Hz (the paper's
+        window). The moduli come from :func:`tenscell.compliance`; for several
+        prestresses use :func:`tenscell.frequency_response` and its ``plot``.
+        Returns the two axes.
+        """
+        from ..response import FrequencyResponse, compliance
+
+        f = np.logspace(-2, 3, 61) if f_hz is None else np.atleast_1d(np.asarray(f_hz, dtype=float))
+        resp = FrequencyResponse(frequency_hz=f, prestress=np.array([self.P]), J=compliance(self, f)[None, :],
+                                 L=self.L)
+        return resp.plot(axes=axes, **kw)
 
 
 def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
@@ -220,7 +257,7 @@ def _require_positive_definite(K0, cell: Cell, P: float) -> None:
         )
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class RelaxationSpectrum:
     """Modes of the linear model: ``J(ω) = Σ_k r_k / (λ_k + iω)``.
 
@@ -247,6 +284,30 @@ class RelaxationSpectrum:
     def weights(self) -> np.ndarray:
         """Compliance weights ``r_k/λ_k`` (m/N): each mode's share of the static compliance."""
         return self.residues / self.rates
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from .._results import format_repr, span
+
+        return format_repr(
+            f"RelaxationSpectrum: {self.rates.size} modes",
+            f"rates λ {span(self.rates, '1/s')} (times {span(self.times, 's')})",
+            f"static compliance Σ r/λ = {self.weights.sum():.6g} m/N",
+        )
+
+    def to_dataframe(self):
+        """One row per mode: ``rate_per_s, time_s, residue_m_per_Ns, weight_m_per_N``."""
+        from .._results import dataframe
+
+        return dataframe({"rate_per_s": self.rates, "time_s": self.times, "residue_m_per_Ns": self.residues,
+                          "weight_m_per_N": self.weights})
+
+    def plot(self, ax=None, **kw):
+        """Each mode's compliance weight r/λ (m/N) against its relaxation time 1/λ (s), as stems."""
+        from ..plotting import spectrum_stems
+
+        return spectrum_stems(self.times, self.weights, ax=ax, xlabel="relaxation time 1/λ (s)",
+                              ylabel="compliance weight r/λ (m/N)", **kw)
 
 
 #: a Cholesky pivot of C0 smaller than this fraction of the largest marks C0 as singular
