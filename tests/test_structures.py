@@ -291,12 +291,13 @@ def test_cli_show_errors_are_one_line(tmp_path, capsys):
     from tenscell.cli import main
 
     bad = _small(tmp_path, _set(["tendons", 3, "nodes"], [4, 4]))
-    assert main(["show", str(bad), "--out", str(tmp_path)]) == 2
+    out = tmp_path / "out"  # an output set replaces its directory: never the one holding the input
+    assert main(["show", str(bad), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "cell.json: tendon 3 joins node 4 to itself" in err[0]
-    assert main(["show", "nonesuch", "--out", str(tmp_path)]) == 2
+    assert main(["show", "nonesuch", "--out", str(out)]) == 2
     assert "neither a file nor a built-in" in capsys.readouterr().err
-    assert not list(tmp_path.glob("*.png"))  # nothing half-written
+    assert not out.exists() and [p.name for p in tmp_path.iterdir()] == ["cell.json"]  # nothing half-written
 
 
 def test_cli_show_draws_a_structure_that_is_not_prestressable(tmp_path, capsys):
@@ -304,6 +305,6 @@ def test_cli_show_draws_a_structure_that_is_not_prestressable(tmp_path, capsys):
 
     path = tmp_path / "flat.json"
     save_structure(path, tenscell.paper_structure(0.0, math.radians(60.0), 1.0))
-    assert main(["show", str(path), "--out", str(tmp_path)]) == 0
+    assert main(["show", str(path), "--out", str(tmp_path / "out")]) == 0
     assert "NOT prestressable" in capsys.readouterr().out
-    assert (tmp_path / "flat_structure.png").exists() and not (tmp_path / "flat_modes.png").exists()
+    assert (tmp_path / "out" / "flat_structure.png").exists() and not (tmp_path / "out" / "flat_modes.png").exists()

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import math
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +21,7 @@ import scipy.optimize
 from threadpoolctl import threadpool_limits
 
 from .._checks import positive_scalar
+from .._parallel import starmap
 from .._progress import progress_bar
 from ..io.data import RheologyData
 from ..model.equilibrium import Cell
@@ -271,24 +271,12 @@ def fit(
     target = polish * tolerance
     args = [(problem, k, children[k], hops, patience, max_nfev, t_begin, target) for k in range(starts)]
 
-    chains: list[_Chain] = []
     bar = progress_bar(total=starts, desc=f"fit ({tendons})", unit="start", progress=progress)
     try:
-        if jobs == 1 or starts == 1:
-            for a in args:
-                chains.append(_run_chain(*a))
-                if bar is not None:
-                    bar.update(1)
-        else:
-            with ProcessPoolExecutor(max_workers=min(jobs, starts)) as pool:
-                futures = [pool.submit(_run_chain, *a) for a in args]
-                for fut in futures:
-                    chains.append(fut.result())
-                    if bar is not None:
-                        bar.update(1)
+        # worker processes that stop cleanly on Ctrl-C and die with this process (tenscell._parallel)
+        chains: list[_Chain] = starmap(_run_chain, args, jobs=jobs, on_done=lambda i, ch: bar.update(1))
     finally:
-        if bar is not None:
-            bar.close()
+        bar.close()
 
     chains.sort(key=lambda ch: ch.start)
     best = min(chains, key=lambda ch: (ch.cost, ch.start))

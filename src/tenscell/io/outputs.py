@@ -27,7 +27,7 @@ import tempfile
 from pathlib import Path
 
 __all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text", "OutputSet", "OutputLocationError",
-           "check_output_dir", "MANIFEST"]
+           "check_output_dir", "check_output_file", "MANIFEST"]
 
 #: name of the manifest file written into every output set
 MANIFEST = "manifest.json"
@@ -119,14 +119,37 @@ def check_output_dir(path, flag: str = "--out") -> Path:
         raise OutputLocationError(
             f"{flag} {path}: directory is not empty and holds no tenscell {MANIFEST}; "
             "choose a new or empty directory (a run replaces its output directory as a whole)")
-    parent = path.absolute().parent
-    probe = parent
+    _check_parent(path, flag)
+    return path
+
+
+def _check_parent(path: Path, flag: str) -> None:
+    """The nearest existing ancestor of ``path``'s directory is a writable directory."""
+    probe = path.absolute().parent
     while not probe.exists():
         probe = probe.parent
     if not probe.is_dir():
         raise OutputLocationError(f"{flag} {path}: {probe} is not a directory")
     if not os.access(probe, os.W_OK | os.X_OK):
         raise OutputLocationError(f"{flag} {path}: {probe} is not writable")
+
+
+def check_output_file(path, flag: str) -> Path:
+    """Validate a single output file's location before any computation; return it as a Path.
+
+    It must not be a directory, and its directory must exist (or be creatable)
+    and be writable.
+
+    Raises
+    ------
+    OutputLocationError
+        With a one-line message naming ``flag``.
+    """
+    trailing = str(path).endswith(("/", os.sep))
+    path = Path(path)
+    if trailing or path.is_dir():
+        raise OutputLocationError(f"{flag} {path}: is a directory; give a file name")
+    _check_parent(path, flag)
     return path
 
 

@@ -1,0 +1,101 @@
+"""The ``tenscell`` command line: parse arguments, call the library, write output sets.
+
+One module per command group; each has ``register(subparsers)`` (standard
+library only, so that building the parser is quick) and run functions that
+import the library when they run. Adding a command is one line in
+:data:`COMMAND_MODULES`.
+
+:func:`main` returns the exit status (also for ``--help`` and refused flags)
+instead of raising SystemExit. Exit status: 0 success, 1 a fit that did not reach its tolerance, 2 bad
+input (one line on stderr naming the flag, before any computation, nothing
+written), 130 interrupted (Ctrl-C), 141 output pipe closed.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+import warnings
+
+from ._args import Parser, command_line
+
+__all__ = ["main", "build_parser", "COMMAND_MODULES"]
+
+#: command modules, in the order their commands appear in --help; each has ``register(sub)``
+COMMAND_MODULES = (
+    "moduli",
+    "reproduce",
+    "fit",
+    "dynamics",
+    "study",
+    "show",
+)
+
+
+def _version() -> str:
+    from .. import __version__
+    return __version__
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand (imports only the standard library)."""
+    parser = Parser(
+        prog="tenscell",
+        description="Tensegrity models of the cytoskeleton: moduli G'(f, P), G''(f, P), fits and studies.",
+    )
+    parser.add_argument("--version", action="version", version=f"tenscell {_version()}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
+    sub.required = True
+    for name in COMMAND_MODULES:
+        importlib.import_module(f"{__name__}.{name}").register(sub)
+    return parser
+
+
+def _quiet_broken_pipe() -> int:
+    """stdout's reader went away (``tenscell moduli | head -1``): stop quietly."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError):  # stdout without a file descriptor (captured in tests)
+        pass
+    return 141
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``tenscell`` command; returns the exit status."""
+    # The command writes files and never opens windows; the library itself never chooses a backend.
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    args = None
+    try:
+        try:
+            args = build_parser().parse_args(argv)
+        except SystemExit as stop:  # --help, --version, or a flag refused by the parser (one line, status 2)
+            return stop.code if isinstance(stop.code, int) else 2
+        args.command_line = command_line(argv)
+        with warnings.catch_warnings():
+            # floating-point warnings never reach the user: inputs are range-checked and
+            # results checked for finiteness where an overflow is possible
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        print("tenscell: interrupted", file=sys.stderr, flush=True)
+        return 130
+    except BrokenPipeError:
+        return _quiet_broken_pipe()
+    except (ValueError, OSError, RecursionError) as err:
+        print(f"{_prog(args)}: error: {_one_line(err)}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        print(f"{_prog(args)}: error: out of memory; reduce the size of the run", file=sys.stderr)
+        return 2
+
+
+def _prog(args) -> str:
+    command = getattr(args, "command", None)
+    return f"tenscell {command}" if command else "tenscell"
+
+
+def _one_line(err: BaseException) -> str:
+    text = " ".join(str(err).split())
+    return text if text else type(err).__name__

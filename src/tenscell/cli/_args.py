@@ -1,0 +1,296 @@
+"""Option parsers shared by every command: one implementation of each concept.
+
+Building the parser imports only the standard library (``tenscell --help``
+must be quick); the values are checked here, at parse time, so that a bad
+flag is refused with one line naming it before any computation or file.
+
+Concepts and their flags (the same everywhere):
+
+``--prestress``  prestress P (N, the paper's Pa): one value, or a comma list where a command sweeps it
+``--freq``       frequencies (Hz): a comma list or ``a:b:n`` (n log-spaced points), or one value
+``--amplitude``  load amplitude(s): one value, or a comma list where a command sweeps it
+``--EA``, ``--c`` member values: one value, ``family=value`` pairs, or one value per member
+``--L``          strut length (m); ``--alpha-deg``, ``--delta-deg`` the reference angles (degrees)
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+__all__ = [
+    "Parser", "HelpFormatter", "number", "integer", "number_list", "frequencies", "member_values",
+    "lattice_size", "add_model_options", "add_prestress", "add_out", "hidden_alias",
+    "model_from_args", "RANGES", "MAX_GRID_POINTS",
+]
+
+#: allowed range of each physical quantity (closed interval, in the flag's unit). The model is
+#: linear algebra on these values and their products; inside these bounds every product stays
+#: far from float64 overflow, and outside them a result would be inf/NaN or rounding noise.
+RANGES = {
+    "prestress": (1e-30, 1e30, "N"),
+    "EA": (1e-30, 1e30, "N"),
+    "c": (1e-30, 1e30, "N·s/m"),
+    "L": (1e-9, 1e6, "m"),
+    "frequency": (1e-12, 1e12, "Hz"),
+}
+
+#: most (prestress, frequency) points one command evaluates: each point costs a complex
+#: solve and a CSV row; 10^6 rows are ~60 MB of CSV and a few seconds.
+MAX_GRID_POINTS = 1_000_000
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Shows each option's default (unless the help already says it, or there is none)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if "%(default)" in text or "default" in text.lower():
+            return text
+        if action.default is None or action.default is False or action.default is argparse.SUPPRESS \
+                or not action.option_strings:
+            return text
+        shown = action.default
+        if isinstance(shown, tuple):
+            shown = ",".join(_fmt(v) for v in shown)
+        elif isinstance(shown, float):
+            shown = _fmt(shown)
+        return text + f" (default: {shown})".replace("%", "%%")
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with a one-line error (``tenscell CMD: error: ...``) and exit status 2."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
+def _fmt(x: float) -> str:
+    return f"{x:g}"
+
+
+def _float(text: str) -> float:
+    text = str(text).strip()
+    if not text:
+        raise argparse.ArgumentTypeError("empty value; expected a number")
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a number") from None
+
+
+def _in_range(v: float, lo: float | None, hi: float | None, unit: str, *, open_lo: bool = False) -> float:
+    u = f" {unit}" if unit else ""
+    if math.isnan(v):
+        raise argparse.ArgumentTypeError(f"got nan; expected a number{_range_text(lo, hi, unit, open_lo)}")
+    bad = (lo is not None and (v <= lo if open_lo else v < lo)) or (hi is not None and v > hi)
+    if bad or math.isinf(v):
+        raise argparse.ArgumentTypeError(f"{_fmt(v)}{u} is out of range; allowed{_range_text(lo, hi, unit, open_lo)}")
+    return v
+
+
+def _range_text(lo, hi, unit, open_lo=False) -> str:
+    u = f" {unit}" if unit else ""
+    if lo is None and hi is None:
+        return " a finite number" + (f" ({unit})" if unit else "")
+    if hi is None:
+        return f" {'>' if open_lo else '>='} {_fmt(lo)}{u}"
+    if lo is None:
+        return f" <= {_fmt(hi)}{u}"
+    return f" {'(' if open_lo else '['}{_fmt(lo)}, {_fmt(hi)}]{u}"
+
+
+def number(lo: float | None = None, hi: float | None = None, unit: str = "", *, open_lo: bool = False,
+           quantity: str | None = None):
+    """An argparse ``type``: one finite float in [lo, hi] (or (lo, hi] with ``open_lo``).
+
+    ``quantity`` names an entry of :data:`RANGES` to take the bounds and unit from.
+    """
+    if quantity is not None:
+        lo, hi, unit = RANGES[quantity]
+
+    def convert(text):
+        return _in_range(_float(text), lo, hi, unit, open_lo=open_lo)
+
+    convert.__name__ = "number"
+    return convert
+
+
+def integer(lo: int | None = None, hi: int | None = None, what: str = ""):
+    """An argparse ``type``: a whole number in [lo, hi]."""
+    def convert(text):
+        text = str(text).strip()
+        try:
+            v = int(text)
+        except ValueError:
+            shown = text if len(text) <= 40 else text[:37] + "..."
+            raise argparse.ArgumentTypeError(f"{shown!r} is not a whole number") from None
+        if (lo is not None and v < lo) or (hi is not None and v > hi):
+            shown = str(v) if len(str(v)) <= 20 else f"a {len(str(v))}-digit number"
+            rng = (f"at least {lo}" if hi is None else f"{lo}..{hi}") if lo is not None else f"at most {hi}"
+            raise argparse.ArgumentTypeError(f"{shown} is out of range; allowed {rng}{(' ' + what) if what else ''}")
+        return v
+
+    convert.__name__ = "integer"
+    return convert
+
+
+def number_list(lo=None, hi=None, unit="", *, quantity=None, max_items: int = 10_000, open_lo: bool = False):
+    """An argparse ``type``: a comma list of numbers, each in range; returns a tuple of floats."""
+    if quantity is not None:
+        lo, hi, unit = RANGES[quantity]
+
+    def convert(text):
+        items = str(text).split(",")
+        if len(items) > max_items:
+            raise argparse.ArgumentTypeError(f"{len(items)} values; at most {max_items}")
+        return tuple(_in_range(_float(item), lo, hi, unit, open_lo=open_lo) for item in items)
+
+    convert.__name__ = "list"
+    return convert
+
+
+def frequencies(max_points: int = MAX_GRID_POINTS):
+    """An argparse ``type``: ``a:b:n`` (n log-spaced points from a to b Hz) or a comma list (Hz)."""
+    lo, hi, unit = RANGES["frequency"]
+    as_list = number_list(quantity="frequency", max_items=max_points)
+
+    def convert(text):
+        text = str(text)
+        if ":" not in text:
+            return as_list(text)
+        parts = text.split(":")
+        if len(parts) != 3:
+            raise argparse.ArgumentTypeError(f"expected a:b:n or a comma list, got {text[:40]!r}")
+        a = _in_range(_float(parts[0]), lo, hi, unit)
+        b = _in_range(_float(parts[1]), lo, hi, unit)
+        n = integer(1, None, "points")(parts[2])
+        if n > max_points:
+            raise argparse.ArgumentTypeError(
+                f"{n:,} points would cost about {_bytes(n * 16 * 40)} of memory and {n * 2e-6:.3g} s or more; "
+                f"at most {max_points:,}")
+        if n == 1:
+            return (a,)
+        la, lb = math.log10(a), math.log10(b)
+        return tuple(10.0 ** (la + (lb - la) * k / (n - 1)) for k in range(n))
+
+    convert.__name__ = "frequencies"
+    return convert
+
+
+def _bytes(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if n < 1024 or unit == "TiB":
+            return f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} TiB"  # pragma: no cover
+
+
+def member_values(quantity: str):
+    """An argparse ``type``: one value, ``family=value`` pairs, or one value per member (comma list).
+
+    Returns a float, a dict {family: float} or a tuple of floats; each value in
+    the range of ``quantity`` (see :data:`RANGES`).
+    """
+    lo, hi, unit = RANGES[quantity]
+
+    def convert(text):
+        text = str(text).strip()
+        if "=" in text:
+            out = {}
+            for item in text.split(","):
+                key, _, val = item.partition("=")
+                key = key.strip()
+                if not key or not _:
+                    raise argparse.ArgumentTypeError(f"expected family=value items, got {item[:40]!r}")
+                out[key] = _in_range(_float(val), lo, hi, unit)
+            return out
+        vals = number_list(lo, hi, unit)(text)
+        return vals[0] if len(vals) == 1 else vals
+
+    convert.__name__ = "member values"
+    return convert
+
+
+def lattice_size(max_modules: int = 1000):
+    """An argparse ``type``: ``NXxNY`` or ``NXxNYxNZ`` module counts (each >= 1), product <= max_modules."""
+    def convert(text):
+        parts = str(text).lower().split("x")
+        if len(parts) not in (2, 3):
+            raise argparse.ArgumentTypeError(f"expected NXxNY or NXxNYxNZ, got {str(text)[:40]!r}")
+        dims = tuple(integer(1, max_modules, "modules")(p) for p in parts)
+        total = math.prod(dims)
+        if total > max_modules:
+            raise argparse.ArgumentTypeError(
+                f"{'x'.join(map(str, dims))} is {total:,} modules (about {total * 6 * 3 * 3:,} coordinates); "
+                f"at most {max_modules:,} modules")
+        return dims
+
+    convert.__name__ = "size"
+    return convert
+
+
+def hidden_alias(p: argparse.ArgumentParser, alias: str, dest: str, **kw) -> None:
+    """Accept an old spelling of an option without showing it in --help."""
+    p.add_argument(alias, dest=dest, help=argparse.SUPPRESS, default=argparse.SUPPRESS, **kw)
+
+
+def add_prestress(p: argparse.ArgumentParser, *, sweep: bool, default: str = "1000") -> None:
+    """``--prestress`` (with the old ``--P`` as a hidden alias): a list where the command sweeps it."""
+    kind = number_list(quantity="prestress", max_items=MAX_GRID_POINTS) if sweep else number(quantity="prestress")
+    help_ = ("prestresses P (N, the paper's Pa; comma list)" if sweep else "prestress P (N, the paper's Pa)")
+    p.add_argument("--prestress", type=kind, default=kind(default), metavar="P", help=help_)
+    hidden_alias(p, "--P", "prestress", type=kind)
+
+
+def add_out(p: argparse.ArgumentParser, default: str | None = None) -> None:
+    """``--out``: the output directory, replaced as a whole by a successful run."""
+    text = "output directory (created, or replaced as a whole by a successful run)"
+    if default is None:
+        p.add_argument("--out", required=True, help=text)
+    else:
+        p.add_argument("--out", default=default, help=text)
+
+
+def add_model_options(p: argparse.ArgumentParser) -> None:
+    """The options that choose the paper cell and its tendon properties (shared by commands)."""
+    p.add_argument("--alpha-deg", type=number(-180.0, 180.0, "degrees"), default=0.0,
+                   help="reference azimuth α (degrees)")
+    p.add_argument("--delta-deg", type=number(0.0, 90.0, "degrees", open_lo=True), default=None,
+                   help="reference declination δ (degrees; default 50 with IFs, the IF-free curve without)")
+    p.add_argument("--EA", type=member_values("EA"), default=1.0,
+                   help="tendon stiffness EA (N): one value, family=value pairs or one per tendon (comma list)")
+    p.add_argument("--c", type=member_values("c"), default=1.0,
+                   help="tendon damping c (N·s/m): same forms as --EA")
+    p.add_argument("--L", type=number(quantity="L"), default=1.0, help="strut length L (m)")
+    p.add_argument("--no-if", action="store_true", help="remove the 12 intermediate filaments")
+
+
+def model_from_args(args):
+    """(cell, EA, c) from the shared model options; EA and c expanded to one value per tendon."""
+    from ..io.structure_files import member_values as expand
+    from ..model.shapes import paper_cell
+
+    delta = None if args.delta_deg is None else math.radians(args.delta_deg)
+    cell = paper_cell(alpha=math.radians(args.alpha_deg), delta=delta, L=args.L,
+                      intermediate_filaments=not args.no_if)
+    EA = expand(cell.structure, _arrayish(args.EA), "--EA", "N")
+    c = expand(cell.structure, _arrayish(args.c), "--c", "N·s/m")
+    return cell, EA, c
+
+
+def _arrayish(v):
+    if isinstance(v, tuple):
+        import numpy as np
+        return np.asarray(v, dtype=float)
+    return v
+
+
+def command_line(argv) -> str:
+    """The command as typed (for manifests)."""
+    import shlex
+    return "tenscell " + shlex.join(str(a) for a in (sys.argv[1:] if argv is None else argv))

@@ -1,0 +1,305 @@
+"""``tenscell simulate`` and ``tenscell creep``: the nonlinear time domain of the paper cell."""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from ._args import (RANGES, add_model_options, add_out, add_prestress, frequencies, hidden_alias, integer, number,
+                    number_list)
+
+#: load amplitudes: force (N) or displacement (m); beyond this every tendon is far outside the model
+AMPLITUDE_RANGE = (1e-30, 1e30)
+
+
+def _one_frequency(text):
+    f = frequencies(max_points=10_000)(text)
+    if len(f) != 1:
+        raise argparse.ArgumentTypeError(
+            f"simulate takes one frequency, got {len(f)} (sweep frequencies with `tenscell moduli`, "
+            "amplitudes with a comma list in --amplitude)")
+    return f[0]
+
+
+_one_frequency.__name__ = "frequency"
+
+
+def _add_law_options(p) -> None:
+    add_prestress(p, sweep=False)
+    p.add_argument("--beta", type=number(0.05, 20.0), default=1.0,
+                   help="dashpot exponent: T = EA(l/l0-1) + c·sign(l')|l'|^beta (1 is the Voigt law)")
+    p.add_argument("--velocity-scale", type=number(1e-30, 1e30, "m/s"), default=None,
+                   help="smoothing velocity of the power-law dashpot near l' = 0 (m/s, default 1e-3; beta != 1 only)")
+    p.add_argument("--rtol", type=number(1e-13, 1e-2), default=None,
+                   help="relative tolerance of the integrator (default 1e-8; 1e-6 when beta != 1)")
+    p.add_argument("--slack", choices=("allow", "error"), default="allow",
+                   help="let tendons go slack and record it, or stop with an error")
+
+
+def register(sub) -> None:
+    lo, hi = AMPLITUDE_RANGE
+    p = sub.add_parser("simulate", help="nonlinear time-domain simulation under a sinusoidal load",
+                       description="Integrate the nonlinear equations of motion of the paper cell under a sinusoidal "
+                                   "load to a periodic steady state; write time traces, the force-displacement loop, "
+                                   "the harmonic spectrum (CSV + PNG) and simulate.json (G', G'' from the time domain "
+                                   "and from the linear model, THD, slack tendons). With several amplitudes, also "
+                                   "sweep them and report where G', G'' depart from the linear values by 1% and "
+                                   "where THD reaches 1% (sweep.csv).")
+    p.add_argument("--amplitude", type=number_list(lo, hi, "N or m", max_items=200), required=True,
+                   help="load amplitude(s): force F at the load point (N), or displacement (m) with "
+                        "--control displacement; a comma list also runs the amplitude sweep (the first value's "
+                        "traces are written)")
+    hidden_alias(p, "--amplitudes", "sweep_amplitudes", type=number_list(lo, hi, "N", max_items=200))
+    p.add_argument("--freq", type=_one_frequency, required=True, metavar="F", help="forcing frequency f (Hz)")
+    p.add_argument("--cycles", type=integer(1, 10_000), default=None,
+                   help="cycles to simulate (default: adaptive, until two consecutive cycles agree)")
+    p.add_argument("--control", choices=("force", "displacement"), default="force",
+                   help="prescribe the force or the probe displacement")
+    p.add_argument("--samples", type=integer(8, 100_000), default=128, help="samples per cycle")
+    add_out(p)
+    add_model_options(p)
+    _add_law_options(p)
+    p.set_defaults(func=run_simulate)
+
+    p = sub.add_parser("creep", help="creep compliance J(t): linear (exact) vs nonlinear (simulated)",
+                       description="Creep after a force step at the load point: the linear model's exact J(t) from "
+                                   "its relaxation spectrum and the nonlinear simulation for each step force; "
+                                   "log-log plot, local exponent, power-law fit over a window, relaxation modulus.")
+    p.add_argument("--amplitude", type=number_list(lo, hi, "N", max_items=50), default=(0.1, 30.0),
+                   help="step forces (N, comma list; default 0.1,30)")
+    p.add_argument("--t-min", type=number(1e-15, 1e15, "s"), default=1e-5, help="first output time (s)")
+    p.add_argument("--t-max", type=number(1e-15, 1e15, "s"), default=1.0, help="last output time (s)")
+    p.add_argument("--points", type=integer(3, 100_000), default=61, help="log-spaced output times")
+    p.add_argument("--window", type=_window, default=None, help="power-law fit window a:b (s; default the whole range)")
+    add_out(p)
+    add_model_options(p)
+    _add_law_options(p)
+    p.set_defaults(func=run_creep)
+
+
+def _window(text):
+    parts = str(text).replace(":", ",").split(",")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"expected a:b (s), got {str(text)[:40]!r}")
+    a, b = (number(1e-15, 1e15, "s")(x) for x in parts)
+    if not a < b:
+        raise argparse.ArgumentTypeError(f"expected a < b, got {a:g}:{b:g}")
+    return a, b
+
+
+_window.__name__ = "window"
+
+
+def law_from_args(args):
+    """(cell, law, solver options) from the model and law options."""
+    from ._args import model_from_args
+    from ..laws import power_dashpot_law, voigt_law
+
+    cell, EA, c = model_from_args(args)
+    if args.beta == 1.0:
+        law = voigt_law(cell, P=args.prestress, EA=EA, c=c)
+    else:
+        kw = {} if args.velocity_scale is None else {"velocity_scale": args.velocity_scale}
+        law = power_dashpot_law(cell, P=args.prestress, EA=EA, c=c, beta=args.beta, **kw)
+    rtol = args.rtol if args.rtol is not None else (1e-8 if args.beta == 1.0 else 1e-6)
+    return cell, law, {"rtol": rtol, "slack": args.slack}
+
+
+def check_resolvable_frequency(cell, law, f: float, rtol: float) -> None:
+    """ValueError if the response at ``f`` Hz is too small for the integrator to resolve.
+
+    The integrator's absolute tolerance is ``rtol`` × the static displacement, so
+    a periodic response smaller than 1000 × that is integration noise (at 1 GHz
+    the default cell moves 1e-9 of its static displacement). The check uses the
+    linear model; laws without a linearization (beta < 1) are not checked.
+    """
+    import numpy as np
+
+    from ..dynamics import linearize_law
+    from ..laws import LinearizationError
+    from ..response import compliance
+
+    try:
+        lin = linearize_law(cell, law)
+    except LinearizationError:
+        return
+    floor = 1000.0 * rtol
+    lo, hi, unit = RANGES["frequency"]
+    grid = np.logspace(math.log10(lo), math.log10(hi), 241)
+    with np.errstate(all="ignore"):
+        J0 = abs(compliance(lin, np.array([lo]))[0])
+        ratio = np.abs(compliance(lin, np.array([f])))[0] / J0
+        if ratio >= floor:
+            return
+        ok = np.abs(compliance(lin, grid)) / J0 >= floor
+    f_max = float(grid[ok].max()) if ok.any() else lo
+    raise ValueError(f"--freq {f:g} Hz: the response there is {ratio:.2g} of the static one, below what the "
+                     f"integrator resolves at --rtol {rtol:g}; allowed up to about {f_max:.3g} Hz for this cell "
+                     "(G', G'' at any frequency: `tenscell moduli`)")
+
+
+def run_simulate(args) -> int:
+    from ..io.outputs import OutputSet
+
+    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    import numpy as np
+
+    from .. import plotting
+    from ..dynamics import amplitude_sweep, oscillatory_response
+    from ..io.outputs import write_csv_rows, write_json
+    from ..io.tables import finite
+
+    amplitude = args.amplitude[0]
+    sweep_amps = getattr(args, "sweep_amplitudes", None) or (args.amplitude if len(args.amplitude) > 1 else None)
+    cell, law, solver = law_from_args(args)
+    f = args.freq
+    check_resolvable_frequency(cell, law, f, solver["rtol"])
+    kw = dict(control=args.control, cycles=args.cycles, samples_per_cycle=args.samples, **solver)
+    res = oscillatory_response(cell, law, amplitude, f, **kw)
+    finite([res.G_storage, res.G_loss], "G', G'' of the simulation")
+    sim, h = res.simulation, res.harmonics
+    sweep = None
+    if sweep_amps:
+        sweep = amplitude_sweep(cell, law, f, np.asarray(sweep_amps), **{k: v for k, v in kw.items() if k != "control"})
+    unit = "N" if args.control == "force" else "m"
+    label = f"{args.control} amplitude {amplitude:g} {unit}, {f:g} Hz"
+    t, z, F = res.cycle()
+    zl, Fl = res.linear_cycle()
+    lin_ok = res.linear is not None
+    ref = abs(h.response[1])
+    summary = res.summary()
+    summary["model"] = {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta,
+                        "EA": _jsonable(args.EA), "c": _jsonable(args.c), "prestress_N": args.prestress}
+    written = ["traces.csv", "traces.png", "loop.csv", "loop.png", "harmonics.csv", "harmonics.png"]
+    if sweep is not None:
+        summary["sweep"] = {
+            "amplitudes_N": sweep.amplitudes.tolist(),
+            "amplitude_for_1pct_departure_N": sweep.threshold("departure", 0.01),
+            "amplitude_for_1pct_storage_departure_N": sweep.threshold("storage_departure", 0.01),
+            "amplitude_for_1pct_loss_departure_N": sweep.threshold("loss_departure", 0.01),
+            "amplitude_for_1pct_thd_N": sweep.threshold("thd", 0.01),
+        }
+        written.append("sweep.csv")
+    written.append("simulate.json")
+    with out as d:
+        write_csv_rows(d / "traces.csv", ["t_s", "force_N", "z_m", "load_displacement_m"]
+                       + [f"T{j}_N" for j in range(cell.m)],
+                       ([float(sim.t[k]), float(sim.force[k]), float(sim.z[k]), float(sim.u[k])]
+                        + [float(x) for x in sim.tensions[k]] for k in range(sim.t.size)))
+        plotting.save(plotting.time_traces(sim, f"Nonlinear simulation: {label}"), d / "traces.png")
+        write_csv_rows(d / "loop.csv", ["t_s", "force_N", "z_m", "z_linear_m", "force_linear_N"],
+                       ([float(a), float(b), float(c_), float(e), float(g)] for a, b, c_, e, g in zip(t, F, z, zl, Fl)))
+        plotting.save(plotting.force_displacement_loop(z, F, zl if lin_ok else None, Fl if lin_ok else None,
+                                                       f"Force-displacement loop: {label}"), d / "loop.png")
+        write_csv_rows(d / "harmonics.csv", ["harmonic", "frequency_Hz", "z_amplitude_m", "z_phase_rad", "z_relative",
+                                             "force_amplitude_N"],
+                       ([k, k * f, float(abs(h.response[k])), float(np.angle(h.response[k])),
+                         float(abs(h.response[k]) / ref), float(abs(h.force[k]))] for k in range(1, h.response.size)))
+        plotting.save(plotting.harmonic_spectrum(h), d / "harmonics.png")
+        if sweep is not None:
+            write_csv_rows(d / "sweep.csv", ["amplitude_N", "G_storage_Pa", "G_loss_Pa", "storage_departure",
+                                             "loss_departure", "thd", "periodicity", "n_slack"], sweep.rows())
+        write_json(d / "simulate.json", summary)
+    print(f"G' = {res.G_storage:.6g} Pa (linear {res.G_storage_linear:.6g}), G'' = {res.G_loss:.6g} Pa "
+          f"(linear {res.G_loss_linear:.6g}), THD = {100 * res.thd:.3g} %, slack tendons: {sim.slack_tendons or 'none'}")
+    if not (h.periodicity <= 1e-4):
+        print(f"tenscell simulate: warning: the last two cycles differ by {h.periodicity:.2g} of the amplitude; "
+              "the state may not be periodic yet (raise --cycles or omit it for the adaptive default)", file=sys.stderr)
+    print(f"tenscell: wrote {', '.join(written)} in {out.target}/", file=sys.stderr)
+    return 0
+
+
+def _jsonable(v):
+    if isinstance(v, tuple):
+        return list(v)
+    return v
+
+
+def run_creep(args) -> int:
+    if not args.t_min < args.t_max:
+        raise ValueError(f"--t-min must be below --t-max, got {args.t_min:g} s and {args.t_max:g} s")
+    from ..io.outputs import OutputSet
+
+    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    import numpy as np
+
+    from .. import plotting
+    from ..dynamics import creep_response, linearize_law
+    from ..io.outputs import write_csv_rows, write_json
+    from ..io.tables import finite
+    from ..laws import LinearizationError
+    from ..timedomain import creep_spectrum, fit_power_law, local_exponent, stress_relaxation
+
+    cell, law, solver = law_from_args(args)
+    t = np.logspace(math.log10(args.t_min), math.log10(args.t_max), args.points)
+    win = args.window or (float(t[0]), float(t[-1]))
+    P0 = args.prestress
+    try:
+        lin, note = linearize_law(cell, law), ""
+    except LinearizationError as err:  # beta < 1: only the nonlinear curves exist
+        lin, note = None, str(err)
+    curves, expo, fits = {}, {}, {}
+    summary = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0},
+               "linear_note": note, "power_law_window_s": [float(win[0]), float(win[1])]}
+    tables = {}
+    if lin is not None:
+        spec = creep_spectrum(lin)
+        curves["linear"] = finite(spec.compliance(t), "the linear creep compliance")
+        expo["linear"] = spec.exponent(t)
+        rel = stress_relaxation(lin)
+        tables["spectrum.csv"] = (["retardation_time_s", "weight_m_per_N"],
+                                  [[float(a), float(b)] for a, b in zip(spec.times, spec.weights)])
+        tables["relaxation.csv"] = (["t_s", "G_relaxation_Pa"],
+                                    [[float(a), float(b)] for a, b in zip(t, rel.modulus(t))])
+        summary.update({
+            "static_compliance_m_per_N": spec.static,
+            "instantaneous_compliance_m_per_N": spec.instantaneous,
+            "retardation_times_s": spec.times.tolist(),
+            "retardation_weights_m_per_N": spec.weights.tolist(),
+            "relaxation": {"equilibrium_modulus_Pa": (0.5 / rel.L) * rel.equilibrium, "viscosity_Pa_s": rel.viscosity,
+                           "times_s": rel.times.tolist(), "weights_N_per_m": rel.weights.tolist()},
+        })
+    steps = []
+    for F in args.amplitude:
+        cr = creep_response(cell, law, float(F), t, **solver)
+        key = f"step {F:g} N"
+        curves[key] = finite(cr.compliance, f"the creep compliance after the {F:g} N step")
+        step = {"force_N": float(F), "slack_tendons": cr.simulation.slack_summary()}
+        if lin is not None:
+            step["max_relative_departure_from_linear"] = float(np.abs(cr.compliance / curves["linear"] - 1).max())
+        steps.append(step)
+        if np.all(cr.compliance > 0):
+            expo[key] = local_exponent(t, cr.compliance)
+    summary["steps"] = steps
+    inwin = (t >= win[0]) & (t <= win[1])
+    fit_lines = []
+    for k, J in curves.items():
+        if np.all(J[inwin] > 0) and inwin.sum() >= 2:
+            fits[k] = fit_power_law(t, J, win[0], win[1])
+    summary["power_law_fits"] = {}
+    for k, v in fits.items():
+        e = expo.get(k)
+        rng = [float(e[inwin].min()), float(e[inwin].max())] if e is not None else None
+        summary["power_law_fits"][k] = {"A_m_per_N": v.A, "alpha": v.alpha, "rms_log": v.rms_log, "max_rel": v.max_rel,
+                                        "points": v.n, "local_exponent_range": rng}
+        fit_lines.append(f"{k}: J(t) ~ {v.A:.4g}·t^{v.alpha:.4f} over [{v.t_min:g}, {v.t_max:g}] s "
+                         f"(rms log residual {v.rms_log:.3g})"
+                         + (f"; local exponent in the window {rng[0]:.3g}..{rng[1]:.3g}" if rng else ""))
+    keys = list(curves)
+    figure = plotting.creep_loglog(t, curves, expo, fits.get("linear"), f"Creep after a force step (P = {P0:g} N)")
+    with out as d:
+        write_csv_rows(d / "creep.csv", ["t_s"] + [f"J_{k.replace(' ', '_')}_m_per_N" for k in keys]
+                       + [f"exponent_{k.replace(' ', '_')}" for k in expo],
+                       ([float(t[i])] + [float(curves[k][i]) for k in keys] + [float(e[i]) for e in expo.values()]
+                        for i in range(t.size)))
+        for name, (header, rows) in tables.items():
+            write_csv_rows(d / name, header, rows)
+        plotting.save(figure, d / "creep.png")
+        write_json(d / "creep.json", summary)
+    for line in fit_lines:
+        print(line)
+    if note:
+        print(f"tenscell creep: note: {note}", file=sys.stderr)
+    files = ["creep.csv", "creep.png", *tables, "creep.json"]
+    print(f"tenscell: wrote {', '.join(files)} in {out.target}/", file=sys.stderr)
+    return 0

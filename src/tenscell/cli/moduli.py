@@ -1,0 +1,41 @@
+"""``tenscell moduli``: G', G'' of the paper cell as CSV on standard output."""
+from __future__ import annotations
+
+import sys
+
+from ._args import MAX_GRID_POINTS, add_model_options, add_prestress, frequencies
+
+DEFAULT_FREQ = "0.01:1000:61"
+
+
+def register(sub) -> None:
+    p = sub.add_parser("moduli", help="G', G'' of the paper cell as CSV on stdout",
+                       description="Storage and loss moduli (Pa) of the paper cell, as CSV on standard output "
+                                   "(columns prestress_Pa, frequency_Hz, G_storage_Pa, G_loss_Pa: the layout "
+                                   "`tenscell fit` reads).")
+    add_prestress(p, sweep=True)
+    p.add_argument("--freq", type=frequencies(), default=frequencies()(DEFAULT_FREQ), metavar="F",
+                   help=f"frequencies (Hz): comma list or a:b:n log-spaced (default {DEFAULT_FREQ})")
+    add_model_options(p)
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    n = len(args.prestress) * len(args.freq)
+    if n > MAX_GRID_POINTS:
+        raise ValueError(f"--prestress × --freq is {len(args.prestress):,} × {len(args.freq):,} = {n:,} points; "
+                         f"at most {MAX_GRID_POINTS:,} per run")
+    from ._args import model_from_args
+    from ..io.tables import check_finite_rows, moduli_table
+    from ..response import frequency_response
+
+    cell, EA, c = model_from_args(args)
+    resp = frequency_response(cell, args.freq, args.prestress, EA=EA, c=c)
+    header, rows = moduli_table(resp)
+    rows = list(check_finite_rows(rows, "G', G''", "(--prestress, --EA, --c, --L, --freq)"))
+    out = sys.stdout
+    out.write(",".join(header) + "\n")
+    for P, f, gs, gl in rows:
+        out.write(f"{P:.10g},{f:.10g},{gs:.10g},{gl:.10g}\n")
+    out.flush()
+    return 0

@@ -1,0 +1,155 @@
+"""``tenscell show``: a structure's summary and 3D pictures (a structure file or a built-in)."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ._args import add_out, add_prestress, integer, lattice_size, member_values, number
+
+#: built-in structures `tenscell show` knows by name
+SHOW_BUILTINS = ("paper", "sphere6", "sphere12", "sphere30", "sheet", "block")
+#: most modules of a built-in lattice (a 10x10x10 block: 2.4e4 coordinates, about a minute with its modes)
+MAX_LATTICE_MODULES = 1000
+
+
+def register(sub) -> None:
+    p = sub.add_parser("show", help="summary and 3D pictures of any structure (file or built-in)",
+                       description="Print a structure's summary (counts, rank of A, self-stress dimension, "
+                                   "mechanisms, prestressability) and draw it in 3D with its slowest relaxation "
+                                   "modes. TARGET is a structure file (JSON, docs/structure-format.md) or one of: "
+                                   + ", ".join(SHOW_BUILTINS) + ".")
+    p.add_argument("target", metavar="TARGET", help="structure file or built-in name")
+    add_out(p, default="out")
+    p.add_argument("--modes", type=integer(0, 50), default=3, help="number of slowest relaxation modes to draw (0: none)")
+    add_prestress(p, sweep=False)
+    p.add_argument("--EA", type=member_values("EA"), default=None,
+                   help="member stiffness EA (N): one value, family=value pairs (e.g. strut=1000,default=1) "
+                        "or one per member; default: the file's values, 1 N for built-ins "
+                        "(lattice struts 1000 N)")
+    p.add_argument("--c", type=member_values("c"), default=None,
+                   help="member damping c (N·s/m), same forms as --EA; default: the file's values, 1 for built-ins")
+    p.add_argument("--L", type=number(quantity="L"), default=1.0, help="strut length of a built-in (m)")
+    p.add_argument("--size", type=lattice_size(MAX_LATTICE_MODULES), default=None,
+                   help="modules of a built-in lattice: NXxNY (sheet) or NXxNYxNZ (block); default 4x4 and 3x3x3")
+    p.add_argument("--save", default=None, help="also write the structure to this JSON file")
+    p.set_defaults(func=run)
+
+
+def _check_target(args) -> None:
+    """Refuse a bad TARGET/--size combination before any computation."""
+    t = args.target
+    if t in SHOW_BUILTINS:
+        if args.size is not None and t not in ("sheet", "block"):
+            raise ValueError(f"--size applies to the lattices (sheet, block), not to {t!r}")
+        if args.size is not None and t == "sheet" and len(args.size) == 3 and args.size[2] != 1:
+            raise ValueError(f"--size: a sheet is NXxNY (one layer), got {'x'.join(map(str, args.size))}")
+        if args.size is not None and t == "block" and len(args.size) != 3:
+            raise ValueError(f"--size: a block is NXxNYxNZ, got {'x'.join(map(str, args.size))}")
+        return
+    if not Path(t).is_file():
+        raise ValueError(f"{t!r} is neither a file nor a built-in ({', '.join(SHOW_BUILTINS)})")
+
+
+def show_target(args):
+    """(stem, cell or (structure, T0), EA, c) for a file or a built-in name."""
+    from ..io.structure_files import load_structure_file
+    from ..model import lattices
+    from ..model.shapes import paper_cell
+
+    target = args.target
+    if target in SHOW_BUILTINS:
+        lattice_ea = {"strut": lattices.LATTICE_STRUT_EA, "default": 1.0}
+        if target == "paper":
+            return "paper", paper_cell(L=args.L), 1.0, 1.0
+        if target.startswith("sphere"):
+            return target, lattices.sphere_cell(int(target[6:]), L=args.L), 1.0, 1.0
+        dims = args.size
+        if target == "sheet":
+            nx, ny, nz = (tuple(dims) + (1,))[:3] if dims else (4, 4, 1)
+        else:
+            nx, ny, nz = dims if dims else (3, 3, 3)
+        return target, lattices.lattice_cell(nx, ny, nz, L=args.L), lattice_ea, 1.0
+    sf = load_structure_file(Path(target))
+    return Path(target).stem, (sf.structure, sf.T0), sf.EA, sf.c
+
+
+def _arrayish(v):
+    if isinstance(v, tuple):
+        import numpy as np
+        return np.asarray(v, dtype=float)
+    return v
+
+
+def run(args) -> int:
+    from ..io.outputs import OutputSet, check_output_file
+
+    _check_target(args)
+    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    save = check_output_file(args.save, "--save") if args.save else None
+
+    from .. import plotting
+    from .._progress import stage
+    from ..io.outputs import write_text
+    from ..io.structure_files import member_values as expand, save_structure
+    from ..model.equilibrium import NotPrestressableError, equilibrate
+    from ..summary import relaxation_modes, summarize
+
+    stem, obj, EA, c = show_target(args)
+    if args.EA is not None:
+        EA = _arrayish(args.EA)
+    if args.c is not None:
+        c = _arrayish(args.c)
+    if isinstance(obj, tuple):  # a file: use its self-stress when it has one
+        structure, T0 = obj
+        target = structure
+        if T0 is not None:
+            try:
+                target = equilibrate(structure, "local", T0=T0)
+            except NotPrestressableError:
+                target = structure
+    else:
+        target, structure = obj, obj.structure
+    EA = expand(structure, EA, "--EA", "N")
+    c = expand(structure, c, "--c", "N·s/m")
+    big = structure.n_tendons > 2000
+    if big:
+        stage(f"{stem}: {structure.n_tendons:,} members; summary and linearization")
+    summary, cell, lin = summarize(target, P=args.prestress, EA=EA, c=c)
+    text = summary.text()
+    modes = None
+    if lin is not None and args.modes > 0:
+        if big:
+            stage(f"{stem}: the {args.modes} slowest relaxation modes")
+        try:
+            modes = relaxation_modes(lin, args.modes)
+            text += "slowest modes  " + ", ".join(f"{r:.6g}" for r in modes.rates) + " 1/s"
+            if modes.residuals is not None:
+                text += f" (the slowest the load excites; Ritz residuals <= {modes.residuals.max():.1g})"
+            text += "\n"
+        except RuntimeError as err:  # an eigensolver that did not converge: still draw the structure
+            text += f"slowest modes  not computed: {err}\n"
+    if big:
+        stage(f"{stem}: drawing")
+    written = [f"{stem}_summary.txt", f"{stem}_structure.png"] + ([f"{stem}_modes.png"] if modes is not None else [])
+    with out as d:
+        write_text(d / f"{stem}_summary.txt", text)
+        plotting.save(plotting.structure_3d(structure), d / f"{stem}_structure.png")
+        if modes is not None:
+            plotting.save(plotting.relaxation_modes_3d(structure, modes.rates, modes.displacements),
+                          d / f"{stem}_modes.png")
+        if save is not None:
+            # inside --out: part of the set; elsewhere: written (atomically) just before the set is committed
+            inside = _relative_to(save, out.target)
+            save_structure(d / inside if inside else save, structure, EA=EA, c=c,
+                           T0=None if cell is None else cell.T0)
+    sys.stdout.write(text)
+    where = f" and {args.save}" if args.save else ""
+    print(f"tenscell: wrote {', '.join(written)} in {out.target}/{where}", file=sys.stderr)
+    return 0
+
+
+def _relative_to(path: Path, directory: Path):
+    try:
+        return path.absolute().relative_to(directory.absolute())
+    except ValueError:
+        return None

@@ -1,0 +1,145 @@
+"""``tenscell study NAME``: the discussion's variant studies (figures, CSV, Markdown)."""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from ._args import add_out, integer
+
+def _study_no_if(out: Path, log, args=None) -> None:
+    from .. import plotting
+    from ..studies import variants
+    from ..io.outputs import write_csv_rows, write_text
+
+    s = variants.no_if_study()
+    rows = ((P, f, a, b, c, d) for (P, f, a, b), (_, _, c, d) in zip(s.without.rows(), s.with_ifs.rows()))
+    write_csv_rows(out / "no_if_moduli.csv",
+                   ["prestress", "frequency_Hz", "G_storage_noIF", "G_loss_noIF", "G_storage_IF", "G_loss_IF"], rows)
+    write_csv_rows(out / "no_if_peaks.csv", ["prestress", "peak_frequency_Hz", "peak_G_loss", "G_storage_at_peak"],
+                   ((float(P), p.frequency_hz, p.height, p.storage) for P, p in zip(s.without.prestress, s.peaks)))
+    plotting.save(plotting.no_if_figure(s), out / "no_if_moduli.png")
+    plotting.save(plotting.no_if_peaks_figure(s), out / "no_if_peaks.png")
+    write_text(out / "no_if.md", variants.no_if_markdown(s))
+    log("no_if_moduli.csv, no_if_peaks.csv, no_if_moduli.png, no_if_peaks.png, no_if.md")
+
+
+def _study_sensitivity(out: Path, log, args=None) -> None:
+    from .. import plotting, sensitivity
+    from ..io.outputs import write_csv_rows, write_text
+
+    draws = getattr(args, "draws", 200)
+    seed = getattr(args, "seed", 0)
+    el = sensitivity.elasticities()
+    table = sensitivity.perturbation_table()
+    summary = sensitivity.summarize(el, table)
+    mcs = [sensitivity.monte_carlo(draws, seed=seed), sensitivity.monte_carlo(draws, seed=seed, parameters="material")]
+    f = el.frequency_hz
+    write_csv_rows(out / "elasticities.csv", ["parameter", "group", "value", "method", "frequency_Hz",
+                                              "dlnGstorage_dlnp", "dlnGloss_dlnp"],
+                   ((n, g, float(v), m, float(f[k]), float(el.storage[i, k]), float(el.loss[i, k]))
+                    for i, (n, g, v, m) in enumerate(zip(el.names, el.groups, el.values, el.methods)) for k in range(f.size)))
+    write_csv_rows(out / "perturbations.csv", ["parameter", "group", "dGstorage_minus", "dGstorage_plus",
+                                               "dGloss_minus", "dGloss_plus", "note"],
+                   ((r.name, r.group, *r.storage, *r.loss, r.note) for r in table))
+    write_csv_rows(out / "sensitivity_table.csv", ["group", "n", "max_abs_elasticity_storage", "max_abs_elasticity_loss",
+                                                   "max_change_storage", "max_change_loss", "holds_8pct", "note"],
+                   ((x.group, x.n, x.max_elasticity_storage, x.max_elasticity_loss, x.max_change_storage,
+                     x.max_change_loss, x.holds, x.note) for x in summary))
+    write_csv_rows(out / "monte_carlo.csv", ["set", "draw", "valid", "max_change_storage", "max_change_loss", "reason"],
+                   ((mc.label, i, bool(mc.valid[i]), float(mc.change_storage[i]), float(mc.change_loss[i]), mc.reasons[i])
+                    for mc in mcs for i in range(mc.factors.shape[0])))
+    plotting.save(plotting.elasticities_figure(el), out / "elasticities.png")
+    plotting.save(plotting.monte_carlo_figure(mcs), out / "monte_carlo.png")
+    write_text(out / "sensitivity.md", sensitivity.sensitivity_markdown(el, summary, mcs))
+    log("elasticities.csv, perturbations.csv, sensitivity_table.csv, monte_carlo.csv, elasticities.png, "
+        "monte_carlo.png, sensitivity.md")
+
+
+def _study_references(out: Path, log, args=None) -> None:
+    from .. import plotting
+    from ..studies import variants
+    from ..io.outputs import write_csv_rows, write_text
+
+    s = variants.references_study()
+    mp = s.map
+    write_csv_rows(out / "reference_map.csv", ["alpha_deg", "delta_deg", "status", "min_tension", "if_tension"],
+                   ((math.degrees(a), math.degrees(d), ("valid", "not prestressable", "K0 not positive definite")[mp.status[i, k]],
+                     float(mp.min_tension[i, k]), float(mp.if_tension[i, k]))
+                    for i, d in enumerate(mp.delta) for k, a in enumerate(mp.alpha)))
+    write_csv_rows(out / "references_moduli.csv", ["reference", "prestress", "frequency_Hz", "G_storage", "G_loss"],
+                   ((name, *row) for name, r in s.responses.items() for row in r.rows()))
+    plotting.save(plotting.reference_map_figure(mp, s.if_free_curve), out / "reference_map.png")
+    P = float(next(iter(s.responses.values())).prestress[len(next(iter(s.responses.values())).prestress) // 2])
+    plotting.save(plotting.references_figure(s.responses, P), out / "references.png")
+    write_text(out / "references.md", variants.references_markdown(s))
+    log("reference_map.csv, references_moduli.csv, reference_map.png, references.png, references.md")
+
+
+def _study_semiflexible(out: Path, log, args=None) -> None:
+    from .. import plotting
+    from ..studies import variants
+    from ..io.outputs import write_csv_rows, write_text
+
+    s = variants.semiflexible_study()
+    f = s.frequency_hz
+    write_csv_rows(out / "semiflexible.csv", ["EA_strut", "frequency_Hz", "G_storage", "G_loss", "G_storage_rigid", "G_loss_rigid"],
+                   ((float(e), float(f[k]), float(s.G[i, k].real), float(s.G[i, k].imag), float(s.G_rigid[k].real),
+                     float(s.G_rigid[k].imag)) for i, e in enumerate(s.EA_strut) for k in range(f.size)))
+    write_csv_rows(out / "semiflexible_convergence.csv", ["EA_strut", "max_rel_diff_storage", "max_rel_diff_loss"],
+                   zip(map(float, s.EA_strut), map(float, s.error_storage), map(float, s.error_loss)))
+    plotting.save(plotting.semiflexible_figure(s), out / "semiflexible.png")
+    write_text(out / "semiflexible.md", variants.semiflexible_markdown(s))
+    log("semiflexible.csv, semiflexible_convergence.csv, semiflexible.png, semiflexible.md")
+
+
+def _study_stiffening(out: Path, log, args=None) -> None:
+    from .. import plotting
+    from ..studies import variants
+    from ..io.outputs import write_csv_rows, write_text
+
+    s = variants.stiffening_study()
+    write_csv_rows(out / "stiffening.csv", ["b", "prestress", "frequency_Hz", "G_storage", "G_loss", "G_static", "IF_tangent_N_per_m"],
+                   ((float(b), float(P), float(f), float(s.G[i, k, j].real), float(s.G[i, k, j].imag), float(s.static[i, k]),
+                     float(s.if_tangent[i, k]))
+                    for i, b in enumerate(s.b) for k, P in enumerate(s.prestress) for j, f in enumerate(s.frequency_hz)))
+    plotting.save(plotting.stiffening_figure(s), out / "stiffening.png")
+    write_text(out / "stiffening.md", variants.stiffening_markdown(s))
+    log("stiffening.csv, stiffening.png, stiffening.md")
+
+
+#: the studies of `tenscell study NAME`: name -> writer(out_dir, log, args)
+STUDIES = {
+    "no-if": _study_no_if,
+    "sensitivity": _study_sensitivity,
+    "references": _study_references,
+    "semiflexible": _study_semiflexible,
+    "stiffening": _study_stiffening,
+}
+
+
+def register(sub) -> None:
+    p = sub.add_parser("study", help="run one of the discussion's variant studies (figures, CSV, markdown)",
+                       description="Studies of the paper's discussion and future work: no-if (no intermediate "
+                                   "filaments, the G'' peak), sensitivity (elasticities, ±10% table, Monte Carlo), "
+                                   "references (valid q0(α, δ), regular and cylindrical cells), semiflexible (elastic "
+                                   "struts), stiffening (strain-stiffening IFs).")
+    p.add_argument("name", choices=sorted(STUDIES), help="which study")
+    add_out(p, default="out/study")
+    p.add_argument("--draws", type=integer(1, 100_000), default=200, help="Monte Carlo draws per set (sensitivity)")
+    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="Monte Carlo seed (sensitivity)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    import sys
+    import time
+
+    from ..io.outputs import OutputSet
+
+    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    t = time.perf_counter()
+    with out as d:
+        STUDIES[args.name](d, lambda msg: print(f"tenscell: {msg}", file=sys.stderr, flush=True), args)
+    print(f"tenscell: study {args.name} finished in {time.perf_counter() - t:.1f} s; wrote {out.target}/",
+          file=sys.stderr)
+    return 0
