@@ -19,8 +19,10 @@ scripts that need one corner of the package do not pay for all of it.
 """
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from importlib import import_module
+
+# typing.TYPE_CHECKING without importing typing (mypy and pyright treat this name as true)
+TYPE_CHECKING = False
 
 __version__ = "0.1.0"
 
@@ -62,14 +64,14 @@ _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 __all__ = list(_WHERE)
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     """Import a public name, or a submodule (``tenscell.plotting``), on first use."""
     module = _WHERE.get(name)
     if module is not None:
-        value = getattr(importlib.import_module(f".{module}", __name__), name)
+        value = getattr(import_module(f".{module}", __name__), name)
     elif not name.startswith("_"):
         try:
-            value = importlib.import_module(f".{name}", __name__)
+            value = import_module(f".{name}", __name__)
         except ModuleNotFoundError as err:
             if err.name != f"{__name__}.{name}":
                 raise  # the submodule exists but one of its imports is missing
