@@ -22,7 +22,8 @@ from tenscell import (
     paper_cell,
     static_modulus,
 )
-from tenscell import cli, stiffening
+from tenscell import cli
+from tenscell.laws import StiffeningFilament
 from tenscell.model import shapes
 from tenscell.studies import variants
 from tenscell.model.equilibrium import generalized_forces
@@ -125,18 +126,21 @@ def test_exponential_law_tangent_inverse_and_linear_limit():
     l0, EA = 0.8, 2.0
     l = np.linspace(0.7, 1.1, 9)
     for b in (0.0, 0.5, 3.0):
+        law = StiffeningFilament(EA=EA, c=0.0, b=b, l0=np.full(l.size, l0))
         h = 1e-6
-        fd = (stiffening.exponential_tension(l + h, l0, EA, b) - stiffening.exponential_tension(l - h, l0, EA, b)) / (2 * h)
-        assert np.allclose(stiffening.exponential_tangent(l, l0, EA, b), fd, rtol=1e-7)
-        T = stiffening.exponential_tension(l, l0, EA, b)
-        assert np.allclose(stiffening.exponential_rest_length(l, T, EA, b), l0, rtol=1e-13)
+        fd = (law.elastic(l + h) - law.elastic(l - h)) / (2 * h)
+        assert np.allclose(law.stiffness_at_rest(l), fd, rtol=1e-7)
+        T = law.elastic(l)
+        assert np.allclose(law.rest_lengths(l, T), l0, rtol=1e-13)
     # b -> 0 is the linear spring, continuously
-    assert np.allclose(stiffening.exponential_tension(l, l0, EA, 1e-9), EA * (l / l0 - 1), rtol=1e-8, atol=1e-12)
-    assert np.array_equal(stiffening.exponential_tension(l, l0, EA, 0.0), EA * (l / l0 - 1))
+    tiny = StiffeningFilament(EA=EA, c=0.0, b=1e-9, l0=np.full(l.size, l0))
+    zero = StiffeningFilament(EA=EA, c=0.0, b=0.0, l0=np.full(l.size, l0))
+    assert np.allclose(tiny.elastic(l), EA * (l / l0 - 1), rtol=1e-8, atol=1e-12)
+    assert np.array_equal(zero.elastic(l), EA * (l / l0 - 1))
     with pytest.raises(ValueError, match="b"):
-        stiffening.exponential_tension(l, l0, EA, -1.0)
+        StiffeningFilament(EA=EA, c=0.0, b=-1.0)
     with pytest.raises(ValueError, match="EA"):
-        stiffening.exponential_rest_length(l, 1.0, 0.0, 1.0)
+        StiffeningFilament(EA=0.0, c=0.0, b=1.0)
 
 
 def test_stiffening_reduces_to_voigt_at_zero_stiffening():
@@ -156,8 +160,10 @@ def test_stiffening_stiffness_is_the_jacobian_of_the_nonlinear_forces():
     bb = np.zeros(cell.m)
     bb[cell.structure.family_indices(INTERMEDIATE_FILAMENT)] = b
 
+    law = StiffeningFilament(EA=1.0, c=1.0, b=bb, l0=lin.l0)
+
     def tensions(l):
-        return stiffening.exponential_tension(l, lin.l0, 1.0, bb)
+        return law.elastic(l)
 
     f0, _ = generalized_forces(cell, cell.q0, tensions)
     assert np.abs(f0).max() < 1e-10 * P  # the rest lengths give equilibrium at q0

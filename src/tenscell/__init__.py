@@ -34,16 +34,17 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "model.structure": ("Point", "Structure", "StructureError"),
     "io.structure_files": ("StructureFile", "load_structure", "load_structure_file", "member_values",
                            "save_structure"),
-    "model.equilibrium": ("Cell", "NotPrestressableError", "equilibrate", "rest_lengths"),
+    "model.equilibrium": ("Cell", "NotPrestressableError", "equilibrate"),
     "model.formfinding": ("FormFindingError", "FormFindingResult", "find_form", "pin_jointed", "rigid_body_modes"),
     "model.shapes": ("DEFAULT_DELTA", "REGULAR_DELTA", "cylindrical_cell", "if_free_delta", "paper_cell",
                      "paper_structure", "regular_cell", "semiflexible_paper_cell"),
     "model.lattices": ("expanded_octahedron", "lattice_cell", "lattice_structure", "sphere_cell",
                        "sphere_structure"),
     # laws, linearization, response
-    "laws": ("LinearizationError", "PowerDashpot", "Voigt", "power_dashpot_law", "voigt_law"),
+    "laws": ("CompositeLaw", "LinearSpring", "LinearizationError", "PowerDashpot", "StiffeningFilament", "Tangent",
+             "TendonLaw", "Voigt", "family_laws", "power_dashpot_law", "rest_lengths", "stiffening_law", "voigt_law"),
     "linear.linearize": ("LinearModel", "NotPositiveDefiniteError", "RelaxationSpectrum", "linearize",
-                         "linearize_tangent", "relaxation_spectrum"),
+                         "linearize_law", "linearize_tangent", "relaxation_spectrum"),
     "response": ("FrequencyResponse", "compliance", "frequency_response", "log_slope", "loss_tangent", "moduli",
                  "static_modulus", "viscosity_limit"),
     "linear.krylov": ("krylov_compliance",),
@@ -52,7 +53,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     # analyses
     "summary": ("relaxation_modes", "summarize"),
     "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
-                 "creep_response", "linearize_law", "oscillatory_response", "simulate"),
+                 "creep_response", "oscillatory_response", "simulate"),
     "fitting": ("FitParameter", "FitResult", "fit"),
     "sensitivity": ("analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table"),
     "studies.variants": ("linearize_semiflexible", "linearize_stiffening", "loss_peak", "no_if_study",
@@ -94,17 +95,21 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
     from .dynamics import (
-        SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, linearize_law,
-        oscillatory_response, simulate,
+        SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, oscillatory_response,
+        simulate,
     )
     from .fitting import FitParameter, FitResult, fit
     from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
-    from .laws import LinearizationError, PowerDashpot, Voigt, power_dashpot_law, voigt_law
+    from .laws import (
+        CompositeLaw, LinearSpring, LinearizationError, PowerDashpot, StiffeningFilament, Tangent, TendonLaw, Voigt,
+        family_laws, power_dashpot_law, rest_lengths, stiffening_law, voigt_law,
+    )
     from .linear.krylov import krylov_compliance
     from .linear.linearize import (
-        LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, linearize_tangent, relaxation_spectrum,
+        LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, linearize_law, linearize_tangent,
+        relaxation_spectrum,
     )
-    from .model.equilibrium import Cell, NotPrestressableError, equilibrate, rest_lengths
+    from .model.equilibrium import Cell, NotPrestressableError, equilibrate
     from .model.formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
     from .model.lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
     from .model.shapes import (

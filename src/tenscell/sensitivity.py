@@ -128,11 +128,20 @@ def _family_tag(family: str) -> str:
 
 
 def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Elasticities:
-    """Exact elasticities of G for every EA_j, every c_j and P of a linear model.
+    """Exact elasticities of G for every parameter of the tendon law and for P.
 
-    Works for any dense :class:`~tenscell.linear.linearize.LinearModel` built by
-    :func:`tenscell.linearize` (where ``K0 = P·Kp + Σ EA_j a_j a_jᵀ/l_j``),
-    including singular C0 (direct solves).
+    The linear model's tendon law (``lin.law``; Voigt with ``lin.EA``,
+    ``lin.c`` for a hand-built model) gives the tangents ``k_j``, ``c_j`` and
+    their derivatives (:meth:`tenscell.laws.TendonLaw.tangent`). With
+    ``x = Z⁻¹(−H0)``, ``y = Z⁻ᵀD0``, ``Z = K0 + iωC0`` and
+    ``K0 = P·Kp + Σ (k_j − P·T0_j/l_j) a_j a_jᵀ``:
+
+    * ``∂J/∂θ_j = −(∂k_j/∂θ_j + iω ∂c_j/∂θ_j)(yᵀa_j)(a_jᵀx)`` for each law parameter θ of tendon j;
+    * ``∂J/∂P = −yᵀKp x − Σ_j (T0_j ∂k_j/∂T_j − T0_j/l_j + iω T0_j ∂c_j/∂T_j)(yᵀa_j)(a_jᵀx)``,
+
+    since ``T = P·T0`` moves every tangent (for Voigt tendons ``∂k/∂T = 1/l``
+    and the sum vanishes). Works for dense models, including singular C0
+    (direct solves).
 
     Parameters
     ----------
@@ -143,7 +152,8 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
     Returns
     -------
     Elasticities
-        Rows ``EA[0..m-1]``, ``c[0..m-1]``, ``P``.
+        Rows ``<θ>[j]`` for each law parameter θ (``EA``, ``c``, and e.g.
+        ``b`` for stiffening filaments) and each tendon that has it, then ``P``.
     """
     f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
     w = 2 * np.pi * f
@@ -154,23 +164,28 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
     X = np.linalg.solve(Z, np.broadcast_to(b, (f.size, b.size))[..., None])[..., 0]
     Y = np.linalg.solve(np.transpose(Z, (0, 2, 1)), np.broadcast_to(lin.D0.astype(complex), X.shape)[..., None])[..., 0]
     J = X @ lin.D0
-    xa, ya = X @ A, Y @ A  # (nf, m): a_jᵀx, yᵀa_j
-    prod = ya * xa
-    l = lin.cell.lengths
-    dJ_EA = -prod / l
-    dJ_c = -1j * w[:, None] * prod
-    dJ_P = -np.einsum("fi,ij,fj->f", Y, Kp, X)
-    e_EA = -(lin.EA * dJ_EA / J[:, None]).T
-    e_c = -(lin.c * dJ_c / J[:, None]).T
-    e_P = -(lin.P * dJ_P / J)[None]
-    m = lin.cell.m
-    fam = [_family_tag(x) for x in lin.cell.structure.families]
-    names = tuple(f"EA[{j}]" for j in range(m)) + tuple(f"c[{j}]" for j in range(m)) + ("P",)
-    groups = tuple(f"EA {fam[j]}" for j in range(m)) + tuple(f"c {fam[j]}" for j in range(m)) + ("P",)
+    prod = (Y @ A) * (X @ A)  # (nf, m): (yᵀa_j)(a_jᵀx)
+    cell, l = lin.cell, lin.cell.lengths
+    tan = lin.tendon_law.tangent(l, lin.P * cell.T0)
+    dk_dP, dc_dP = tan.dP(cell.T0)
+    dJ_P = -np.einsum("fi,ij,fj->f", Y, Kp, X) - prod @ (dk_dP - cell.T0 / l) - 1j * w * (prod @ dc_dP)
+    fam = [_family_tag(x) for x in cell.structure.families]
+    rows, names, groups, values = [], [], [], []
+    for i, name in enumerate(tan.names):
+        js = np.flatnonzero(tan.present[i])
+        dJ = -prod[:, js] * (tan.dk[i, js] + 1j * w[:, None] * tan.dc[i, js])
+        rows.append(-(tan.values[i, js] * dJ / J[:, None]).T)
+        names += [f"{name}[{j}]" for j in js]
+        groups += [f"{name} {fam[j]}" for j in js]
+        values.append(tan.values[i, js])
+    rows.append(-(lin.P * dJ_P / J)[None])
+    names.append("P")
+    groups.append("P")
+    values.append([lin.P])
+    n = len(names)
     return Elasticities(
-        frequency_hz=f, names=names, groups=groups, values=np.concatenate([lin.EA, lin.c, [lin.P]]),
-        complex=np.vstack([e_EA, e_c, e_P]), G=(0.5 / lin.L) / J, methods=("analytic",) * (2 * m + 1),
-        errors=np.zeros(2 * m + 1),
+        frequency_hz=f, names=tuple(names), groups=tuple(groups), values=np.concatenate(values),
+        complex=np.vstack(rows), G=(0.5 / lin.L) / J, methods=("analytic",) * n, errors=np.zeros(n),
     )
 
 

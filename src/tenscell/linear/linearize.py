@@ -21,13 +21,15 @@ import scipy.sparse as sp
 
 from .._checks import positive_array, positive_scalar
 from .sparse import NotPositiveDefinite, coordinate_locations, factorize_spd
-from ..model.equilibrium import Cell, _weighted_gram, assemble_hessian, rest_lengths
+from ..laws import LinearSpring, TendonLaw, Voigt
+from ..model.equilibrium import Cell, _weighted_gram, tangent_stiffness
 
 __all__ = [
     "LinearModel",
     "RelaxationSpectrum",
     "linearize",
     "linearize_tangent",
+    "linearize_law",
     "relaxation_spectrum",
     "NotPositiveDefiniteError",
 ]
@@ -60,7 +62,12 @@ class LinearModel:
     D0 : ndarray, shape (n,)
         Output row for the probe z1.
     l0 : ndarray, shape (m,)
-        Rest lengths (m) giving ``T = P·T0`` at the reference (Eq. 11).
+        Rest lengths (m) giving ``T = P·T0`` at the reference (Eq. 11 for Voigt tendons).
+    law : TendonLaw
+        The tendon law, placed at the reference (rest lengths ``l0``): what
+        :func:`tenscell.sensitivity.analytic_elasticities` differentiates.
+        None only for models built by hand, which are then read as Voigt
+        tendons with ``EA`` and ``c``.
     """
 
     cell: Cell
@@ -72,6 +79,12 @@ class LinearModel:
     H0: np.ndarray
     D0: np.ndarray
     l0: np.ndarray
+    law: object = None
+
+    @property
+    def tendon_law(self):
+        """The law (a :class:`tenscell.laws.Voigt` with ``EA``, ``c`` when ``law`` is None)."""
+        return self.law if self.law is not None else Voigt(EA=self.EA, c=self.c, l0=self.l0)
 
     @property
     def L(self) -> float:
@@ -133,7 +146,11 @@ class LinearModel:
 
 
 def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
-    """Linearize the cell's equations of motion at prestress ``P``.
+    """Linearize the cell's equations of motion at prestress ``P`` (Voigt tendons, the paper's model).
+
+    The paper-facing convenience for :func:`linearize_law` with
+    :class:`tenscell.laws.Voigt`: ``K0 = P·Kp + Σ EA_j a_j a_jᵀ/l_j``,
+    ``C0 = Σ c_j a_j a_jᵀ``.
 
     Parameters
     ----------
@@ -164,25 +181,18 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     m = cell.m
     EA = positive_array("EA", EA, (m,), "N")
     c = positive_array("c", c, (m,), "N·s/m")
-    A = cell.A
-    K0 = P * cell.Kp + _weighted_gram(A, EA / cell.lengths)
-    C0 = _weighted_gram(A, c)
-    if check:
-        _require_positive_definite(K0, cell, P)
-    return LinearModel(
-        cell=cell, P=P, EA=EA, c=c, K0=K0, C0=C0, H0=-np.asarray(cell.load), D0=np.asarray(cell.probe),
-        l0=rest_lengths(cell, P, EA),
-    )
+    # validated above: skip the law's own checks on this hot path (parameter sweeps, fits)
+    return _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
 
 
 def linearize_tangent(cell: Cell, P: float, k, c=1.0, *, l0=None, check: bool = True) -> LinearModel:
     """Linearize with given tangent stiffnesses ``k_j = dT_j/dl_j`` of the members at the reference.
 
-    For members whose law is not the Voigt spring (a strain-stiffening
-    filament, an elastic strut): the exact Jacobian of ``A(q)·T(l(q))`` at the
-    reference is ``K0 = P·Σ T0_j ∇²l_j + Σ k_j a_j a_jᵀ``. With
+    The law is :class:`tenscell.laws.LinearSpring` (stiffness ``k`` in N/m at
+    any tension): ``K0 = P·Σ T0_j ∇²l_j + Σ k_j a_j a_jᵀ``. With
     ``k_j = (EA_j + P·T0_j)/l_j`` (the Voigt spring with the rest lengths of
-    Eq. 11) this is exactly :func:`linearize`.
+    Eq. 11) this is exactly :func:`linearize`. For a law of your own, prefer
+    :func:`linearize_law`, which also gives exact prestress derivatives.
 
     Parameters
     ----------
@@ -217,19 +227,98 @@ def linearize_tangent(cell: Cell, P: float, k, c=1.0, *, l0=None, check: bool = 
     m = cell.m
     k = positive_array("k (tangent stiffness)", k, (m,), "N/m")
     c = positive_array("c", c, (m,), "N·s/m", allow_zero=True)
-    T = P * cell.T0
-    if l0 is None:
-        l0 = cell.lengths - T / k
-    else:
+    if l0 is not None:
         l0 = positive_array("l0 (rest length)", l0, (m,), "m")
+    return _from_law(cell, P, LinearSpring._trusted(k=k, c=c), check=check, l0=l0)
+
+
+def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True) -> LinearModel:
+    """The linear model of a cell with any tendon law, about its reference at rest.
+
+    ``K0 = Σ T_j ∇²l_j + Σ k_j a_j a_jᵀ`` and ``C0 = Σ c_j a_j a_jᵀ`` with the
+    law's tangent stiffness ``k_j = ∂T_j/∂l_j`` and tangent damping
+    ``c_j = ∂T_j/∂l'_j`` at rest (:meth:`tenscell.laws.TendonLaw.tangent_at_rest`;
+    for a power-law dashpot with β > 1 that is 0, so ``C0 = 0`` and ``G'' = 0``).
+    With ``T = P·T0`` this is ``K0 = P·Kp + Σ (k_j − P·T0_j/l_j) a_j a_jᵀ``.
+
+    Parameters
+    ----------
+    cell : Cell
+    law : TendonLaw
+        One entry per tendon (see :mod:`tenscell.laws`).
+    P : float, optional
+        Prestress (N): linearize at tensions ``P·T0``, the law's rest lengths
+        following from its inverse. Default: use the law's own rest lengths
+        (``law.l0``, e.g. from :func:`tenscell.laws.voigt_law`), which must
+        hold the cell in equilibrium at its reference; ``P`` is then the
+        projection of those tensions on ``T0``.
+    check : bool
+        Verify that K0 is positive definite.
+
+    Returns
+    -------
+    LinearModel
+        ``EA`` holds the Voigt stiffness with the same tangent, ``k·l − T``
+        (N); ``c`` the tangent damping (N·s/m); ``law`` the law, placed.
+
+    Raises
+    ------
+    LinearizationError
+        If the law has no linearization at rest (power-law dashpot, β < 1).
+    ValueError
+        If the law's rest lengths do not hold the cell in equilibrium at its reference.
+    NotPositiveDefiniteError
+        If K0 is not positive definite.
+    """
+    if not isinstance(law, TendonLaw):
+        raise ValueError(f"law must be a tenscell.laws.TendonLaw, got {type(law).__name__}")
+    if law.m is not None and law.m != cell.m:
+        raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
+    if P is not None:
+        return _from_law(cell, positive_scalar("P (prestress)", P, "N"), law, check=check)
+    T = np.asarray(law.elastic(cell.lengths), dtype=float)
+    resid = np.abs(cell.A @ T).max()
+    scale = max(abs(cell.A).max() * np.abs(T).max(), 1e-300)
+    if resid > 1e-8 * scale:
+        raise ValueError(
+            f"the tendon law's rest lengths do not hold {cell.describe()} in equilibrium at its reference "
+            f"(|A·T| = {resid:.3g} N); place it with law.at_prestress(cell, P) (voigt_law and power_dashpot_law do)"
+        )
+    T0 = cell.T0
+    P = float(T @ T0 / (T0 @ T0))
+    return _from_law(cell, P, law, check=check, T=T, own=True)
+
+
+def _from_law(cell: Cell, P: float, law, *, check: bool, T=None, EA=None, l0=None, own: bool = False) -> LinearModel:
+    """The one assembly of (K0, C0) from a law's tangents at tensions ``T`` (default ``P·T0``).
+
+    ``own``: the law is already placed (its rest lengths give ``T``) and is kept as it is.
+    """
+    l = cell.lengths
+    TP = P * cell.T0
+    if T is None or np.abs(T - TP).max() <= 1e-12 * np.abs(TP).max():
+        T = TP
+    if own:
+        (k, c), l0 = law.tangent_at_rest(l, T), law.l0
+    else:
+        l0_law, k, c = law._reference(l, T)
+        l0 = l0_law if l0 is None else l0
+    k, c = np.asarray(k, dtype=float), np.asarray(c, dtype=float)
+    if not (np.all(np.isfinite(k)) and np.all(np.isfinite(c))):
+        raise ValueError("the tendon law gave a non-finite tangent stiffness or damping at the reference")
     A = cell.A
-    K0 = P * assemble_hessian(cell.geometry, cell.T0, sparse=cell.sparse) + _weighted_gram(A, k)
+    if T is TP:
+        # Kp already holds Σ T0 (∇²l + a aᵀ/l): add only what the law's tangent has beyond the prestress's a aᵀ/l
+        K0 = P * cell.Kp + _weighted_gram(A, EA / l if EA is not None else k - T / l)
+    else:  # a self-stress other than P·T0 (several self-stress states): assemble its Hessian term
+        K0 = tangent_stiffness(cell.geometry, T, k)
     C0 = _weighted_gram(A, c)
     if check:
         _require_positive_definite(K0, cell, P)
+    placed = law if own else law._placed(l0)
     return LinearModel(
-        cell=cell, P=P, EA=k * cell.lengths - T, c=c, K0=K0, C0=C0, H0=-np.asarray(cell.load),
-        D0=np.asarray(cell.probe), l0=np.asarray(l0, dtype=float),
+        cell=cell, P=P, EA=EA if EA is not None else k * l - T, c=c, K0=K0, C0=C0, H0=-np.asarray(cell.load),
+        D0=np.asarray(cell.probe), l0=np.asarray(l0, dtype=float), law=placed,
     )
 
 

@@ -8,7 +8,7 @@ The paper's Eq. (6)–(11) at the level of geometry:
 * the self-stress space ``{T : A(q0) T = 0}`` by SVD, the state ``T0``
   (``‖T0‖₂ = 1``, equal tension within the structure's equal-tension groups,
   all cable tensions strictly positive), ``T = P·T0`` (Eq. 10);
-* rest lengths from Eq. (11).
+* (rest lengths, Eq. (11), are the tendon law's: :func:`tenscell.laws.rest_lengths`).
 
 A :class:`Cell` bundles a structure with its prestressable reference and the
 per-cell geometry (A, Hessians, ``Kp``) that every later stage reuses, so
@@ -38,7 +38,6 @@ __all__ = [
     "self_stress",
     "self_stress_lp",
     "equilibrate",
-    "rest_lengths",
     "generalized_forces",
     "damping_matrix",
     "tangent_stiffness",
@@ -511,15 +510,6 @@ def _weighted_gram(A, w: np.ndarray):
     if sp.issparse(A):
         return (A @ sp.diags(w) @ A.T).tocsr()
     return (A * w) @ A.T
-
-
-def rest_lengths(cell: Cell, P: float, EA: np.ndarray) -> np.ndarray:
-    """Rest lengths giving ``T = P·T0`` at the reference (paper Eq. 11), in m.
-
-    ``l0_j = l_j(q0)·EA_j / (T0_j·P + EA_j)``.
-    """
-    EA = np.broadcast_to(np.asarray(EA, dtype=float), cell.T0.shape)
-    return cell.lengths * EA / (cell.T0 * P + EA)
 
 
 def generalized_forces(cell: Cell, q: np.ndarray, tensions_fn):

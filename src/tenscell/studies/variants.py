@@ -11,7 +11,7 @@
   elastic members with axial stiffness EA_s (and an Euler-buckling check with
   bending stiffness EI); convergence to the rigid-strut moduli as EA_s grows.
 * :func:`linearize_stiffening` and :func:`stiffening_study` — strain-stiffening
-  intermediate filaments (:mod:`tenscell.stiffening`), linearized with their
+  intermediate filaments (:class:`tenscell.laws.StiffeningFilament`), linearized with their
   tangent stiffness; their effect on G' versus prestress.
 
 Each ``*_study`` returns a frozen result and has a ``*_markdown`` companion
@@ -28,7 +28,8 @@ import scipy.optimize
 
 from .._checks import finite_scalar, positive_array, positive_scalar
 from ..model.equilibrium import Cell, NotPrestressableError
-from ..linear.linearize import LinearModel, NotPositiveDefiniteError, linearize, linearize_tangent
+from ..laws import Voigt, stiffening_law
+from ..linear.linearize import LinearModel, NotPositiveDefiniteError, linearize, linearize_law
 from ..response import FrequencyResponse, compliance, frequency_response, static_modulus
 from ..model.shapes import (
     REGULAR_DELTA,
@@ -38,7 +39,6 @@ from ..model.shapes import (
     regular_cell,
     semiflexible_paper_cell,
 )
-from ..stiffening import tangent_at_tension
 from ..model.structure import INTERMEDIATE_FILAMENT, STRUT
 
 __all__ = [
@@ -590,8 +590,7 @@ def linearize_semiflexible(
             f"EA_strut must exceed the strut compression P·|T0| = {comp[j]:.6g} N at P={P:g} "
             f"(got {EA_all[s][j]:.6g} N): a softer strut would need a non-positive rest length"
         )
-    k = (EA_all + P * cell.T0) / cell.lengths
-    return linearize_tangent(cell, P, k, c_all, l0=cell.lengths * EA_all / (P * cell.T0 + EA_all), check=check)
+    return linearize_law(cell, Voigt(EA=EA_all, c=c_all), P, check=check)
 
 
 @dataclass(frozen=True, eq=False)
@@ -764,40 +763,15 @@ def linearize_stiffening(
     cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, b: float = 0.0, family: str = INTERMEDIATE_FILAMENT,
     check: bool = True,
 ) -> LinearModel:
-    """Linearize with the exponential stiffening law on one tendon family (the IFs by default).
+    """Linearize with strain-stiffening filaments on one tendon family (the IFs by default).
 
-    The members of ``family`` follow ``T = (EA/b)(exp(bε) − 1)``
-    (:mod:`tenscell.stiffening`), the others the paper's linear law; each gets
-    the rest length that gives ``P·T0`` at the reference and the tangent
-    stiffness ``(EA + b·T)/l0`` there. ``b = 0`` reproduces
-    :func:`tenscell.linearize` exactly.
-
-    Parameters
-    ----------
-    cell : Cell
-    P : float
-        Prestress (N).
-    EA : float or array_like, shape (m,)
-        Small-strain stiffness (N).
-    c : float or array_like, shape (m,)
-        Damping (N·s/m).
-    b : float
-        Stiffening exponent of ``family`` (dimensionless), ≥ 0.
-    family : str
-        The tendon family that stiffens.
+    ``linearize_law(cell, stiffening_law(cell, None, EA, c, b=b, family=family), P)``:
+    the members of ``family`` follow :class:`tenscell.laws.StiffeningFilament`,
+    the others the paper's Voigt law (parameters as in
+    :func:`tenscell.laws.stiffening_law`). ``b = 0`` reproduces
+    :func:`tenscell.linearize`.
     """
-    P = positive_scalar("P (prestress)", P, "N")
-    EA = positive_array("EA", EA, (cell.m,), "N")
-    b = finite_scalar("b", b, "a finite number >= 0 (dimensionless)")
-    if b < 0:
-        raise ValueError(f"b (stiffening exponent) must be >= 0, got {b!r}")
-    idx = cell.structure.family_indices(family)
-    if idx.size == 0:
-        raise ValueError(f"{cell.describe()} has no tendons of family {family!r}")
-    bb = np.zeros(cell.m)
-    bb[idx] = b
-    l0, k = tangent_at_tension(cell.lengths, P * cell.T0, EA, bb)
-    return linearize_tangent(cell, P, k, c, l0=l0, check=check)
+    return linearize_law(cell, stiffening_law(cell, None, EA, c, b=b, family=family), P, check=check)
 
 
 @dataclass(frozen=True, eq=False)
