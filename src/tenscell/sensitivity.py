@@ -31,7 +31,6 @@ multiplying every c by s maps G(f) to G(s·f), so ``Σ e_c = ∂ln G/∂ln f``; 
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -555,14 +554,15 @@ def monte_carlo(
     ----------
     n : int
         Number of draws, ≥ 1.
-    progress : bool, optional
-        Show a tqdm bar on stderr (default: when stderr is a terminal).
+    progress : bool or None
+        A progress bar: None shows one when someone watches (a terminal or a
+        notebook), True always, False never (see :mod:`tenscell._progress`).
 
     Returns
     -------
     MonteCarloResult
     """
-    from tqdm import tqdm
+    from ._progress import progress_bar
 
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n (number of draws) must be a whole number >= 1, got {n!r}")
@@ -586,7 +586,7 @@ def monte_carlo(
     if parameters == "all":
         factors[:, -1] = alpha_spread * rng.uniform(-1.0, 1.0, size=n)
     cs, cl, reasons = np.full(n, np.nan), np.full(n, np.nan), []
-    bar = tqdm(range(n), desc="Monte Carlo", file=sys.stderr, disable=None if progress is None else not progress)
+    bar = progress_bar(range(n), total=n, desc="Monte Carlo", unit="draw", progress=progress)
     for i in bar:
         fa = factors[i]
         try:

@@ -241,7 +241,8 @@ def fit(
     bounds, fixed : dict, optional
         See :func:`make_problem`.
     progress : bool or None
-        tqdm progress bar on stderr; None = only when stderr is a terminal.
+        A progress bar: None shows one when someone watches (a terminal or a
+        notebook), True always, False never (see :mod:`tenscell._progress`).
 
     Returns
     -------
