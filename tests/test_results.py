@@ -44,6 +44,7 @@ BUILDERS = {
     "StructureSummary": lambda cell, lin, tmp: tc.summarize(cell)[0],
     "StructureFile": lambda cell, lin, tmp: _structure_file(tmp, cell),
     "FormFindingResult": lambda cell, lin, tmp: tc.find_form(tc.expanded_octahedron(), force_density=1.0),
+    "RheologyData": lambda cell, lin, tmp: tc.bundled("stamenovic2002"),
 }
 
 

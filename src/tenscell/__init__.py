@@ -50,6 +50,9 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "linear.krylov": ("krylov_compliance",),
     "timedomain": ("CreepSpectrum", "PowerLawFit", "StressRelaxation", "creep_compliance", "creep_spectrum",
                    "fit_power_law", "local_exponent", "relaxation_modulus", "stress_relaxation"),
+    # measured data
+    "io.data": ("DataError", "RheologyData", "bundled", "bundled_names", "read_csv"),
+    "io.importers": ("ColumnMap", "read_rheocompass", "read_table"),
     # analyses
     "summary": ("relaxation_modes", "summarize"),
     "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
@@ -99,6 +102,8 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
         simulate,
     )
     from .fitting import FitParameter, FitResult, fit
+    from .io.data import DataError, RheologyData, bundled, bundled_names, read_csv
+    from .io.importers import ColumnMap, read_rheocompass, read_table
     from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
     from .laws import (
         CompositeLaw, LinearSpring, LinearizationError, PowerDashpot, StiffeningFilament, Tangent, TendonLaw, Voigt,

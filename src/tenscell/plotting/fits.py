@@ -6,12 +6,12 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from matplotlib.axes import Axes
 
-from ._style import new_panels, styled
+from ._style import new_axes, new_panels, styled
 
 if TYPE_CHECKING:
     from ..io.data import RheologyData
 
-__all__ = ["fit_figure", "data_points"]
+__all__ = ["fit_figure", "data_points", "measured"]
 
 
 def data_points(data: RheologyData, ax: Axes, **kw) -> Axes:
@@ -19,6 +19,24 @@ def data_points(data: RheologyData, ax: Axes, **kw) -> Axes:
     x = data.prestress if data.kind == "prestress" else data.frequency_hz
     ax.plot(x, data.G_storage, "o", color="C0", label="G′ data", **kw)
     ax.plot(x, data.G_loss, "o", mfc="none", color="C3", label="G″ data", **kw)
+    return ax
+
+
+@styled
+def measured(data: RheologyData, ax: Axes | None = None, *, title: str | None = None, **kw) -> Axes:
+    """Measured G' and G'' on labelled axes: log-log against f (Hz), or linear against prestress (Pa)."""
+    ax = new_axes(ax, (5.0, 3.8))
+    data_points(data, ax, **kw)
+    if data.kind == "prestress":
+        ax.set_xlabel("prestress (Pa)")
+    else:
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("frequency f (Hz)")
+    ax.set_ylabel("modulus (Pa)")
+    ax.legend(loc="best")
+    if title:
+        ax.set_title(title)
     return ax
 
 
