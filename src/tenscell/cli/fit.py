@@ -66,12 +66,14 @@ def fit_outputs(result, baseline, title):
 def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, **search):
     """The fit and its homogeneous baseline (the fit itself when it is homogeneous)."""
     from .. import fitting
+    from .._progress import stage
 
     result = fitting.fit(data, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
                          tolerance=tolerance, **search)
     if tendons == "uniform" and damping == "uniform":
         baseline = result
     else:
+        stage(f"homogeneous baseline: {baseline_starts} start(s)")
         baseline = fitting.fit(data, tendons="uniform", starts=baseline_starts, seed=seed, jobs=1,
                                tolerance=tolerance)
     return result, baseline
@@ -91,6 +93,8 @@ def run(args) -> int:
         raw_n = data.n
         data = data.binned(args.max_points)
         stage(f"{raw_n:,} points binned to {data.n:,} in log frequency (--max-points {args.max_points})")
+    stage(f"fitting {data.n} points: {args.starts} start(s), stiffness {args.tendons}, damping {args.damping}, "
+          f"{args.jobs} process(es)")
     result, baseline = run_fit(data, args.tendons, args.damping, args.starts, args.seed, args.jobs,
                                args.tolerance, args.baseline_starts)
     outputs = fit_outputs(result, baseline, title=f"Tensegrity fit to {Path(args.data).name}")
