@@ -11,12 +11,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from ._checks import positive_array
-from .model.equilibrium import Cell
-from .linear.krylov import factorize_stiffness, krylov_compliance
-from .linear.linearize import LinearModel, _cholesky_or_none, _spectrum_or_none, linearize
+from .model.equilibrium import Cell, weighted_gram
+from .linear.krylov import krylov_compliance
+from .linear.linearize import LinearModel, linearize
+from .linear.modal import modal_compliance, modulus, prestress_grid_compliance
 
 __all__ = [
     "compliance",
@@ -34,18 +34,14 @@ def _frequencies(f_hz) -> np.ndarray:
     return positive_array("frequency", f_hz, unit="Hz")
 
 
-def _c0_positive_definite(lin: LinearModel) -> bool:
-    return not sp.issparse(lin.C0) and _cholesky_or_none(lin.C0) is not None
-
-
 def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     """Transfer function ``J = z1/F1`` (m/N) at frequencies ``f_hz`` (Hz).
 
-    Through the relaxation spectrum when C0 is positive definite, by direct
-    complex solves otherwise (singular C0); sparse models (more than
-    ``SPARSE_THRESHOLD`` coordinates) use one factorization and a shifted
-    Lanczos iteration (:func:`tenscell.linear.krylov.krylov_compliance`, relative
-    accuracy 1e-12).
+    Dense models: the modal sum ``Σ ρ_k/(1 + iωτ_k)`` of the model's one
+    modal decomposition (cached on ``lin.pencil``; exact also for singular
+    C0). Sparse models (more than ``SPARSE_THRESHOLD`` coordinates): the
+    model's one shifted factorization and Lanczos run
+    (:func:`tenscell.linear.krylov.krylov_compliance`, relative accuracy 1e-12).
 
     Parameters
     ----------
@@ -58,28 +54,10 @@ def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     ndarray of complex, same shape as ``f_hz``
     """
     f = _frequencies(f_hz)
-    w = 2 * np.pi * f.ravel()
-    spec = _spectrum_or_none(lin)
-    if spec is not None:
-        lam, r = spec.rates, spec.residues
-        # Σ r/(λ + iω) in real arithmetic: one (2 × n)(n × nf) product gives both parts
-        den = np.add.outer(lam * lam, w * w)
-        np.reciprocal(den, out=den)
-        re, im = np.stack([r * lam, r]) @ den
-        J = re - 1j * (w * im)
-    else:
-        J = _direct(lin, w)
-    return J.reshape(f.shape)
-
-
-def _direct(lin: LinearModel, w: np.ndarray) -> np.ndarray:
-    b = -lin.H0
-    if sp.issparse(lin.K0):
-        # large models: one factorization and a shifted Lanczos run for all frequencies (tenscell.linear.krylov)
-        return krylov_compliance(lin, w / (2 * np.pi)).J
-    Z = lin.K0[None, :, :] + 1j * w[:, None, None] * lin.C0[None, :, :]
-    x = np.linalg.solve(Z, np.broadcast_to(b.astype(complex), (w.size, b.size))[..., None])[..., 0]
-    return x @ lin.D0
+    if lin.pencil.sparse:
+        return krylov_compliance(lin, f).J
+    m = lin.pencil.modes
+    return modal_compliance(m.tau, m.weights, 2 * np.pi * f.ravel()).reshape(f.shape)
 
 
 def moduli(lin: LinearModel, f_hz) -> tuple[np.ndarray, np.ndarray]:
@@ -87,22 +65,26 @@ def moduli(lin: LinearModel, f_hz) -> tuple[np.ndarray, np.ndarray]:
 
     ``G' + iG'' = (0.5/L)/J``.
     """
-    G = (0.5 / lin.L) / compliance(lin, f_hz)
+    G = modulus(compliance(lin, f_hz), lin.L)
     return G.real, G.imag
 
 
 def static_modulus(lin: LinearModel) -> float:
     """Low-frequency limit ``G'(f→0) = (0.5/L)/(D0 K0⁻¹ (−H0))`` (Pa)."""
-    K0 = lin.K0
-    x = factorize_stiffness(lin).solve(-lin.H0) if sp.issparse(K0) else np.linalg.solve(K0, -lin.H0)
-    return float((0.5 / lin.L) / (lin.D0 @ x))
+    return float(modulus(lin.pencil.static_compliance(), lin.L))
 
 
 def viscosity_limit(lin: LinearModel) -> float:
-    """High-frequency limit ``G''/ω → (0.5/L)/(D0 C0⁻¹ (−H0))`` (Pa·s); needs C0 positive definite."""
-    if not _c0_positive_definite(lin):
+    """High-frequency limit ``G''/ω → (0.5/L)/(D0 C0⁻¹ (−H0))`` (Pa·s); needs C0 positive definite.
+
+    ``D0 C0⁻¹ b = Σ ρ_k/τ_k`` over the model's retardation spectrum (dense or sparse).
+    """
+    from .linear.modal import ZERO_TIME
+
+    tau, rho, _ = lin.pencil.retardation()
+    if tau.size == 0 or tau.min() <= ZERO_TIME * tau.max():
         raise ValueError("C0 is singular: G''/ω has no finite high-frequency limit")
-    return float((0.5 / lin.L) / (lin.D0 @ np.linalg.solve(lin.C0, -lin.H0)))
+    return float(modulus(np.sum(rho / tau), lin.L))
 
 
 def loss_tangent(G_storage, G_loss) -> np.ndarray:
@@ -139,7 +121,7 @@ class FrequencyResponse:
     @property
     def G(self) -> np.ndarray:
         """Complex modulus ``G' + iG''`` (Pa), shape (nP, nf)."""
-        return (0.5 / self.L) / self.J
+        return modulus(self.J, self.L)
 
     @property
     def G_storage(self) -> np.ndarray:
@@ -187,5 +169,13 @@ def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0) -> FrequencyResponse:
     """
     f = np.atleast_1d(_frequencies(f_hz)).ravel()
     Ps = np.atleast_1d(positive_array("P (prestress)", P, unit="N")).ravel()
-    J = np.stack([compliance(linearize(cell, P=p, EA=EA, c=c), f) for p in Ps])
+    J = None
+    if not cell.sparse and Ps.size > 1:
+        # K0(P) = P·Kp + Σ EA_j a_j a_jᵀ/l_j is affine in P and C0 does not depend on it: one batched eigensolve
+        EA_ = positive_array("EA", EA, (cell.m,), "N")
+        c_ = positive_array("c", c, (cell.m,), "N·s/m")
+        J = prestress_grid_compliance(cell.Kp, weighted_gram(cell.A, EA_ / cell.lengths), weighted_gram(cell.A, c_),
+                                      cell.load, cell.probe, Ps, 2 * np.pi * f, describe=cell.describe())
+    if J is None:
+        J = np.stack([compliance(linearize(cell, P=p, EA=EA, c=c), f) for p in Ps])
     return FrequencyResponse(frequency_hz=f, prestress=Ps, J=J, L=cell.strut_length)

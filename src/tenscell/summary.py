@@ -265,6 +265,12 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
         # one local mode per module; the Lanczos run from the load finds the slowest modes it excites
         rates, V, resid = load_modes(lin, min(k, n))
         mu = 1.0 / rates
+    elif rigid_body_modes(lin.cell.coords).shape[1] == 0:
+        # anchored structures: the model's one modal decomposition (C0 v = τ K0 v, τ = μ ascending)
+        modes = lin.pencil.modes
+        k = min(k, n)
+        mu, V = modes.tau[n - k:], modes.vectors[:, n - k:]
+        resid = None
     else:
         Q = _complement(lin)
         K = Q.T @ lin.K0 @ Q

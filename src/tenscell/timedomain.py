@@ -28,8 +28,12 @@ resists an instantaneous step with an infinite force) and θ_i the
 relaxation times of the clamped structure. The relaxation modulus is
 ``G(t) = (0.5/L)·R(t)`` (Pa), the same continuum factor as ``G' + iG''``.
 
-Both are exact for the linear model. :mod:`tenscell.dynamics` computes the
-nonlinear creep by simulation.
+Both are exact for the linear model. Dense models take τ_k, ρ_k from their
+one modal decomposition; sparse models from the Ritz spectrum of their one
+Lanczos run (:meth:`tenscell.linear.modal.Pencil.retardation`), converged
+until J(t) at every time, J(∞) and the initial creep rate change by less than
+``1e-10`` relative (the spectrum's ``error_estimate``); a sparse model is never
+made dense. :mod:`tenscell.dynamics` computes the nonlinear creep by simulation.
 """
 from __future__ import annotations
 
@@ -37,10 +41,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
-import scipy.sparse as sp
 
 from ._checks import positive_array, positive_scalar
 from .linear.linearize import LinearModel
+from .linear.modal import ZERO_TIME, continuum_factor
 
 __all__ = [
     "CreepSpectrum",
@@ -54,7 +58,7 @@ __all__ = [
     "fit_power_law",
 ]
 
-_ZERO_TIME = 1e-12  # τ below this fraction of the longest retardation time counts as instantaneous
+_ZERO_TIME = ZERO_TIME  # τ below this fraction of the longest retardation time counts as instantaneous
 
 
 def _times(t) -> np.ndarray:
@@ -82,12 +86,16 @@ class CreepSpectrum:
     L : float
         Strut length (m), for the continuum factor: compliance in 1/Pa is
         ``J(t)·2L``.
+    error_estimate : float
+        Relative accuracy of ``J(t)`` (0 for dense models, whose spectrum is
+        exact; for sparse ones the Lanczos run's convergence measure).
     """
 
     times: np.ndarray
     weights: np.ndarray
     instantaneous: float
     L: float
+    error_estimate: float = 0.0
 
     @property
     def static(self) -> float:
@@ -121,15 +129,13 @@ class CreepSpectrum:
         return self.instantaneous + (1.0 / (1.0 + np.multiply.outer(s, self.times))) @ self.weights
 
 
-def _dense(M) -> np.ndarray:
-    return M.toarray() if sp.issparse(M) else np.asarray(M)
-
-
 def creep_spectrum(lin: LinearModel) -> CreepSpectrum:
     """Retardation times and weights of the linear model (works for singular C0 too).
 
-    Solves the symmetric-definite pencil ``C0 v = τ K0 v`` (K0 positive
-    definite is guaranteed by :func:`tenscell.linearize`).
+    The symmetric-definite pencil ``C0 v = τ K0 v`` through the model's
+    pencil (:meth:`tenscell.linear.modal.Pencil.retardation`): dense models
+    from their one modal decomposition, sparse ones from the Ritz spectrum of
+    their Lanczos run (the modes the load excites).
 
     Parameters
     ----------
@@ -139,14 +145,12 @@ def creep_spectrum(lin: LinearModel) -> CreepSpectrum:
     -------
     CreepSpectrum
     """
-    K0, C0 = _dense(lin.K0), _dense(lin.C0)
-    tau, V = scipy.linalg.eigh(C0, K0)
-    tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding
-    rho = (lin.D0 @ V) * (-lin.H0 @ V)
-    inst = tau <= _ZERO_TIME * max(tau.max(), 1e-300)
+    tau, rho, err = lin.pencil.retardation()
+    inst = tau <= _ZERO_TIME * max(tau.max() if tau.size else 0.0, 1e-300)
     order = np.argsort(tau[~inst])
     return CreepSpectrum(
         times=tau[~inst][order], weights=rho[~inst][order], instantaneous=float(rho[inst].sum()), L=lin.L,
+        error_estimate=float(err),
     )
 
 
@@ -169,7 +173,7 @@ def creep_compliance(lin: LinearModel, t, *, continuum: bool = False) -> np.ndar
     """
     spec = creep_spectrum(lin)
     J = spec.compliance(t)
-    return J * (2.0 * spec.L) if continuum else J
+    return J / continuum_factor(spec.L) if continuum else J
 
 
 @dataclass(frozen=True, eq=False)
@@ -192,6 +196,9 @@ class StressRelaxation:
         C0 is positive definite, otherwise 0.
     L : float
         Strut length (m).
+    error_estimate : float
+        Relative accuracy of the retardation spectrum it was computed from
+        (0 for dense models; see :class:`CreepSpectrum`).
     """
 
     times: np.ndarray
@@ -199,6 +206,7 @@ class StressRelaxation:
     equilibrium: float
     impulse: float
     L: float
+    error_estimate: float = 0.0
 
     @property
     def initial(self) -> float:
@@ -212,12 +220,12 @@ class StressRelaxation:
 
     def modulus(self, t) -> np.ndarray:
         """Relaxation modulus ``G(t) = (0.5/L)·R(t)`` (Pa), regular part, t ≥ 0 (s)."""
-        return (0.5 / self.L) * self.force(t)
+        return continuum_factor(self.L) * self.force(t)
 
     @property
     def viscosity(self) -> float:
         """``(0.5/L)·η`` (Pa·s): equals ``lim G''/ω`` at high frequency."""
-        return (0.5 / self.L) * self.impulse
+        return continuum_factor(self.L) * self.impulse
 
     def laplace(self, s) -> np.ndarray:
         """``R(s) = η + k_∞/s + Σ g_i θ_i/(1 + s θ_i)`` (N·s/m) at complex ``s`` (1/s); equals ``1/(s·J(s))``."""
@@ -270,7 +278,8 @@ def stress_relaxation(lin: LinearModel) -> StressRelaxation:
     k = lam.size
     J0 = spec.static
     if k == 0:  # purely elastic response
-        return StressRelaxation(times=np.zeros(0), weights=np.zeros(0), equilibrium=1.0 / J0, impulse=0.0, L=spec.L)
+        return StressRelaxation(times=np.zeros(0), weights=np.zeros(0), equilibrium=1.0 / J0, impulse=0.0, L=spec.L,
+                                error_estimate=spec.error_estimate)
     p = np.sign(r) * np.sqrt(np.abs(r))
     w = np.sqrt(np.abs(r))
     M = np.zeros((k + 1, k + 1))
@@ -304,7 +313,8 @@ def stress_relaxation(lin: LinearModel) -> StressRelaxation:
     theta = -1.0 / z
     order = np.argsort(theta)
     impulse = 1.0 / r.sum() if Jinst == 0.0 else 0.0
-    return StressRelaxation(times=theta[order], weights=g[order], equilibrium=1.0 / J0, impulse=impulse, L=spec.L)
+    return StressRelaxation(times=theta[order], weights=g[order], equilibrium=1.0 / J0, impulse=impulse, L=spec.L,
+                            error_estimate=spec.error_estimate)
 
 
 def relaxation_modulus(lin: LinearModel, t) -> np.ndarray:

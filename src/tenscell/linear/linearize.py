@@ -13,16 +13,17 @@ The relaxation spectrum solves ``K0 v = λ C0 v`` (rates λ in 1/s) with
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
-import scipy.linalg
-import scipy.linalg.lapack
 import scipy.sparse as sp
 
 from .._checks import positive_array, positive_scalar
-from .sparse import NotPositiveDefinite, coordinate_locations, factorize_spd
 from ..laws import LinearSpring, TendonLaw, Voigt
-from ..model.equilibrium import Cell, _weighted_gram, tangent_stiffness
+from ..model.equilibrium import Cell, tangent_stiffness
+from .modal import (
+    NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
+)
 
 __all__ = [
     "LinearModel",
@@ -35,8 +36,8 @@ __all__ = [
 ]
 
 
-class NotPositiveDefiniteError(ValueError):
-    """K0 is not positive definite: the reference is not a stable equilibrium."""
+#: advice appended to the not-positive-definite message
+_STABILITY_HINT = "For the paper cell keep delta between about 45.5° and 54.7° at alpha=0."
 
 
 @dataclass(frozen=True, eq=False)
@@ -106,6 +107,20 @@ class LinearModel:
     def tensions(self) -> np.ndarray:
         """Tendon tensions at the reference, ``P·T0`` (N)."""
         return self.P * self.cell.T0
+
+    @cached_property
+    def pencil(self) -> Pencil:
+        """The pencil (K0, C0) with its decompositions, each computed once for this model (:mod:`tenscell.linear.modal`)."""
+        return Pencil(self.K0, self.C0, -np.asarray(self.H0), self.D0,
+                      describe=f"{self.cell.describe()} at P={self.P:.6g}", hint=_STABILITY_HINT)
+
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state.pop("pencil", None)  # factorizations are rebuilt on demand (native factors do not pickle)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
 
 
 def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
@@ -269,120 +284,15 @@ def _from_law(cell: Cell, P: float, law, *, check: bool, T=None, EA=None, l0=Non
     k, c = np.asarray(k, dtype=float), np.asarray(c, dtype=float)
     if not (np.all(np.isfinite(k)) and np.all(np.isfinite(c))):
         raise ValueError("the tendon law gave a non-finite tangent stiffness or damping at the reference")
-    A = cell.A
     if T is TP:
-        # Kp already holds Σ T0 (∇²l + a aᵀ/l): add only what the law's tangent has beyond the prestress's a aᵀ/l
-        K0 = P * cell.Kp + _weighted_gram(A, EA / l if EA is not None else k - T / l)
+        K0 = assemble_stiffness(cell, P, k)
     else:  # a self-stress other than P·T0 (several self-stress states): assemble its Hessian term
         K0 = tangent_stiffness(cell.geometry, T, k)
-    C0 = _weighted_gram(A, c)
-    if check:
-        _require_positive_definite(K0, cell, P)
     placed = law if own else law._placed(l0)
-    return LinearModel(
-        cell=cell, P=P, EA=EA if EA is not None else k * l - T, c=c, K0=K0, C0=C0, H0=-np.asarray(cell.load),
-        D0=np.asarray(cell.probe), l0=np.asarray(l0, dtype=float), law=placed,
+    lin = LinearModel(
+        cell=cell, P=P, EA=EA if EA is not None else k * l - T, c=c, K0=K0, C0=assemble_damping(cell, c),
+        H0=-np.asarray(cell.load), D0=np.asarray(cell.probe), l0=np.asarray(l0, dtype=float), law=placed,
     )
-
-
-def _require_positive_definite(K0, cell: Cell, P: float) -> None:
-    if sp.issparse(K0):
-        # one sparse LDLᵀ factorization (nested dissection): positive definite iff every pivot is > 0
-        try:
-            factorize_spd(K0, what="K0", points=coordinate_locations(cell.coords))
-            return
-        except NotPositiveDefinite as err:
-            ok, lam = False, err.smallest_pivot
-    else:
-        try:
-            np.linalg.cholesky(K0)
-            return
-        except np.linalg.LinAlgError:
-            ok = False
-            lam = float(np.linalg.eigvalsh(K0)[0])
-    if not ok:
-        raise NotPositiveDefiniteError(
-            f"K0 is not positive definite for {cell.describe()} at P={P:.6g} "
-            f"(smallest {'pivot' if sp.issparse(K0) else 'eigenvalue'} {lam:.3g}): "
-            "the reference is not a stable equilibrium. "
-            "For the paper cell keep delta between about 45.5° and 54.7° at alpha=0."
-        )
-
-
-@dataclass(frozen=True, eq=False)
-class RelaxationSpectrum:
-    """Modes of the linear model: ``J(ω) = Σ_k r_k / (λ_k + iω)``.
-
-    Attributes
-    ----------
-    rates : ndarray, shape (n,)
-        Relaxation rates λ_k (1/s), ascending; ``K0 v = λ C0 v``.
-    residues : ndarray, shape (n,)
-        ``r_k = (D0·v_k)(−H0·v_k)`` (m/(N·s)); non-negative when probe = load.
-    modes : ndarray, shape (n, n)
-        C0-orthonormal eigenvectors as columns.
-    """
-
-    rates: np.ndarray
-    residues: np.ndarray
-    modes: np.ndarray
-
-    @property
-    def times(self) -> np.ndarray:
-        """Relaxation times τ_k = 1/λ_k (s)."""
-        return 1.0 / self.rates
-
-    @property
-    def weights(self) -> np.ndarray:
-        """Compliance weights ``r_k/λ_k`` (m/N): each mode's share of the static compliance."""
-        return self.residues / self.rates
-
-
-#: a Cholesky pivot of C0 smaller than this fraction of the largest marks C0 as singular
-C0_PIVOT_RTOL = 1e-12
-
-
-def _cholesky_or_none(M: np.ndarray) -> np.ndarray | None:
-    """Lower Cholesky factor of a positive definite M, or None if M is singular or indefinite.
-
-    Round-off lets Cholesky "succeed" on a singular matrix with tiny pivots, so
-    pivots below ``C0_PIVOT_RTOL`` of the largest count as zero.
-    """
-    try:
-        Lf = np.linalg.cholesky(M)
-    except np.linalg.LinAlgError:
-        return None
-    d = np.diagonal(Lf) ** 2
-    return Lf if d.min() > C0_PIVOT_RTOL * d.max() else None
-
-
-def relaxation_spectrum(lin: LinearModel) -> RelaxationSpectrum:
-    """Solve ``K0 v = λ C0 v``; requires C0 positive definite (dense models).
-
-    Raises
-    ------
-    ValueError
-        If C0 is singular (e.g. the cell without intermediate filaments, whose
-        damping leaves a mechanism undamped): use direct solves instead.
-    """
-    spec = _spectrum_or_none(lin)
-    if spec is None:
-        raise ValueError(
-            f"the damping matrix C0 of {lin.cell.describe()} is singular (not positive definite), "
-            "so the relaxation spectrum K0 v = λ C0 v is not defined; compliance() uses direct solves"
-        )
-    return spec
-
-
-def _spectrum_or_none(lin: LinearModel) -> RelaxationSpectrum | None:
-    K0, C0 = lin.K0, lin.C0
-    if sp.issparse(K0):
-        return None
-    if _cholesky_or_none(C0) is None:
-        return None
-    # LAPACK sygv: one call for the symmetric-definite pencil, eigenvectors with VᵀC0V = I
-    lam, V, info = scipy.linalg.lapack.dsygv(K0, C0, itype=1, jobz="V", uplo="L")
-    if info != 0:
-        return None
-    r = (lin.D0 @ V) * (-lin.H0 @ V)
-    return RelaxationSpectrum(rates=lam, residues=r, modes=V)
+    if check:
+        lin.pencil.check()
+    return lin

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from types import MappingProxyType
 
 import numpy as np
@@ -43,6 +44,7 @@ __all__ = [
     "generalized_forces",
     "damping_matrix",
     "tangent_stiffness",
+    "weighted_gram",
     "SPARSE_THRESHOLD",
 ]
 
@@ -380,6 +382,11 @@ class Cell:
         """Whether the matrices are scipy.sparse (large structures)."""
         return sp.issparse(self.A)
 
+    @cached_property
+    def prestress_hessian(self):
+        """``Σ_j T0_j ∇²l_j`` (N/m per N of P), dense or sparse like ``A``; ``Kp`` is it plus ``Σ T0_j a_j a_jᵀ/l_j``."""
+        return assemble_hessian(self.geometry, self.T0, sparse=self.sparse)
+
     @property
     def strut_length(self) -> float:
         """The strut length L used in the equivalent-continuum factor 0.5/L (m).
@@ -453,7 +460,7 @@ def equilibrate(
         T0 = _check_given_self_stress(A, structure.families, T0, label)
         dim = -1 if sp.issparse(A) else self_stress_basis(A)[0].shape[1]
     l = geom.lengths
-    Kp = assemble_hessian(geom, T0) + _weighted_gram(A, T0 / l)
+    Kp = tangent_stiffness(geom, T0, T0 / l, A)
     load = point_vector(coords, structure.load, kin)
     probe = point_vector(coords, structure.probe, kin)
     for arr in (T0, l, load, probe):
@@ -485,8 +492,8 @@ def _check_given_self_stress(A, families, T0, label) -> np.ndarray:
     return T0
 
 
-def _weighted_gram(A, w: np.ndarray):
-    """``A diag(w) Aᵀ`` for dense or sparse A."""
+def weighted_gram(A, w: np.ndarray):
+    """``A diag(w) Aᵀ`` for dense or sparse A: ``Σ_j w_j a_j a_jᵀ`` (the material part of K, and C)."""
     if sp.issparse(A):
         return (A @ sp.diags(w) @ A.T).tocsr()
     return (A * w) @ A.T
@@ -517,10 +524,15 @@ def generalized_forces(cell: Cell, q: np.ndarray, tensions_fn):
 
 def damping_matrix(geom: MemberGeometry, c: np.ndarray):
     """``C(q) = Σ c_j a_j a_jᵀ`` (paper Eq. 8), in N·s/m, from a member geometry."""
-    return _weighted_gram(equilibrium_matrix(geom), np.broadcast_to(c, geom.lengths.shape))
+    return weighted_gram(equilibrium_matrix(geom), np.broadcast_to(c, geom.lengths.shape))
 
 
-def tangent_stiffness(geom: MemberGeometry, T: np.ndarray, dT_dl: np.ndarray):
-    """Exact Jacobian of ``A(q)T(l(q))``: ``Σ T_j ∇²l_j + Σ (dT_j/dl_j) a_j a_jᵀ`` (N/m)."""
-    A = equilibrium_matrix(geom)
-    return assemble_hessian(geom, T) + _weighted_gram(A, dT_dl)
+def tangent_stiffness(geom: MemberGeometry, T: np.ndarray, dT_dl: np.ndarray, A=None, sparse: bool | None = None):
+    """Exact Jacobian of ``A(q)T(l(q))``: ``Σ T_j ∇²l_j + Σ (dT_j/dl_j) a_j a_jᵀ`` (N/m).
+
+    The one formula for a stiffness matrix: ``Kp`` (``T = T0``, ``dT/dl = T0/l``),
+    K0 of a linear model and the tangent of the time integrator. ``A`` (the
+    equilibrium matrix of ``geom``) is computed when not given.
+    """
+    A = equilibrium_matrix(geom, sparse) if A is None else A
+    return assemble_hessian(geom, T, sparse=sp.issparse(A)) + weighted_gram(A, dT_dl)

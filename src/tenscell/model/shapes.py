@@ -219,7 +219,7 @@ def paper_cell(
 # imported here rather than at the top so this section merges cleanly with other additions
 from types import MappingProxyType  # noqa: E402
 
-from .equilibrium import _weighted_gram, assemble_hessian, point_vector, self_stress_basis  # noqa: E402
+from .equilibrium import point_vector, self_stress_basis, tangent_stiffness, weighted_gram  # noqa: E402
 from .structure import STRUT  # noqa: E402
 
 __all__ += [
@@ -251,7 +251,7 @@ def _assemble_cell(structure: Structure, parametrization: str, T0: np.ndarray, p
         raise NotPrestressableError(f"the given state is not a self-stress of {structure.name}: |A·T0| = {resid:.3g}")
     l = geom.lengths
     T0 = np.array(T0, dtype=float)
-    Kp = assemble_hessian(geom, T0) + _weighted_gram(A, T0 / l)
+    Kp = tangent_stiffness(geom, T0, T0 / l, A)
     load = point_vector(coords, structure.load, kin)
     probe = point_vector(coords, structure.probe, kin)
     for arr in (T0, l, load, probe):
@@ -333,7 +333,7 @@ def semiflexible_paper_cell(
     m). With intermediate filaments: 30 coordinates (10 point nodes) and 39
     members; without: 27 coordinates and 27 members. Give the struts their
     axial stiffness and damping through
-    :func:`tenscell.studies.variants.linearize_semiflexible`.
+    :func:`tenscell.studies.semiflexible.linearize_semiflexible`.
     """
     rigid = paper_cell(alpha, delta, L, intermediate_filaments)
     p = dict(rigid.parameters)
@@ -531,7 +531,7 @@ def find_cylindrical_reference(
         except ValueError as err:
             reasons.append(f"start {k}: {type(err).__name__}")
             continue
-        K0 = P * cell.Kp + _weighted_gram(cell.A, np.full(cell.m, float(EA)) / cell.lengths)
+        K0 = P * cell.Kp + weighted_gram(cell.A, np.full(cell.m, float(EA)) / cell.lengths)
         lam = float(np.linalg.eigvalsh(K0)[0])
         if lam > 0:
             return params

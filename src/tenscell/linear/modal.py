@@ -1,0 +1,533 @@
+"""The linear-algebra core: the pencil (K0, C0) of a linear model and everything computed from it.
+
+Every later stage (compliance and moduli, creep and relaxation, the relaxation
+spectrum, the slowest modes, elasticities) reaches K0 and C0 through the one
+:class:`Pencil` cached on its :class:`~tenscell.linear.linearize.LinearModel`
+(``lin.pencil``), so each decomposition is computed once per model and shared.
+
+Assembly at the reference (:func:`assemble_stiffness`, :func:`assemble_damping`)
+    ``K0 = P·Σ T0_j ∇²l_j + Σ k_j a_j a_jᵀ`` for tangent stiffnesses ``k_j``
+    (N/m) of the members, ``C0 = Σ c_j a_j a_jᵀ``. The geometric pieces (the
+    Gram product ``A diag(w) Aᵀ`` and the member Hessians) belong to the
+    geometry stage, :mod:`tenscell.model.equilibrium`, which needs them at any
+    configuration; this module only combines them for a linear model.
+
+Positive definiteness (:attr:`Pencil.cholesky`)
+    One Cholesky factorization of K0 — dense LAPACK, or sparse CHOLMOD
+    (:mod:`tenscell.linear.sparse`). It exists exactly when K0 is positive
+    definite, so it is the check (:func:`tenscell.linearize` with
+    ``check=True`` computes it) and it is kept for every later solve.
+
+Dense modal decomposition (:attr:`Pencil.modes`)
+    With ``K0 = L Lᵀ`` from the check, one symmetric eigensolve of the
+    whitened damping ``L⁻¹ C0 L⁻ᵀ = U diag(τ) Uᵀ`` gives ``C0 v = τ K0 v``
+    with ``V = L⁻ᵀU`` (``VᵀK0V = I``, τ ≥ 0 in s, τ = 0 for a mode the
+    tendons do not damp), and
+
+        J(s) = D0 (K0 + s·C0)⁻¹ b = Σ_k ρ_k / (1 + s·τ_k),  ρ_k = (D0·v_k)(b·v_k),  b = −H0,
+
+    which serves the compliance at every frequency, creep and relaxation at
+    every time, and the relaxation spectrum ``λ = 1/τ``. Singular C0 needs no
+    special case. Grids of prestresses use the same identity with C0 whitened
+    once for all P (:func:`prestress_grid_compliance`).
+
+Sparse models (:meth:`Pencil.lanczos_runs`)
+    Besides the Cholesky of K0 (the check, and static solves), one Cholesky of
+    ``K0 + σC0`` and one Lanczos run per shift σ, extended on demand
+    (:mod:`tenscell.linear.krylov`), serve every frequency, time and mode. Its
+    Ritz pairs are a retardation spectrum of the same form as the dense one
+    (:meth:`Pencil.retardation`). Why a second factorization rather than
+    Lanczos on K0's: measured on the lattices of ``bench/bench_scale.py``,
+    σ = 0 needs 3–4 times the steps (130–155 against 35–40 for 100
+    frequencies in 10⁻²…10³ Hz), and each step is a solve costing about a
+    tenth of a factorization.
+
+The continuum factor (:func:`continuum_factor`, :func:`modulus`)
+    ``G = (0.5/L)/J`` (Pa) with strut length L (m), the paper's equivalent
+    continuum; ``J(t)·2L`` is the creep compliance in 1/Pa.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sp
+
+from ..model.equilibrium import weighted_gram
+from .krylov import DEFAULT_BAND_HZ, LanczosRun, converge, default_shift
+from .sparse import NotPositiveDefinite, factorize_spd
+
+__all__ = [
+    "NotPositiveDefiniteError",
+    "continuum_factor",
+    "modulus",
+    "assemble_stiffness",
+    "assemble_damping",
+    "Modes",
+    "Pencil",
+    "RelaxationSpectrum",
+    "relaxation_spectrum",
+    "modal_compliance",
+    "prestress_grid_compliance",
+    "ZERO_TIME",
+]
+
+#: a retardation time below this fraction of the longest counts as zero (an undamped mode)
+ZERO_TIME = 1e-12
+#: relative accuracy to which a sparse model's retardation spectrum is converged (J(t) at every t, and η)
+SPECTRUM_TOL = 1e-10
+#: a Lanczos run at another shift is reused when its shift is within this factor of the one asked for
+SHIFT_REUSE_FACTOR = 4.0
+#: rows of prestresses per block of the grid's modal sum (keeps the block in cache)
+_GRID_BLOCK = 8
+
+
+class NotPositiveDefiniteError(ValueError):
+    """K0 is not positive definite: the reference is not a stable equilibrium."""
+
+
+# ---- the continuum factor ---------------------------------------------------------------------
+def continuum_factor(L: float) -> float:
+    """The paper's equivalent-continuum factor ``0.5/L`` (1/m) for strut length ``L`` (m): ``G = (0.5/L)/J``."""
+    return 0.5 / L
+
+
+def modulus(J, L: float):
+    """Complex modulus ``G' + iG'' = (0.5/L)/J`` (Pa) from a compliance ``J`` (m/N) and strut length ``L`` (m)."""
+    return continuum_factor(L) / np.asarray(J) if np.ndim(J) else continuum_factor(L) / J
+
+
+# ---- assembly at the reference ------------------------------------------------------------------
+def assemble_stiffness(cell, P: float, k):
+    """``K0 = P·Σ T0_j ∇²l_j + Σ k_j a_j a_jᵀ`` (N/m), dense or sparse like the cell.
+
+    Parameters
+    ----------
+    cell : Cell
+    P : float
+        Prestress scale (N): member forces ``P·T0``.
+    k : ndarray, shape (m,)
+        Tangent stiffness ``dT_j/dl_j`` of each member at the reference (N/m).
+        For the Voigt spring with the rest lengths of Eq. 11 it is
+        ``(EA_j + P·T0_j)/l_j``.
+    """
+    return P * cell.prestress_hessian + weighted_gram(cell.A, k)
+
+
+def assemble_damping(cell, c):
+    """``C0 = Σ c_j a_j a_jᵀ`` (N·s/m) for member damping ``c`` (N·s/m, shape (m,))."""
+    return weighted_gram(cell.A, c)
+
+
+# ---- the dense modal decomposition ---------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Modes:
+    """``C0 v = τ K0 v`` for a dense pencil: ``J(s) = Σ ρ_k/(1 + s·τ_k)``.
+
+    Attributes
+    ----------
+    tau : ndarray, shape (n,)
+        Retardation times τ_k (s), ascending, ≥ 0 (0 for undamped modes).
+    vectors : ndarray, shape (n, n)
+        K0-orthonormal eigenvectors as columns (``VᵀK0V = I``).
+    weights : ndarray, shape (n,)
+        ``ρ_k = (D0·v_k)(b·v_k)`` (m/N), ``b = −H0``.
+    """
+
+    tau: np.ndarray
+    vectors: np.ndarray
+    weights: np.ndarray
+
+
+def modal_compliance(tau: np.ndarray, rho: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """``J(iω) = Σ_k ρ_k/(1 + iωτ_k)`` (m/N) for ``tau``, ``rho`` of shape (..., n) and ω (rad/s) of shape (nf,).
+
+    Real arithmetic: one batched ``(2 × n)(n × nf)`` product gives both parts.
+    Returns shape (..., nf).
+    """
+    tau, rho = np.asarray(tau), np.asarray(rho)
+    den = np.multiply.outer(tau * tau, w * w)
+    den += 1.0
+    np.reciprocal(den, out=den)
+    parts = np.stack([rho, rho * tau], axis=-2) @ den
+    return parts[..., 0, :] - 1j * (w * parts[..., 1, :])
+
+
+_tri = scipy.linalg.solve_triangular
+
+
+def _whiten(L: np.ndarray, M: np.ndarray) -> np.ndarray:
+    """``L⁻¹ M L⁻ᵀ`` (symmetrized) for a lower-triangular L, with M of shape (n, n)."""
+    X = _tri(L, M, lower=True, check_finite=False)
+    X = _tri(L, X.T, lower=True, check_finite=False)
+    return 0.5 * (X + X.T)
+
+
+def _cholesky_or_none(M: np.ndarray) -> np.ndarray | None:
+    """Lower Cholesky factor of M, or None if M is indefinite or singular (a pivot below ZERO_TIME of the largest)."""
+    try:
+        L = np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        return None
+    d = np.diagonal(L) ** 2
+    return L if d.min() > ZERO_TIME * d.max() else None
+
+
+def _ritz_is_zero(tau: np.ndarray) -> np.ndarray:
+    return tau <= ZERO_TIME * max(float(tau.max()) if tau.size else 0.0, 1e-300)
+
+
+# ---- the pencil -----------------------------------------------------------------------------------
+class Pencil:
+    """The pencil (K0, C0) of one linear model with its decompositions, each computed once.
+
+    Parameters
+    ----------
+    K0, C0 : ndarray or scipy.sparse matrix, shape (n, n)
+        Stiffness (N/m) and damping (N·s/m).
+    load : ndarray, shape (n,)
+        ``b = −H0``, generalized force of a unit load.
+    probe : ndarray, shape (n,)
+        ``D0``, the probe's output row.
+    describe : str
+        What the model is, for messages (e.g. ``"paper cell (...) at P=1000"``).
+    hint : str
+        Advice appended to the not-positive-definite message.
+    """
+
+    def __init__(self, K0, C0, load, probe, *, describe: str = "the model", hint: str = ""):
+        self.K0, self.C0 = K0, C0
+        self.load = np.asarray(load, dtype=float)
+        self.probe = np.asarray(probe, dtype=float)
+        self.describe, self.hint = describe, hint
+        self.sparse = sp.issparse(K0)
+        self._factors: dict[float, object] = {}
+        self._runs: dict[float, list[LanczosRun]] = {}
+        self._retardation: tuple | None = None
+
+    @property
+    def n(self) -> int:
+        """Number of coordinates."""
+        return self.K0.shape[0]
+
+    # -- positive definiteness --------------------------------------------------------------------
+    @cached_property
+    def cholesky(self):
+        """Cholesky factor of K0: lower-triangular ndarray (dense) or :class:`SparseCholesky`.
+
+        Raises
+        ------
+        NotPositiveDefiniteError
+            If K0 is not positive definite.
+        """
+        if self.sparse:
+            try:
+                return factorize_spd(self.K0, what="K0")
+            except NotPositiveDefinite as err:
+                detail = f"a pivot of its sparse Cholesky factorization is <= 0, at column {err.column}"
+        else:
+            try:
+                return np.linalg.cholesky(self.K0)
+            except np.linalg.LinAlgError:
+                detail = f"smallest eigenvalue {float(np.linalg.eigvalsh(self.K0)[0]):.3g}"
+        raise NotPositiveDefiniteError(
+            f"K0 is not positive definite for {self.describe} ({detail}): "
+            "the reference is not a stable equilibrium." + (f" {self.hint}" if self.hint else "")
+        )
+
+    def check(self) -> None:
+        """Raise :class:`NotPositiveDefiniteError` unless K0 is positive definite (factors K0 once)."""
+        self.cholesky  # noqa: B018 - computing the factor is the check
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """``K0⁻¹ rhs`` with the cached factor; rhs of shape (n,) or (n, k)."""
+        L = self.cholesky
+        if self.sparse:
+            return L.solve(rhs)
+        return scipy.linalg.cho_solve((L, True), rhs, check_finite=False)
+
+    def static_compliance(self) -> float:
+        """``J(0) = D0 K0⁻¹ b`` (m/N)."""
+        return float(self.probe @ self.solve(self.load))
+
+    # -- dense: one eigensolve ---------------------------------------------------------------------
+    @cached_property
+    def damping_cholesky(self) -> np.ndarray | None:
+        """Lower Cholesky factor of a dense positive definite C0, or None if C0 is singular.
+
+        Round-off lets Cholesky "succeed" on a singular matrix with tiny pivots,
+        so pivots below :data:`ZERO_TIME` of the largest count as zero.
+        """
+        return None if self.sparse else _cholesky_or_none(np.asarray(self.C0))
+
+    @cached_property
+    def modes(self) -> Modes:
+        """The dense modal decomposition ``C0 v = τ K0 v``: one Cholesky, one symmetric eigensolve.
+
+        The pencil is whitened by C0 when C0 is positive definite (the rates
+        λ = 1/τ are then eigenvalues of ``Lc⁻¹K0Lc⁻ᵀ``, the identity the
+        prestress grids use too), otherwise by K0's factor from the check
+        (undamped modes get τ = 0). Either way K0 is checked first.
+        """
+        if self.sparse:
+            raise ValueError(
+                f"{self.describe} is sparse ({self.n} coordinates): its full modal decomposition is not formed; "
+                "use Pencil.retardation() (Lanczos) instead"
+            )
+        L = self.cholesky  # the positive-definiteness check
+        Lc = self.damping_cholesky
+        if Lc is not None:
+            lam, U = np.linalg.eigh(_whiten(Lc, np.asarray(self.K0)))
+            Vc = _tri(Lc, U, lower=True, trans="T", check_finite=False)  # C0-orthonormal, VᵀK0V = diag(λ)
+            lam, Vc = lam[::-1], Vc[:, ::-1]  # τ ascending
+            tau = 1.0 / lam
+            V = Vc * np.sqrt(tau)
+        else:
+            tau, U = np.linalg.eigh(_whiten(L, np.asarray(self.C0)))
+            tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding
+            V = _tri(L, U, lower=True, trans="T", check_finite=False)
+        return Modes(tau=tau, vectors=V, weights=(self.probe @ V) * (self.load @ V))
+
+    # -- sparse: factors and Lanczos runs per shift ----------------------------------------------------
+    def factor(self, shift: float = 0.0):
+        """Sparse Cholesky factor of ``K0 + shift·C0`` (shift in rad/s, ≥ 0), computed once per shift."""
+        shift = float(shift)
+        if shift == 0.0:
+            return self.cholesky
+        if shift not in self._factors:
+            Ks = (sp.csc_matrix(self.K0) + shift * sp.csc_matrix(self.C0)).tocsc()
+            try:
+                self._factors[shift] = factorize_spd(Ks, what=f"K0 + {shift:g}·C0")
+            except NotPositiveDefinite as err:
+                raise NotPositiveDefiniteError(
+                    f"K0 + {shift:g}·C0 is not positive definite for {self.describe} (a pivot of its sparse Cholesky "
+                    f"factorization is <= 0, at column {err.column}), so neither is K0: the reference is not a "
+                    "stable equilibrium"
+                ) from None
+        return self._factors[shift]
+
+    def nearby_shift(self, shift: float) -> float:
+        """A shift already in use within :data:`SHIFT_REUSE_FACTOR` of ``shift`` (rad/s), else ``shift``."""
+        for s in self._runs:
+            if s > 0 and shift > 0 and 1.0 / SHIFT_REUSE_FACTOR <= s / shift <= SHIFT_REUSE_FACTOR:
+                return s
+        return float(shift)
+
+    def lanczos_runs(self, shift: float) -> list[LanczosRun]:
+        """The Lanczos run(s) at ``shift`` (rad/s): one from the load, or two (b ± D0) when probe ≠ load."""
+        shift = float(shift)
+        if shift not in self._runs:
+            F = self.factor(shift)
+            C = sp.csr_matrix(self.C0)
+            Ks = (sp.csr_matrix(self.K0) + shift * C).tocsr() if shift else sp.csr_matrix(self.K0)
+            b, d = self.load, self.probe
+            starts = [b] if self.probe_is_load else [b + d, b - d]
+            cap = min(self.n, 2000)
+            self._runs[shift] = [LanczosRun(F, Ks, C, v, shift, cap) for v in starts]
+        return self._runs[shift]
+
+    @property
+    def probe_is_load(self) -> bool:
+        """Whether the probe row equals the load vector (symmetric transfer function)."""
+        b, d = self.load, self.probe
+        return bool(np.allclose(b, d, rtol=0, atol=1e-14 * max(np.abs(b).max(), 1e-300)))
+
+    # -- the retardation spectrum, dense or sparse ------------------------------------------------------
+    def retardation(self, tol: float = SPECTRUM_TOL) -> tuple[np.ndarray, np.ndarray, float]:
+        """``(τ, ρ, error)``: ``J(s) = Σ ρ/(1 + sτ)`` for every s, dense or sparse.
+
+        Dense: the modal decomposition (error 0). Sparse: the Ritz spectrum of
+        the model's Lanczos run, extended until the creep compliance
+        ``J(t) = Σ ρ(1 − e^{−t/τ})`` on a logarithmic grid of times spanning the
+        spectrum, the static compliance and ``Σ_{τ>0} ρ/τ`` change by less than
+        ``tol`` (relative) over the last steps; ``error`` is that change.
+        """
+        if not self.sparse:
+            m = self.modes
+            return m.tau, m.weights, 0.0
+        if self._retardation is not None and self._retardation[2] <= tol:
+            return self._retardation
+        sigma = self.retardation_shift
+        runs = self.lanczos_runs(sigma)
+        err = 0.0
+        for run in runs:
+            err = max(err, converge(run, _CreepChange(), tol, "creep spectrum"))
+        spectra = [self._run_spectrum(r) for r in runs]
+        if len(runs) == 1:
+            tau, rho = spectra[0]
+        else:  # polarization: J = ¼(J₊ − J₋)
+            tau = np.concatenate([spectra[0][0], spectra[1][0]])
+            rho = np.concatenate([0.25 * spectra[0][1], -0.25 * spectra[1][1]])
+        order = np.argsort(tau)
+        self._retardation = (tau[order], rho[order], err)
+        return self._retardation
+
+    @cached_property
+    def retardation_shift(self) -> float:
+        """The shift (rad/s) of the Lanczos run behind the time domain: the paper band's, or a nearby one in use."""
+        return self.nearby_shift(default_shift(DEFAULT_BAND_HZ))
+
+    def _run_spectrum(self, run: LanczosRun) -> tuple[np.ndarray, np.ndarray]:
+        try:
+            return run.spectrum()
+        except FloatingPointError:
+            raise NotPositiveDefiniteError(
+                f"K0 is not positive definite for {self.describe}: the Lanczos run found a mode with a "
+                "non-positive stiffness (the reference is not a stable equilibrium)"
+            ) from None
+
+
+class _CreepChange:
+    """Relative change of the reduced creep compliance since the previous check (the run's error estimate)."""
+
+    def __init__(self):
+        self.prev = None
+
+    def __call__(self, run: LanczosRun) -> float:
+        if run.steps == 0:
+            return 0.0 if run.broke_down else math.inf
+        try:
+            tau, rho = run.spectrum()
+        except FloatingPointError:
+            return 0.0  # reported by Pencil.retardation
+        if run.broke_down:
+            return 0.0  # the Krylov space is invariant: the reduced model is exact
+        prev, self.prev = self.prev, (tau, rho)
+        if prev is None:
+            return math.inf
+        pos = tau[~_ritz_is_zero(tau)]
+        if pos.size == 0:
+            return math.inf
+        t = np.logspace(math.log10(pos.min()) - 1, math.log10(pos.max()) + 1, 48)
+        now, before = _creep_features(tau, rho, t), _creep_features(*prev, t)
+        return float(np.max(np.abs(now - before) / np.maximum(np.abs(now), 1e-300)))
+
+
+def _creep_features(tau, rho, t):
+    """J(t) on the grid, J(∞) and Σ_{τ>0} ρ/τ (the initial creep rate per unit force)."""
+    zero = _ritz_is_zero(tau)
+    tp, rp = tau[~zero], rho[~zero]
+    J = rho[zero].sum() + (-np.expm1(-np.multiply.outer(t, 1.0 / tp))) @ rp
+    return np.concatenate([J, [rho.sum(), (rp / tp).sum()]])
+
+
+# ---- the relaxation spectrum -----------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class RelaxationSpectrum:
+    """Modes of the linear model: ``J(ω) = Σ_k r_k / (λ_k + iω)``.
+
+    Attributes
+    ----------
+    rates : ndarray, shape (k,)
+        Relaxation rates λ_k (1/s), ascending; ``K0 v = λ C0 v``. Dense
+        models: all n of them; sparse models: the Ritz values of the Lanczos
+        run from the load (the modes the load excites, converged so that
+        ``J`` agrees with the full model to ``error_estimate``).
+    residues : ndarray, shape (k,)
+        ``r_k = (D0·v_k)(−H0·v_k)`` (m/(N·s)); non-negative when probe = load.
+    modes : ndarray, shape (n, k)
+        C0-orthonormal eigenvectors (Ritz vectors for sparse models) as columns.
+    error_estimate : float
+        Relative accuracy of the spectrum's ``J`` (0 for the dense, exact decomposition).
+    """
+
+    rates: np.ndarray
+    residues: np.ndarray
+    modes: np.ndarray
+    error_estimate: float = 0.0
+
+    @property
+    def times(self) -> np.ndarray:
+        """Relaxation times τ_k = 1/λ_k (s)."""
+        return 1.0 / self.rates
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Compliance weights ``r_k/λ_k`` (m/N): each mode's share of the static compliance."""
+        return self.residues / self.rates
+
+
+def relaxation_spectrum(lin) -> RelaxationSpectrum:
+    """Solve ``K0 v = λ C0 v`` (rates λ in 1/s, ``vᵀC0v = 1``), dense or sparse.
+
+    Dense models: the full spectrum from the model's one modal decomposition.
+    Sparse models: the load-excited part, from the model's Lanczos run
+    (:meth:`Pencil.retardation`); it needs probe = load.
+
+    Raises
+    ------
+    ValueError
+        If C0 is singular (e.g. the cell without intermediate filaments, whose
+        damping leaves a mechanism undamped), so that some λ is infinite; or
+        for a sparse model whose probe is not its load.
+    """
+    pencil = lin.pencil
+    if not pencil.sparse:
+        m = pencil.modes
+        tau, rho, err = m.tau, m.weights, 0.0
+        V = m.vectors
+    else:
+        if not pencil.probe_is_load:
+            raise ValueError(
+                f"the relaxation spectrum of the sparse model {lin.cell.describe()} is computed from the load; "
+                "its probe is not the load (use creep_spectrum, whose retardation spectrum covers this case)"
+            )
+        err = pencil.retardation()[2]
+        run = pencil.lanczos_runs(pencil.retardation_shift)[0]
+        tau, rho = pencil._run_spectrum(run)  # in the order of the Ritz values θ, ascending
+        V = run.ritz_vectors(np.arange(tau.size))
+    if tau.size == 0 or np.any(_ritz_is_zero(tau)):
+        raise ValueError(
+            f"the damping matrix C0 of {lin.cell.describe()} is singular (not positive definite), "
+            "so the relaxation spectrum K0 v = λ C0 v is not defined; compliance() handles this case"
+        )
+    rates = 1.0 / tau
+    # to C0-normalization: dense vectors are K0-normalized (vᵀC0v = τ), Ritz vectors Kσ-normalized (uᵀC0u = θ)
+    V = V / np.sqrt(tau if not pencil.sparse else tau / (1.0 + pencil.retardation_shift * tau))
+    order = np.argsort(rates)
+    return RelaxationSpectrum(rates=rates[order], residues=(rho / tau)[order], modes=V[:, order],
+                              error_estimate=err)
+
+
+# ---- grids of prestresses ---------------------------------------------------------------------------
+def prestress_grid_compliance(Kp, K_material, C0, load, probe, P: np.ndarray, w: np.ndarray,
+                              describe: str = "the model") -> np.ndarray | None:
+    """``J(iω)`` (m/N) of the dense pencils ``(P·Kp + K_material, C0)`` for many prestresses at once.
+
+    C0 is the same for every P, so it is whitened once (``C0 = Lc Lcᵀ``);
+    one batched symmetric eigensolve of ``P·K̃p + K̃m`` gives every P's rates
+    λ (their positivity is the positive-definiteness check of each K0), and
+    the modal sum runs in blocks of prestresses that stay in cache.
+
+    Returns
+    -------
+    ndarray of complex, shape (nP, nf), or None
+        None when C0 is singular (use the per-model path).
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        If K0 is not positive definite at some P.
+    """
+    Lc = _cholesky_or_none(np.asarray(C0))
+    if Lc is None:
+        return None
+    Kpt, Kmt = _whiten(Lc, np.asarray(Kp)), _whiten(Lc, np.asarray(K_material))
+    bt = _tri(Lc, load, lower=True, check_finite=False)
+    dt = _tri(Lc, probe, lower=True, check_finite=False)
+    lam, U = np.linalg.eigh(P[:, None, None] * Kpt + Kmt)
+    bad = np.flatnonzero(lam[:, 0] <= 0)
+    if bad.size:
+        raise NotPositiveDefiniteError(
+            f"K0 is not positive definite for {describe} at P={P[bad[0]]:.6g} (smallest relaxation rate "
+            f"{lam[bad[0], 0]:.3g} 1/s): the reference is not a stable equilibrium"
+        )
+    tau = 1.0 / lam
+    rho = (dt @ U) * (bt @ U) * tau  # residues r = (d̃·u)(b̃·u) in rate form; ρ = r/λ
+    J = np.empty((P.size, w.size), dtype=complex)
+    for i in range(0, P.size, _GRID_BLOCK):
+        J[i: i + _GRID_BLOCK] = modal_compliance(tau[i: i + _GRID_BLOCK], rho[i: i + _GRID_BLOCK], w)
+    return J
