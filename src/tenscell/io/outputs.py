@@ -20,6 +20,7 @@ import csv
 import ctypes
 import ctypes.util
 import datetime as _dt
+import glob
 import json
 import os
 import shutil
@@ -35,6 +36,7 @@ __all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text", "OutputS
 MANIFEST = "manifest.json"
 _STAGING = ".tenscell-staging-"
 _OLD = ".tenscell-old-"
+_TEMP = ".tenscell-tmp-"
 
 
 @contextlib.contextmanager
@@ -49,7 +51,9 @@ def atomic_path(path, *, make_parents: bool = True):
     path = Path(path)
     if make_parents:
         path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix or ".tmp", dir=path.parent)
+    _clean_stale_temps(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}{_TEMP}{os.getpid()}-", suffix=path.suffix or ".tmp",
+                               dir=path.parent)
     os.close(fd)
     try:
         yield Path(tmp)
@@ -65,6 +69,15 @@ def atomic_path(path, *, make_parents: bool = True):
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def _clean_stale_temps(path: Path) -> None:
+    """Remove temporary files that killed writers (SIGKILL) left beside ``path``."""
+    for entry in path.parent.glob(f".{glob.escape(path.name)}{_TEMP}*"):
+        pid = entry.name[len(path.name) + 1 + len(_TEMP):].split("-", 1)[0]
+        if pid.isdigit() and not _pid_alive(int(pid)):
+            with contextlib.suppress(OSError):
+                entry.unlink()
 
 
 def write_csv_rows(path, header, rows) -> None:
@@ -191,11 +204,11 @@ def _clean_stale(target: Path) -> None:
     parent = target.absolute().parent
     if not parent.is_dir():
         return
-    for entry in parent.glob(f".{target.name}{_STAGING}*"):
+    for entry in parent.glob(f".{glob.escape(target.name)}{_STAGING}*"):
         pid = entry.name.rsplit("-", 1)[-1]
         if not pid.isdigit() or not _pid_alive(int(pid)):
             shutil.rmtree(entry, ignore_errors=True)
-    for entry in parent.glob(f".{target.name}{_OLD}*"):
+    for entry in parent.glob(f".{glob.escape(target.name)}{_OLD}*"):
         pid = entry.name.rsplit("-", 1)[-1]
         if pid.isdigit() and _pid_alive(int(pid)):
             continue
