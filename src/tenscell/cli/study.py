@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._args import add_out, integer
+from ._args import add_out, integer, number, number_list
 
 def _study_no_if(out: Path, log, args=None) -> None:
     from .. import plotting
@@ -111,8 +111,38 @@ def _study_stiffening(out: Path, log, args=None) -> None:
     log("stiffening.csv, stiffening.png, stiffening.md")
 
 
+def _study_compactness(out: Path, log, args=None) -> None:
+    from .. import plotting
+    from ..io.outputs import write_csv_rows, write_text
+    from ..plotting.fits import stiffness_histogram
+    from ..reports.compactness import compactness_markdown
+    from ..studies.compactness import compactness_study
+    from .fit import read_datasets
+
+    datasets = read_datasets(args.data, args.prestress, 1)
+    s = compactness_study(datasets, args.decades, damping=args.damping, starts=args.starts, seed=args.seed,
+                          jobs=args.jobs, tolerance=args.tolerance)
+    write_csv_rows(out / "compactness.csv", s.HEADER, s.rows())
+    plotting.save(s.plot(title="Best fit against the bound on the stiffness spread"), out / "compactness_front.png")
+    written = "compactness.csv, compactness_front.png, compactness.md"
+    knee = s.knee_fit
+    if knee is not None:
+        plotting.save(stiffness_histogram(knee.EA, families=knee.cell.structure.families,
+                                          title=f"Stiffnesses at the narrowest bound within tolerance ({s.knee:g} "
+                                                "decades)"), out / "compactness_histogram.png")
+        write_csv_rows(out / "compactness_knee_stiffness.csv", ["tendon", "family", "EA_N"],
+                       ((j, fam, float(e)) for j, (fam, e) in enumerate(zip(knee.cell.structure.families, knee.EA))))
+        written += ", compactness_histogram.png, compactness_knee_stiffness.csv"
+    write_text(out / "compactness.md", compactness_markdown(s))
+    log(written)
+
+
+#: studies that fit data files given on the command line (not part of `reproduce`'s variants stage)
+DATA_STUDIES = ("compactness",)
+
 #: the studies of `tenscell study NAME`: name -> writer(out_dir, log, args)
 STUDIES = {
+    "compactness": _study_compactness,
     "no-if": _study_no_if,
     "sensitivity": _study_sensitivity,
     "references": _study_references,
@@ -126,11 +156,24 @@ def register(sub) -> None:
                        description="Studies of the paper's discussion and future work: no-if (no intermediate "
                                    "filaments, the G'' peak), sensitivity (elasticities, ±10% table, Monte Carlo), "
                                    "references (valid q0(α, δ), regular and cylindrical cells), semiflexible (elastic "
-                                   "struts), stiffening (strain-stiffening IFs).")
+                                   "struts), stiffening (strain-stiffening IFs); compactness DATA... (how narrow the "
+                                   "distribution of tendon stiffnesses can be and still fit the data: best RMS for "
+                                   "each bound on its spread).")
     p.add_argument("name", choices=sorted(STUDIES), help="which study")
+    p.add_argument("data", nargs="*", help="compactness: CSV file(s) of measured moduli, or bundled:NAME")
     add_out(p, derived="study-NAME")
     p.add_argument("--draws", type=integer(1, 100_000), default=200, help="Monte Carlo draws per set (sensitivity)")
-    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="Monte Carlo seed (sensitivity)")
+    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed (sensitivity, compactness)")
+    g = p.add_argument_group("compactness (fits with the stiffness spread bounded to each of --decades)")
+    g.add_argument("--decades", type=number_list(0.0, 100.0, "decades", open_lo=True),
+                   default=tuple(float(d) for d in range(1, 15)), help="bounds on the spread (comma list)")
+    g.add_argument("--prestress", action="append", metavar="FILE=PA",
+                   help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
+    g.add_argument("--damping", choices=("uniform", "per-family"), default="uniform", help="damping c")
+    g.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per bound")
+    g.add_argument("--jobs", type=integer(1, 256), default=1, help="worker processes over the starts")
+    g.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.01,
+                   help="RMS of the log10 errors (decades) a fit must reach")
     p.set_defaults(func=run)
 
 
@@ -140,6 +183,9 @@ def run(args) -> int:
 
     from ..io.outputs import OutputSet
 
+    if (args.name == "compactness") != bool(args.data):
+        raise ValueError("study compactness needs data files (e.g. bundled:fabry2001)" if args.name == "compactness"
+                         else f"study {args.name} takes no data files, got {' '.join(args.data)}")
     from .._progress import stage
 
     out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")
