@@ -24,10 +24,10 @@ import glob
 import json
 import os
 import shutil
-import signal
 import tempfile
-import threading
 from pathlib import Path
+
+from .._parallel import sigint_deferred
 
 __all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text", "OutputSet", "OutputLocationError",
            "check_output_dir", "check_output_file", "read_manifest", "MANIFEST"]
@@ -218,26 +218,6 @@ def _clean_stale(target: Path) -> None:
             shutil.rmtree(entry, ignore_errors=True)
 
 
-@contextlib.contextmanager
-def _sigint_deferred():
-    """Hold SIGINT during the block (main thread only); raise KeyboardInterrupt after it if one came."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught = []
-    try:
-        previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
-    except ValueError:  # pragma: no cover - signals unavailable here
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-    if caught and previous not in (signal.SIG_IGN, None):
-        raise KeyboardInterrupt
-
-
 _RENAME_EXCHANGE = 2
 
 
@@ -307,7 +287,7 @@ class OutputSet:
         staging, self.staging = self.staging, None
         assert staging is not None
         # a second Ctrl-C must not cut the clean-up or the swap in half: it is held until they are done
-        with _sigint_deferred():
+        with sigint_deferred():
             if exc_type is not None:
                 shutil.rmtree(staging, ignore_errors=True)
                 return False
