@@ -47,6 +47,9 @@ def register(sub) -> None:
                    help="RMS of the log10 errors (decades) every data set must reach")
     p.add_argument("--baseline-starts", type=integer(1, 10_000), default=2,
                    help="starts for the homogeneous baseline fit")
+    p.add_argument("--max-points", type=integer(4, 100_000), default=100,
+                   help="fit at most this many points: denser data is binned in log frequency per prestress "
+                        "(weighted log means; the rule is in tenscell.io.thinning and the report)")
     add_out(p)
     p.set_defaults(func=run)
 
@@ -137,10 +140,16 @@ def run(args) -> int:
     import sys
 
     from .. import fitting
+    from .._progress import stage
     from ..io.outputs import OutputSet
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
+    for k, data in enumerate(datasets):
+        if data.n > args.max_points:
+            datasets[k] = data.binned(args.max_points)
+            stage(f"{data.source}: {data.n:,} points binned to {datasets[k].n:,} in log frequency "
+                  f"(--max-points {args.max_points})")
     constraints = {"min_prestress_share": args.min_prestress_share, "max_decades": args.max_decades}
     fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **constraints)  # bad input: before
     result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,

@@ -8,8 +8,9 @@ from ._args import add_out, add_prestress, integer, lattice_size, member_values,
 
 #: built-in structures `tenscell show` knows by name
 SHOW_BUILTINS = ("paper", "sphere6", "sphere12", "sphere30", "sheet", "block")
-#: most modules of a built-in lattice (a 10x10x10 block: 2.4e4 coordinates, about a minute with its modes)
-MAX_LATTICE_MODULES = 1000
+#: most modules of a built-in lattice: about 1.2e5 coordinates, some 1.5 GB and minutes for the sparse
+#: factorization (the README's 11x11x12 block has 1452 modules)
+MAX_LATTICE_MODULES = 5000
 
 
 def register(sub) -> None:
@@ -19,7 +20,7 @@ def register(sub) -> None:
                                    "modes. TARGET is a structure file (JSON, docs/structure-format.md) or one of: "
                                    + ", ".join(SHOW_BUILTINS) + ".")
     p.add_argument("target", metavar="TARGET", help="structure file or built-in name")
-    add_out(p, default="out")
+    add_out(p, derived="show-TARGET, TARGET's file name without .json")
     p.add_argument("--modes", type=integer(0, 50), default=3, help="number of slowest relaxation modes to draw (0: none)")
     add_prestress(p, sweep=False)
     p.add_argument("--EA", type=member_values("EA"), default=None,
@@ -84,7 +85,7 @@ def run(args) -> int:
     from ..io.outputs import OutputSet, check_output_file
 
     _check_target(args)
-    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    out = OutputSet(args.out or f"show-{Path(args.target).stem}", command=args.command_line, flag="--out")
     save = check_output_file(args.save, "--save") if args.save else None
 
     from .. import plotting

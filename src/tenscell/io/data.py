@@ -112,6 +112,10 @@ class RheologyData:
         ``"prestress"`` when `prestress` is given, else ``"frequency"``.
         Derived when None; an inconsistent value is an error.
 
+    The points are stored in a canonical order (by prestress, then frequency),
+    whatever order they were given in, so that results depend on the data set
+    and not on the order of its rows.
+
     Raises
     ------
     DataError
@@ -168,6 +172,17 @@ class RheologyData:
             raise _error(source, f"arrays have different lengths: {lengths}")
         if lengths["frequency_hz"] == 0:
             raise _error(source, "no data points")
+        # canonical row order (prestress, then frequency, then the values): the same data set gives
+        # the same object, and the same fit, whatever the order of the rows in its file
+        keys = [arrays[k] for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
+                if arrays[k] is not None]
+        order = np.lexsort(keys)
+        if np.any(order != np.arange(order.size)):
+            for name, arr in arrays.items():
+                if arr is not None:
+                    arr = arr[order]
+                    arr.flags.writeable = False
+                    arrays[name] = arr
         for name, arr in arrays.items():
             object.__setattr__(self, name, arr)
 
@@ -218,6 +233,15 @@ class RheologyData:
         return RheologyData(frequency_hz=self.frequency_hz, G_storage=self.G_storage, G_loss=self.G_loss,
                             prestress=np.full(self.n, p), G_storage_sd=self.G_storage_sd,
                             G_loss_sd=self.G_loss_sd, source=self.source, comments=self.comments)
+
+    def binned(self, max_points: int | None = None) -> "RheologyData":
+        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`).
+
+        Returns ``self`` when it has no more points than that.
+        """
+        from .thinning import DEFAULT_MAX_POINTS, bin_log_frequency
+
+        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points)
 
     @property
     def weights_storage(self) -> np.ndarray:
@@ -580,7 +604,7 @@ def bundled(name: str) -> RheologyData:
     Returns
     -------
     RheologyData
-        ``source`` is the location of the bundled file.
+        ``source`` is the file's name marked as bundled (not its install path).
 
     Raises
     ------
@@ -595,7 +619,8 @@ def bundled(name: str) -> RheologyData:
         available = ", ".join(f"{s!r} ({f})" for s, f in _BUNDLED)
         raise DataError(f"{name!r}: no bundled data set of that name; available: {available}")
     resource = resources.files("tenscell") / "data" / filename
-    source = str(resource)
+    # the name, not the install path: reports and messages say which data set, the same on every machine
+    source = f"{filename} (bundled with tenscell)"
     # Read through the resource API rather than open() so that this also
     # works when the package is installed as a zip file.
     try:

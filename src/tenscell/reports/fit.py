@@ -15,6 +15,7 @@ from ..fitting.prestress import CELL_ELASTICITY
 from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
 from ..io.data import RheologyData
 from ._format import num, table
+from ..io.thinning import binning_notes
 
 __all__ = ["fit_markdown", "SECTIONS", "section_summary", "section_datasets", "section_baseline", "section_shape",
            "section_prestress", "section_stiffness", "section_parameters", "section_errors",
@@ -42,6 +43,7 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
               f", prestress not stated: fitted {num(f.prestress_fitted_pa)} Pa" if f.prestress_fitted_pa is not None
               else "")
         lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {f.axis} sweep{at}.")
+        lines += [f"  Data thinned: {note}." for note in binning_notes(f.data)]
     lines += [
         f"- Model: {result.cell.describe()}; stiffness {result.tendons}, damping {result.damping}; "
         f"{pr.n_free} free parameters against {pr.n_residuals} residuals.",
