@@ -59,6 +59,7 @@ from .._checks import positive_scalar
 from .._results import format_repr
 from ..io.data import DataError, RheologyData
 from ..laws import Voigt
+from ..linear.modal import prestress_grid_modes
 from ..model.equilibrium import Cell
 from .result import FitParameter
 
@@ -313,8 +314,7 @@ class FitProblem:
         if wh is None:
             return None
         B, Ht, bt, Dt = wh
-        Kt = P[:, None, None] * Ht[None] + np.matmul(B[None] * k[:, None, :], B.T[None])
-        lam, W = np.linalg.eigh(Kt)
+        lam, W = prestress_grid_modes(Ht, np.matmul(B[None] * k[:, None, :], B.T[None]), P)
         if not np.all(lam > 0):
             return None
         alpha = np.einsum("gnk,n->gk", W, Dt)  # probe projections, D0·v_k
