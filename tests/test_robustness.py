@@ -37,8 +37,9 @@ NUMERIC_FLAGS = {
     ("creep",): {"--amplitude": (), "--t-min": (), "--t-max": (), "--points": (), "--window": (),
                  "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),
                  "--prestress": (), "--P": (), "--beta": (), "--velocity-scale": (), "--rtol": ()},
-    ("study", "sensitivity"): {"--draws": (), "--seed": ("zero",), "--decades": (), "--starts": (), "--jobs": (),
-                               "--tolerance": ()},
+    ("study", "sensitivity"): {"--draws": (), "--seed": ("zero",)},
+    ("study", "compactness", "DATA"): {"--decades": (), "--starts": (), "--jobs": (), "--tolerance": (),
+                                       "--min-prestress-share": (), "--max-decades": ()},
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
 }

@@ -46,6 +46,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "response": ("FrequencyResponse", "compliance", "frequency_response", "log_slope", "loss_tangent", "moduli",
                  "static_modulus", "viscosity_limit"),
     "linear.krylov": ("krylov_compliance",),
+    "_threads": ("set_threads", "threads"),
     "timedomain": ("CreepSpectrum", "PowerLawFit", "StressRelaxation", "creep_compliance", "creep_spectrum",
                    "fit_power_law", "local_exponent", "relaxation_modulus", "stress_relaxation"),
     # analyses
@@ -98,6 +99,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
         SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, oscillatory_response,
         simulate,
     )
+    from ._threads import set_threads, threads
     from .fitting import FitParameter, FitResult, fit
     from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
     from .laws import (

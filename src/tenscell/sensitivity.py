@@ -40,6 +40,7 @@ from ._checks import finite_scalar, positive_array, positive_scalar
 from ._progress import progress_bar, stage
 from ._results import dataframe, format_repr
 from .linear.linearize import LinearModel, linearize
+from .linear.modal import modulus
 from .response import compliance
 from .model.shapes import paper_cell
 from .model.structure import STRUT
@@ -189,11 +190,9 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
     f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
     w = 2 * np.pi * f
     dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M)  # noqa: E731
-    K0, C0, Kp, A = dense(lin.K0), dense(lin.C0), dense(lin.Kp), dense(lin.cell.A)
-    Z = K0[None] + 1j * w[:, None, None] * C0[None]
-    b = (-lin.H0).astype(complex)
-    X = np.linalg.solve(Z, np.broadcast_to(b, (f.size, b.size))[..., None])[..., 0]
-    Y = np.linalg.solve(np.transpose(Z, (0, 2, 1)), np.broadcast_to(lin.D0.astype(complex), X.shape)[..., None])[..., 0]
+    Kp, A = dense(lin.Kp), dense(lin.cell.A)
+    X = lin.pencil.resolvent(w, -lin.H0)  # the model's one modal decomposition (tenscell.linear.modal)
+    Y = lin.pencil.resolvent(w, lin.D0)  # Z = K0 + iωC0 is symmetric: Z⁻ᵀD0 = Z⁻¹D0
     J = X @ lin.D0
     prod = (Y @ A) * (X @ A)  # (nf, m): (yᵀa_j)(a_jᵀx)
     cell, l = lin.cell, lin.cell.lengths
@@ -216,13 +215,13 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
     n = len(names)
     return Elasticities(
         frequency_hz=f, names=tuple(names), groups=tuple(groups), values=np.concatenate(values),
-        complex=np.vstack(rows), G=(0.5 / lin.L) / J, methods=("analytic",) * n, errors=np.zeros(n),
+        complex=np.vstack(rows), G=modulus(J, lin.L), methods=("analytic",) * n, errors=np.zeros(n),
     )
 
 
 def _modulus(alpha, delta, L, P, EA, c, f, intermediate_filaments=True):
     cell = paper_cell(alpha=alpha, delta=delta, L=L, intermediate_filaments=intermediate_filaments)
-    return (0.5 / cell.strut_length) / compliance(linearize(cell, P=P, EA=EA, c=c), f)
+    return modulus(compliance(linearize(cell, P=P, EA=EA, c=c), f), cell.strut_length)
 
 
 def _geometry_derivative(G_of, x0, h, relative):
@@ -400,7 +399,7 @@ def perturbation_table(
     fam = [_family_tag(x) for x in cell.structure.families]
 
     def G_material(P_, EA_, c_):
-        return (0.5 / cell.strut_length) / compliance(linearize(cell, P=P_, EA=EA_, c=c_), f)
+        return modulus(compliance(linearize(cell, P=P_, EA=EA_, c=c_), f), cell.strut_length)
 
     G0 = G_material(P, EA, c)
     rows = []
@@ -630,7 +629,7 @@ def monte_carlo(
     cell, EA, c = _base_parameters(alpha, delta, L, P, EA, c, True)
     delta0 = float(cell.parameters["delta"])
     m = cell.m
-    G0 = (0.5 / cell.strut_length) / compliance(linearize(cell, P=P, EA=EA, c=c), f)
+    G0 = modulus(compliance(linearize(cell, P=P, EA=EA, c=c), f), cell.strut_length)
     names = tuple(f"EA[{j}]" for j in range(m)) + tuple(f"c[{j}]" for j in range(m)) + ("P",)
     if parameters == "all":
         names += ("L", "delta", "alpha")
@@ -648,7 +647,7 @@ def monte_carlo(
             else:
                 cell_i = cell
             lin = linearize(cell_i, P=P * fa[2 * m], EA=EA * fa[:m], c=c * fa[m:2 * m])
-            G1 = (0.5 / cell_i.strut_length) / compliance(lin, f)
+            G1 = modulus(compliance(lin, f), cell_i.strut_length)
         except ValueError as err:
             reasons.append(type(err).__name__)
             continue

@@ -45,6 +45,7 @@ import scipy.linalg
 from ._checks import positive_array, positive_scalar
 from .linear.linearize import LinearModel
 from .linear.modal import ZERO_TIME, continuum_factor
+from ._threads import hot_path
 
 __all__ = [
     "CreepSpectrum",
@@ -129,6 +130,7 @@ class CreepSpectrum:
         return self.instantaneous + (1.0 / (1.0 + np.multiply.outer(s, self.times))) @ self.weights
 
 
+@hot_path
 def creep_spectrum(lin: LinearModel) -> CreepSpectrum:
     """Retardation times and weights of the linear model (works for singular C0 too).
 
@@ -250,6 +252,7 @@ def _merge_modes(lam: np.ndarray, r: np.ndarray, rtol: float = 1e-9) -> tuple[np
     return np.array(out_l), np.array(out_r)
 
 
+@hot_path
 def stress_relaxation(lin: LinearModel) -> StressRelaxation:
     """Relaxation function of the linear model from the zeros of ``J(s)``.
 

@@ -1,6 +1,7 @@
 """``tenscell fit``: fit the tensegrity model to measured G', G'' (CSV) and write the fit's output set."""
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 from ._args import add_out, integer, number
@@ -39,6 +40,15 @@ def register(sub) -> None:
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform",
                    help="damping c: one for all (as in the paper) or per family")
     add_constraints(p)
+    p.add_argument("--bound", action="append", type=_bound, metavar="KIND=LO:HI", default=None,
+                   help="bounds of every parameter of a kind, in SI units (repeatable): EA (N), c (N·s/m), P (N), "
+                        "s (m²), P_data (Pa), L (m); e.g. --bound EA=1e-3:1e3")
+    p.add_argument("--fix", action="append", type=_fixed, metavar="NAME=VALUE", default=None,
+                   help="hold a parameter fixed, by its name in fit.json, in SI units (repeatable): e.g. --fix L=1, "
+                        "--fix c=0.5, --fix P=20, --fix c_actin=2, --fix EA_intermediate_filament=0.3")
+    p.add_argument("--holdout", type=_holdout, metavar="FMIN:FMAX", default=None,
+                   help="train on the points outside FMIN..FMAX Hz and report every model's error on the held-out "
+                        "points (one frequency sweep)")
     p.add_argument("--starts", type=integer(1, 10_000), default=4, help="independent starts")
     p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0,
                    help="random seed; the same seed gives the same fit")
@@ -52,6 +62,97 @@ def register(sub) -> None:
                         "(weighted log means; the rule is in tenscell.io.thinning and the report)")
     add_out(p)
     p.set_defaults(func=run)
+
+
+#: parameter kinds that --bound takes, with their units
+BOUND_UNITS = {"EA": "N", "c": "N·s/m", "P": "N", "s": "m²", "P_data": "Pa", "L": "m"}
+
+
+def _pair(text: str, flag: str, example: str) -> tuple[str, str]:
+    name, sep, value = str(text).partition("=")
+    if not sep or not name.strip() or not value.strip():
+        raise argparse.ArgumentTypeError(f"expected {example}, got {str(text)[:40]!r}")
+    return name.strip(), value.strip()
+
+
+def _bound(text):
+    kind, value = _pair(text, "--bound", "KIND=LO:HI (e.g. EA=1e-3:1e3)")
+    if kind not in BOUND_UNITS:
+        raise argparse.ArgumentTypeError(f"unknown parameter kind {kind!r}; kinds: {', '.join(BOUND_UNITS)}")
+    unit = BOUND_UNITS[kind]
+    parts = value.split(":")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"{kind}: expected LO:HI in {unit}, got {value[:40]!r}")
+    lo, hi = (number(0.0, None, unit, open_lo=True)(x) for x in parts)
+    if not lo < hi:
+        raise argparse.ArgumentTypeError(f"{kind}: the lower bound {lo:g} {unit} must be below the upper bound "
+                                         f"{hi:g} {unit}")
+    return kind, (lo, hi)
+
+
+_bound.__name__ = "bound"
+
+
+def _fixed(text):
+    name, value = _pair(text, "--fix", "NAME=VALUE (e.g. L=1)")
+    return name, number(0.0, None, "", open_lo=True)(value)
+
+
+_fixed.__name__ = "fixed value"
+
+
+def _holdout(text):
+    parts = str(text).split(":")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"expected FMIN:FMAX in Hz, got {str(text)[:40]!r}")
+    lo, hi = (number(quantity="frequency")(x) for x in parts)
+    if not lo < hi:
+        raise argparse.ArgumentTypeError(f"FMIN {lo:g} Hz must be below FMAX {hi:g} Hz")
+    return lo, hi
+
+
+_holdout.__name__ = "holdout window"
+
+
+def search_space(args, datasets) -> dict:
+    """bounds, fixed and the constraints as keyword arguments of :func:`tenscell.fitting.fit`, checked.
+
+    Each --bound kind and --fix name is checked against the parameters of these data (named with the
+    flag, in the units typed) before any fitting.
+    """
+    from .. import fitting
+
+    space = {"min_prestress_share": args.min_prestress_share, "max_decades": args.max_decades,
+             "min_prestress_elasticity": args.min_prestress_elasticity}
+    plain = fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **space)
+    bounds = dict(args.bound or ())
+    for kind, (lo, hi) in bounds.items():
+        if kind not in plain.kinds:
+            raise ValueError(f"--bound {kind}={lo:g}:{hi:g}: no parameter of kind {kind!r} in this fit (kinds here: "
+                             f"{', '.join(dict.fromkeys(plain.kinds))})")
+    fixed = dict(args.fix or ())
+    import math
+
+    bounded = fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, bounds=bounds, **space)
+    lower, upper = [math.exp(x) for x in bounded.lower], [math.exp(x) for x in bounded.upper]
+    for name, v in fixed.items():
+        if name not in plain.names:
+            raise ValueError(f"--fix {name}={v:g}: no parameter named {name!r} in this fit (parameters: "
+                             f"{_names_text(plain.names)})")
+        i = plain.names.index(name)
+        unit = plain.units[i]
+        if not lower[i] <= v <= upper[i]:
+            raise ValueError(f"--fix {name}={v:g}: outside its bounds [{lower[i]:.6g}, {upper[i]:.6g}] {unit} "
+                             f"(widen them with --bound {plain.kinds[i]}=LO:HI)")
+    space.update(bounds=bounds or None, fixed=fixed or None)
+    fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **space)
+    return space
+
+
+def _names_text(names) -> str:
+    per_tendon = [n for n in names if n.startswith("EA[")]
+    rest = [n for n in names if not n.startswith("EA[")]
+    return ", ".join(([f"EA[0]..EA[{len(per_tendon) - 1}]"] if per_tendon else []) + rest)
 
 
 def add_constraints(p) -> None:
@@ -102,7 +203,7 @@ def read_datasets(paths, prestress_options, min_points: int):
     return datasets
 
 
-def fit_outputs(result, baseline, title):
+def fit_outputs(result, baseline, title, comparison=None):
     """Everything a fit writes, computed before any file is touched: {extension: writer(path)}."""
     from .. import plotting
     from ..io.outputs import write_csv_rows, write_json, write_text
@@ -113,8 +214,13 @@ def fit_outputs(result, baseline, title):
     doc = result.to_dict()
     doc["baseline"] = {k: v for k, v in baseline.to_dict().items()
                        if k in ("tendons", "damping", "rms_log10_error", "converged", "time_s", "parameters")}
+    if comparison is None:
+        from ..fitting.models import compare_models
+
+        comparison = compare_models(result, homogeneous=baseline)
+    doc["model_comparison"] = comparison.to_dict()
     header, rows = fit_table(result, baseline)
-    markdown = fit_markdown(result, baseline, title=title)
+    markdown = fit_markdown(result, baseline, title=title, comparison=comparison)
     fig = fit_panels(result, baseline=baseline, title=title)
     return {
         "json": lambda path: write_json(path, doc),
@@ -150,18 +256,30 @@ def run(args) -> int:
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
-    for k, data in enumerate(datasets):
+    for i, data in enumerate(datasets):
         if data.n > args.max_points:
-            datasets[k] = data.binned(args.max_points)
-            stage(f"{data.source}: {data.n:,} points binned to {datasets[k].n:,} in log frequency "
+            datasets[i] = data.binned(args.max_points)
+            stage(f"{data.n:,} points of {Path(args.data[i]).name} binned to {datasets[i].n:,} in log frequency "
                   f"(--max-points {args.max_points})")
-    constraints = {"min_prestress_share": args.min_prestress_share, "max_decades": args.max_decades,
-                   "min_prestress_elasticity": args.min_prestress_elasticity}
-    fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **constraints)  # bad input: before
+    held = None
+    if args.holdout is not None:
+        if len(datasets) != 1:
+            raise ValueError(f"--holdout applies to one frequency sweep, got {len(datasets)} data sets")
+        from ..fitting.models import split_holdout
+
+        try:
+            train, held = split_holdout(datasets[0], *args.holdout)
+        except ValueError as err:
+            raise ValueError(f"--holdout {args.holdout[0]:g}:{args.holdout[1]:g}: {err}") from None
+        datasets = [train]
+    space = search_space(args, datasets)  # bad input: before any fitting
     result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,
-                               args.tolerance, args.baseline_starts, **constraints)
+                               args.tolerance, args.baseline_starts, **space)
+    from ..fitting.models import compare_models
+
+    comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
     names = " and ".join(Path(p).name for p in args.data)
-    outputs = fit_outputs(result, baseline, title=f"Tensegrity fit to {names}")
+    outputs = fit_outputs(result, baseline, title=f"Tensegrity fit to {names}", comparison=comparison)
     with out as d:
         for ext, name in FIT_FILES.items():
             outputs[ext](d / name)

@@ -613,6 +613,19 @@ class FitProblem:
             for n, v, a, b, u, fr, d in zip(self.names, vals, lo, hi, self.units, self.free, self.descriptions)
         )
 
+    def gauge(self) -> np.ndarray:
+        """The exact strut-length gauge in log-parameter space, shape (n_params,).
+
+        ``(P, EA, c, L) -> (λ²P, λ²EA, λc, λL)`` leaves G unchanged, i.e. the
+        moduli are constant along ``phi + t·gauge()`` for every t: 2 for each
+        stiffness and for a model prestress ``P`` or scale ``s``, 1 for each
+        damping and for ``L``, 0 for a data set's fitted prestress ``P_data``
+        (in Pa: the scale ``s`` carries the λ²). It is a gauge of the fit only
+        if every parameter it moves is free.
+        """
+        power = {"EA": 2.0, "c": 1.0, "P": 2.0, "s": 2.0, "P_data": 0.0, "L": 1.0}
+        return np.array([power[k] for k in self.kinds])
+
     def effective_properties(self, theta):
         """(EA (m,), c (m,), P (groups,)) on the reference cell (N, N·s/m, N) equivalent to ``theta``."""
         return self._effective(self.full(theta))
@@ -781,11 +794,9 @@ def _apply_fixed(names, kinds, lower, upper, fixed, damping, L_ref, P_med):
     for i, k in enumerate(kinds):  # a data set's own prestress starts at the others' median
         if k == "P_data" and lower[i] < math.log(P_med) < upper[i]:
             fixed_log[i] = math.log(P_med)
-    allowed = (["c"] if damping == "uniform" else []) + [n for n, k in zip(names, kinds) if k in ("P", "s", "P_data")]
-    allowed.append("L")
     for key, value in dict(fixed or {}).items():
-        if key not in allowed:
-            raise ValueError(f"fixed: cannot fix {key!r}; fixable here: {', '.join(allowed)}")
+        if key not in names:  # any parameter may be held fixed (a stiffness group, a damping, a prestress, L)
+            raise ValueError(f"fixed: cannot fix {key!r}; parameters here: {', '.join(names)}")
         v = positive_scalar(f"fixed[{key!r}]", value)
         i = names.index(key)
         if not lower[i] <= math.log(v) <= upper[i]:
@@ -868,9 +879,11 @@ def make_problem(
         s in [1e-10, 1e4]·S/P_m, P_data in [1e-3, 1e3]·P_m, L in
         [1e-3, 1e3]·L_cell.
     fixed : dict, optional
-        Scalar parameters to hold fixed, by name: ``"c"`` (uniform damping
-        only), any prestress parameter (``"P"``, ``"s"``, ``"P_data[k]"``...)
-        and ``"L"``, with values in SI units (Pa for ``P_data``).
+        Parameters to hold fixed, by name (any of :attr:`FitProblem.names`:
+        ``"L"``, ``"c"`` or ``"c_actin"``, ``"EA_intermediate_filament"``,
+        ``"EA[3]"``, a prestress ``"P"``, ``"s"``, ``"P_data[k]"``...), with
+        values in SI units (Pa for ``P_data``). Fixing any of EA, c, P (or
+        s) or L removes the strut-length gauge (and makes L identifiable).
     min_prestress_share : float in (0, 1), optional
         Lower bound on the prestress share of the static stiffness at every
         prestress of the data (module docstring).

@@ -434,6 +434,48 @@ class FitResult:
 
         return prestress_activity(self)
 
+    # -- the fitted cell as a model, and what the data determine ---------------------------------
+    @property
+    def model(self):
+        """The fitted cell as a :class:`~tenscell.fitting.fitted.FittedModel` (cell at the fitted L, EA, c, prestress)."""
+        from .fitted import FittedModel, scaled_cell
+
+        names = self.problem.names
+        if "s" in names:  # some data set stated its prestress: P = s × prestress (Pa)
+            stated = [p for f in self.fits for p in (
+                np.unique(f.data.prestress) if f.data.prestress is not None else [f.prestress_fitted_pa])
+                if p is not None]
+            pre = {"s": self.value("s"), "prestress_pa": tuple(float(p) for p in stated)}
+        else:
+            pre = {"P": float(self.prestress_model(dataset=self._single_prestress_dataset())[0])}
+        return FittedModel(cell=scaled_cell(self.cell, self.L), EA=self.EA, c=self.c,
+                           source=" + ".join(d.source for d in self.datasets), **pre)
+
+    def _default_prestress_N(self) -> float:
+        """Model prestress (N) of the first single-prestress data set, else at the first data set's median."""
+        try:
+            return float(self.prestress_model(dataset=self._single_prestress_dataset())[0])
+        except ValueError:
+            return float(np.ravel(self.prestress_model(np.median(self.datasets[0].prestress)))[0])
+
+    @property
+    def linear(self):
+        """The linear model of the fitted cell (at the fitted strut length) at :meth:`_default_prestress_N`."""
+        return self.model.linear(P_N=self._default_prestress_N())
+
+    def identifiability(self, rtol: float = 1e-8):
+        """Rank, standard errors, correlations and determined combinations (:mod:`tenscell.fitting.identifiability`)."""
+        from .identifiability import identifiability
+
+        known = all(d.G_storage_sd is not None and d.G_loss_sd is not None for d in self.datasets)
+        return identifiability(self.problem, self.theta, sigma_known=known, rtol=rtol)
+
+    def predicted_creep(self, t_min: float = 0.1, t_max: float = 10.0, n: int = 41):
+        """Creep compliance (1/Pa) of the fitted cell over [t_min, t_max] s and its power-law exponent."""
+        from .fitted import predicted_creep
+
+        return predicted_creep(self.linear, t_min, t_max, n)
+
     # -- conventions ----------------------------------------------------------------------
     def __repr__(self) -> str:
         sets = ", ".join(f"{_short(f.data.source)} {f.rms_log10_error:.3g}" for f in self.fits)
@@ -520,6 +562,9 @@ class FitResult:
             "start_rms": list(self.start_rms),
             "alternatives": [a.to_dict() for a in self.alternatives],
             "history": [{"time_s": t, "rms_log10_error": r} for t, r in self.history],
+            "identifiability": self.identifiability().to_dict(),
+            "predicted_creep": self.predicted_creep().to_dict(),
+            "model": self.model.to_dict(),
         }
         if not self.joint:
             doc["residuals_log10"] = first.to_dict()["residuals_log10"]

@@ -40,6 +40,7 @@ __all__ = [
     "write_csv",
     "bundled",
     "bundled_names",
+    "generated_note",
 ]
 
 # Canonical spellings, used for writing and in messages; matching is on the
@@ -214,6 +215,15 @@ class RheologyData:
         """Number of data points."""
         return int(self.frequency_hz.shape[0])
 
+    def binned(self, max_points: int | None = None) -> "RheologyData":
+        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`).
+
+        Returns ``self`` when it has no more points than that.
+        """
+        from .thinning import DEFAULT_MAX_POINTS, bin_log_frequency
+
+        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points)
+
     def with_prestress(self, prestress_pa: float) -> "RheologyData":
         """A copy that states the prestress (Pa) at which the data were measured (a constant ``prestress`` column).
 
@@ -233,15 +243,6 @@ class RheologyData:
         return RheologyData(frequency_hz=self.frequency_hz, G_storage=self.G_storage, G_loss=self.G_loss,
                             prestress=np.full(self.n, p), G_storage_sd=self.G_storage_sd,
                             G_loss_sd=self.G_loss_sd, source=self.source, comments=self.comments)
-
-    def binned(self, max_points: int | None = None) -> "RheologyData":
-        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`).
-
-        Returns ``self`` when it has no more points than that.
-        """
-        from .thinning import DEFAULT_MAX_POINTS, bin_log_frequency
-
-        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points)
 
     @property
     def weights_storage(self) -> np.ndarray:
@@ -336,13 +337,8 @@ def _parse_header(raw: list[str], source: str, line: int) -> list[str]:
     return canonical
 
 
-def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
-    comments: list[str] = []
-    columns: list[str] | None = None
-    header_line = 0
-    values: dict[str, list[float]] = {}
-    row_lines: list[int] = []
-
+def _csv_lines(text: str, source: str, comments: list[str]):
+    """Yield ``(line number, fields)`` of every non-blank, non-comment line; comments go to ``comments``."""
     # Split on "\n" only (the file was opened in universal-newline mode), so
     # that line numbers agree with what an editor shows; str.splitlines()
     # would also break on form feeds and other rare separators.
@@ -354,10 +350,19 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
             comments.append(stripped[1:].strip())
             continue
         try:
-            fields = next(csv.reader([line], strict=True))
+            yield lineno, next(csv.reader([line], strict=True))
         except csv.Error as exc:
             raise _error(source, f"malformed CSV: {exc}", lineno) from exc
 
+
+def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
+    comments: list[str] = []
+    columns: list[str] | None = None
+    header_line = 0
+    values: dict[str, list[float]] = {}
+    row_lines: list[int] = []
+
+    for lineno, fields in _csv_lines(text, source, comments):
         if columns is None:
             columns = _parse_header(fields, source, lineno)
             header_line = lineno
@@ -628,3 +633,26 @@ def bundled(name: str) -> RheologyData:
     except (OSError, UnicodeDecodeError) as exc:
         raise _error(source, f"cannot read bundled file: {exc}") from exc
     return _parse_text(text, source, min_points=1)
+
+
+def generated_note(data) -> str | None:
+    """A phrase saying the data are generated from a published fit law, when their file's comments say so.
+
+    The bundled data sets are not raw measurements: each file's comments say
+    it was generated from a published law. Reports, figures and claims that
+    call them data repeat it; this reads it from the comments (``"not raw
+    measurements"`` or ``"generated from"``) rather than from the file name.
+
+    Parameters
+    ----------
+    data : RheologyData or CreepData
+        Anything with ``comments``.
+
+    Returns
+    -------
+    str or None
+    """
+    text = " ".join(getattr(data, "comments", ()) or ()).lower()
+    if "not raw measurement" in text or "generated from" in text:
+        return "generated from a published fit law, not raw measurements (the file's own comments say so)"
+    return None

@@ -24,6 +24,7 @@ from ..model.equilibrium import Cell, tangent_stiffness
 from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
 )
+from .._threads import hot_path
 
 __all__ = [
     "LinearModel",
@@ -123,6 +124,7 @@ class LinearModel:
         self.__dict__.update(state)
 
 
+@hot_path
 def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
     """Linearize the cell's equations of motion at prestress ``P`` (Voigt tendons, the paper's model).
 
@@ -163,6 +165,7 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     return _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
 
 
+@hot_path
 def linearize_tangent(cell: Cell, P: float, k, c=1.0, *, l0=None, check: bool = True) -> LinearModel:
     """Linearize with given tangent stiffnesses ``k_j = dT_j/dl_j`` of the members at the reference.
 
@@ -255,12 +258,18 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
     if P is not None:
         return _from_law(cell, positive_scalar("P (prestress)", P, "N"), law, check=check)
     T = np.asarray(law.elastic(cell.lengths), dtype=float)
-    resid = np.abs(cell.A @ T).max()
-    scale = max(abs(cell.A).max() * np.abs(T).max(), 1e-300)
-    if resid > 1e-8 * scale:
+    # tolerance relative to the tensions and to their round-off: T = EA(l/l0 − 1) carries an error of
+    # order eps·k·l ≈ eps·EA, which dominates for stiff tendons at a small prestress (a fitted cell)
+    k = np.asarray(law.tangent_at_rest(cell.lengths, T)[0], dtype=float)
+    absA = abs(cell.A)
+    resid = np.abs(cell.A @ T)
+    bound = absA @ (1e-8 * np.abs(T) + 16 * np.finfo(float).eps * np.abs(k) * cell.lengths)
+    if np.any(resid > bound):
+        i = int(np.argmax(resid - bound))
         raise ValueError(
             f"the tendon law's rest lengths do not hold {cell.describe()} in equilibrium at its reference "
-            f"(|A·T| = {resid:.3g} N); place it with law.at_prestress(cell, P) (voigt_law and power_dashpot_law do)"
+            f"(|A·T| = {resid[i]:.3g} N at coordinate {i}, tolerance {bound[i]:.3g} N); place it with "
+            "law.at_prestress(cell, P) (voigt_law and power_dashpot_law do)"
         )
     T0 = cell.T0
     P = float(T @ T0 / (T0 @ T0))

@@ -27,9 +27,13 @@ def _x_axis(data: RheologyData) -> str:
 
 def data_points(data: RheologyData, ax: Axes, **kw) -> Axes:
     """Measured G' (filled circles) and G'' (open circles) on ``ax`` against f or prestress."""
+    from ..io.data import generated_note
+
     x = data.prestress if _x_axis(data) == "prestress" else data.frequency_hz
-    ax.plot(x, data.G_storage, "o", color="C0", label="G′ data", **kw)
-    ax.plot(x, data.G_loss, "o", mfc="none", color="C3", label="G″ data", **kw)
+    # data generated from a published law (the bundled sets) say so in the legend
+    what = "data (published law, not raw)" if generated_note(data) else "data"
+    ax.plot(x, data.G_storage, "o", color="C0", label=f"G′ {what}", **kw)
+    ax.plot(x, data.G_loss, "o", mfc="none", color="C3", label=f"G″ {what}", **kw)
     return ax
 
 

@@ -14,8 +14,9 @@ import numpy as np
 from ..fitting.prestress import CELL_ELASTICITY
 from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
 from ..io.data import RheologyData
-from ._format import num, table
 from ..io.thinning import binning_notes
+from ._format import num, table
+from .fit_analysis import section_comparison, section_creep, section_identifiability, section_provenance
 
 __all__ = ["fit_markdown", "SECTIONS", "section_summary", "section_datasets", "section_baseline", "section_shape",
            "section_prestress", "section_stiffness", "section_parameters", "section_errors",
@@ -43,7 +44,7 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
               f", prestress not stated: fitted {num(f.prestress_fitted_pa)} Pa" if f.prestress_fitted_pa is not None
               else "")
         lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {f.axis} sweep{at}.")
-        lines += [f"  Data thinned: {note}." for note in binning_notes(f.data)]
+        lines += [f"     Thinned: {note}." for note in binning_notes(f.data)]
     lines += [
         f"- Model: {result.cell.describe()}; stiffness {result.tendons}, damping {result.damping}; "
         f"{pr.n_free} free parameters against {pr.n_residuals} residuals.",
@@ -209,12 +210,15 @@ def section_alternatives(result: FitResult, baseline=None) -> list[str]:
 
 
 #: the report's sections, in order
-SECTIONS = [section_summary, section_datasets, section_baseline, section_shape, section_prestress,
-            section_stiffness, section_parameters, section_errors, section_alternatives]
+SECTIONS = [section_summary, section_provenance, section_datasets, section_baseline, section_shape,
+            section_prestress, section_identifiability, section_comparison, section_creep, section_stiffness,
+            section_parameters, section_errors, section_alternatives]
 
 
-def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None) -> str:
-    """A Markdown report: verdict, each data set, prestress activity, parameters, errors, baseline beside it.
+def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None,
+                 comparison=None) -> str:
+    """A Markdown report: verdict, each data set, prestress activity, identifiability, model comparison,
+    predicted creep, parameters, errors, baseline beside it.
 
     Parameters
     ----------
@@ -223,10 +227,14 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
     baseline : FitResult, optional
         The homogeneous fit (``tendons="uniform"``) of the same data.
     title : str, optional
+    comparison : ModelComparison, optional
+        From :func:`tenscell.fitting.models.compare_models` (e.g. with held-out
+        data); computed from ``result`` and ``baseline`` when not given.
     """
     if title is None:
         title = "Fit of the tensegrity model to " + " and ".join(f"`{_name(d.source)}`" for d in result.datasets)
     out = [f"# {title}", ""]
     for section in SECTIONS:
-        out += section(result, baseline)
+        out += section(result, baseline, comparison=comparison) if section is section_comparison \
+            else section(result, baseline)
     return "\n".join(out)
