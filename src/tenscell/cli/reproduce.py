@@ -51,7 +51,7 @@ def reproduce_fit(out: Path, log) -> None:
 
     # a lighter search than the command's default (2 starts in parallel, shorter hopping, longer polishing
     # so that the figures sit well inside the tolerance) keeps `make reproduce` fast
-    search = dict(starts=2, seed=0, jobs=2, tolerance=0.01, baseline_starts=1, hops=15, patience=4, polish_effort=2.0)
+    search = dict(starts=2, seed=0, jobs=2, tolerance=0.01, baseline_starts=1, hops=15, patience=4, polish_effort=4.0)
     active = {"min_prestress_elasticity": 0.7}  # ∂lnG'/∂lnP at 0.1 Hz as in adherent cells
     for name, stem, title, damping, extra in (
         ("stamenovic2002", "fig4_prestress_fit", "Fig. 4: moduli versus prestress at 0.1 Hz (Stamenović 2002)",
