@@ -55,6 +55,9 @@ __all__ = [
     "summarize",
     "MonteCarloResult",
     "monte_carlo",
+    "monte_carlo_draws",
+    "monte_carlo_factors",
+    "monte_carlo_names",
     "SensitivityStudy",
     "sensitivity_study",
     "SENSITIVITY_FREQUENCIES",
@@ -610,8 +613,9 @@ def monte_carlo(
     ----------
     n : int
         Number of draws, ≥ 1.
-    progress : bool, optional
-        Progress bar (the :mod:`tenscell._progress` convention).
+    progress : bool or None
+        A progress bar: None shows one when someone watches (a terminal or a
+        notebook), True always, False never (see :mod:`tenscell._progress`).
 
     Returns
     -------
@@ -619,25 +623,71 @@ def monte_carlo(
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n (number of draws) must be a whole number >= 1, got {n!r}")
+    spread, alpha_spread = _mc_spreads(spread, alpha_spread, parameters)
+    names = monte_carlo_names(paper_cell().m, parameters)
+    factors = monte_carlo_factors(np.random.default_rng(seed), n, len(names), spread, alpha_spread, parameters)
+    cs, cl, reasons = monte_carlo_draws(factors, parameters=parameters, alpha=alpha, delta=delta, L=L, P=P, EA=EA,
+                                        c=c, f_hz=f_hz, progress=progress)
+    f = np.atleast_1d(np.asarray(f_hz, dtype=float)).ravel()
+    label = "all parameters" if parameters == "all" else "material parameters (EA_j, c_j, P)"
+    return MonteCarloResult(names=names, factors=factors, change_storage=cs, change_loss=cl, reasons=tuple(reasons),
+                            spread=spread, seed=seed, alpha_spread=alpha_spread if parameters == "all" else 0.0,
+                            label=label, frequency_hz=f)
+
+
+def _mc_spreads(spread, alpha_spread, parameters):
     spread = positive_scalar("spread", spread)
     if spread >= 1:
         raise ValueError(f"spread must be a fraction below 1, got {spread!r}")
     if parameters not in ("all", "material"):
         raise ValueError(f"parameters must be 'all' or 'material', got {parameters!r}")
     alpha_spread = spread if alpha_spread is None else positive_scalar("alpha_spread", alpha_spread, "rad")
+    return spread, alpha_spread
+
+
+def monte_carlo_names(m: int, parameters: str = "all") -> tuple[str, ...]:
+    """Names of the perturbed parameters of :func:`monte_carlo` for a cell of ``m`` tendons (factor columns)."""
+    names = tuple(f"EA[{j}]" for j in range(m)) + tuple(f"c[{j}]" for j in range(m)) + ("P",)
+    return names + (("L", "delta", "alpha") if parameters == "all" else ())
+
+
+def monte_carlo_factors(rng: np.random.Generator, n: int, k: int, spread: float, alpha_spread: float,
+                        parameters: str = "all") -> np.ndarray:
+    """Draw ``n`` rows of ``k`` factors as :func:`monte_carlo` does, shape (n, k) (α column: shifts in rad)."""
+    factors = 1 + spread * rng.uniform(-1.0, 1.0, size=(n, k))
+    if parameters == "all":
+        factors[:, -1] = alpha_spread * rng.uniform(-1.0, 1.0, size=n)
+    return factors
+
+
+def monte_carlo_draws(factors, *, parameters: str = "all", alpha: float = 0.0, delta: float | None = None,
+                      L: float = 1.0, P: float = 1000.0, EA=1.0, c=1.0, f_hz=SENSITIVITY_FREQUENCIES,
+                      progress: bool | None = False):
+    """Evaluate given draws of :func:`monte_carlo` (a pure function: the same factors, the same numbers).
+
+    Parameters
+    ----------
+    factors : ndarray, shape (n, k)
+        Rows as drawn by :func:`monte_carlo_factors`, columns :func:`monte_carlo_names`.
+    parameters, alpha, delta, L, P, EA, c, f_hz
+        The reference, as in :func:`monte_carlo`.
+
+    Returns
+    -------
+    change_storage, change_loss : ndarray, shape (n,)
+        Largest |ΔG'/G'| and |ΔG''/G''| over frequency (NaN for an invalid draw).
+    reasons : list of str
+        The error type of each invalid draw, "" for valid ones.
+    """
+    from ._progress import progress_bar
+
+    factors = np.atleast_2d(np.asarray(factors, dtype=float))
+    n = factors.shape[0]
     f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
     cell, EA, c = _base_parameters(alpha, delta, L, P, EA, c, True)
     delta0 = float(cell.parameters["delta"])
     m = cell.m
     G0 = modulus(compliance(linearize(cell, P=P, EA=EA, c=c), f), cell.strut_length)
-    names = tuple(f"EA[{j}]" for j in range(m)) + tuple(f"c[{j}]" for j in range(m)) + ("P",)
-    if parameters == "all":
-        names += ("L", "delta", "alpha")
-    rng = np.random.default_rng(seed)
-    k = len(names)
-    factors = 1 + spread * rng.uniform(-1.0, 1.0, size=(n, k))
-    if parameters == "all":
-        factors[:, -1] = alpha_spread * rng.uniform(-1.0, 1.0, size=n)
     cs, cl, reasons = np.full(n, np.nan), np.full(n, np.nan), []
     for i in progress_bar(range(n), desc="Monte Carlo", unit="draw", progress=progress):
         fa = factors[i]
@@ -654,10 +704,7 @@ def monte_carlo(
         cs[i] = np.max(np.abs(G1.real / G0.real - 1))
         cl[i] = np.max(np.abs(G1.imag / G0.imag - 1))
         reasons.append("")
-    label = "all parameters" if parameters == "all" else "material parameters (EA_j, c_j, P)"
-    return MonteCarloResult(names=names, factors=factors, change_storage=cs, change_loss=cl, reasons=tuple(reasons),
-                            spread=spread, seed=seed, alpha_spread=alpha_spread if parameters == "all" else 0.0,
-                            label=label, frequency_hz=f)
+    return cs, cl, reasons
 
 
 # ---- the whole study ---------------------------------------------------------------------------------
