@@ -28,7 +28,8 @@ NUMERIC_FLAGS = {
     ("moduli",): {"--prestress": (), "--P": (), "--freq": (), "--alpha-deg": ("negative", "zero"),
                   "--delta-deg": (), "--EA": (), "--c": (), "--L": ()},
     tuple(FIT): {"--starts": (), "--seed": ("zero",), "--jobs": (), "--tolerance": (), "--baseline-starts": (),
-                 "--max-points": (), "--min-prestress-share": (), "--max-decades": ()},
+                 "--max-points": (), "--min-prestress-share": (), "--max-decades": (),
+                 "--min-prestress-elasticity": ()},
     ("simulate", "--amplitude", "1", "--freq", "1"): {
         "--amplitude": (), "--amplitudes": (), "--freq": (), "--cycles": (), "--samples": (),
         "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),

@@ -122,7 +122,8 @@ def search_space(args, datasets) -> dict:
     """
     from .. import fitting
 
-    space = {"min_prestress_share": args.min_prestress_share, "max_decades": args.max_decades}
+    space = {"min_prestress_share": args.min_prestress_share, "max_decades": args.max_decades,
+             "min_prestress_elasticity": args.min_prestress_elasticity}
     plain = fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **space)
     bounds = dict(args.bound or ())
     for kind, (lo, hi) in bounds.items():
@@ -155,10 +156,13 @@ def _names_text(names) -> str:
 
 
 def add_constraints(p) -> None:
-    """``--min-prestress-share`` and ``--max-decades`` (fit and the compactness study)."""
+    """The search-space constraints: ``--min-prestress-share``, ``--min-prestress-elasticity``, ``--max-decades``."""
     p.add_argument("--min-prestress-share", type=number(0.0, 1.0, open_lo=True), default=None, metavar="S",
                    help="keep the prestress mechanically active: P·Kp must carry at least this share (0-1) of "
                         "the static stiffness at every prestress of the data")
+    p.add_argument("--min-prestress-elasticity", type=number(0.0, 10.0, open_lo=True), default=None, metavar="E",
+                   help="keep the prestress mechanically active: dlnG'/dlnP at 0.1 Hz must be at least E at every "
+                        "prestress of the data (adherent cells: about 0.7)")
     p.add_argument("--max-decades", type=number(0.0, 100.0, "decades", open_lo=True), default=None, metavar="D",
                    help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
 
@@ -233,7 +237,9 @@ def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_star
 
     result = fitting.fit(data, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
                          tolerance=tolerance, **search)
-    if tendons == "uniform" and damping == "uniform" and not search.get("min_prestress_share"):
+    constrained = search.get("min_prestress_share") or search.get("min_prestress_elasticity") or search.get(
+        "max_decades")
+    if tendons == "uniform" and damping == "uniform" and not constrained:
         baseline = result
     else:
         # the baseline only shows what a homogeneous cell cannot do: a short search suffices

@@ -64,6 +64,10 @@ class PrestressActivity:
     reference_share : ndarray, shape (groups,)
     min_share_bound : float or None
         The lower bound the fit imposed on the share (``min_prestress_share``), if any.
+    min_elasticity_bound : float or None
+        The lower bound the fit imposed on ``∂ln G'/∂ln P`` (``min_prestress_elasticity``), if any.
+    elasticity_bound_frequency_hz : float
+        The frequency (Hz) of that bound.
     """
 
     dataset: np.ndarray
@@ -79,6 +83,8 @@ class PrestressActivity:
     reference_loss: np.ndarray
     reference_share: np.ndarray
     min_share_bound: float | None = None
+    min_elasticity_bound: float | None = None
+    elasticity_bound_frequency_hz: float = REFERENCE_FREQUENCY_HZ
 
     @property
     def inert(self) -> bool:
@@ -120,6 +126,8 @@ class PrestressActivity:
             "inert": self.inert,
             "verdict": self.verdict(),
             "min_share_bound": self.min_share_bound,
+            "min_elasticity_bound": self.min_elasticity_bound,
+            "elasticity_bound_frequency_Hz": self.elasticity_bound_frequency_hz,
             "share_min": float(np.nanmin(self.share)), "share_max": float(np.nanmax(self.share)),
             "dlnGstorage_dlnP": {"min": float(np.nanmin(self.storage)), "max": float(np.nanmax(self.storage))},
             "dlnGloss_dlnP": {"min": float(np.nanmin(self.loss)), "max": float(np.nanmax(self.loss))},
@@ -169,4 +177,6 @@ def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERE
         reference_frequency_hz=float(reference_frequency_hz), reference_prestress_N=P_groups,
         reference_dataset=pr.group_dataset.copy(), reference_storage=ref[0], reference_loss=ref[1],
         reference_share=share_groups, min_share_bound=pr.min_prestress_share,
+        min_elasticity_bound=pr.min_prestress_elasticity,
+        elasticity_bound_frequency_hz=float(pr.elasticity_omega / (2 * np.pi)),
     )

@@ -550,6 +550,8 @@ class FitResult:
             "n_free_parameters": self.problem.n_free,
             "n_residuals": self.problem.n_residuals,
             "constraints": {"min_prestress_share": self.problem.min_prestress_share,
+                            "min_prestress_elasticity": self.problem.min_prestress_elasticity,
+                            "elasticity_frequency_Hz": float(self.problem.elasticity_omega / (2 * math.pi)),
                             "max_decades": self.problem.max_decades},
             "parameters": [p.to_dict() for p in self.parameters],
             "tendon_stiffness_spread": {"min_N": lo, "max_N": hi, "decades": dec},

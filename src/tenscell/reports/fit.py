@@ -122,6 +122,10 @@ def section_prestress(result: FitResult, baseline=None) -> list[str]:
     if pa.min_share_bound is not None:
         out += [f"This fit was required to keep the prestress share of the static stiffness at or above "
                 f"{num(pa.min_share_bound)} (a one-sided penalty; the values below are the ones reached).", ""]
+    if pa.min_elasticity_bound is not None:
+        out += [f"This fit was required to keep ∂lnG'/∂lnP at {num(pa.elasticity_bound_frequency_hz)} Hz at or "
+                f"above {num(pa.min_elasticity_bound)} at every prestress of the data (a one-sided penalty; the "
+                "values below are the ones reached).", ""]
     rows = []
     for k, P, a, b, s in zip(pa.reference_dataset, pa.reference_prestress_N, pa.reference_storage,
                              pa.reference_loss, pa.reference_share):
