@@ -100,7 +100,9 @@ def test_creep_csv_round_trip_and_detection(tmp_path):
     assert back.comments == ("synthetic",) and back.kind == "creep"
     np.testing.assert_allclose(back.weights, d.compliance * np.log(10) / d.compliance_sd)
     assert isinstance(read_measurements(p), CreepData)
-    assert isinstance(read_measurements(tenscell.io.data.bundled("fabry2001").source), RheologyData)
+    moduli = tmp_path / "moduli.csv"
+    tenscell.io.data.write_csv(tenscell.io.data.bundled("fabry2001"), moduli)
+    assert isinstance(read_measurements(moduli), RheologyData)
     df = back.to_dataframe()
     assert list(df.columns) == ["time_s", "creep_compliance_per_Pa", "creep_compliance_sd_per_Pa"]
 

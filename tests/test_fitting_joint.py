@@ -190,7 +190,9 @@ def test_compactness_study_front(cell):
     assert s.rms[1] < 1e-6
     ok = s.decades[s.rms <= s.tolerance]
     assert s.knee == ok.min() and s.knee_fit is s.fits[int(np.flatnonzero(s.decades == s.knee)[0])]
-    assert list(s.to_dataframe().columns) == ["max_decades", "rms_log10_error", "spread_decades", "converged"]
+    assert list(s.to_dataframe().columns) == ["max_decades", "rms_log10_error", "spread_decades", "converged",
+                                              "search_rms_log10_error"]
+    assert np.all(np.diff(s.rms) <= 0)  # the front never rises with D
     assert len(repr(s).splitlines()) <= 6
 
 

@@ -216,18 +216,25 @@ def member_values(quantity: str):
     return convert
 
 
-def lattice_size(max_modules: int = 1000):
-    """An argparse ``type``: ``NXxNY`` or ``NXxNYxNZ`` module counts (each >= 1), product <= max_modules."""
+def lattice_size(max_modules: int):
+    """An argparse ``type``: ``NXxNY`` or ``NXxNYxNZ`` module counts (each >= 1), product <= max_modules.
+
+    The refusal states the cost: a module adds about 24 coordinates, and the
+    sparse factorization's memory grows as coordinates^1.4 (1.25 GB at 1.07e5).
+    """
     def convert(text):
         parts = str(text).lower().split("x")
         if len(parts) not in (2, 3):
             raise argparse.ArgumentTypeError(f"expected NXxNY or NXxNYxNZ, got {str(text)[:40]!r}")
-        dims = tuple(integer(1, max_modules, "modules")(p) for p in parts)
+        dims = tuple(integer(1, max_modules, "modules per direction")(p) for p in parts)
         total = math.prod(dims)
         if total > max_modules:
+            coords = 24 * total
+            gb = 1.25 * (coords / 1.07e5) ** 1.4
             raise argparse.ArgumentTypeError(
-                f"{'x'.join(map(str, dims))} is {total:,} modules (about {total * 6 * 3 * 3:,} coordinates); "
-                f"at most {max_modules:,} modules")
+                f"{'x'.join(map(str, dims))} is {total:,} modules: about {coords:,} coordinates and "
+                f"{gb:.3g} GB for the factorization alone; at most {max_modules:,} modules "
+                f"(about {24 * max_modules:,} coordinates)")
         return dims
 
     convert.__name__ = "size"
@@ -301,10 +308,16 @@ def prestress_from_args(args) -> float:
     return args.prestress if args.prestress is not None else args.prestress_default
 
 
-def add_out(p: argparse.ArgumentParser, default: str | None = None) -> None:
-    """``--out``: the output directory, replaced as a whole by a successful run."""
+def add_out(p: argparse.ArgumentParser, default: str | None = None, *, derived: str | None = None) -> None:
+    """``--out``: the output directory, replaced as a whole by a successful run.
+
+    Required unless ``default`` is given, or ``derived`` describes the default
+    the command derives from its other arguments (``args.out`` is then None).
+    """
     text = "output directory (created, or replaced as a whole by a successful run)"
-    if default is None:
+    if derived is not None:
+        p.add_argument("--out", default=None, help=f"{text} (default: {derived})")
+    elif default is None:
         p.add_argument("--out", required=True, help=text)
     else:
         p.add_argument("--out", default=default, help=text)

@@ -57,6 +57,9 @@ def register(sub) -> None:
                    help="RMS of the log10 errors (decades) every data set must reach")
     p.add_argument("--baseline-starts", type=integer(1, 10_000), default=2,
                    help="starts for the homogeneous baseline fit")
+    p.add_argument("--max-points", type=integer(4, 100_000), default=100,
+                   help="fit at most this many points: denser data is binned in log frequency per prestress "
+                        "(weighted log means; the rule is in tenscell.io.thinning and the report)")
     add_out(p)
     p.set_defaults(func=run)
 
@@ -242,10 +245,16 @@ def run(args) -> int:
     import sys
 
     from .. import fitting
+    from .._progress import stage
     from ..io.outputs import OutputSet
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
+    for i, data in enumerate(datasets):
+        if data.n > args.max_points:
+            datasets[i] = data.binned(args.max_points)
+            stage(f"{data.n:,} points of {Path(args.data[i]).name} binned to {datasets[i].n:,} in log frequency "
+                  f"(--max-points {args.max_points})")
     held = None
     if args.holdout is not None:
         if len(datasets) != 1:

@@ -9,8 +9,9 @@ from ._args import (add_out, add_prestress, fitted_from_args, integer, lattice_s
 
 #: built-in structures `tenscell show` knows by name
 SHOW_BUILTINS = ("paper", "sphere6", "sphere12", "sphere30", "sheet", "block")
-#: most modules of a built-in lattice (a 10x10x10 block: 2.4e4 coordinates, about a minute with its modes)
-MAX_LATTICE_MODULES = 1000
+#: most modules of a built-in lattice: about 1.2e5 coordinates, some 1.5 GB and minutes for the sparse
+#: factorization (the README's 11x11x12 block has 1452 modules)
+MAX_LATTICE_MODULES = 5000
 
 
 def register(sub) -> None:
@@ -21,7 +22,7 @@ def register(sub) -> None:
                                    + ", ".join(SHOW_BUILTINS) + ".")
     p.add_argument("target", metavar="TARGET", nargs="?", default=None,
                    help="structure file or built-in name (omit it with --from-fit)")
-    add_out(p, default="out")
+    add_out(p, derived="show-TARGET, TARGET's file name without .json; show-fit with --from-fit")
     p.add_argument("--modes", type=integer(0, 50), default=3, help="number of slowest relaxation modes to draw (0: none)")
     add_prestress(p, sweep=False, from_fit=True)
     p.add_argument("--EA", type=member_values("EA"), default=None,
@@ -96,7 +97,8 @@ def run(args) -> int:
     from ..io.outputs import OutputSet, check_output_file
 
     _check_target(args)
-    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    default = "show-fit" if args.target is None else f"show-{Path(args.target).stem}"
+    out = OutputSet(args.out or default, command=args.command_line, flag="--out")
     save = check_output_file(args.save, "--save") if args.save else None
 
     from .. import plotting

@@ -113,6 +113,10 @@ class RheologyData:
         ``"prestress"`` when `prestress` is given, else ``"frequency"``.
         Derived when None; an inconsistent value is an error.
 
+    The points are stored in a canonical order (by prestress, then frequency),
+    whatever order they were given in, so that results depend on the data set
+    and not on the order of its rows.
+
     Raises
     ------
     DataError
@@ -169,6 +173,17 @@ class RheologyData:
             raise _error(source, f"arrays have different lengths: {lengths}")
         if lengths["frequency_hz"] == 0:
             raise _error(source, "no data points")
+        # canonical row order (prestress, then frequency, then the values): the same data set gives
+        # the same object, and the same fit, whatever the order of the rows in its file
+        keys = [arrays[k] for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
+                if arrays[k] is not None]
+        order = np.lexsort(keys)
+        if np.any(order != np.arange(order.size)):
+            for name, arr in arrays.items():
+                if arr is not None:
+                    arr = arr[order]
+                    arr.flags.writeable = False
+                    arrays[name] = arr
         for name, arr in arrays.items():
             object.__setattr__(self, name, arr)
 
@@ -199,6 +214,15 @@ class RheologyData:
     def n(self) -> int:
         """Number of data points."""
         return int(self.frequency_hz.shape[0])
+
+    def binned(self, max_points: int | None = None) -> "RheologyData":
+        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`).
+
+        Returns ``self`` when it has no more points than that.
+        """
+        from .thinning import DEFAULT_MAX_POINTS, bin_log_frequency
+
+        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points)
 
     def with_prestress(self, prestress_pa: float) -> "RheologyData":
         """A copy that states the prestress (Pa) at which the data were measured (a constant ``prestress`` column).
@@ -585,7 +609,7 @@ def bundled(name: str) -> RheologyData:
     Returns
     -------
     RheologyData
-        ``source`` is the location of the bundled file.
+        ``source`` is the file's name marked as bundled (not its install path).
 
     Raises
     ------
@@ -600,7 +624,8 @@ def bundled(name: str) -> RheologyData:
         available = ", ".join(f"{s!r} ({f})" for s, f in _BUNDLED)
         raise DataError(f"{name!r}: no bundled data set of that name; available: {available}")
     resource = resources.files("tenscell") / "data" / filename
-    source = str(resource)
+    # the name, not the install path: reports and messages say which data set, the same on every machine
+    source = f"{filename} (bundled with tenscell)"
     # Read through the resource API rather than open() so that this also
     # works when the package is installed as a zip file.
     try:

@@ -30,13 +30,18 @@ def compactness_markdown(study: CompactnessStudy, title: str | None = None) -> s
                    + (f"narrower than the {num(PAPER_SPREAD_DECADES)} decades of the paper's fit, so a more compact "
                       "distribution does fit these data." if narrower else
                       f"not narrower than the {num(PAPER_SPREAD_DECADES)} decades of the paper's fit."))
-    out += ["", table(("bound D (decades)", "best RMS log10 error", "fitted spread (decades)", "within tolerance"),
-                      [(num(d), num(r, 3), f"{s:.2f}", "yes" if ok else "no") for d, r, s, ok in study.rows()]),
-            "Each search stops once it is well inside the tolerance (at a fifth of it), so RMS values below that "
-            "are where the search stopped, not the best possible. The front is what a search of this effort "
-            "found (2 starts and a warm start from the next wider bound): a bound that did not reach the "
-            "tolerance here might with more effort; one that did is a proof that such a compact distribution "
-            "fits.", ""]
+    starts = study.fits[0].starts
+    out += ["", table(("bound D (decades)", "best RMS log10 error", "its spread (decades)", "within tolerance",
+                       "this bound's own search"),
+                      [(num(d), num(r, 3), f"{s:.2f}", "yes" if ok else "no", num(q, 3))
+                       for d, r, s, ok, q in study.rows()]),
+            "The best RMS at a bound is the best of the searches at that bound and every narrower one (their fits "
+            "satisfy the wider bound too). Each search stops once it is well inside the tolerance (at a fifth of "
+            "it) or has polished as long as reaching the tolerance took, so RMS values well below the tolerance "
+            "are where a search stopped, not the best possible. The front is what searches of this effort "
+            f"found ({starts} starts per bound plus a warm start from the next wider bound): a bound that did not "
+            "reach the tolerance here might with more effort; one that did shows that such a compact "
+            "distribution fits.", ""]
     generated = [d.source for d in study.fits[0].datasets if any("generated" in c.lower() for c in d.comments)]
     if generated:
         out += ["Generated, not measured: " + ", ".join(f"`{s}`" for s in generated) + " (their own comments say "

@@ -14,6 +14,7 @@ import numpy as np
 from ..fitting.prestress import CELL_ELASTICITY
 from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
 from ..io.data import RheologyData
+from ..io.thinning import binning_notes
 from ._format import num, table
 from .fit_analysis import section_comparison, section_creep, section_identifiability, section_provenance
 
@@ -43,6 +44,7 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
               f", prestress not stated: fitted {num(f.prestress_fitted_pa)} Pa" if f.prestress_fitted_pa is not None
               else "")
         lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {f.axis} sweep{at}.")
+        lines += [f"     Thinned: {note}." for note in binning_notes(f.data)]
     lines += [
         f"- Model: {result.cell.describe()}; stiffness {result.tendons}, damping {result.damping}; "
         f"{pr.n_free} free parameters against {pr.n_residuals} residuals.",
