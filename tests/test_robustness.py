@@ -28,7 +28,7 @@ NUMERIC_FLAGS = {
     ("moduli",): {"--prestress": (), "--P": (), "--freq": (), "--alpha-deg": ("negative", "zero"),
                   "--delta-deg": (), "--EA": (), "--c": (), "--L": ()},
     tuple(FIT): {"--starts": (), "--seed": ("zero",), "--jobs": (), "--tolerance": (), "--baseline-starts": (),
-                 "--max-points": ()},
+                 "--max-points": (), "--min-prestress-share": (), "--max-decades": ()},
     ("simulate", "--amplitude", "1", "--freq", "1"): {
         "--amplitude": (), "--amplitudes": (), "--freq": (), "--cycles": (), "--samples": (),
         "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),
@@ -37,6 +37,8 @@ NUMERIC_FLAGS = {
                  "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),
                  "--prestress": (), "--P": (), "--beta": (), "--velocity-scale": (), "--rtol": ()},
     ("study", "sensitivity"): {"--draws": (), "--seed": ("zero",)},
+    ("study", "compactness", "DATA"): {"--decades": (), "--starts": (), "--jobs": (), "--tolerance": (),
+                                       "--min-prestress-share": (), "--max-decades": ()},
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
 }

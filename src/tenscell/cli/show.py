@@ -97,8 +97,8 @@ def run(args) -> int:
     from ..io.outputs import OutputSet, check_output_file
 
     _check_target(args)
-    default = "show-fit" if args.target is None else f"show-{Path(args.target).stem}"
-    out = OutputSet(args.out or default, command=args.command_line, flag="--out")
+    default_out = f"show-{Path(args.target).stem}" if args.target else "show-fit"
+    out = OutputSet(args.out or default_out, command=args.command_line, flag="--out")
     save = check_output_file(args.save, "--save") if args.save else None
 
     from .. import plotting

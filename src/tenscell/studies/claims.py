@@ -246,7 +246,8 @@ class CellComparison:
     source : str
         Which bundled data set gave the cells' value.
     generated : bool
-        True when that data set says it was generated from a published law.
+        The data set's own comments say it was generated from a published fit
+        law rather than measured (:func:`tenscell.io.data.generated_note`).
     """
 
     quantity: str
@@ -293,7 +294,7 @@ def against_cells(study: HomogeneousStudy, prestress_data=None, frequency_data=N
         model = _at(P_ref, P3, _elasticity(P3, G3[:, i:i + 1])[:, 0])
         cells = _at(P_ref, Pc, np.gradient(np.log(Gc), np.log(Pc)))
         rows.append(CellComparison(name, f"{f3[i]:.3g} Hz, P = {P_ref:g}", model, cells, pdata.source,
-                                   bool(generated_note(pdata))))
+                                   generated_note(pdata) is not None))
     k = int(np.argmin(np.abs(P3 - P_ref)))
     ff = fdata.frequency_hz
     for f in (0.1, 1.0):
@@ -301,13 +302,13 @@ def against_cells(study: HomogeneousStudy, prestress_data=None, frequency_data=N
         model = float(study.fig3.G_loss[k, j] / study.fig3.G_storage[k, j])
         cells = _at(f, ff, fdata.G_loss / fdata.G_storage)
         rows.append(CellComparison("G''/G'", f"{f:g} Hz, P = {P3[k]:g}", model, cells, fdata.source,
-                                   bool(generated_note(fdata))))
+                                   generated_note(fdata) is not None))
     lo, hi = 0.1, 1.0
     a, b = int(np.argmin(np.abs(np.log(f3 / lo)))), int(np.argmin(np.abs(np.log(f3 / hi))))
     model = float(math.log(study.fig3.G_storage[k, b] / study.fig3.G_storage[k, a]) / math.log(f3[b] / f3[a]))
     cells = float(math.log(_at(hi, ff, fdata.G_storage) / _at(lo, ff, fdata.G_storage)) / math.log(hi / lo))
     rows.append(CellComparison("G' frequency exponent", f"{lo:g}–{hi:g} Hz, P = {P3[k]:g}", model, cells,
-                               fdata.source, bool(generated_note(fdata))))
+                               fdata.source, generated_note(fdata) is not None))
     return rows
 
 
@@ -332,15 +333,14 @@ def claims_markdown(claims: list[Claim], study: HomogeneousStudy, cells: list[Ce
 
 
 def _cells_lines(cells: list[CellComparison]) -> list[str]:
-    name = lambda src: src.replace("\\", "/").rsplit("/", 1)[-1]  # noqa: E731
     lines = ["## Against cells", "",
              "A claim that holds describes the paper's model, not cells. The same quantities for the homogeneous "
              "model and for airway smooth muscle cells:", "",
              "| quantity | at | homogeneous model | cells | cells' source |", "|---|---|---|---|---|"]
     for c in cells:
-        lines.append(f"| {c.quantity} | {c.where} | {c.model:.3g} | {c.cells:.3g} | `{name(c.source)}` |")
+        lines.append(f"| {c.quantity} | {c.where} | {c.model:.3g} | {c.cells:.3g} | `{c.source.rsplit('/', 1)[-1]}` |")
     lines.append("")
-    generated = list(dict.fromkeys(f"`{name(c.source)}`" for c in cells if c.generated))
+    generated = [f"`{src.rsplit('/', 1)[-1]}`" for src in dict.fromkeys(c.source for c in cells if c.generated)]
     if generated:
         lines += [f"The cells' values come from {', '.join(generated)}, which are generated from published fit laws, "
                   "not raw measurements (the files' own comments say so): they carry the laws' numbers, not the "
