@@ -154,3 +154,15 @@ def test_fit_creep_file(tmp_path):
     assert "creep_compliance_model_per_Pa" in rows[0] and len(rows) == 1 + t.size
     md = (out / "report.md").read_text()
     assert "creep compliance J(t)" in md and "J data (1/Pa)" in md
+
+
+def test_study_sensitivity_from_fit_takes_the_fitted_paper_cell(fit_json, tmp_path, capsys):
+    from tenscell.cli.study import _fitted_paper_cell
+
+    path, result = fit_json
+    kw = _fitted_paper_cell(path)
+    assert kw["L"] == pytest.approx(result.L) and kw["P"] == pytest.approx(
+        result.value("s") * np.median(result.data.prestress))
+    np.testing.assert_array_equal(kw["EA"], result.EA)
+    assert cli_main(["study", "no-if", "--from-fit", str(path), "--out", str(tmp_path / "x")]) == 2
+    assert "applies to study sensitivity" in capsys.readouterr().err
