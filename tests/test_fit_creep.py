@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from decimal import Decimal, getcontext
 
+
 import numpy as np
 import pytest
 import scipy.integrate
