@@ -3,7 +3,6 @@ from __future__ import annotations
 
 from decimal import Decimal, getcontext
 
-
 import numpy as np
 import pytest
 import scipy.integrate
