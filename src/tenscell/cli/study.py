@@ -206,10 +206,13 @@ def run(args) -> int:
         if args.name != "sensitivity":
             raise ValueError(f"--from-fit applies to study sensitivity, not to study {args.name}")
         args.fitted_cell = _fitted_paper_cell(args.from_fit)
+    from .._progress import stage
+
     out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")
     t = time.perf_counter()
+    stage(f"study {args.name} ...")
     with out as d:
-        STUDIES[args.name](d, lambda msg: print(f"tenscell: {msg}", file=sys.stderr, flush=True), args)
+        STUDIES[args.name](d, lambda msg: stage(f"    computed {msg}"), args)
     print(f"tenscell: study {args.name} finished in {time.perf_counter() - t:.1f} s; wrote {out.target}/",
           file=sys.stderr)
     return 0
