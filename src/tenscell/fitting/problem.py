@@ -57,7 +57,7 @@ Two options shape the search space:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
@@ -144,6 +144,8 @@ class _Evaluation:
     dshare: np.ndarray | None  # (groups, n_params) d ln share / d phi
     elasticity: np.ndarray | None = None  # (groups,) ∂ln G'/∂ln P at elasticity_omega
     delasticity: np.ndarray | None = None  # (groups, n_params) its d ln / d phi
+    Jc: np.ndarray | None = None  # (Nc,) creep compliance at the creep data's times (1/Pa)
+    dlogJc: np.ndarray | None = None  # (Nc, n_params) d ln Jc / d phi
 
 
 # ---------------------------------------------------------------------------------
@@ -227,6 +229,10 @@ class FitProblem:
     max_decades: float | None = None
     min_prestress_elasticity: float | None = None
     elasticity_omega: float = 2 * math.pi * 0.1
+    # creep data (times after a stress step): their residuals follow the moduli's in y_obs and weights
+    creep_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    creep_dataset: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    creep_group: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     def __repr__(self) -> str:
         opts = [f"{k}={v:g}" for k, v in (("min_prestress_share", self.min_prestress_share),
@@ -256,8 +262,13 @@ class FitProblem:
 
     @property
     def n_residuals(self) -> int:
-        """Number of data residuals: 2 per data point (G' and G'')."""
+        """Number of data residuals: 2 per moduli point (G' and G''), 1 per creep point."""
         return int(self.y_obs.size)
+
+    @property
+    def n_creep(self) -> int:
+        """Number of creep points, all creep data sets together (their residuals come last)."""
+        return int(self.creep_t.size)
 
     @property
     def n_datasets(self) -> int:
@@ -290,7 +301,10 @@ class FitProblem:
         return np.exp(self.full(theta))
 
     def rows(self, dataset: int) -> np.ndarray:
-        """Positions of data set ``dataset``'s residuals (its G' rows, then its G'' rows), shape (2n_k,)."""
+        """Positions of data set ``dataset``'s residuals: its G' rows then its G'' rows, or its creep rows."""
+        creep = np.flatnonzero(self.creep_dataset == dataset)
+        if creep.size:
+            return 2 * self.n_points + creep
         pts = np.flatnonzero(self.dataset_index == dataset)
         return np.concatenate([pts, self.n_points + pts])
 
@@ -351,7 +365,29 @@ class FitProblem:
         dlogG = self._dlogG(spec, J, aR, bR) if jac else None
         sh, dsh = self._share(spec, jac) if share else (None, None)
         el, de = self._storage_elasticity(spec, jac) if elasticity else (None, None)
-        return _Evaluation(G=G, dlogG=dlogG, share=sh, dshare=dsh, elasticity=el, delasticity=de)
+        Jc, dJc = self._creep(spec, jac) if self.n_creep else (None, None)
+        return _Evaluation(G=G, dlogG=dlogG, share=sh, dshare=dsh, elasticity=el, delasticity=de, Jc=Jc,
+                           dlogJc=dJc)
+
+    def _creep(self, spec, jac: bool):
+        """Creep compliance (1/Pa) at the creep points and, if ``jac``, d ln J / d phi (module :mod:`.creep`)."""
+        from .creep import creep_derivatives, creep_from_modes
+
+        Jc = np.empty(self.n_creep)
+        dJ = np.zeros((self.n_creep, self.n_params)) if jac else None
+        AV, M = self._modal(spec) if jac else (None, None)
+        for g in np.unique(self.creep_group):
+            sel = np.flatnonzero(self.creep_group == g)
+            t = self.creep_t[sel]
+            # J in 1/Pa is the cell's compliance (m/N) times 2L (the continuum factor of G = (0.5/L)/J)
+            Jc[sel] = 2.0 * self.L_ref * creep_from_modes(spec.lam[g], spec.alpha[g], spec.beta[g], t)
+            if jac:
+                d_EA, d_c, d_Pg = creep_derivatives(spec.lam[g], spec.alpha[g], spec.beta[g], AV[g], M[g], t,
+                                                    spec.dk[g], spec.deta, spec.P[g])
+                d_P = np.zeros((sel.size, self.n_groups))
+                d_P[:, g] = d_Pg
+                dJ[sel] = 2.0 * self.L_ref * self._to_params(d_EA, d_c, d_P)
+        return Jc, (dJ / Jc[:, None] if jac else None)
 
     def _modal(self, spec):
         """AV = a_jᵀ v_k (groups, m, n) and M = Vᵀ Kp V (groups, n, n)."""
@@ -452,6 +488,11 @@ class FitProblem:
             return nan, nan.copy()
         return out.G.real, out.G.imag
 
+    def creep(self, theta) -> np.ndarray:
+        """Model creep compliance (1/Pa) at the creep points, shape (n_creep,); NaN where the model is unstable."""
+        out = self._evaluate(self.full(theta), jac=False)
+        return np.full(self.n_creep, np.nan) if out is None or out.Jc is None else out.Jc
+
     def residuals(self, theta) -> np.ndarray:
         """Weighted data residuals ``w·(log10 G_model − log10 G_data)``, shape (2N,) (G' block, then G'')."""
         return self._residuals_from(self._evaluate(self.full(theta), jac=False))
@@ -462,8 +503,12 @@ class FitProblem:
         G = out.G
         if not (np.all(G.real > 0) and np.all(G.imag > 0)):
             return np.full(self.y_obs.size, _PENALTY)
-        model = np.concatenate([np.log10(G.real), np.log10(G.imag)])
-        return self.weights * (model - self.y_obs)
+        parts = [np.log10(G.real), np.log10(G.imag)]
+        if self.n_creep:
+            if not np.all(out.Jc > 0):
+                return np.full(self.y_obs.size, _PENALTY)
+            parts.append(np.log10(out.Jc))
+        return self.weights * (np.concatenate(parts) - self.y_obs)
 
     def jacobian(self, theta) -> np.ndarray:
         """Analytic Jacobian of :meth:`residuals` with respect to ``theta``, shape (2N, n_free)."""
@@ -475,8 +520,10 @@ class FitProblem:
         G = out.G
         dG = G[:, None] * out.dlogG[:, self.free]
         with np.errstate(divide="ignore", invalid="ignore"):
-            rows = np.vstack([dG.real / (G.real[:, None] * _LN10), dG.imag / (G.imag[:, None] * _LN10)])
-        return self.weights[:, None] * np.nan_to_num(rows)
+            blocks = [dG.real / (G.real[:, None] * _LN10), dG.imag / (G.imag[:, None] * _LN10)]
+        if self.n_creep:
+            blocks.append(out.dlogJc[:, self.free] / _LN10)
+        return self.weights[:, None] * np.nan_to_num(np.vstack(blocks))
 
     def jacobian_fd(self, theta, step: float = 1e-5) -> np.ndarray:
         """Central finite-difference Jacobian of :meth:`residuals` (the slow reference), shape (2N, n_free)."""
@@ -677,12 +724,20 @@ def _family_groups(cell: Cell) -> tuple[np.ndarray, list[str]]:
     return groups, fams
 
 
+def _is_creep(d) -> bool:
+    return getattr(d, "kind", None) == "creep"
+
+
 def as_datasets(data) -> tuple:
-    """One data set or a sequence of them as a tuple of :class:`RheologyData` (ValueError otherwise)."""
-    items = (data,) if isinstance(data, RheologyData) else tuple(data) if isinstance(data, (list, tuple)) else None
-    if not items or not all(isinstance(d, RheologyData) for d in items):
-        raise ValueError("data must be a tenscell.io.data.RheologyData or a non-empty list of them, got "
-                         f"{type(data).__name__}")
+    """One data set or a sequence of them as a tuple of :class:`RheologyData` or
+    :class:`~tenscell.io.creep_data.CreepData` (ValueError otherwise)."""
+    from ..io.creep_data import CreepData
+
+    kinds = (RheologyData, CreepData)
+    items = (data,) if isinstance(data, kinds) else tuple(data) if isinstance(data, (list, tuple)) else None
+    if not items or not all(isinstance(d, kinds) for d in items):
+        raise ValueError("data must be a tenscell.io.data.RheologyData or CreepData, or a non-empty list of them, "
+                         f"got {type(data).__name__}")
     return items
 
 
@@ -745,13 +800,16 @@ def _prestress_layout(datasets):
                 links[0] = 1.0
             groups.append((k, math.nan, 0.0, links))
             point_group.append(np.full(d.n, len(groups) - 1))
-    return names, units, descs, kinds, groups, np.concatenate(point_group)
+    return names, units, descs, kinds, groups, point_group
 
 
 def _default_bounds(datasets, L_ref):
-    """Default bounds per parameter kind and the scales used by the initial guess."""
-    Gs = np.concatenate([d.G_storage for d in datasets])
-    omega = 2 * np.pi * np.concatenate([d.frequency_hz for d in datasets])
+    """Default bounds per parameter kind and the scales used by the initial guess.
+
+    A creep point at time t counts as a modulus 1/J at the angular frequency 1/t.
+    """
+    Gs = np.concatenate([1.0 / d.compliance if _is_creep(d) else d.G_storage for d in datasets])
+    omega = np.concatenate([1.0 / d.time_s if _is_creep(d) else 2 * np.pi * d.frequency_hz for d in datasets])
     S = float(np.median(Gs)) * L_ref**2
     w_m = float(np.exp(np.mean(np.log(omega))))
     known = [d.prestress for d in datasets if d.prestress is not None]
@@ -946,6 +1004,15 @@ def make_problem(
     measured = [d.prestress for d in datasets if d.prestress is not None]
     varies = bool(measured) and np.unique(np.concatenate(measured)).size > 1
     load, probe = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
+    moduli = [k for k, d in enumerate(datasets) if not _is_creep(d)]
+    creep = [k for k, d in enumerate(datasets) if _is_creep(d)]
+    mod = [datasets[k] for k in moduli]
+
+    def cat(parts, dtype=float):
+        return np.concatenate(parts) if parts else np.zeros(0, dtype=dtype)
+
+    y_mod = [np.log10(cat([d.G_storage for d in mod])), np.log10(cat([d.G_loss for d in mod]))]
+    w_mod = [cat([d.weights_storage for d in mod]), cat([d.weights_loss for d in mod])]
     return FitProblem(
         names=names, units=units, descriptions=descs, kinds=kinds, lower=lower, upper=upper, free=free,
         fixed_log=fixed_log, tendons=tendons, damping=damping, n_ea=len(ea_names), n_c=len(c_names),
@@ -953,17 +1020,18 @@ def make_problem(
         A=A, lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float), H=H, load=load,
         probe=probe, L_ref=L_ref, white_unit=_whiten(chol, A, H, load, probe),
         sources=tuple(d.source for d in datasets),
-        omega=2 * np.pi * np.concatenate([d.frequency_hz for d in datasets]),
-        dataset_index=np.concatenate([np.full(d.n, k) for k, d in enumerate(datasets)]),
-        group_index=point_group,
+        omega=2 * np.pi * cat([d.frequency_hz for d in mod]),
+        dataset_index=cat([np.full(datasets[k].n, k) for k in moduli], int),
+        group_index=cat([point_group[k] for k in moduli], int),
         group_log_offset=np.array([g[2] for g in groups]), group_map=group_map,
         group_measured=np.array([g[1] for g in groups]), group_dataset=np.array([g[0] for g in groups]),
-        y_obs=np.concatenate([np.log10(np.concatenate([d.G_storage for d in datasets])),
-                              np.log10(np.concatenate([d.G_loss for d in datasets]))]),
-        weights=np.concatenate([np.concatenate([d.weights_storage for d in datasets]),
-                                np.concatenate([d.weights_loss for d in datasets])]),
+        y_obs=np.concatenate(y_mod + [np.log10(datasets[k].compliance) for k in creep]),
+        weights=np.concatenate(w_mod + [datasets[k].weights for k in creep]),
         scale_stiffness=S, scale_damping=S / w_m,
         prestress_matters=bool(varies or min_prestress_share is not None or min_prestress_elasticity is not None),
         min_prestress_share=min_prestress_share, max_decades=max_decades,
         min_prestress_elasticity=min_prestress_elasticity, elasticity_omega=2 * math.pi * elasticity_frequency_hz,
+        creep_t=cat([datasets[k].time_s for k in creep]),
+        creep_dataset=cat([np.full(datasets[k].n, k) for k in creep], int),
+        creep_group=cat([point_group[k] for k in creep], int),
     )
