@@ -195,8 +195,8 @@ def test_homogeneous_model_cannot_fit_power_law(cell):
 
 def test_heterogeneous_fit_reaches_power_law(cell):
     """... and a heterogeneous one does, with G' slope near 0.2 across 0.01-100 Hz."""
-    r = fitting.fit(bundled("fabry2001"), cell, starts=1, hops=15, seed=0, progress=False)
-    assert r.converged and r.rms_log10_error <= 0.01
+    r = fitting.fit(bundled("fabry2001"), cell, starts=1, hops=15, seed=0, tolerance=0.005, progress=False)
+    assert r.converged and r.rms_log10_error <= 0.005
     _, s1, _ = fitting.frequency_slopes(r, 0.01, 100.0, 1000)
     assert 0.14 <= s1.min() and s1.max() <= 0.26
     lo, hi, decades = r.stiffness_spread

@@ -102,6 +102,19 @@ LAWS = {
 }
 
 
+def test_every_law_class_is_run_through_every_consumer():
+    """A new law class in tenscell.laws must join LAWS (and so every test below)."""
+    classes = {obj for obj in vars(laws).values()
+               if isinstance(obj, type) and issubclass(obj, TendonLaw) and obj is not TendonLaw
+               and not obj.__name__.startswith("_")}
+    covered = set()
+    for law in LAWS.values():
+        covered.add(type(law))
+        if isinstance(law, CompositeLaw):
+            covered |= {type(part) for part in law.laws}
+    assert classes <= covered, f"laws not covered by tests/test_laws.py: {sorted(c.__name__ for c in classes - covered)}"
+
+
 def _lnG(law, P, f=F):
     lin = linearize_law(CELL, law, P)
     return np.log((0.5 / CELL.strut_length) / compliance(lin, f))
@@ -241,7 +254,7 @@ def test_elasticities_match_finite_differences_through_the_law(name):
 
 def test_stiffening_prestress_elasticity_is_fixed():
     """The issue's case: IFs with b = 1 at P = 1000. The Voigt formula gave ∂lnG'/∂lnP = 0.67; FD gives 1.06."""
-    from tenscell.studies.variants import linearize_stiffening
+    from tenscell.studies.stiffening import linearize_stiffening
 
     lin = linearize_stiffening(CELL, P0, b=1.0)
     el = analytic_elasticities(lin, [1.0])

@@ -14,10 +14,10 @@ def _names(d):
 
 def test_set_replaces_previous_as_a_whole(tmp_path):
     d = tmp_path / "o"
-    with OutputSet(d, command="first") as s:
+    with OutputSet(d, command="tenscell fit a.csv") as s:
         (s / "a.txt").write_text("1")
     assert _names(d) == ["a.txt", MANIFEST]
-    with OutputSet(d, command="second") as s:
+    with OutputSet(d, command="tenscell fit b.csv") as s:
         (s / "b.txt").write_text("2")
     assert _names(d) == ["b.txt", MANIFEST]
     assert _names(tmp_path) == ["o"]  # no staging, no old copy left
@@ -55,3 +55,18 @@ def test_location_refused_before_computation(tmp_path):
     with pytest.raises(OutputLocationError, match="--save .*not empty"):
         OutputSet(tmp_path / "mine", flag="--save")
     check_output_dir(tmp_path / "new" / "deeper")  # missing directories are created later
+
+
+def test_a_set_of_another_command_or_inside_a_set_is_refused(tmp_path):
+    d = tmp_path / "o"
+    with OutputSet(d, command="tenscell reproduce --out o") as s:
+        (s / "a.txt").write_text("1")
+    with pytest.raises(OutputLocationError, match="holds the output set of `tenscell reproduce"):
+        OutputSet(d, command="tenscell show paper --out o")
+    with pytest.raises(OutputLocationError, match="inside the output set"):
+        OutputSet(d / "study", command="tenscell study x")
+    (tmp_path / "web").mkdir()
+    (tmp_path / "web" / MANIFEST).write_text('{"name": "not ours"}')  # someone else's manifest.json
+    with pytest.raises(OutputLocationError, match="holds no tenscell"):
+        OutputSet(tmp_path / "web")
+    assert _names(d) == ["a.txt", MANIFEST]

@@ -272,13 +272,15 @@ def test_summary_reports_not_prestressable():
 def test_cli_show_paper_and_a_saved_lattice(tmp_path, capsys):
     from tenscell.cli import main
 
-    assert main(["show", "paper", "--out", str(tmp_path)]) == 0
+    shown = tmp_path / "show"
+    assert main(["show", "paper", "--out", str(shown)]) == 0
     out = capsys.readouterr().out
     assert "rank of A      24" in out and "self-stresses  9" in out and "prestressable and stable" in out
     for name in ("paper_structure.png", "paper_modes.png", "paper_summary.txt"):
-        assert (tmp_path / name).stat().st_size > 0
-    lattice = tmp_path / "lattice.json"
-    assert main(["show", "sheet", "--size", "2x2", "--out", str(tmp_path), "--modes", "0", "--save", str(lattice)]) == 0
+        assert (shown / name).stat().st_size > 0
+    lattice = shown / "lattice.json"  # --save inside --out: part of the output set
+    assert main(["show", "sheet", "--size", "2x2", "--out", str(shown), "--modes", "0", "--save", str(lattice)]) == 0
+    assert "lattice.json" in (shown / "manifest.json").read_text()
     capsys.readouterr()
     assert main(["show", str(lattice), "--out", str(tmp_path / "again"), "--modes", "1"]) == 0
     out = capsys.readouterr().out

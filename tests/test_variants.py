@@ -25,7 +25,8 @@ from tenscell import (
 from tenscell import cli
 from tenscell.laws import StiffeningFilament
 from tenscell.model import shapes
-from tenscell.studies import variants
+from tenscell.studies import references, semiflexible, stiffening
+from tenscell.studies.no_if import loss_peak, no_if_study
 from tenscell.model.equilibrium import generalized_forces
 from tenscell.linear.linearize import linearize_tangent, relaxation_spectrum
 from tenscell.model.structure import INTERMEDIATE_FILAMENT, STRUT
@@ -74,22 +75,22 @@ def test_no_if_damping_is_singular_and_compliance_is_right(no_if):
 
 def test_no_if_loss_peak_exists_and_scales(no_if):
     lin = linearize(no_if, P=1000.0)
-    pk = variants.loss_peak(lin)
+    pk = loss_peak(lin)
     assert 1e-4 < pk.frequency_hz < 1e8
     _, Gl = moduli(lin, [pk.frequency_hz / 3, pk.frequency_hz, pk.frequency_hz * 3])
     assert Gl[1] > Gl[0] and Gl[1] > Gl[2] and Gl[1] == pytest.approx(pk.height, rel=1e-12)
     # c -> s·c maps G(f) to G(s·f): the peak moves to f/s at the same height
-    pk10 = variants.loss_peak(linearize(no_if, P=1000.0, c=10.0))
+    pk10 = loss_peak(linearize(no_if, P=1000.0, c=10.0))
     assert pk10.frequency_hz == pytest.approx(pk.frequency_hz / 10, rel=1e-5)
     assert pk10.height == pytest.approx(pk.height, rel=1e-9)
     # P, EA, c all × s scales G by s at the same f
-    pk2 = variants.loss_peak(linearize(no_if, P=2000.0, EA=2.0, c=2.0))
+    pk2 = loss_peak(linearize(no_if, P=2000.0, EA=2.0, c=2.0))
     assert pk2.frequency_hz == pytest.approx(pk.frequency_hz, rel=1e-5)
     assert pk2.height == pytest.approx(2 * pk.height, rel=1e-9)
 
 
 def test_no_if_high_frequency_limit_is_the_prestress_held_mechanism(no_if):
-    s = variants.no_if_study(prestress=(500.0, 1000.0), f_hz=[1.0, 1e7], EA_values=(1.0,), c_values=(1.0,))
+    s = no_if_study(prestress=(500.0, 1000.0), f_hz=[1.0, 1e7], EA_values=(1.0,), c_values=(1.0,))
     assert s.mechanism_residual < 1e-12
     Gs, Gl = moduli(linearize(no_if, P=500.0), [1e9])
     assert Gs[0] == pytest.approx(s.storage_limit_per_P * 500.0, rel=1e-6)
@@ -99,7 +100,7 @@ def test_no_if_high_frequency_limit_is_the_prestress_held_mechanism(no_if):
 
 def test_with_ifs_there_is_no_loss_peak():
     with pytest.raises(ValueError, match="no peak"):
-        variants.loss_peak(linearize(paper_cell(), P=1000.0))
+        loss_peak(linearize(paper_cell(), P=1000.0))
 
 
 # ---- tangent linearization and the stiffening law ---------------------------------------------------
@@ -146,8 +147,8 @@ def test_exponential_law_tangent_inverse_and_linear_limit():
 def test_stiffening_reduces_to_voigt_at_zero_stiffening():
     cell = paper_cell()
     ref = linearize(cell, 1500.0)
-    zero = variants.linearize_stiffening(cell, 1500.0, b=0.0)
-    tiny = variants.linearize_stiffening(cell, 1500.0, b=1e-10)
+    zero = stiffening.linearize_stiffening(cell, 1500.0, b=0.0)
+    tiny = stiffening.linearize_stiffening(cell, 1500.0, b=1e-10)
     assert np.allclose(zero.K0, ref.K0, rtol=0, atol=1e-12 * np.abs(ref.K0).max())
     assert np.allclose(_G(zero), _G(ref), rtol=1e-12)
     assert np.allclose(_G(tiny), _G(ref), rtol=1e-6)
@@ -156,7 +157,7 @@ def test_stiffening_reduces_to_voigt_at_zero_stiffening():
 def test_stiffening_stiffness_is_the_jacobian_of_the_nonlinear_forces():
     cell = paper_cell()
     P, b = 1000.0, 0.05
-    lin = variants.linearize_stiffening(cell, P, b=b)
+    lin = stiffening.linearize_stiffening(cell, P, b=b)
     bb = np.zeros(cell.m)
     bb[cell.structure.family_indices(INTERMEDIATE_FILAMENT)] = b
 
@@ -175,7 +176,7 @@ def test_stiffening_stiffness_is_the_jacobian_of_the_nonlinear_forces():
 
 
 def test_stiffening_study_makes_G_grow_faster_than_linear_in_P():
-    s = variants.stiffening_study(b=(0.0, 0.01), prestress=(500.0, 1000.0, 4500.0), f_hz=(1.0,))
+    s = stiffening.stiffening_study(b=(0.0, 0.01), prestress=(500.0, 1000.0, 4500.0), f_hz=(1.0,))
     ex = s.exponent()[:, 0]
     assert ex[1] > ex[0] + 0.1
     assert np.all(s.G[1].real > s.G[0].real)
@@ -198,7 +199,7 @@ def test_semiflexible_cell_shares_the_rigid_self_stress(semi):
 
 def test_semiflexible_stiffness_is_the_jacobian_of_the_nonlinear_forces(semi):
     P = 1000.0
-    lin = variants.linearize_semiflexible(semi, P, EA_strut=5e3)
+    lin = semiflexible.linearize_semiflexible(semi, P, EA_strut=5e3)
     EA = lin.EA
     Jac = _fd_jacobian(semi, lambda l: EA * (l / lin.l0 - 1))
     assert np.allclose(Jac, lin.K0, rtol=0, atol=1e-6 * np.abs(lin.K0).max())
@@ -208,32 +209,32 @@ def test_semiflexible_converges_to_rigid_at_rate_one_over_EA(semi):
     rigid = _G(linearize(paper_cell(), 1000.0))
     err = []
     for EAs in (1e6, 1e7, 1e8):
-        G = _G(variants.linearize_semiflexible(semi, 1000.0, EA_strut=EAs, c_strut=0.0))
+        G = _G(semiflexible.linearize_semiflexible(semi, 1000.0, EA_strut=EAs, c_strut=0.0))
         err.append(np.max(np.abs(G / rigid - 1)))
     assert err[2] < 1e-4
     assert err[0] / err[1] == pytest.approx(10.0, rel=0.02)
     assert err[1] / err[2] == pytest.approx(10.0, rel=0.02)
-    s = variants.semiflexible_study(EA_strut=np.logspace(6, 9, 7), f_hz=F)
+    s = semiflexible.semiflexible_study(EA_strut=np.logspace(6, 9, 7), f_hz=F)
     assert s.rate_storage == pytest.approx(-1.0, abs=0.02) and s.rate_loss == pytest.approx(-1.0, abs=0.02)
 
 
 def test_softer_struts_give_a_softer_cell(semi):
-    g = [_G(variants.linearize_semiflexible(semi, 1000.0, EA_strut=e), [0.01])[0].real for e in (700.0, 2e3, 1e4, 1e6)]
+    g = [_G(semiflexible.linearize_semiflexible(semi, 1000.0, EA_strut=e), [0.01])[0].real for e in (700.0, 2e3, 1e4, 1e6)]
     assert np.all(np.diff(g) > 0)
 
 
 def test_semiflexible_rejects_struts_softer_than_their_compression_and_buckling(semi):
     comp = -1000.0 * semi.T0[33]
     with pytest.raises(ValueError, match="EA_strut"):
-        variants.linearize_semiflexible(semi, 1000.0, EA_strut=0.9 * comp)
+        semiflexible.linearize_semiflexible(semi, 1000.0, EA_strut=0.9 * comp)
     EI = 10.0
-    Pcr = variants.euler_critical_prestress(semi, EI)
+    Pcr = semiflexible.euler_critical_prestress(semi, EI)
     assert Pcr * comp / 1000.0 == pytest.approx(math.pi ** 2 * EI / 1.0 ** 2, rel=1e-12)
-    variants.linearize_semiflexible(semi, 0.99 * Pcr, EI=EI, EA_strut=1e6)
-    with pytest.raises(variants.BucklingError, match="Euler"):
-        variants.linearize_semiflexible(semi, 1.01 * Pcr, EI=EI, EA_strut=1e6)
+    semiflexible.linearize_semiflexible(semi, 0.99 * Pcr, EI=EI, EA_strut=1e6)
+    with pytest.raises(semiflexible.BucklingError, match="Euler"):
+        semiflexible.linearize_semiflexible(semi, 1.01 * Pcr, EI=EI, EA_strut=1e6)
     with pytest.raises(ValueError, match="no elastic struts"):
-        variants.linearize_semiflexible(paper_cell(), 1000.0)
+        semiflexible.linearize_semiflexible(paper_cell(), 1000.0)
 
 
 # ---- other references -------------------------------------------------------------------------------
@@ -280,15 +281,15 @@ def test_cylindrical_search_reproduces_the_stored_reference():
 
 def test_prestress_map_agrees_with_the_cell_constructors():
     d = np.radians([44.0, 50.0, 56.0])
-    mp = variants.prestress_map([0.0], d)
-    assert mp.status[:, 0].tolist() == [variants.NOT_STABLE, variants.VALID, variants.NOT_PRESTRESSABLE]
+    mp = references.prestress_map([0.0], d)
+    assert mp.status[:, 0].tolist() == [references.NOT_STABLE, references.VALID, references.NOT_PRESTRESSABLE]
     with pytest.raises(NotPositiveDefiniteError):
         linearize(paper_cell(0.0, d[0]), 1000.0)
     with pytest.raises(NotPrestressableError):
         paper_cell(0.0, d[2])
     assert mp.if_tension[1, 0] == pytest.approx(paper_cell().T0[-1], rel=1e-12)
     with pytest.raises(ValueError, match="delta"):
-        variants.prestress_map([0.0], [2.0])
+        references.prestress_map([0.0], [2.0])
 
 
 # ---- the commands -----------------------------------------------------------------------------------

@@ -58,9 +58,11 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
                  "creep_response", "oscillatory_response", "simulate"),
     "fitting": ("FitParameter", "FitResult", "fit"),
-    "sensitivity": ("analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table"),
-    "studies.variants": ("linearize_semiflexible", "linearize_stiffening", "loss_peak", "no_if_study",
-                         "prestress_map", "references_study", "semiflexible_study", "stiffening_study"),
+    "sensitivity": ("analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table", "sensitivity_study"),
+    "studies.no_if": ("loss_peak", "no_if_study"),
+    "studies.references": ("prestress_map", "references_study"),
+    "studies.semiflexible": ("linearize_semiflexible", "semiflexible_study"),
+    "studies.stiffening": ("linearize_stiffening", "stiffening_study"),
 }
 
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
@@ -126,11 +128,11 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
         FrequencyResponse, compliance, frequency_response, log_slope, loss_tangent, moduli, static_modulus,
         viscosity_limit,
     )
-    from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table
-    from .studies.variants import (
-        linearize_semiflexible, linearize_stiffening, loss_peak, no_if_study, prestress_map, references_study,
-        semiflexible_study, stiffening_study,
-    )
+    from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table, sensitivity_study
+    from .studies.no_if import loss_peak, no_if_study
+    from .studies.references import prestress_map, references_study
+    from .studies.semiflexible import linearize_semiflexible, semiflexible_study
+    from .studies.stiffening import linearize_stiffening, stiffening_study
     from .summary import relaxation_modes, summarize
     from .timedomain import (
         CreepSpectrum, PowerLawFit, StressRelaxation, creep_compliance, creep_spectrum, fit_power_law,

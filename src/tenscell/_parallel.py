@@ -26,7 +26,7 @@ import sys
 import threading
 from typing import Any, Callable, Iterable, Sequence
 
-__all__ = ["starmap", "GRACE_S"]
+__all__ = ["starmap", "Workers", "GRACE_S"]
 
 #: seconds terminated workers get to exit before they are killed
 GRACE_S = 0.5
@@ -99,41 +99,79 @@ def starmap(fn: Callable[..., Any], arglists: Iterable[Sequence[Any]], *, jobs: 
         The first task's exception, after the workers are stopped.
     """
     tasks = [tuple(a) for a in arglists]
-    jobs = max(1, min(int(jobs), len(tasks)))
-    if jobs == 1:
-        results = []
-        for i, a in enumerate(tasks):
-            results.append(fn(*a))
-            if on_done is not None:
-                on_done(i, results[-1])
-        return results
+    with Workers(min(int(jobs), max(1, len(tasks)))) as workers:
+        return workers.starmap(fn, tasks, on_done=on_done)
 
-    from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 
-    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_die_with_parent, initargs=(os.getpid(),))
-    try:
-        # workers are forked at the first submit; SIGINT ignored meanwhile, so that no worker can
-        # receive one before its initializer has run (an ignored signal stays ignored in the child)
-        previous = _ignore_sigint()
-        try:
-            futures = [pool.submit(fn, *a) for a in tasks]
-        finally:
-            _restore_sigint(previous)
-        index = {f: i for i, f in enumerate(futures)}
-        pending = set(futures)
-        while pending:
-            done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for f in sorted(done, key=index.get):
-                if f.exception() is not None:
-                    raise f.exception()
+class Workers:
+    """Worker processes kept for several :meth:`starmap` calls (rounds of an iterative search).
+
+    ``with Workers(jobs) as w: w.starmap(fn, tasks)`` — the same guarantees
+    as :func:`starmap`; the pool starts at the first call with ``jobs > 1``
+    and ends with the block (stopped at once on an exception or Ctrl-C).
+    """
+
+    def __init__(self, jobs: int = 1):
+        self.jobs = max(1, int(jobs))
+        self._pool = None
+
+    def __enter__(self) -> "Workers":
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            if exc_type is None:
+                pool.shutdown(wait=True)
+            else:
+                _stop_workers(pool)
+        return False
+
+    def _start(self):
+        from concurrent.futures import ProcessPoolExecutor
+
+        if self._pool is None:
+            self._pool = ProcessPoolExecutor(max_workers=self.jobs, initializer=_die_with_parent,
+                                             initargs=(os.getpid(),))
+        return self._pool
+
+    def starmap(self, fn: Callable[..., Any], arglists: Iterable[Sequence[Any]], *,
+                on_done: Callable[[int, Any], None] | None = None) -> list:
+        """``[fn(*args) for args in arglists]`` on these workers (in this process when ``jobs`` is 1)."""
+        tasks = [tuple(a) for a in arglists]
+        if self.jobs == 1 or len(tasks) <= 1:
+            results = []
+            for i, a in enumerate(tasks):
+                results.append(fn(*a))
                 if on_done is not None:
-                    on_done(index[f], f.result())
-        results = [f.result() for f in futures]
-    except BaseException:
-        _stop_workers(pool)
-        raise
-    pool.shutdown(wait=True)
-    return results
+                    on_done(i, results[-1])
+            return results
+
+        from concurrent.futures import FIRST_COMPLETED, wait
+
+        pool = self._start()
+        try:
+            # workers are forked at the first submit; SIGINT ignored meanwhile, so that no worker can
+            # receive one before its initializer has run (an ignored signal stays ignored in the child)
+            previous = _ignore_sigint()
+            try:
+                futures = [pool.submit(fn, *a) for a in tasks]
+            finally:
+                _restore_sigint(previous)
+            index = {f: i for i, f in enumerate(futures)}
+            pending = set(futures)
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for f in sorted(done, key=index.get):
+                    if f.exception() is not None:
+                        raise f.exception()
+                    if on_done is not None:
+                        on_done(index[f], f.result())
+            return [f.result() for f in futures]
+        except BaseException:
+            self._pool = None
+            _stop_workers(pool)
+            raise
 
 
 def _ignore_sigint():

@@ -37,6 +37,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ._checks import finite_scalar, positive_array, positive_scalar
+from ._progress import progress_bar, stage
+from ._results import dataframe, format_repr
 from .linear.linearize import LinearModel, linearize
 from .response import compliance
 from .model.shapes import paper_cell
@@ -52,7 +54,8 @@ __all__ = [
     "summarize",
     "MonteCarloResult",
     "monte_carlo",
-    "sensitivity_markdown",
+    "SensitivityStudy",
+    "sensitivity_study",
     "SENSITIVITY_FREQUENCIES",
     "PAPER_BOUND",
 ]
@@ -63,7 +66,7 @@ SENSITIVITY_FREQUENCIES = np.logspace(-2, 3, 51)
 PAPER_BOUND = 0.08
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Elasticities:
     """Local elasticities of the complex modulus over frequency.
 
@@ -120,6 +123,35 @@ class Elasticities:
         if not rows:
             raise ValueError(f"unknown group {group!r}")
         return self.complex[rows].sum(axis=0)
+
+    def __repr__(self) -> str:
+        k = self.names.index("P") if "P" in self.names else None
+        head = (f"∂ln G'/∂ln P = {self.storage[k].min():.4g}…{self.storage[k].max():.4g}, "
+                f"∂ln G''/∂ln P = {self.loss[k].min():.4g}…{self.loss[k].max():.4g}") if k is not None else ""
+        kinds = ", ".join(dict.fromkeys(n.split("[")[0] for n in self.names))
+        return format_repr(
+            f"Elasticities of G: {len(self.names)} parameters × {self.frequency_hz.size} frequencies "
+            f"{self.frequency_hz[0]:g}…{self.frequency_hz[-1]:g} Hz",
+            f"parameters: {kinds}",
+            head,
+            f"{self.methods.count('analytic')} analytic, {len(self.methods) - self.methods.count('analytic')} by finite differences",
+        )
+
+    def to_dataframe(self):
+        """One row per (parameter, frequency): value and ∂ln G'/∂ln p, ∂ln G''/∂ln p (per rad for α)."""
+        nf = self.frequency_hz.size
+        return dataframe({
+            "parameter": np.repeat(self.names, nf), "group": np.repeat(self.groups, nf),
+            "value": np.repeat(self.values, nf), "method": np.repeat(self.methods, nf),
+            "frequency_Hz": np.tile(self.frequency_hz, len(self.names)),
+            "dlnGstorage_dlnp": self.storage.ravel(), "dlnGloss_dlnp": self.loss.ravel(),
+        })
+
+    def plot(self, ax=None, **kw):
+        """Elasticities of G' and G'' against f (groups, largest members) on a pair of axes (or a new figure)."""
+        from .plotting.variants import elasticities_figure
+
+        return elasticities_figure(self, axes=ax, **kw)
 
 
 def _family_tag(family: str) -> str:
@@ -475,7 +507,7 @@ def summarize(el: Elasticities, table: list[PerturbationRow], bound: float = PAP
 
 
 # ---- Monte Carlo -----------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class MonteCarloResult:
     """Simultaneous random perturbations of the parameters.
 
@@ -526,6 +558,31 @@ class MonteCarloResult:
         v = self.valid
         return {"storage": np.percentile(self.change_storage[v], q), "loss": np.percentile(self.change_loss[v], q)}
 
+    def __repr__(self) -> str:
+        p = self.percentiles((95,))
+        return format_repr(
+            f"MonteCarloResult: {self.factors.shape[0]} draws of {self.label or 'the parameters'} (seed {self.seed}), "
+            f"±{100 * self.spread:g}%",
+            f"{int(self.valid.sum())} valid; 95th percentile |ΔG'/G'| {100 * p['storage'][0]:.2f}%, "
+            f"|ΔG''/G''| {100 * p['loss'][0]:.2f}%",
+            f"within {100 * PAPER_BOUND:g}%: {100 * self.fraction_within():.1f}% of valid draws",
+        )
+
+    def to_dataframe(self):
+        """One row per draw: largest |ΔG'/G'|, |ΔG''/G''| over f (fractions), validity, and the factors."""
+        cols = {"draw": np.arange(self.factors.shape[0]), "valid": self.valid,
+                "max_change_storage": self.change_storage, "max_change_loss": self.change_loss,
+                "reason": list(self.reasons)}
+        for k, n in enumerate(self.names):
+            cols[f"factor_{n}" if n != "alpha" else "shift_alpha_rad"] = self.factors[:, k]
+        return dataframe(cols, {"spread": self.spread, "seed": self.seed, "label": self.label})
+
+    def plot(self, ax=None, **kw):
+        """Histograms of the largest change of G' and G'' per valid draw, on a pair of axes (or a new figure)."""
+        from .plotting.variants import monte_carlo_figure
+
+        return monte_carlo_figure([self], axes=ax, **kw)
+
 
 def monte_carlo(
     n: int = 200,
@@ -554,16 +611,13 @@ def monte_carlo(
     ----------
     n : int
         Number of draws, ≥ 1.
-    progress : bool or None
-        A progress bar: None shows one when someone watches (a terminal or a
-        notebook), True always, False never (see :mod:`tenscell._progress`).
+    progress : bool, optional
+        Progress bar (the :mod:`tenscell._progress` convention).
 
     Returns
     -------
     MonteCarloResult
     """
-    from ._progress import progress_bar
-
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n (number of draws) must be a whole number >= 1, got {n!r}")
     spread = positive_scalar("spread", spread)
@@ -586,8 +640,7 @@ def monte_carlo(
     if parameters == "all":
         factors[:, -1] = alpha_spread * rng.uniform(-1.0, 1.0, size=n)
     cs, cl, reasons = np.full(n, np.nan), np.full(n, np.nan), []
-    bar = progress_bar(range(n), total=n, desc="Monte Carlo", unit="draw", progress=progress)
-    for i in bar:
+    for i in progress_bar(range(n), desc="Monte Carlo", unit="draw", progress=progress):
         fa = factors[i]
         try:
             if parameters == "all":
@@ -608,64 +661,106 @@ def monte_carlo(
                             label=label, frequency_hz=f)
 
 
-def _pct(x: float) -> str:
-    return "n/a" if math.isnan(x) else f"{100 * x:.2f}%"
+# ---- the whole study ---------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False, repr=False)
+class SensitivityStudy:
+    """Elasticities, the ±change table, its group summary and Monte Carlo, for one base point.
 
+    Attributes
+    ----------
+    elasticities : Elasticities
+    table : list of PerturbationRow
+    summary : list of GroupSummary
+    monte_carlo : tuple of MonteCarloResult
+        All parameters, then the material parameters only.
+    change : float
+        Relative change of the one-at-a-time table (fraction).
+    alpha_change : float
+        Shift of α in the table (rad).
+    bound : float
+        The claim checked: a ``change`` in gives at most ``bound`` out (fraction).
+    describe : str
+        The base cell.
+    P, L, alpha, delta : float
+        Base prestress (N), strut length (m), reference angles (rad).
+    EA, c : ndarray, shape (m,)
+        Base tendon stiffness (N) and damping (N·s/m).
+    """
 
-def sensitivity_markdown(el: Elasticities, summary: list[GroupSummary], mcs: list[MonteCarloResult],
-                         bound: float = PAPER_BOUND) -> str:
-    """The sensitivity study as a short markdown report with its numbers."""
-    f = el.frequency_hz
-    lines = [
-        "# Sensitivity of G' and G'' to the parameters",
-        "",
-        f"Paper cell, α = 0, δ = 50°, L = 1 m, P = 1000, EA = 1 N, c = 1 N·s/m, f = {f[0]:g}–{f[-1]:g} Hz ({f.size} points). "
-        "Elasticities of EA_j, c_j and P are analytic (derivatives of J through (K0 + iωC0)⁻¹); "
-        "L, α and δ by central differences through paper_cell "
-        + "(" + "; ".join(f"{n}: {m}, error estimate {e:.1e}" for n, m, e in zip(el.names, el.methods, el.errors)
-                          if n in ("L", "alpha", "delta")) + "). "
-        "For α (0 in the reference) the semi-elasticity ∂ln G/∂α is per rad and the finite change is ±0.1 rad. "
-        "The angles are also changed by half as much (rows marked 'half': ±0.05 rad, ±5%), since ±10% of δ leaves "
-        "the valid band 45.5°–54.74° on both sides.",
-        "",
-        f"| parameter group | n | max abs ∂lnG'/∂ln p | max abs ∂lnG''/∂ln p | max ΔG'/G' (±10%) | max ΔG''/G'' (±10%) | ≤ {100 * bound:g}%? |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    verdict = {True: "yes", False: "**no**", None: "partly"}
-    for s in summary:
-        both_invalid = math.isnan(s.max_change_storage) and math.isnan(s.max_change_loss)
-        lines.append(
-            f"| {s.group} | {s.n} | {s.max_elasticity_storage:.4f} | {s.max_elasticity_loss:.4f} | "
-            f"{_pct(s.max_change_storage)} | {_pct(s.max_change_loss)} | {'n/a' if both_invalid else verdict[s.holds]}"
-            + (f" ({s.note})" if s.note else "") + " |"
+    elasticities: Elasticities
+    table: list
+    summary: list
+    monte_carlo: tuple
+    change: float
+    alpha_change: float
+    bound: float
+    describe: str
+    P: float
+    L: float
+    alpha: float
+    delta: float
+    EA: np.ndarray
+    c: np.ndarray
+
+    def __repr__(self) -> str:
+        holds = [g.group for g in self.summary if g.holds]
+        fails = [g.group for g in self.summary if g.holds is False]
+        return format_repr(
+            f"SensitivityStudy of {self.describe} at P = {self.P:g} N",
+            f"±{100 * self.change:g}% one at a time: holds ≤ {100 * self.bound:g}% for {len(holds)} groups, "
+            f"fails for {len(fails)}" + (f" ({', '.join(fails)})" if fails else ""),
+            f"Monte Carlo: {', '.join(f'{100 * m.fraction_within(self.bound):.1f}% within' for m in self.monte_carlo)}",
         )
-    ok = [s.group for s in summary if s.holds]
-    bad = [s.group for s in summary if s.holds is False]
-    na = [s.group for s in summary if math.isnan(s.max_change_storage) and math.isnan(s.max_change_loss)]
-    part = [s.group for s in summary if s.holds is None and s.group not in na]
-    lines += ["", f"**10% in, at most {100 * bound:g}% out** holds for: {', '.join(ok) or 'none'}.",
-              f"It fails for: {', '.join(bad) or 'none'}."
-              + (f" Within {100 * bound:g}% where valid, but part of the perturbations are not valid references: "
-                 f"{', '.join(part)}." if part else "")
-              + (f" Not applicable (both perturbations leave the valid region): {', '.join(na)}." if na else ""),
-              ""]
-    tot = el.complex[[k for k, g in enumerate(el.groups) if g.startswith(("EA", "c", "P"))]].sum(axis=0)
-    lines.append(f"Sum rule e_P + Σe_EA + Σe_c = 1: largest deviation {np.max(np.abs(tot - 1)):.2e}.")
-    lines.append("")
-    for mc in mcs:
-        p = mc.percentiles()
-        nv = int(mc.valid.sum())
-        lines += [
-            f"## Monte Carlo, {mc.label}",
-            "",
-            f"{mc.factors.shape[0]} draws (seed {mc.seed}), each factor uniform in ±{100 * mc.spread:g}%"
-            + (f", α shifted uniformly in ±{mc.alpha_spread:g} rad" if mc.alpha_spread else "")
-            + f"; {mc.factors.shape[0] - nv} draws were not valid references"
-            + (" (" + ", ".join(f"{r}: {mc.reasons.count(r)}" for r in sorted(set(mc.reasons) - {''})) + ")" if nv < mc.factors.shape[0] else "")
-            + ".",
-            f"- largest |ΔG'/G'| over f: median {_pct(p['storage'][0])}, 95th percentile {_pct(p['storage'][1])}, max {_pct(p['storage'][2])}",
-            f"- largest |ΔG''/G''| over f: median {_pct(p['loss'][0])}, 95th percentile {_pct(p['loss'][1])}, max {_pct(p['loss'][2])}",
-            f"- draws with both moduli within {100 * bound:g}% at every frequency: {100 * mc.fraction_within(bound):.1f}%",
-            "",
-        ]
-    return "\n".join(lines)
+
+    def to_dataframe(self):
+        """The group summary: one row per parameter group."""
+        s = self.summary
+        return dataframe({
+            "group": [x.group for x in s], "n": [x.n for x in s],
+            "max_abs_elasticity_storage": [x.max_elasticity_storage for x in s],
+            "max_abs_elasticity_loss": [x.max_elasticity_loss for x in s],
+            "max_change_storage": [x.max_change_storage for x in s], "max_change_loss": [x.max_change_loss for x in s],
+            "holds": [x.holds for x in s], "note": [x.note for x in s],
+        }, {"change": self.change, "bound": self.bound, "prestress_N": self.P})
+
+    def plot(self, ax=None, **kw):
+        """The elasticities of G' against frequency (see :meth:`Elasticities.plot`)."""
+        return self.elasticities.plot(ax=ax, **kw)
+
+
+def sensitivity_study(
+    draws: int = 200,
+    *,
+    seed: int = 0,
+    change: float = 0.10,
+    alpha_change: float | None = None,
+    bound: float = PAPER_BOUND,
+    alpha: float = 0.0,
+    delta: float | None = None,
+    L: float = 1.0,
+    P: float = 1000.0,
+    EA=1.0,
+    c=1.0,
+    f_hz=SENSITIVITY_FREQUENCIES,
+    progress: bool | None = None,
+) -> SensitivityStudy:
+    """The paper's "10% in, at most 8% out", checked every way: elasticities, ±change table, Monte Carlo.
+
+    Parameters as in :func:`elasticities`, :func:`perturbation_table` and
+    :func:`monte_carlo` (``change`` is also the Monte Carlo spread).
+    """
+    bound = positive_scalar("bound", bound)
+    stage("sensitivity: elasticities", progress=progress)
+    el = elasticities(alpha=alpha, delta=delta, L=L, P=P, EA=EA, c=c, f_hz=f_hz)
+    stage(f"sensitivity: ±{100 * change:g}% one at a time", progress=progress)
+    table = perturbation_table(change=change, alpha_change=alpha_change, alpha=alpha, delta=delta, L=L, P=P, EA=EA,
+                               c=c, f_hz=f_hz)
+    mcs = tuple(monte_carlo(draws, spread=change, seed=seed, parameters=which, alpha_spread=alpha_change, alpha=alpha,
+                            delta=delta, L=L, P=P, EA=EA, c=c, f_hz=f_hz, progress=progress)
+                for which in ("all", "material"))
+    cell, EA_, c_ = _base_parameters(alpha, delta, L, P, EA, c, True)
+    return SensitivityStudy(
+        elasticities=el, table=table, summary=summarize(el, table, bound), monte_carlo=mcs, change=float(change),
+        alpha_change=float(change if alpha_change is None else alpha_change), bound=bound, describe=cell.describe(),
+        P=float(P), L=float(L), alpha=float(alpha), delta=float(cell.parameters["delta"]), EA=EA_, c=c_,
+    )

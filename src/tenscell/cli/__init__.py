@@ -96,6 +96,10 @@ def _prog(args) -> str:
     return f"tenscell {command}" if command else "tenscell"
 
 
+#: longest error message printed (a message quoting a huge input value is cut)
+_MAX_MESSAGE = 600
+
+
 def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split())
-    return text if text else type(err).__name__
+    text = " ".join(str(err).split()) or type(err).__name__
+    return text if len(text) <= _MAX_MESSAGE else text[:_MAX_MESSAGE - 1] + "…"

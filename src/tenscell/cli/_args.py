@@ -20,8 +20,8 @@ import sys
 
 __all__ = [
     "Parser", "HelpFormatter", "number", "integer", "number_list", "frequencies", "member_values",
-    "lattice_size", "add_model_options", "add_prestress", "add_out", "hidden_alias",
-    "model_from_args", "RANGES", "MAX_GRID_POINTS",
+    "lattice_size", "add_model_options", "add_prestress", "add_out", "hidden_alias", "add_from_fit",
+    "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS",
 ]
 
 #: allowed range of each physical quantity (closed interval, in the flag's unit). The model is
@@ -216,18 +216,25 @@ def member_values(quantity: str):
     return convert
 
 
-def lattice_size(max_modules: int = 1000):
-    """An argparse ``type``: ``NXxNY`` or ``NXxNYxNZ`` module counts (each >= 1), product <= max_modules."""
+def lattice_size(max_modules: int):
+    """An argparse ``type``: ``NXxNY`` or ``NXxNYxNZ`` module counts (each >= 1), product <= max_modules.
+
+    The refusal states the cost: a module adds about 24 coordinates, and the
+    sparse factorization's memory grows as coordinates^1.4 (1.25 GB at 1.07e5).
+    """
     def convert(text):
         parts = str(text).lower().split("x")
         if len(parts) not in (2, 3):
             raise argparse.ArgumentTypeError(f"expected NXxNY or NXxNYxNZ, got {str(text)[:40]!r}")
-        dims = tuple(integer(1, max_modules, "modules")(p) for p in parts)
+        dims = tuple(integer(1, max_modules, "modules per direction")(p) for p in parts)
         total = math.prod(dims)
         if total > max_modules:
+            coords = 24 * total
+            gb = 1.25 * (coords / 1.07e5) ** 1.4
             raise argparse.ArgumentTypeError(
-                f"{'x'.join(map(str, dims))} is {total:,} modules (about {total * 6 * 3 * 3:,} coordinates); "
-                f"at most {max_modules:,} modules")
+                f"{'x'.join(map(str, dims))} is {total:,} modules: about {coords:,} coordinates and "
+                f"{gb:.3g} GB for the factorization alone; at most {max_modules:,} modules "
+                f"(about {24 * max_modules:,} coordinates)")
         return dims
 
     convert.__name__ = "size"
@@ -239,18 +246,78 @@ def hidden_alias(p: argparse.ArgumentParser, alias: str, dest: str, **kw) -> Non
     p.add_argument(alias, dest=dest, help=argparse.SUPPRESS, default=argparse.SUPPRESS, **kw)
 
 
-def add_prestress(p: argparse.ArgumentParser, *, sweep: bool, default: str = "1000") -> None:
-    """``--prestress`` (with the old ``--P`` as a hidden alias): a list where the command sweeps it."""
+def add_prestress(p: argparse.ArgumentParser, *, sweep: bool, default: str = "1000", from_fit: bool = False) -> None:
+    """``--prestress`` (with the old ``--P`` as a hidden alias): a list where the command sweeps it.
+
+    With ``from_fit`` the command also takes ``--from-fit`` (:func:`add_from_fit`); the parsed
+    default is then None (see :func:`prestress_from_args`) so that a prestress typed with a fit is seen.
+    """
     kind = number_list(quantity="prestress", max_items=MAX_GRID_POINTS) if sweep else number(quantity="prestress")
     help_ = ("prestresses P (N, the paper's Pa; comma list)" if sweep else "prestress P (N, the paper's Pa)")
-    p.add_argument("--prestress", type=kind, default=kind(default), metavar="P", help=help_)
+    if from_fit:
+        help_ += (f" (default {default}; with --from-fit: the measured prestress in Pa of a fit to data that state "
+                  "one, default their median, and refused for a fit with its own prestress P)")
+    p.add_argument("--prestress", type=kind, default=None if from_fit else kind(default), metavar="P", help=help_)
     hidden_alias(p, "--P", "prestress", type=kind)
+    if from_fit:
+        p.set_defaults(prestress_default=kind(default))
+        add_from_fit(p)
 
 
-def add_out(p: argparse.ArgumentParser, default: str | None = None) -> None:
-    """``--out``: the output directory, replaced as a whole by a successful run."""
+def add_from_fit(p: argparse.ArgumentParser) -> None:
+    """``--from-fit FIT_JSON``: the fitted cell of a ``tenscell fit`` run instead of the model options."""
+    p.add_argument("--from-fit", metavar="FIT_JSON", default=None,
+                   help="use the fitted cell of a `tenscell fit` run (its fit.json): cell, strut length, EA, c and "
+                        "prestress; the cell and tendon options are then refused")
+
+
+#: the model options' defaults: with --from-fit any other value is a conflict
+_MODEL_DEFAULTS = {"alpha_deg": (0.0, "--alpha-deg"), "delta_deg": (None, "--delta-deg"), "EA": (1.0, "--EA"),
+                   "c": (1.0, "--c"), "L": (1.0, "--L"), "no_if": (False, "--no-if")}
+
+
+def fitted_from_args(args, conflicts: dict | None = None):
+    """(FittedModel, P in N) from ``--from-fit`` and ``--prestress``; None if ``--from-fit`` is not given.
+
+    Raises
+    ------
+    ValueError
+        A model option given with ``--from-fit`` (naming it), an unreadable fit.json, or a
+        ``--prestress`` the fit cannot use.
+    """
+    if getattr(args, "from_fit", None) is None:
+        return None
+    for dest, (default, flag) in (_MODEL_DEFAULTS if conflicts is None else conflicts).items():
+        if hasattr(args, dest) and getattr(args, dest) != default:
+            raise ValueError(f"{flag} cannot be combined with --from-fit: the fit gives the cell and its tendons")
+    from ..fitting.fitted import load_fit
+
+    model = load_fit(args.from_fit)
+    if args.prestress is not None and model.s is None:
+        raise ValueError(f"--prestress cannot be combined with --from-fit {args.from_fit}: that fit has its own "
+                         f"prestress P = {model.P:.6g} N (its data state no prestress)")
+    try:
+        P = model.prestress(args.prestress)
+    except ValueError as err:
+        raise ValueError(f"--prestress: {err}") from None
+    return model, P
+
+
+def prestress_from_args(args) -> float:
+    """``--prestress`` (N) of a command that also takes ``--from-fit`` but was run without it."""
+    return args.prestress if args.prestress is not None else args.prestress_default
+
+
+def add_out(p: argparse.ArgumentParser, default: str | None = None, *, derived: str | None = None) -> None:
+    """``--out``: the output directory, replaced as a whole by a successful run.
+
+    Required unless ``default`` is given, or ``derived`` describes the default
+    the command derives from its other arguments (``args.out`` is then None).
+    """
     text = "output directory (created, or replaced as a whole by a successful run)"
-    if default is None:
+    if derived is not None:
+        p.add_argument("--out", default=None, help=f"{text} (default: {derived})")
+    elif default is None:
         p.add_argument("--out", required=True, help=text)
     else:
         p.add_argument("--out", default=default, help=text)

@@ -25,7 +25,7 @@ _one_frequency.__name__ = "frequency"
 
 
 def _add_law_options(p) -> None:
-    add_prestress(p, sweep=False)
+    add_prestress(p, sweep=False, from_fit=True)
     p.add_argument("--beta", type=number(0.05, 20.0), default=1.0,
                    help="dashpot exponent: T = EA(l/l0-1) + c·sign(l')|l'|^beta (1 is the Voigt law)")
     p.add_argument("--velocity-scale", type=number(1e-30, 1e30, "m/s"), default=None,
@@ -65,8 +65,9 @@ def register(sub) -> None:
                        description="Creep after a force step at the load point: the linear model's exact J(t) from "
                                    "its relaxation spectrum and the nonlinear simulation for each step force; "
                                    "log-log plot, local exponent, power-law fit over a window, relaxation modulus.")
-    p.add_argument("--amplitude", type=number_list(lo, hi, "N", max_items=50), default=(0.1, 30.0),
-                   help="step forces (N, comma list; default 0.1,30)")
+    p.add_argument("--amplitude", type=number_list(lo, hi, "N", max_items=50), default=None,
+                   help="step forces of the nonlinear simulations (N, comma list; default 0.1,30, and none with "
+                        "--from-fit: a fitted cell's tensions can be far below 1 N)")
     p.add_argument("--t-min", type=number(1e-15, 1e15, "s"), default=1e-5, help="first output time (s)")
     p.add_argument("--t-max", type=number(1e-15, 1e15, "s"), default=1.0, help="last output time (s)")
     p.add_argument("--points", type=integer(3, 100_000), default=61, help="log-spaced output times")
@@ -92,26 +93,57 @@ _window.__name__ = "window"
 
 def law_from_args(args):
     """(cell, law, solver options) from the model and law options."""
-    from ._args import model_from_args
+    from ._args import fitted_from_args, model_from_args, prestress_from_args
     from ..laws import power_dashpot_law, voigt_law
 
-    cell, EA, c = model_from_args(args)
+    fitted = fitted_from_args(args)
+    if fitted is None:
+        cell, EA, c = model_from_args(args)
+        P = prestress_from_args(args)
+    else:
+        (model, P), cell = fitted, fitted[0].cell
+        EA, c = model.EA, model.c
+    args.prestress_N = P
     if args.beta == 1.0:
-        law = voigt_law(cell, P=args.prestress, EA=EA, c=c)
+        law = voigt_law(cell, P=P, EA=EA, c=c)
     else:
         kw = {} if args.velocity_scale is None else {"velocity_scale": args.velocity_scale}
-        law = power_dashpot_law(cell, P=args.prestress, EA=EA, c=c, beta=args.beta, **kw)
+        law = power_dashpot_law(cell, P=P, EA=EA, c=c, beta=args.beta, **kw)
     rtol = args.rtol if args.rtol is not None else (1e-8 if args.beta == 1.0 else 1e-6)
     return cell, law, {"rtol": rtol, "slack": args.slack}
 
 
-def check_resolvable_frequency(cell, law, f: float, rtol: float) -> None:
-    """ValueError if the response at ``f`` Hz is too small for the integrator to resolve.
+def check_resolvable_prestrain(cell, law, rtol: float, flag: str) -> None:
+    """ValueError if some tendon's strain at rest, ``T/EA``, is below the integrator's tolerance.
 
-    The integrator's absolute tolerance is ``rtol`` × the static displacement, so
-    a periodic response smaller than 1000 × that is integration noise (at 1 GHz
-    the default cell moves 1e-9 of its static displacement). The check uses the
-    linear model; laws without a linearization (beta < 1) are not checked.
+    Such a tendon's tension is smaller than the integration noise of its length
+    times its stiffness: the nonlinear equations cannot resolve it, and the
+    simulation would report spurious slack (a fit whose prestress is inert
+    against its stiffest tendons gives such a cell).
+    """
+    import numpy as np
+
+    strain = np.abs(law.elastic(cell.lengths)) / np.asarray(law.EA, dtype=float)
+    j = int(np.argmin(strain))
+    if strain[j] < 10 * rtol:
+        raise ValueError(
+            f"{flag}: tendon {j} carries a strain of {strain[j]:.2g} at rest (tension {law.elastic(cell.lengths)[j]:.3g} N "
+            f"against EA = {law.EA[j]:.3g} N), below 10 × the integrator's --rtol {rtol:g}: its tension is integration "
+            "noise, so the nonlinear simulation cannot resolve this cell (lower --rtol, raise the prestress, or fit with "
+            "the prestress kept active; the linear results — creep, moduli — are exact)")
+
+
+def check_resolvable_frequency(cell, law, f: float, rtol: float) -> None:
+    """ValueError if the integrator cannot resolve G' at ``f`` Hz to about 1 %.
+
+    The integrator's absolute tolerance is ``rtol`` × the static displacement;
+    G' comes from the part of the response in phase with the load,
+    ``Re J(f) / J(0)`` of the static one, which falls as 1/f² at high
+    frequency. Measured on the paper cell, G' carries an error of about
+    ``10 rtol J(0) / Re J(f)`` of G', so the part in phase must stay above
+    ``1000 rtol`` of the static response (at 1 GHz it is 1e-15 of it and the
+    simulated G' was 1.3e8 Pa against 2.1e3 Pa). Checked on the linear model;
+    laws without a linearization (beta < 1) are not checked.
     """
     import numpy as np
 
@@ -125,22 +157,41 @@ def check_resolvable_frequency(cell, law, f: float, rtol: float) -> None:
         return
     floor = 1000.0 * rtol
     lo, hi, unit = RANGES["frequency"]
-    grid = np.logspace(math.log10(lo), math.log10(hi), 241)
     with np.errstate(all="ignore"):
         J0 = abs(compliance(lin, np.array([lo]))[0])
-        ratio = np.abs(compliance(lin, np.array([f])))[0] / J0
+        ratio = abs(compliance(lin, np.array([f]))[0].real) / J0
         if ratio >= floor:
             return
-        ok = np.abs(compliance(lin, grid)) / J0 >= floor
+        grid = np.logspace(math.log10(lo), math.log10(hi), 481)  # 20 per decade
+        ok = (np.abs(compliance(lin, grid).real) / J0 >= floor) & (grid < f)
     f_max = float(grid[ok].max()) if ok.any() else lo
-    raise ValueError(f"--freq {f:g} Hz: the response there is {ratio:.2g} of the static one, below what the "
-                     f"integrator resolves at --rtol {rtol:g}; allowed up to about {f_max:.3g} Hz for this cell "
-                     "(G', G'' at any frequency: `tenscell moduli`)")
+    raise ValueError(f"--freq {f:g} Hz: the response in phase with the load is {ratio:.2g} of the static one, too "
+                     f"small for the integrator at --rtol {rtol:g} to give G' to 1%; allowed up to about "
+                     f"{f_max:.2g} Hz for this cell (or a smaller --rtol; linear G', G'' at any frequency: "
+                     "`tenscell moduli`)")
+
+
+#: most samples a simulation may store (samples per cycle × cycles; 1e6 samples of the 36 tensions
+#: are about 300 MB of traces)
+MAX_SAMPLES = 1_000_000
+#: cycles the adaptive mode of oscillatory_response runs at most (its max_cycles default)
+ADAPTIVE_MAX_CYCLES = 400
+
+
+def check_samples(samples: int, cycles: int | None) -> None:
+    """ValueError if --samples × --cycles (or the adaptive maximum) exceeds :data:`MAX_SAMPLES`."""
+    n_cycles = cycles if cycles is not None else ADAPTIVE_MAX_CYCLES
+    n = samples * n_cycles
+    if n > MAX_SAMPLES:
+        what = f"--cycles {cycles}" if cycles is not None else f"up to {ADAPTIVE_MAX_CYCLES} adaptive cycles"
+        raise ValueError(f"--samples {samples} × {what} is {n:,} samples (about {n * 40 * 8 / 1e9:.2g} GB of "
+                         f"traces); at most {MAX_SAMPLES:,}")
 
 
 def run_simulate(args) -> int:
     from ..io.outputs import OutputSet
 
+    check_samples(args.samples, args.cycles)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     import numpy as np
 
@@ -153,6 +204,7 @@ def run_simulate(args) -> int:
     sweep_amps = getattr(args, "sweep_amplitudes", None) or (args.amplitude if len(args.amplitude) > 1 else None)
     cell, law, solver = law_from_args(args)
     f = args.freq
+    check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
     check_resolvable_frequency(cell, law, f, solver["rtol"])
     kw = dict(control=args.control, cycles=args.cycles, samples_per_cycle=args.samples, **solver)
     res = oscillatory_response(cell, law, amplitude, f, **kw)
@@ -169,7 +221,9 @@ def run_simulate(args) -> int:
     ref = abs(h.response[1])
     summary = res.summary()
     summary["model"] = {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta,
-                        "EA": _jsonable(args.EA), "c": _jsonable(args.c), "prestress_N": args.prestress}
+                        "EA": _jsonable(args.EA) if args.from_fit is None else law.EA.tolist(),
+                        "c": _jsonable(args.c) if args.from_fit is None else law.c.tolist(),
+                        "prestress_N": args.prestress_N, "from_fit": args.from_fit}
     written = ["traces.csv", "traces.png", "loop.csv", "loop.png", "harmonics.csv", "harmonics.png"]
     if sweep is not None:
         summary["sweep"] = {
@@ -231,15 +285,19 @@ def run_creep(args) -> int:
     from ..timedomain import creep_spectrum, fit_power_law, local_exponent, stress_relaxation
 
     cell, law, solver = law_from_args(args)
+    amplitudes = args.amplitude if args.amplitude is not None else (() if args.from_fit else (0.1, 30.0))
+    if len(amplitudes):
+        check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
     t = np.logspace(math.log10(args.t_min), math.log10(args.t_max), args.points)
     win = args.window or (float(t[0]), float(t[-1]))
-    P0 = args.prestress
+    P0 = args.prestress_N
     try:
         lin, note = linearize_law(cell, law), ""
     except LinearizationError as err:  # beta < 1: only the nonlinear curves exist
         lin, note = None, str(err)
     curves, expo, fits = {}, {}, {}
-    summary = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0},
+    summary = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0,
+                         "from_fit": args.from_fit},
                "linear_note": note, "power_law_window_s": [float(win[0]), float(win[1])]}
     tables = {}
     if lin is not None:
@@ -260,7 +318,7 @@ def run_creep(args) -> int:
                            "times_s": rel.times.tolist(), "weights_N_per_m": rel.weights.tolist()},
         })
     steps = []
-    for F in args.amplitude:
+    for F in amplitudes:
         cr = creep_response(cell, law, float(F), t, **solver)
         key = f"step {F:g} N"
         curves[key] = finite(cr.compliance, f"the creep compliance after the {F:g} N step")

@@ -1,6 +1,7 @@
 """``tenscell fit``: fit the tensegrity model to measured G', G'' (CSV) and write the fit's output set."""
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 from ._args import add_out, integer, number
@@ -14,44 +15,209 @@ DAMPING_MODES = ("uniform", "per-family")
 FIT_FILES = {"json": "fit.json", "csv": "fit.csv", "md": "report.md", "png": "fit.png"}
 
 
+#: the prestress (Pa) at which the bundled frequency data (fabry2001) were measured, for joint fits: the
+#: baseline prestress of airway smooth muscle cells, where the bundled prestress data (stamenovic2002)
+#: give G'(0.1 Hz) close to the frequency data's 280 Pa
+BUNDLED_FREQUENCY_PRESTRESS_PA = 1000.0
+
+
 def register(sub) -> None:
     p = sub.add_parser(
-        "fit", help="fit the tensegrity model to measured G', G'' (CSV)",
+        "fit", help="fit the tensegrity model to measured G', G'' (CSV; several files: one joint fit)",
         description="Fit tendon stiffnesses, damping, prestress and strut length so that the model's G', G'' "
-                    "match a CSV of measured moduli (frequency sweep, prestress sweep or |G|/phase; see "
-                    "docs/fitting.md). Writes fit.json, fit.csv, fit.png and report.md into --out. Exit status 0 "
-                    "if the RMS of the log10 errors reached --tolerance, 1 if not, 2 for bad input.")
-    p.add_argument("data", help="CSV file of measured moduli")
+                    "match CSV files of measured moduli (frequency sweep, prestress sweep or |G|/phase; see "
+                    "docs/fitting.md). Several files are fitted jointly by one parameter set: a frequency sweep "
+                    "that states its prestress (a prestress_Pa column, or --prestress FILE=PA) is linked to the "
+                    "others by one prestress scale; otherwise its prestress is a fitted, reported parameter. "
+                    "bundled:NAME reads a data set shipped with tenscell (fabry2001, stamenovic2002). "
+                    "Writes fit.json, fit.csv, fit.png and report.md into --out. Exit status 0 if every data "
+                    "set's RMS of the log10 errors reached --tolerance, 1 if not, 2 for bad input.")
+    p.add_argument("data", nargs="+", help="CSV file(s) of measured moduli, or bundled:NAME")
+    p.add_argument("--prestress", action="append", metavar="FILE=PA",
+                   help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     p.add_argument("--tendons", choices=TENDON_MODES, default="per-tendon",
                    help="stiffness per tendon (as in the paper), per family, or one for all")
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform",
                    help="damping c: one for all (as in the paper) or per family")
+    add_constraints(p)
+    p.add_argument("--bound", action="append", type=_bound, metavar="KIND=LO:HI", default=None,
+                   help="bounds of every parameter of a kind, in SI units (repeatable): EA (N), c (N·s/m), P (N), "
+                        "s (m²), P_data (Pa), L (m); e.g. --bound EA=1e-3:1e3")
+    p.add_argument("--fix", action="append", type=_fixed, metavar="NAME=VALUE", default=None,
+                   help="hold a parameter fixed, by its name in fit.json, in SI units (repeatable): e.g. --fix L=1, "
+                        "--fix c=0.5, --fix P=20, --fix c_actin=2, --fix EA_intermediate_filament=0.3")
+    p.add_argument("--holdout", type=_holdout, metavar="FMIN:FMAX", default=None,
+                   help="train on the points outside FMIN..FMAX Hz and report every model's error on the held-out "
+                        "points (one frequency sweep)")
     p.add_argument("--starts", type=integer(1, 10_000), default=4, help="independent starts")
     p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0,
                    help="random seed; the same seed gives the same fit")
     p.add_argument("--jobs", type=integer(1, 256), default=1, help="worker processes over the starts")
     p.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.01,
-                   help="RMS of the log10 errors (decades) the fit must reach")
+                   help="RMS of the log10 errors (decades) every data set must reach")
     p.add_argument("--baseline-starts", type=integer(1, 10_000), default=2,
                    help="starts for the homogeneous baseline fit")
+    p.add_argument("--max-points", type=integer(4, 100_000), default=100,
+                   help="fit at most this many points: denser data is binned in log frequency per prestress "
+                        "(weighted log means; the rule is in tenscell.io.thinning and the report)")
     add_out(p)
     p.set_defaults(func=run)
 
 
-def fit_outputs(result, baseline, title):
+#: parameter kinds that --bound takes, with their units
+BOUND_UNITS = {"EA": "N", "c": "N·s/m", "P": "N", "s": "m²", "P_data": "Pa", "L": "m"}
+
+
+def _pair(text: str, flag: str, example: str) -> tuple[str, str]:
+    name, sep, value = str(text).partition("=")
+    if not sep or not name.strip() or not value.strip():
+        raise argparse.ArgumentTypeError(f"expected {example}, got {str(text)[:40]!r}")
+    return name.strip(), value.strip()
+
+
+def _bound(text):
+    kind, value = _pair(text, "--bound", "KIND=LO:HI (e.g. EA=1e-3:1e3)")
+    if kind not in BOUND_UNITS:
+        raise argparse.ArgumentTypeError(f"unknown parameter kind {kind!r}; kinds: {', '.join(BOUND_UNITS)}")
+    unit = BOUND_UNITS[kind]
+    parts = value.split(":")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"{kind}: expected LO:HI in {unit}, got {value[:40]!r}")
+    lo, hi = (number(0.0, None, unit, open_lo=True)(x) for x in parts)
+    if not lo < hi:
+        raise argparse.ArgumentTypeError(f"{kind}: the lower bound {lo:g} {unit} must be below the upper bound "
+                                         f"{hi:g} {unit}")
+    return kind, (lo, hi)
+
+
+_bound.__name__ = "bound"
+
+
+def _fixed(text):
+    name, value = _pair(text, "--fix", "NAME=VALUE (e.g. L=1)")
+    return name, number(0.0, None, "", open_lo=True)(value)
+
+
+_fixed.__name__ = "fixed value"
+
+
+def _holdout(text):
+    parts = str(text).split(":")
+    if len(parts) != 2:
+        raise argparse.ArgumentTypeError(f"expected FMIN:FMAX in Hz, got {str(text)[:40]!r}")
+    lo, hi = (number(quantity="frequency")(x) for x in parts)
+    if not lo < hi:
+        raise argparse.ArgumentTypeError(f"FMIN {lo:g} Hz must be below FMAX {hi:g} Hz")
+    return lo, hi
+
+
+_holdout.__name__ = "holdout window"
+
+
+def search_space(args, datasets) -> dict:
+    """bounds, fixed and the constraints as keyword arguments of :func:`tenscell.fitting.fit`, checked.
+
+    Each --bound kind and --fix name is checked against the parameters of these data (named with the
+    flag, in the units typed) before any fitting.
+    """
+    from .. import fitting
+
+    space = {"min_prestress_share": args.min_prestress_share, "max_decades": args.max_decades}
+    plain = fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **space)
+    bounds = dict(args.bound or ())
+    for kind, (lo, hi) in bounds.items():
+        if kind not in plain.kinds:
+            raise ValueError(f"--bound {kind}={lo:g}:{hi:g}: no parameter of kind {kind!r} in this fit (kinds here: "
+                             f"{', '.join(dict.fromkeys(plain.kinds))})")
+    fixed = dict(args.fix or ())
+    import math
+
+    bounded = fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, bounds=bounds, **space)
+    lower, upper = [math.exp(x) for x in bounded.lower], [math.exp(x) for x in bounded.upper]
+    for name, v in fixed.items():
+        if name not in plain.names:
+            raise ValueError(f"--fix {name}={v:g}: no parameter named {name!r} in this fit (parameters: "
+                             f"{_names_text(plain.names)})")
+        i = plain.names.index(name)
+        unit = plain.units[i]
+        if not lower[i] <= v <= upper[i]:
+            raise ValueError(f"--fix {name}={v:g}: outside its bounds [{lower[i]:.6g}, {upper[i]:.6g}] {unit} "
+                             f"(widen them with --bound {plain.kinds[i]}=LO:HI)")
+    space.update(bounds=bounds or None, fixed=fixed or None)
+    fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **space)
+    return space
+
+
+def _names_text(names) -> str:
+    per_tendon = [n for n in names if n.startswith("EA[")]
+    rest = [n for n in names if not n.startswith("EA[")]
+    return ", ".join(([f"EA[0]..EA[{len(per_tendon) - 1}]"] if per_tendon else []) + rest)
+
+
+def add_constraints(p) -> None:
+    """``--min-prestress-share`` and ``--max-decades`` (fit and the compactness study)."""
+    p.add_argument("--min-prestress-share", type=number(0.0, 1.0, open_lo=True), default=None, metavar="S",
+                   help="keep the prestress mechanically active: P·Kp must carry at least this share (0-1) of "
+                        "the static stiffness at every prestress of the data")
+    p.add_argument("--max-decades", type=number(0.0, 100.0, "decades", open_lo=True), default=None, metavar="D",
+                   help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
+
+
+def read_data_arg(text: str, min_points: int):
+    """A data file, or ``bundled:NAME`` for a data set shipped with tenscell."""
+    from ..io.data import bundled, read_csv
+
+    if text.lower().startswith("bundled:"):
+        return bundled(text.split(":", 1)[1])
+    return read_csv(text, min_points=min_points)
+
+
+def read_datasets(paths, prestress_options, min_points: int):
+    """Read the data files and attach the prestresses stated by ``--prestress FILE=PA``."""
+    stated = {}
+    for opt in prestress_options or ():
+        name, sep, value = opt.rpartition("=")
+        if not sep or not name:
+            raise ValueError(f"--prestress: expected FILE=PA (e.g. freq.csv=1000), got {opt!r}")
+        match = [k for k, p in enumerate(paths) if name in (p, Path(p).name)]
+        if len(match) != 1:
+            raise ValueError(f"--prestress {opt}: {name!r} matches {len(match)} of the data files given "
+                             f"({', '.join(paths)})")
+        try:
+            stated[match[0]] = float(value)
+        except ValueError:
+            raise ValueError(f"--prestress {opt}: {value!r} is not a number (Pa)") from None
+    datasets = []
+    for k, p in enumerate(paths):
+        d = read_data_arg(p, min_points if len(paths) == 1 else 1)
+        if k in stated:
+            try:
+                d = d.with_prestress(stated[k])
+            except ValueError as err:
+                raise ValueError(f"--prestress: {err}") from None
+        datasets.append(d)
+    return datasets
+
+
+def fit_outputs(result, baseline, title, comparison=None):
     """Everything a fit writes, computed before any file is touched: {extension: writer(path)}."""
-    from .. import fitting, plotting
+    from .. import plotting
     from ..io.outputs import write_csv_rows, write_json, write_text
     from ..io.tables import fit_table
+    from ..plotting.fits import fit_panels
     from ..reports.fit import fit_markdown
 
     doc = result.to_dict()
     doc["baseline"] = {k: v for k, v in baseline.to_dict().items()
                        if k in ("tendons", "damping", "rms_log10_error", "converged", "time_s", "parameters")}
+    if comparison is None:
+        from ..fitting.models import compare_models
+
+        comparison = compare_models(result, homogeneous=baseline)
+    doc["model_comparison"] = comparison.to_dict()
     header, rows = fit_table(result, baseline)
-    markdown = fit_markdown(result, baseline, title=title)
-    curves = [fitting.model_curve(result), fitting.model_curve(baseline, label="homogeneous baseline")]
-    fig = plotting.fit_figure(result.data, curves, title=title)
+    markdown = fit_markdown(result, baseline, title=title, comparison=comparison)
+    fig = fit_panels(result, baseline=baseline, title=title)
     return {
         "json": lambda path: write_json(path, doc),
         "csv": lambda path: write_csv_rows(path, header, rows),
@@ -61,16 +227,17 @@ def fit_outputs(result, baseline, title):
 
 
 def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, **search):
-    """The fit and its homogeneous baseline (the fit itself when it is homogeneous)."""
+    """The fit and its homogeneous baseline (the fit itself when it is homogeneous and unconstrained)."""
     from .. import fitting
 
     result = fitting.fit(data, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
                          tolerance=tolerance, **search)
-    if tendons == "uniform" and damping == "uniform":
+    if tendons == "uniform" and damping == "uniform" and not search.get("min_prestress_share"):
         baseline = result
     else:
+        # the baseline only shows what a homogeneous cell cannot do: a short search suffices
         baseline = fitting.fit(data, tendons="uniform", starts=baseline_starts, seed=seed, jobs=1,
-                               tolerance=tolerance)
+                               tolerance=tolerance, hops=10, patience=3)
     return result, baseline
 
 
@@ -78,19 +245,41 @@ def run(args) -> int:
     import sys
 
     from .. import fitting
-    from ..io.data import read_csv
+    from .._progress import stage
     from ..io.outputs import OutputSet
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    data = read_csv(args.data, min_points=fitting.required_points(args.tendons, args.damping))
-    result, baseline = run_fit(data, args.tendons, args.damping, args.starts, args.seed, args.jobs,
-                               args.tolerance, args.baseline_starts)
-    outputs = fit_outputs(result, baseline, title=f"Tensegrity fit to {Path(args.data).name}")
+    datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
+    for i, data in enumerate(datasets):
+        if data.n > args.max_points:
+            datasets[i] = data.binned(args.max_points)
+            stage(f"{data.n:,} points of {Path(args.data[i]).name} binned to {datasets[i].n:,} in log frequency "
+                  f"(--max-points {args.max_points})")
+    held = None
+    if args.holdout is not None:
+        if len(datasets) != 1:
+            raise ValueError(f"--holdout applies to one frequency sweep, got {len(datasets)} data sets")
+        from ..fitting.models import split_holdout
+
+        try:
+            train, held = split_holdout(datasets[0], *args.holdout)
+        except ValueError as err:
+            raise ValueError(f"--holdout {args.holdout[0]:g}:{args.holdout[1]:g}: {err}") from None
+        datasets = [train]
+    space = search_space(args, datasets)  # bad input: before any fitting
+    result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,
+                               args.tolerance, args.baseline_starts, **space)
+    from ..fitting.models import compare_models
+
+    comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
+    names = " and ".join(Path(p).name for p in args.data)
+    outputs = fit_outputs(result, baseline, title=f"Tensegrity fit to {names}", comparison=comparison)
     with out as d:
         for ext, name in FIT_FILES.items():
             outputs[ext](d / name)
     verdict = "converged" if result.converged else "NOT converged"
-    print(f"tenscell fit: rms log10 error {result.rms_log10_error:.5f} (tolerance {result.tolerance:g}): {verdict}; "
+    each = "; ".join(f"{Path(f.data.source).name} {f.rms_log10_error:.5f}" for f in result.fits)
+    print(f"tenscell fit: rms log10 error {each} (tolerance {result.tolerance:g}): {verdict}; "
           f"homogeneous baseline {baseline.rms_log10_error:.5f}; {result.elapsed_s:.1f} s; wrote {out.target}/",
           file=sys.stderr)
     return 0 if result.converged else 1

@@ -4,12 +4,14 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._args import add_out, add_prestress, integer, lattice_size, member_values, number
+from ._args import (add_out, add_prestress, fitted_from_args, integer, lattice_size, member_values, number,
+                    prestress_from_args)
 
 #: built-in structures `tenscell show` knows by name
 SHOW_BUILTINS = ("paper", "sphere6", "sphere12", "sphere30", "sheet", "block")
-#: most modules of a built-in lattice (a 10x10x10 block: 2.4e4 coordinates, about a minute with its modes)
-MAX_LATTICE_MODULES = 1000
+#: most modules of a built-in lattice: about 1.2e5 coordinates, some 1.5 GB and minutes for the sparse
+#: factorization (the README's 11x11x12 block has 1452 modules)
+MAX_LATTICE_MODULES = 5000
 
 
 def register(sub) -> None:
@@ -18,10 +20,11 @@ def register(sub) -> None:
                                    "mechanisms, prestressability) and draw it in 3D with its slowest relaxation "
                                    "modes. TARGET is a structure file (JSON, docs/structure-format.md) or one of: "
                                    + ", ".join(SHOW_BUILTINS) + ".")
-    p.add_argument("target", metavar="TARGET", help="structure file or built-in name")
-    add_out(p, default="out")
+    p.add_argument("target", metavar="TARGET", nargs="?", default=None,
+                   help="structure file or built-in name (omit it with --from-fit)")
+    add_out(p, derived="show-TARGET, TARGET's file name without .json; show-fit with --from-fit")
     p.add_argument("--modes", type=integer(0, 50), default=3, help="number of slowest relaxation modes to draw (0: none)")
-    add_prestress(p, sweep=False)
+    add_prestress(p, sweep=False, from_fit=True)
     p.add_argument("--EA", type=member_values("EA"), default=None,
                    help="member stiffness EA (N): one value, family=value pairs (e.g. strut=1000,default=1) "
                         "or one per member; default: the file's values, 1 N for built-ins "
@@ -35,9 +38,19 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+#: show's own model options: with --from-fit any other value is a conflict
+_SHOW_MODEL_DEFAULTS = {"EA": (None, "--EA"), "c": (None, "--c"), "L": (1.0, "--L"), "size": (None, "--size")}
+
+
 def _check_target(args) -> None:
     """Refuse a bad TARGET/--size combination before any computation."""
     t = args.target
+    if args.from_fit is not None:
+        if t is not None:
+            raise ValueError(f"TARGET {t!r} cannot be combined with --from-fit: the fit gives the structure")
+        return
+    if t is None:
+        raise ValueError("give a TARGET (a structure file or a built-in name) or --from-fit FIT_JSON")
     if t in SHOW_BUILTINS:
         if args.size is not None and t not in ("sheet", "block"):
             raise ValueError(f"--size applies to the lattices (sheet, block), not to {t!r}")
@@ -84,7 +97,8 @@ def run(args) -> int:
     from ..io.outputs import OutputSet, check_output_file
 
     _check_target(args)
-    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    default_out = f"show-{Path(args.target).stem}" if args.target else "show-fit"
+    out = OutputSet(args.out or default_out, command=args.command_line, flag="--out")
     save = check_output_file(args.save, "--save") if args.save else None
 
     from .. import plotting
@@ -94,7 +108,13 @@ def run(args) -> int:
     from ..model.equilibrium import NotPrestressableError, equilibrate
     from ..summary import relaxation_modes, summarize
 
-    stem, obj, EA, c = show_target(args)
+    fitted = fitted_from_args(args, _SHOW_MODEL_DEFAULTS)
+    if fitted is not None:
+        (model, P), stem = fitted, "fit"
+        obj, EA, c = model.cell, model.EA, model.c
+    else:
+        stem, obj, EA, c = show_target(args)
+        P = prestress_from_args(args)
     if args.EA is not None:
         EA = _arrayish(args.EA)
     if args.c is not None:
@@ -114,7 +134,7 @@ def run(args) -> int:
     big = structure.n_tendons > 2000
     if big:
         stage(f"{stem}: {structure.n_tendons:,} members; summary and linearization")
-    summary, cell, lin = summarize(target, P=args.prestress, EA=EA, c=c)
+    summary, cell, lin = summarize(target, P=P, EA=EA, c=c)
     text = summary.text()
     modes = None
     if lin is not None and args.modes > 0:

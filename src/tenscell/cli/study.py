@@ -4,14 +4,15 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._args import add_out, integer
+from ._args import add_out, integer, number, number_list
 
 def _study_no_if(out: Path, log, args=None) -> None:
     from .. import plotting
-    from ..studies import variants
+    from ..studies.no_if import no_if_study
+    from ..reports.studies import no_if_markdown
     from ..io.outputs import write_csv_rows, write_text
 
-    s = variants.no_if_study()
+    s = no_if_study()
     rows = ((P, f, a, b, c, d) for (P, f, a, b), (_, _, c, d) in zip(s.without.rows(), s.with_ifs.rows()))
     write_csv_rows(out / "no_if_moduli.csv",
                    ["prestress", "frequency_Hz", "G_storage_noIF", "G_loss_noIF", "G_storage_IF", "G_loss_IF"], rows)
@@ -19,7 +20,7 @@ def _study_no_if(out: Path, log, args=None) -> None:
                    ((float(P), p.frequency_hz, p.height, p.storage) for P, p in zip(s.without.prestress, s.peaks)))
     plotting.save(plotting.no_if_figure(s), out / "no_if_moduli.png")
     plotting.save(plotting.no_if_peaks_figure(s), out / "no_if_peaks.png")
-    write_text(out / "no_if.md", variants.no_if_markdown(s))
+    write_text(out / "no_if.md", no_if_markdown(s))
     log("no_if_moduli.csv, no_if_peaks.csv, no_if_moduli.png, no_if_peaks.png, no_if.md")
 
 
@@ -27,12 +28,12 @@ def _study_sensitivity(out: Path, log, args=None) -> None:
     from .. import plotting, sensitivity
     from ..io.outputs import write_csv_rows, write_text
 
+    from ..reports.sensitivity import sensitivity_markdown
+
     draws = getattr(args, "draws", 200)
     seed = getattr(args, "seed", 0)
-    el = sensitivity.elasticities()
-    table = sensitivity.perturbation_table()
-    summary = sensitivity.summarize(el, table)
-    mcs = [sensitivity.monte_carlo(draws, seed=seed), sensitivity.monte_carlo(draws, seed=seed, parameters="material")]
+    study = sensitivity.sensitivity_study(draws, seed=seed)
+    el, table, summary, mcs = study.elasticities, study.table, study.summary, list(study.monte_carlo)
     f = el.frequency_hz
     write_csv_rows(out / "elasticities.csv", ["parameter", "group", "value", "method", "frequency_Hz",
                                               "dlnGstorage_dlnp", "dlnGloss_dlnp"],
@@ -50,17 +51,18 @@ def _study_sensitivity(out: Path, log, args=None) -> None:
                     for mc in mcs for i in range(mc.factors.shape[0])))
     plotting.save(plotting.elasticities_figure(el), out / "elasticities.png")
     plotting.save(plotting.monte_carlo_figure(mcs), out / "monte_carlo.png")
-    write_text(out / "sensitivity.md", sensitivity.sensitivity_markdown(el, summary, mcs))
+    write_text(out / "sensitivity.md", sensitivity_markdown(study))
     log("elasticities.csv, perturbations.csv, sensitivity_table.csv, monte_carlo.csv, elasticities.png, "
         "monte_carlo.png, sensitivity.md")
 
 
 def _study_references(out: Path, log, args=None) -> None:
     from .. import plotting
-    from ..studies import variants
+    from ..studies.references import references_study
+    from ..reports.studies import references_markdown
     from ..io.outputs import write_csv_rows, write_text
 
-    s = variants.references_study()
+    s = references_study()
     mp = s.map
     write_csv_rows(out / "reference_map.csv", ["alpha_deg", "delta_deg", "status", "min_tension", "if_tension"],
                    ((math.degrees(a), math.degrees(d), ("valid", "not prestressable", "K0 not positive definite")[mp.status[i, k]],
@@ -71,16 +73,17 @@ def _study_references(out: Path, log, args=None) -> None:
     plotting.save(plotting.reference_map_figure(mp, s.if_free_curve), out / "reference_map.png")
     P = float(next(iter(s.responses.values())).prestress[len(next(iter(s.responses.values())).prestress) // 2])
     plotting.save(plotting.references_figure(s.responses, P), out / "references.png")
-    write_text(out / "references.md", variants.references_markdown(s))
+    write_text(out / "references.md", references_markdown(s))
     log("reference_map.csv, references_moduli.csv, reference_map.png, references.png, references.md")
 
 
 def _study_semiflexible(out: Path, log, args=None) -> None:
     from .. import plotting
-    from ..studies import variants
+    from ..studies.semiflexible import semiflexible_study
+    from ..reports.studies import semiflexible_markdown
     from ..io.outputs import write_csv_rows, write_text
 
-    s = variants.semiflexible_study()
+    s = semiflexible_study()
     f = s.frequency_hz
     write_csv_rows(out / "semiflexible.csv", ["EA_strut", "frequency_Hz", "G_storage", "G_loss", "G_storage_rigid", "G_loss_rigid"],
                    ((float(e), float(f[k]), float(s.G[i, k].real), float(s.G[i, k].imag), float(s.G_rigid[k].real),
@@ -88,27 +91,58 @@ def _study_semiflexible(out: Path, log, args=None) -> None:
     write_csv_rows(out / "semiflexible_convergence.csv", ["EA_strut", "max_rel_diff_storage", "max_rel_diff_loss"],
                    zip(map(float, s.EA_strut), map(float, s.error_storage), map(float, s.error_loss)))
     plotting.save(plotting.semiflexible_figure(s), out / "semiflexible.png")
-    write_text(out / "semiflexible.md", variants.semiflexible_markdown(s))
+    write_text(out / "semiflexible.md", semiflexible_markdown(s))
     log("semiflexible.csv, semiflexible_convergence.csv, semiflexible.png, semiflexible.md")
 
 
 def _study_stiffening(out: Path, log, args=None) -> None:
     from .. import plotting
-    from ..studies import variants
+    from ..studies.stiffening import stiffening_study
+    from ..reports.studies import stiffening_markdown
     from ..io.outputs import write_csv_rows, write_text
 
-    s = variants.stiffening_study()
+    s = stiffening_study()
     write_csv_rows(out / "stiffening.csv", ["b", "prestress", "frequency_Hz", "G_storage", "G_loss", "G_static", "IF_tangent_N_per_m"],
                    ((float(b), float(P), float(f), float(s.G[i, k, j].real), float(s.G[i, k, j].imag), float(s.static[i, k]),
                      float(s.if_tangent[i, k]))
                     for i, b in enumerate(s.b) for k, P in enumerate(s.prestress) for j, f in enumerate(s.frequency_hz)))
     plotting.save(plotting.stiffening_figure(s), out / "stiffening.png")
-    write_text(out / "stiffening.md", variants.stiffening_markdown(s))
+    write_text(out / "stiffening.md", stiffening_markdown(s))
     log("stiffening.csv, stiffening.png, stiffening.md")
 
 
+def _study_compactness(out: Path, log, args=None) -> None:
+    from .. import plotting
+    from ..io.outputs import write_csv_rows, write_text
+    from ..plotting.fits import stiffness_histogram
+    from ..reports.compactness import compactness_markdown
+    from ..studies.compactness import compactness_study
+    from .fit import read_datasets
+
+    datasets = read_datasets(args.data, args.prestress, 1)
+    s = compactness_study(datasets, args.decades, damping=args.damping, starts=args.starts, seed=args.seed,
+                          jobs=args.jobs, tolerance=args.tolerance)
+    write_csv_rows(out / "compactness.csv", s.HEADER, s.rows())
+    plotting.save(s.plot(title="Best fit against the bound on the stiffness spread"), out / "compactness_front.png")
+    written = "compactness.csv, compactness_front.png, compactness.md"
+    knee = s.knee_fit
+    if knee is not None:
+        plotting.save(stiffness_histogram(knee.EA, families=knee.cell.structure.families,
+                                          title=f"Stiffnesses at the narrowest bound within tolerance ({s.knee:g} "
+                                                "decades)"), out / "compactness_histogram.png")
+        write_csv_rows(out / "compactness_knee_stiffness.csv", ["tendon", "family", "EA_N"],
+                       ((j, fam, float(e)) for j, (fam, e) in enumerate(zip(knee.cell.structure.families, knee.EA))))
+        written += ", compactness_histogram.png, compactness_knee_stiffness.csv"
+    write_text(out / "compactness.md", compactness_markdown(s))
+    log(written)
+
+
+#: studies that fit data files given on the command line (not part of `reproduce`'s variants stage)
+DATA_STUDIES = ("compactness",)
+
 #: the studies of `tenscell study NAME`: name -> writer(out_dir, log, args)
 STUDIES = {
+    "compactness": _study_compactness,
     "no-if": _study_no_if,
     "sensitivity": _study_sensitivity,
     "references": _study_references,
@@ -122,11 +156,24 @@ def register(sub) -> None:
                        description="Studies of the paper's discussion and future work: no-if (no intermediate "
                                    "filaments, the G'' peak), sensitivity (elasticities, ±10% table, Monte Carlo), "
                                    "references (valid q0(α, δ), regular and cylindrical cells), semiflexible (elastic "
-                                   "struts), stiffening (strain-stiffening IFs).")
+                                   "struts), stiffening (strain-stiffening IFs); compactness DATA... (how narrow the "
+                                   "distribution of tendon stiffnesses can be and still fit the data: best RMS for "
+                                   "each bound on its spread).")
     p.add_argument("name", choices=sorted(STUDIES), help="which study")
-    add_out(p, default="out/study")
+    p.add_argument("data", nargs="*", help="compactness: CSV file(s) of measured moduli, or bundled:NAME")
+    add_out(p, derived="study-NAME")
     p.add_argument("--draws", type=integer(1, 100_000), default=200, help="Monte Carlo draws per set (sensitivity)")
-    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="Monte Carlo seed (sensitivity)")
+    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed (sensitivity, compactness)")
+    g = p.add_argument_group("compactness (fits with the stiffness spread bounded to each of --decades)")
+    g.add_argument("--decades", type=number_list(0.0, 100.0, "decades", open_lo=True),
+                   default=tuple(float(d) for d in range(1, 15)), help="bounds on the spread (comma list)")
+    g.add_argument("--prestress", action="append", metavar="FILE=PA",
+                   help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
+    g.add_argument("--damping", choices=("uniform", "per-family"), default="uniform", help="damping c")
+    g.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per bound")
+    g.add_argument("--jobs", type=integer(1, 256), default=1, help="worker processes over the starts")
+    g.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.01,
+                   help="RMS of the log10 errors (decades) a fit must reach")
     p.set_defaults(func=run)
 
 
@@ -136,7 +183,10 @@ def run(args) -> int:
 
     from ..io.outputs import OutputSet
 
-    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    if (args.name == "compactness") != bool(args.data):
+        raise ValueError("study compactness needs data files (e.g. bundled:fabry2001)" if args.name == "compactness"
+                         else f"study {args.name} takes no data files, got {' '.join(args.data)}")
+    out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")
     t = time.perf_counter()
     with out as d:
         STUDIES[args.name](d, lambda msg: print(f"tenscell: {msg}", file=sys.stderr, flush=True), args)

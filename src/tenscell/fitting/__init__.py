@@ -10,13 +10,16 @@ package does the same for any :class:`tenscell.io.data.RheologyData`:
 - :mod:`~tenscell.fitting.search`: starts, basin hopping, least squares,
   stopping (:func:`fit`);
 - :mod:`~tenscell.fitting.result`: what a fit returns (:class:`FitResult`,
-  :class:`FitParameter`, model curves and slopes).
+  :class:`FitParameter`, per-data-set :class:`DatasetFit`, model curves and slopes);
+- :mod:`~tenscell.fitting.prestress`: is the prestress doing anything
+  (:class:`PrestressActivity`).
 
 The Markdown report is :func:`tenscell.reports.fit.fit_markdown`.
 """
+from .prestress import PrestressActivity, prestress_activity
 from .problem import DAMPING_MODES, TENDON_MODES, FitProblem, make_problem, required_points
-from .result import (FitAlternative, FitCurve, FitParameter, FitResult, frequency_slopes, model_curve,
-                     prestress_slopes)
+from .result import (DatasetFit, FitAlternative, FitCurve, FitParameter, FitResult, data_axis, frequency_slopes,
+                     model_curve, prestress_slopes)
 from .search import fit
 
 __all__ = [
@@ -26,6 +29,10 @@ __all__ = [
     "FitAlternative",
     "FitResult",
     "FitCurve",
+    "DatasetFit",
+    "PrestressActivity",
+    "prestress_activity",
+    "data_axis",
     "FitProblem",
     "make_problem",
     "fit",

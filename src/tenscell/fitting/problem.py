@@ -5,23 +5,46 @@ Parameters and units
 * ``EA`` (N): per tendon (``tendons="per-tendon"``, 33 values for the paper
   cell), per family (actin / intermediate filament) or one for all.
 * ``c`` (N·s/m): one value (the paper) or per family (``damping="per-family"``).
-* ``P`` (N): prestress scale for a frequency sweep; for a prestress sweep the
-  model prestress of each point is ``s·P_exp`` and the parameter is the scale
-  ``s`` (m², since ``P_exp`` is in Pa).
-* ``L`` (m): strut length. For the linear moduli it is exactly redundant:
-  a cell scaled by λ (all lengths ×λ) with ``(P, EA, c) -> (λ²P, λ²EA, λc)``
-  has the same G' and G'', so ``(P, EA, c, L) -> (λ²P, λ²EA, λc, λL)`` is
-  an exact gauge. It is
-  fitted as the paper did, starts at the cell's own L and stays there unless
-  other parameters are fixed or hit bounds; fix P or c to make it identifiable.
+* The prestress. Where a data set states the prestress at which it was
+  measured (a ``prestress_Pa`` column: a prestress sweep, or a frequency sweep
+  at a stated prestress), the model prestress of each point is ``s·P_exp`` and
+  the parameter is the scale ``s`` (m², since ``P_exp`` is in Pa): one ``s``
+  links every data set. A data set that does not state its prestress gets its
+  own fitted prestress, ``P_data[k]`` (Pa, on the same scale ``s``) in a joint
+  fit, or the model prestress ``P`` (N) directly when no data set states one
+  (``P[k]`` for several such data sets).
+* ``L`` (m): strut length. For the linear moduli it is exactly redundant: a
+  cell scaled by λ (all lengths ×λ) with ``(P, EA, c) -> (λ²P, λ²EA, λc)`` has
+  the same G' and G'', so ``(P, EA, c, L) -> (λ²P, λ²EA, λc, λL)`` is an exact
+  gauge. It is fitted as the paper did, starts at the cell's own L and stays
+  there unless other parameters are fixed or hit bounds; fix P or c to make it
+  identifiable.
 
 Everything is fitted in natural-log space within bounds. Residuals are
-``w·(log10 G_model − log10 G_data)`` for G' and G'' (``w`` = 1, or
-``1/sd(log10 G)`` when the data have standard deviations). The Jacobian is
-analytic, from the relaxation spectrum ``K0 v = λ C0 v``: with
-``x = Z⁻¹(−H0)``, ``y = Z⁻ᵀ D0ᵀ`` and ``Z = K0 + iωC0``,
-``∂J/∂EA_j = −(yᵀa_j)(a_jᵀx)/l_j``, ``∂J/∂c_j = −iω(yᵀa_j)(a_jᵀx)``,
-``∂J/∂P = −yᵀKp x``, all frequencies at once from a few matrix products.
+``w·(log10 G_model − log10 G_data)`` for G' and G'' of every point of every
+data set (``w`` = 1, or ``1/sd(log10 G)`` when the data have standard
+deviations). The Jacobian is analytic, from the relaxation spectrum
+``K0 v = λ C0 v``: with ``x = Z⁻¹(−H0)``, ``y = Z⁻ᵀ D0ᵀ`` and
+``Z = K0 + iωC0``, ``∂J/∂EA_j = −(yᵀa_j)(a_jᵀx)/l_j``,
+``∂J/∂c_j = −iω(yᵀa_j)(a_jᵀx)``, ``∂J/∂P = −yᵀKp x``, all frequencies at once
+from a few matrix products.
+
+Two options shape the search space:
+
+``min_prestress_share``
+    The prestress share of the static stiffness, ``P·yᵀKp x / yᵀK0 x`` at
+    ω → 0 (equal to ``∂ln G(0)/∂ln P``), must stay at or above this value at
+    every prestress of the data. Enforced as a one-sided penalty residual
+    ``ρ·ln(S_min/share)`` (zero when satisfied), with its exact Jacobian; the
+    share is scale-free, so it depends on P relative to the stiffnesses only.
+``max_decades``
+    The spread ``log10(max EA / min EA)`` of the fitted stiffnesses is at most
+    ``D``: the search works in coordinates ``ln EA_j = m + D·ln10·σ_j`` with
+    ``σ_j ∈ [−½, ½]`` and ``m`` within the EA bounds shrunk by ``D/2``. Box
+    bounds on (m, σ) are exactly the constraint (any set of stiffnesses within
+    the bounds whose spread is ≤ D has such a representation), so the
+    trust-region solver enforces it at every iterate, and the Jacobian follows
+    by the chain rule. A penalty would only approximate the bound.
 """
 from __future__ import annotations
 
@@ -33,12 +56,15 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from .._checks import positive_scalar
+from .._results import format_repr
 from ..io.data import DataError, RheologyData
+from ..laws import Voigt
 from ..model.equilibrium import Cell
 from .result import FitParameter
 
-__all__ = ["TENDON_MODES", "DAMPING_MODES", "FitProblem", "make_problem", "required_points"]
+__all__ = ["TENDON_MODES", "DAMPING_MODES", "FitProblem", "make_problem", "required_points", "as_datasets"]
 
+#: how tendon stiffnesses are parametrized
 TENDON_MODES = ("per-tendon", "per-family", "uniform")
 #: how tendon damping is parametrized
 DAMPING_MODES = ("uniform", "per-family")
@@ -48,51 +74,112 @@ _LN10 = math.log(10.0)
 # cell (K0 not positive definite, G' or G'' <= 0). Finite, so that the
 # trust-region solver simply rejects the step.
 _PENALTY = 10.0
+# Weight of the prestress-share penalty residual ρ·ln(S_min/share): a shortfall of
+# 1 % of the share costs as much as a 0.003-decade misfit of one point... times ρ/0.3
+_SHARE_WEIGHT = 30.0
 
 
-def _whiten(Lc, A, Kp, load, probe):
-    """A, Kp, load, probe in the basis where C0 = Lc Lcᵀ becomes the identity."""
+def _whiten(Lc, A, H, load, probe):
+    """A, H (symmetric), load, probe in the basis where C0 = Lc Lcᵀ becomes the identity."""
     solve = scipy.linalg.solve_triangular
     B = solve(Lc, A, lower=True, check_finite=False)
-    X = solve(Lc, Kp, lower=True, check_finite=False)
-    Kpt = solve(Lc, X.T, lower=True, check_finite=False)
+    X = solve(Lc, H, lower=True, check_finite=False)
+    Ht = solve(Lc, X.T, lower=True, check_finite=False)
     bt = solve(Lc, load, lower=True, check_finite=False)
     Dt = solve(Lc, probe, lower=True, check_finite=False)
-    return B, 0.5 * (Kpt + Kpt.T), bt, Dt
+    return B, 0.5 * (Ht + Ht.T), bt, Dt
+
+
+def _tangents(EA, c, lengths, T0, P):
+    """The Voigt law's tangents at tensions ``P_g·T0`` for every prestress group (the one place the fit meets the law).
+
+    Returns ``(k, dk, dk_dT·T0, eta, deta)``: tangent stiffness ``k`` (groups, m)
+    in N/m with its derivative by ``ln EA_j`` and the prestress derivative
+    ``∂k/∂P = (∂k/∂T)·T0`` (groups, m); tangent damping ``η`` (m,) in N·s/m with
+    its derivative by ``ln c_j``. From :meth:`tenscell.laws.Voigt.tangent`.
+    """
+    g, m = P.size, EA.size
+    law = Voigt._trusted(EA=np.tile(EA, g), c=np.tile(c, g))
+    tg = law.tangent(np.tile(lengths, g), (P[:, None] * T0[None]).ravel())
+    i_ea, i_c = tg.row("EA"), tg.row("c")
+    shape = (g, m)
+    k = tg.k.reshape(shape)
+    dk = (tg.dk[i_ea] * law.EA).reshape(shape)
+    kP = (tg.dk_dT * np.tile(T0, g)).reshape(shape)
+    eta, deta = tg.c[:m], tg.dc[i_c][:m] * c
+    return k, dk, kP, eta, deta
+
+
+@dataclass(frozen=True, eq=False)
+class _Spectrum:
+    """The relaxation spectrum of the model at one parameter vector, per prestress group."""
+
+    P: np.ndarray  # (groups,) effective prestress (N) on the reference cell
+    dk: np.ndarray  # (groups, m) d k_j / d ln EA_j (N/m)
+    deta: np.ndarray  # (m,) d η_j / d ln c_j (N·s/m)
+    B: np.ndarray  # (n, m) whitened tendon directions
+    Kpt: np.ndarray  # (groups, n, n) whitened ∂K0/∂P = Σ T0_j ∇²l_j + Σ (∂k_j/∂P) a_j a_jᵀ
+    lam: np.ndarray  # (groups, n) relaxation rates (1/s)
+    W: np.ndarray  # (groups, n, n) C0-orthonormal modes (whitened)
+    alpha: np.ndarray  # (groups, n) probe projections
+    beta: np.ndarray  # (groups, n) load projections
+
+
+@dataclass(frozen=True, eq=False)
+class _Evaluation:
+    """Moduli, their log-derivatives and the prestress share at one parameter vector."""
+
+    G: np.ndarray  # (N,) complex moduli (Pa)
+    dlogG: np.ndarray | None  # (N, n_params) d ln G / d phi
+    share: np.ndarray | None  # (groups,) prestress share of the static stiffness
+    dshare: np.ndarray | None  # (groups, n_params) d ln share / d phi
 
 
 # ---------------------------------------------------------------------------------
 # the problem: model, data, parameter layout
 # ---------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class FitProblem:
-    """The linear model of a cell against one data set, with a parameter layout.
+    """The linear model of a cell against one or several data sets, with a parameter layout.
 
     Built by :func:`make_problem`; holds plain arrays only, so that it can be
     sent to worker processes. The parameter vector ``theta`` holds the natural
     logarithms of the *free* parameters, in the order of :attr:`names`
-    restricted to :attr:`free`.
+    restricted to :attr:`free`. Parameters are laid out as stiffness groups,
+    damping groups, prestress parameters, then ``L``.
 
     Attributes
     ----------
     names : tuple of str
-        All parameter names: stiffness groups, damping groups, ``P`` or ``s``, ``L``.
-    units, descriptions : tuple of str
+        All parameter names.
+    units, descriptions, kinds : tuple of str
+        ``kinds`` is one of ``"EA"``, ``"c"``, ``"P"``, ``"s"``, ``"P_data"``, ``"L"`` per parameter.
     lower, upper : ndarray
         Log-space bounds of all parameters.
     free : ndarray of bool
     fixed_log : ndarray
         Log values of all parameters (used for the fixed ones).
+    sources : tuple of str
+        The data sets' sources, in order.
+    dataset_index : ndarray of int, shape (N,)
+        Data set of each point (the points of all data sets, concatenated).
+    group_index : ndarray of int, shape (N,)
+        Prestress group of each point.
+    group_measured : ndarray, shape (groups,)
+        Measured prestress (Pa) of each group, NaN where the data set did not state it.
+    group_dataset : ndarray of int, shape (groups,)
+    min_prestress_share, max_decades : float or None
+        The search-space options (module docstring).
     """
 
     names: tuple
     units: tuple
     descriptions: tuple
+    kinds: tuple
     lower: np.ndarray
     upper: np.ndarray
     free: np.ndarray
     fixed_log: np.ndarray
-    kind: str
     tendons: str
     damping: str
     n_ea: int
@@ -102,20 +189,38 @@ class FitProblem:
     # cell (reference strut length L_ref)
     A: np.ndarray
     lengths: np.ndarray
-    Kp: np.ndarray
+    T0: np.ndarray
+    H: np.ndarray
     load: np.ndarray
     probe: np.ndarray
     L_ref: float
     white_unit: tuple
     # data
+    sources: tuple
     omega: np.ndarray
+    dataset_index: np.ndarray
     group_index: np.ndarray
-    group_prestress: np.ndarray
+    group_log_offset: np.ndarray
+    group_map: np.ndarray
+    group_measured: np.ndarray
+    group_dataset: np.ndarray
     y_obs: np.ndarray
     weights: np.ndarray
+    # search
     scale_stiffness: float
     scale_damping: float
-    scale_prestress: float
+    prestress_matters: bool
+    min_prestress_share: float | None = None
+    max_decades: float | None = None
+
+    def __repr__(self) -> str:
+        opts = [f"{k}={v:g}" for k, v in (("min_prestress_share", self.min_prestress_share),
+                                         ("max_decades", self.max_decades)) if v is not None]
+        return format_repr(
+            f"FitProblem: {self.n_datasets} data set(s), {self.n_points} points, {self.n_groups} prestress(es)",
+            f"{self.n_free} free of {self.n_params} parameters (stiffness {self.tendons}, damping {self.damping}); "
+            f"{self.n_residuals} residuals" + (f"; {', '.join(opts)}" if opts else ""),
+        )
 
     # -- layout -------------------------------------------------------------------
     @property
@@ -129,9 +234,29 @@ class FitProblem:
         return int(self.free.sum())
 
     @property
+    def n_points(self) -> int:
+        """Number of data points, all data sets together."""
+        return int(self.omega.size)
+
+    @property
     def n_residuals(self) -> int:
-        """Number of residuals: 2 per data point (G' and G'')."""
+        """Number of data residuals: 2 per data point (G' and G'')."""
         return int(self.y_obs.size)
+
+    @property
+    def n_datasets(self) -> int:
+        """Number of data sets fitted together."""
+        return len(self.sources)
+
+    @property
+    def n_groups(self) -> int:
+        """Number of distinct model prestresses (one eigendecomposition each)."""
+        return int(self.group_map.shape[0])
+
+    @property
+    def prestress_slice(self) -> slice:
+        """Positions of the prestress parameters in :attr:`names`."""
+        return slice(self.n_ea + self.n_c, self.n_params - 1)
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -148,92 +273,152 @@ class FitProblem:
         """Parameter values (SI units) of all parameters, in the order of :attr:`names`."""
         return np.exp(self.full(theta))
 
+    def rows(self, dataset: int) -> np.ndarray:
+        """Positions of data set ``dataset``'s residuals (its G' rows, then its G'' rows), shape (2n_k,)."""
+        pts = np.flatnonzero(self.dataset_index == dataset)
+        return np.concatenate([pts, self.n_points + pts])
+
     # -- model ----------------------------------------------------------------------
     def _effective(self, phi):
-        """Tendon properties on the reference cell (strut length L_ref) equivalent to ``phi``."""
+        """Tendon properties and group prestresses on the reference cell (strut length L_ref) equivalent to ``phi``."""
         EA = np.exp(phi[: self.n_ea])[self.ea_groups]
         c = np.exp(phi[self.n_ea: self.n_ea + self.n_c])[self.c_groups]
-        p = math.exp(phi[-2])
+        P = np.exp(self.group_log_offset + self.group_map @ phi[self.prestress_slice])
         lam = math.exp(phi[-1]) / self.L_ref
         # the cell scaled by lam = L/L_ref has the moduli of the reference cell with these
         # properties (module docstring), so L never needs a new cell
-        P = p * self.group_prestress / lam**2 if self.kind == "prestress" else np.array([p / lam**2])
-        return EA / lam**2, c / lam, P
+        return EA / lam**2, c / lam, P / lam**2
 
-    def _whitening(self, c):
-        """(B, Kpt, bt, Dt): A, Kp, load, probe in the basis where C0 = I."""
+    def _whitening(self, eta):
+        """(B, Ht, bt, Dt): A, the prestress Hessian, load and probe in the basis where C0 = I."""
         if self.n_c == 1:  # C0 = c·A Aᵀ: rescale the precomputed basis
-            s = 1.0 / math.sqrt(c[0])
-            B0, Kpt0, bt0, Dt0 = self.white_unit
-            return B0 * s, Kpt0 * (s * s), bt0 * s, Dt0 * s
+            s = 1.0 / math.sqrt(eta[0])
+            B0, Ht0, bt0, Dt0 = self.white_unit
+            return B0 * s, Ht0 * (s * s), bt0 * s, Dt0 * s
         try:
-            Lc = np.linalg.cholesky((self.A * c) @ self.A.T)
+            Lc = np.linalg.cholesky((self.A * eta) @ self.A.T)
         except np.linalg.LinAlgError:
             return None
-        return _whiten(Lc, self.A, self.Kp, self.load, self.probe)
+        return _whiten(Lc, self.A, self.H, self.load, self.probe)
 
+    def _spectrum(self, phi) -> _Spectrum | None:
+        """Relaxation spectrum per prestress group; None where the model is not a stable cell.
 
-    def _evaluate(self, phi, jac: bool):
-        """Complex moduli G (N,) and, if ``jac``, d log G / d phi (N, n_params); None if unstable."""
+        ``K0 = P·Σ T0_j ∇²l_j + Σ k_j a_j a_jᵀ`` with the law's tangent
+        stiffness ``k_j`` at tension ``P·T0_j`` (it depends on P), ``C0 = Σ η_j a_j a_jᵀ``.
+        """
         EA, c, P = self._effective(phi)
-        wh = self._whitening(c)
+        k, dk, kP, eta, deta = _tangents(EA, c, self.lengths, self.T0, P)
+        wh = self._whitening(eta)
         if wh is None:
             return None
-        B, Kpt, bt, Dt = wh
-        Bl = B / np.sqrt(self.lengths)
-        KE = (Bl * EA) @ Bl.T
-        Kt = P[:, None, None] * Kpt[None] + KE[None]
-        lam, W = np.linalg.eigh(Kt)  # rates (1/s) and whitened C0-orthonormal modes
+        B, Ht, bt, Dt = wh
+        Kt = P[:, None, None] * Ht[None] + np.matmul(B[None] * k[:, None, :], B.T[None])
+        lam, W = np.linalg.eigh(Kt)
         if not np.all(lam > 0):
             return None
         alpha = np.einsum("gnk,n->gk", W, Dt)  # probe projections, D0·v_k
         beta = np.einsum("gnk,n->gk", W, bt)  # load projections, −H0·v_k
+        Kpt = Ht[None] + np.matmul(B[None] * kP[:, None, :], B.T[None])
+        return _Spectrum(P=P, dk=dk, deta=deta, B=B, Kpt=Kpt, lam=lam, W=W, alpha=alpha, beta=beta)
+
+    def _evaluate(self, phi, jac: bool, share: bool = False) -> _Evaluation | None:
+        """Moduli (and, if asked, their log-derivatives and the prestress share); None if unstable."""
+        spec = self._spectrum(phi)
+        if spec is None:
+            return None
         g = self.group_index
-        R = 1.0 / (lam[g] + 1j * self.omega[:, None])  # (N, n)
-        aR = alpha[g] * R
-        bR = beta[g] * R
-        J = np.sum(alpha[g] * bR, axis=1)
+        R = 1.0 / (spec.lam[g] + 1j * self.omega[:, None])  # (N, n)
+        aR = spec.alpha[g] * R
+        bR = spec.beta[g] * R
+        J = np.sum(spec.alpha[g] * bR, axis=1)
         G = (0.5 / self.L_ref) / J
-        if not jac:
-            return G, None
-        AV = np.matmul(B.T[None], W)  # (G, m, n): a_jᵀ v_k
-        M = np.matmul(np.transpose(W, (0, 2, 1)), np.matmul(Kpt[None], W))  # Vᵀ Kp V
-        if lam.shape[0] == 1:  # one prestress: plain matrix products
+        dlogG = self._dlogG(spec, J, aR, bR) if jac else None
+        sh, dsh = self._share(spec, jac) if share else (None, None)
+        return _Evaluation(G=G, dlogG=dlogG, share=sh, dshare=dsh)
+
+    def _modal(self, spec):
+        """AV = a_jᵀ v_k (groups, m, n) and M = Vᵀ Kp V (groups, n, n)."""
+        AV = np.matmul(spec.B.T[None], spec.W)
+        M = np.matmul(np.transpose(spec.W, (0, 2, 1)), np.matmul(spec.Kpt, spec.W))
+        return AV, M
+
+    def _to_params(self, d_EA, d_c, d_P):
+        """Per-tendon and per-group derivatives (rows: points or groups) to derivatives by all parameters.
+
+        ``d_EA`` (r, m), ``d_c`` (r, m): by ln EA_j, ln c_j of each tendon; ``d_P`` (r, groups): by the
+        log prestress of each group. L acts through the effective (P/λ², EA/λ², c/λ).
+        """
+        out = np.zeros((d_EA.shape[0], self.n_params), dtype=np.result_type(d_EA, d_c, d_P))
+        out[:, : self.n_ea] = d_EA @ np.eye(self.n_ea)[self.ea_groups]
+        out[:, self.n_ea: self.n_ea + self.n_c] = d_c @ np.eye(self.n_c)[self.c_groups]
+        out[:, self.prestress_slice] = d_P @ self.group_map
+        out[:, -1] = -2.0 * d_P.sum(axis=1) - 2.0 * d_EA.sum(axis=1) - d_c.sum(axis=1)
+        return out
+
+    def _dlogG(self, spec, J, aR, bR):
+        """d ln G / d phi at the data points, shape (N, n_params)."""
+        AV, M = self._modal(spec)
+        g = self.group_index
+        if spec.lam.shape[0] == 1:  # one prestress: plain matrix products
             ax = bR @ AV[0].T  # a_jᵀ x(ω_i), (N, m)
             ay = aR @ AV[0].T  # a_jᵀ y(ω_i)
-            dJ_P = -np.einsum("ik,kl,il->i", aR, M[0], bR) * P[0]  # P ∂J/∂P
+            dJ_P = -np.einsum("ik,kl,il->i", aR, M[0], bR) * spec.P[0]  # P ∂J/∂P
         else:
             ax = np.einsum("imk,ik->im", AV[g], bR)
             ay = np.einsum("imk,ik->im", AV[g], aR)
-            dJ_P = -np.einsum("ik,ikl,il->i", aR, M[g], bR) * P[g]
+            dJ_P = -np.einsum("ik,ikl,il->i", aR, M[g], bR) * spec.P[g]
         pr = ax * ay
-        dJ_EA = -pr * (EA / self.lengths)  # EA_j ∂J/∂EA_j
-        dJ_c = -1j * self.omega[:, None] * pr * c  # c_j ∂J/∂c_j
-        dJ = np.empty((J.size, self.n_params), dtype=complex)
-        dJ[:, : self.n_ea] = dJ_EA @ np.eye(self.n_ea)[self.ea_groups]
-        dJ[:, self.n_ea: self.n_ea + self.n_c] = dJ_c @ np.eye(self.n_c)[self.c_groups]
-        dJ[:, -2] = dJ_P
-        # L enters only through the effective parameters (P/λ², EA/λ², c/λ)
-        dJ[:, -1] = -2.0 * dJ_P - 2.0 * dJ_EA.sum(axis=1) - dJ_c.sum(axis=1)
-        return G, -dJ / J[:, None]
+        dJ_EA = -pr * spec.dk[g]  # EA_j ∂J/∂EA_j
+        dJ_c = -1j * self.omega[:, None] * pr * spec.deta  # c_j ∂J/∂c_j
+        d_P = np.zeros((J.size, self.n_groups), dtype=complex)
+        d_P[np.arange(J.size), g] = dJ_P
+        return -self._to_params(dJ_EA, dJ_c, d_P) / J[:, None]
 
+    def _share(self, spec, jac: bool):
+        """Prestress share of the static stiffness per group, and d ln share / d phi.
+
+        ``share = P·yᵀKp x / yᵀK0 x`` with ``x = K0⁻¹(−H0)``, ``y = K0⁻ᵀD0ᵀ``
+        (the ω → 0 limit of ∂ln G/∂ln P). Its derivatives follow from
+        ``∂x = −K0⁻¹(∂K0)x`` and its transpose.
+        """
+        lam, P = spec.lam, spec.P
+        xs, ys = spec.beta / lam, spec.alpha / lam  # x, y in modal coordinates
+        J0 = np.sum(spec.alpha * xs, axis=1)
+        AV, M = self._modal(spec)
+        Mx, My = np.einsum("gkl,gl->gk", M, xs), np.einsum("gkl,gl->gk", M, ys)
+        Q = np.sum(ys * Mx, axis=1)  # yᵀ Kp x
+        share = P * Q / J0
+        if not jac:
+            return share, None
+        ax, ay = np.einsum("gmk,gk->gm", AV, xs), np.einsum("gmk,gk->gm", AV, ys)
+        au, av = np.einsum("gmk,gk->gm", AV, Mx / lam), np.einsum("gmk,gk->gm", AV, My / lam)
+        # by ln EA_j (∂K0 = dk_j a_j a_jᵀ): Q and J0 both move
+        dQ = -spec.dk * (ay * au + av * ax)
+        dJ0 = -spec.dk * ay * ax
+        d_EA = dQ / Q[:, None] - dJ0 / J0[:, None]
+        # by the group's own ln P (∂K0 = P Kp; the Voigt law's ∂k/∂T does not depend on T or EA)
+        R = np.sum(My * Mx / lam, axis=1)  # yᵀ Kp K0⁻¹ Kp x
+        d_P = np.diag(1.0 - 2.0 * P * R / Q + P * Q / J0)
+        return share, self._to_params(d_EA, np.zeros_like(d_EA), d_P)
+
+    # -- residuals ------------------------------------------------------------------
     def moduli(self, theta) -> tuple[np.ndarray, np.ndarray]:
         """Model G', G'' (Pa) at the data points, shape (N,) each; NaN where the model is unstable."""
         out = self._evaluate(self.full(theta), jac=False)
         if out is None:
             nan = np.full(self.omega.size, np.nan)
             return nan, nan.copy()
-        return out[0].real, out[0].imag
+        return out.G.real, out.G.imag
 
     def residuals(self, theta) -> np.ndarray:
-        """Weighted residuals ``w·(log10 G_model − log10 G_data)``, shape (2N,) (G' block, then G'')."""
-        out = self._evaluate(self.full(theta), jac=False)
-        return self._residuals_from(out)
+        """Weighted data residuals ``w·(log10 G_model − log10 G_data)``, shape (2N,) (G' block, then G'')."""
+        return self._residuals_from(self._evaluate(self.full(theta), jac=False))
 
     def _residuals_from(self, out) -> np.ndarray:
         if out is None:
             return np.full(self.y_obs.size, _PENALTY)
-        G = out[0]
+        G = out.G
         if not (np.all(G.real > 0) and np.all(G.imag > 0)):
             return np.full(self.y_obs.size, _PENALTY)
         model = np.concatenate([np.log10(G.real), np.log10(G.imag)])
@@ -241,33 +426,123 @@ class FitProblem:
 
     def jacobian(self, theta) -> np.ndarray:
         """Analytic Jacobian of :meth:`residuals` with respect to ``theta``, shape (2N, n_free)."""
-        out = self._evaluate(self.full(theta), jac=True)
-        return self._jacobian_from(out)
+        return self._jacobian_from(self._evaluate(self.full(theta), jac=True))
 
     def _jacobian_from(self, out) -> np.ndarray:
-        if out is None or out[1] is None:
+        if out is None or out.dlogG is None:
             return np.zeros((self.y_obs.size, self.n_free))
-        G, dlogG = out
-        dG = G[:, None] * dlogG[:, self.free]
+        G = out.G
+        dG = G[:, None] * out.dlogG[:, self.free]
         with np.errstate(divide="ignore", invalid="ignore"):
             rows = np.vstack([dG.real / (G.real[:, None] * _LN10), dG.imag / (G.imag[:, None] * _LN10)])
         return self.weights[:, None] * np.nan_to_num(rows)
 
     def jacobian_fd(self, theta, step: float = 1e-5) -> np.ndarray:
         """Central finite-difference Jacobian of :meth:`residuals` (the slow reference), shape (2N, n_free)."""
-        theta = np.asarray(theta, dtype=float)
-        out = np.empty((self.y_obs.size, theta.size))
-        for k in range(theta.size):
-            e = np.zeros_like(theta)
-            e[k] = step
-            out[:, k] = (self.residuals(theta + e) - self.residuals(theta - e)) / (2 * step)
-        return out
+        return _central(self.residuals, theta, step)
 
     def rms(self, theta) -> float:
-        """RMS of the unweighted log10 residuals (decades)."""
+        """RMS of the unweighted log10 residuals of all data sets (decades)."""
         r = self.residuals(theta)
         return float(np.sqrt(np.mean((r / self.weights) ** 2)))
 
+    def dataset_rms(self, theta) -> np.ndarray:
+        """RMS of the unweighted log10 residuals of each data set (decades), shape (n_datasets,)."""
+        r = self.residuals(theta) / self.weights
+        return np.array([math.sqrt(float(np.mean(r[self.rows(k)] ** 2))) for k in range(self.n_datasets)])
+
+    # -- the prestress share and its penalty ---------------------------------------------
+    def prestress_share(self, theta) -> np.ndarray:
+        """Prestress share of the static stiffness at each prestress group, shape (groups,); NaN if unstable."""
+        out = self._evaluate(self.full(theta), jac=False, share=True)
+        return np.full(self.n_groups, np.nan) if out is None else out.share
+
+    @property
+    def n_penalties(self) -> int:
+        """Penalty residuals the search adds to the data residuals (one per group with ``min_prestress_share``)."""
+        return 0 if self.min_prestress_share is None else self.n_groups
+
+    def _penalty_from(self, out, jac: bool):
+        """Penalty residuals ``ρ·ln(S_min/share)`` where the share falls short (else 0) and their Jacobian."""
+        n = self.n_penalties
+        r = np.zeros(n)
+        Jr = np.zeros((n, self.n_free)) if jac else None
+        if n == 0:
+            return r, Jr
+        if out is None:
+            return np.full(n, _PENALTY), Jr
+        s = out.share
+        short = s < self.min_prestress_share
+        ok = short & (s > 0)
+        r[ok] = _SHARE_WEIGHT * np.log(self.min_prestress_share / s[ok])
+        r[short & ~(s > 0)] = _SHARE_WEIGHT * 50.0  # no positive share: a flat wall
+        if jac and ok.any():
+            Jr[ok] = -_SHARE_WEIGHT * out.dshare[ok][:, self.free]
+        return r, Jr
+
+    def penalty(self, theta) -> np.ndarray:
+        """The penalty residuals the search adds (empty without ``min_prestress_share``), shape (n_penalties,)."""
+        if self.n_penalties == 0:
+            return np.zeros(0)
+        out = self._evaluate(self.full(theta), jac=False, share=True)
+        return self._penalty_from(out, jac=False)[0]
+
+    def penalty_jacobian(self, theta) -> np.ndarray:
+        """Analytic Jacobian of :meth:`penalty`, shape (n_penalties, n_free)."""
+        if self.n_penalties == 0:
+            return np.zeros((0, self.n_free))
+        out = self._evaluate(self.full(theta), jac=True, share=True)
+        return self._penalty_from(out, jac=True)[1]
+
+    # -- search coordinates (max_decades) ---------------------------------------------
+    @property
+    def compact(self) -> bool:
+        """True if ``max_decades`` actually constrains the stiffnesses (several EA, D below the EA box)."""
+        if self.max_decades is None or self.n_ea < 2:
+            return False
+        return self.max_decades * _LN10 < float(self.upper[0] - self.lower[0])
+
+    def coordinate_map(self) -> np.ndarray:
+        """``T`` with ``theta = T @ u`` (search coordinates ``u``), shape (n_free, n_u).
+
+        Identity unless :attr:`compact`; then ``u = (m, σ_1..σ_nEA, rest)`` and
+        ``ln EA_j = m + D·ln10·σ_j``.
+        """
+        n = self.n_free
+        if not self.compact:
+            return np.eye(n)
+        T = np.zeros((n, n + 1))
+        T[: self.n_ea, 0] = 1.0
+        T[: self.n_ea, 1: self.n_ea + 1] = np.eye(self.n_ea) * (self.max_decades * _LN10)
+        T[self.n_ea:, self.n_ea + 1:] = np.eye(n - self.n_ea)
+        return T
+
+    def coordinate_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Box bounds of the search coordinates ``u``."""
+        lo, hi = self.bounds
+        if not self.compact:
+            return lo, hi
+        half = 0.5 * self.max_decades * _LN10
+        s = np.full(self.n_ea, 0.5)
+        return (np.concatenate([[lo[0] + half], -s, lo[self.n_ea:]]),
+                np.concatenate([[hi[0] - half], s, hi[self.n_ea:]]))
+
+    def to_coordinates(self, theta) -> np.ndarray:
+        """Search coordinates of ``theta``; stiffnesses spread wider than ``max_decades`` are compressed about their centre."""
+        theta = np.asarray(theta, dtype=float)
+        if not self.compact:
+            return theta.copy()
+        e = theta[: self.n_ea]
+        width = self.max_decades * _LN10
+        spread = float(e.max() - e.min())
+        centre = 0.5 * float(e.max() + e.min())
+        lo, hi = self.coordinate_bounds()
+        mid = float(np.clip(centre, lo[0], hi[0]))
+        scale = min(1.0, width / spread) if spread > 0 else 1.0
+        sigma = np.clip((centre + (e - centre) * scale - mid) / width, -0.5, 0.5)
+        return np.concatenate([[mid], sigma, theta[self.n_ea:]])
+
+    # -- records ----------------------------------------------------------------------
     def parameters(self, theta) -> tuple:
         """The parameters as :class:`FitParameter` records."""
         vals = self.values(theta)
@@ -277,22 +552,46 @@ class FitProblem:
             for n, v, a, b, u, fr, d in zip(self.names, vals, lo, hi, self.units, self.free, self.descriptions)
         )
 
+    def gauge(self) -> np.ndarray:
+        """The exact strut-length gauge in log-parameter space, shape (n_params,).
+
+        ``(P, EA, c, L) -> (λ²P, λ²EA, λc, λL)`` leaves G unchanged, i.e. the
+        moduli are constant along ``phi + t·gauge()`` for every t: 2 for each
+        stiffness and for a model prestress ``P`` or scale ``s``, 1 for each
+        damping and for ``L``, 0 for a data set's fitted prestress ``P_data``
+        (in Pa: the scale ``s`` carries the λ²). It is a gauge of the fit only
+        if every parameter it moves is free.
+        """
+        power = {"EA": 2.0, "c": 1.0, "P": 2.0, "s": 2.0, "P_data": 0.0, "L": 1.0}
+        return np.array([power[k] for k in self.kinds])
+
     def effective_properties(self, theta):
         """(EA (m,), c (m,), P (groups,)) on the reference cell (N, N·s/m, N) equivalent to ``theta``."""
         return self._effective(self.full(theta))
+
+
+def _central(fun, theta, step):
+    theta = np.asarray(theta, dtype=float)
+    cols = []
+    for k in range(theta.size):
+        e = np.zeros_like(theta)
+        e[k] = step
+        cols.append((fun(theta + e) - fun(theta - e)) / (2 * step))
+    return np.stack(cols, axis=-1)
 
 
 # ---------------------------------------------------------------------------------
 # building a problem
 # ---------------------------------------------------------------------------------
 def required_points(tendons: str = "per-tendon", damping: str = "uniform", n_families: int = 2) -> int:
-    """Minimum number of data points for a fit.
+    """Minimum number of data points for a fit of one data set.
 
     Each point gives two residuals. Per-tendon stiffnesses are deliberately
     over-parametrized (as in the paper: 36 parameters against 32 residuals
     for the 16-point frequency data; the trust-region solver handles it, and
     the alternatives show the non-uniqueness), so they count as one stiffness
-    here; the other parameters (c, P or s, L) each count.
+    here; the other parameters (c, P or s, L) each count. A joint fit needs
+    one more point per data set whose prestress is fitted.
     """
     n_ea = {"per-tendon": 1, "per-family": n_families, "uniform": 1}[_choice("tendons", tendons, TENDON_MODES)]
     n_c = n_families if _choice("damping", damping, DAMPING_MODES) == "per-family" else 1
@@ -317,63 +616,143 @@ def _family_groups(cell: Cell) -> tuple[np.ndarray, list[str]]:
     return groups, fams
 
 
-def make_problem(
-    data: RheologyData,
-    cell: Cell | None = None,
-    *,
-    tendons: str = "per-tendon",
-    damping: str = "uniform",
-    bounds: dict | None = None,
-    fixed: dict | None = None,
-) -> FitProblem:
-    """Set up the fit of ``cell``'s linear model to ``data``.
+def as_datasets(data) -> tuple:
+    """One data set or a sequence of them as a tuple of :class:`RheologyData` (ValueError otherwise)."""
+    items = (data,) if isinstance(data, RheologyData) else tuple(data) if isinstance(data, (list, tuple)) else None
+    if not items or not all(isinstance(d, RheologyData) for d in items):
+        raise ValueError("data must be a tenscell.io.data.RheologyData or a non-empty list of them, got "
+                         f"{type(data).__name__}")
+    return items
 
-    Parameters
-    ----------
-    data : RheologyData
-        A frequency sweep (``kind="frequency"``) or prestress sweep.
-    cell : Cell, optional
-        The reference (default :func:`tenscell.paper_cell`). Its damping
-        matrix must be positive definite for positive c (true for the paper
-        cell with intermediate filaments).
-    tendons : {"per-tendon", "per-family", "uniform"}
-        Stiffness parametrization.
-    damping : {"uniform", "per-family"}
-        Damping parametrization.
-    bounds : dict, optional
-        ``{"EA": (lo, hi), "c": (lo, hi), "P": (lo, hi), "s": (lo, hi), "L": (lo, hi)}``
-        in N, N·s/m, N, m², m; each applies to every parameter of that kind.
-        Defaults scale with the data: with ``S = median(G')·L²`` (N) and
-        ``ω_m = 2π·geomean(f)``: EA in [1e-8, 1e6]·S, c in [1e-6, 1e6]·S/ω_m,
-        P in [1e-10, 1e4]·S (s likewise, divided by the median prestress),
-        L in [1e-3, 1e3]·L_cell.
-    fixed : dict, optional
-        Scalar parameters to hold fixed: any of ``"c"``, ``"P"`` (frequency
-        sweep), ``"s"`` (prestress sweep), ``"L"``, with values in SI units.
-        ``c`` is only fixable with uniform damping.
 
-    Returns
-    -------
-    FitProblem
-
-    Raises
-    ------
-    ValueError
-        Unknown modes, bad bounds or fixed values, a cell with singular
-        damping, or too few data points (:func:`required_points`).
-    """
-    from ..model.shapes import paper_cell
-
-    if not isinstance(data, RheologyData):
-        raise ValueError(f"data must be a tenscell.io.data.RheologyData, got {type(data).__name__}")
-    _choice("tendons", tendons, TENDON_MODES)
-    _choice("damping", damping, DAMPING_MODES)
-    cell = paper_cell() if cell is None else cell
-    if not isinstance(cell, Cell):
-        raise ValueError(f"cell must be a tenscell Cell, got {type(cell).__name__}")
-    A = cell.A.toarray() if sp.issparse(cell.A) else np.asarray(cell.A, dtype=float)
-    Kp = cell.Kp.toarray() if sp.issparse(cell.Kp) else np.asarray(cell.Kp, dtype=float)
+def _stiffness_layout(cell: Cell, tendons: str, damping: str):
+    """(ea_groups, ea_names, ea_desc, c_groups, c_names, c_desc) for the parametrization."""
     m = cell.m
+    fam_groups, fams = _family_groups(cell)
+    labels = _tendon_labels(cell)
+    if tendons == "per-tendon":
+        ea = (np.arange(m), [f"EA[{j}]" for j in range(m)],
+              [f"stiffness of tendon {j}, {lab}" for j, lab in enumerate(labels)])
+    elif tendons == "per-family":
+        ea = (fam_groups, [f"EA_{f}" for f in fams], [f"stiffness of every {f} tendon" for f in fams])
+    else:
+        ea = (np.zeros(m, dtype=int), ["EA"], ["stiffness of every tendon"])
+    if damping == "per-family":
+        cc = (fam_groups, [f"c_{f}" for f in fams], [f"damping of every {f} tendon" for f in fams])
+    else:
+        cc = (np.zeros(m, dtype=int), ["c"], ["damping of every tendon"])
+    return (*ea, *cc)
+
+
+def _prestress_layout(datasets):
+    """Prestress parameters and groups: (names, units, descs, kinds, groups) with groups a list of
+    (dataset, measured Pa or NaN, log offset, {parameter position: 1}) and point -> group index."""
+    known = [d.prestress is not None for d in datasets]
+    joint = len(datasets) > 1
+    names, units, descs, kinds = [], [], [], []
+    if any(known):
+        names.append("s")
+        units.append("m²")
+        kinds.append("s")
+        descs.append("prestress scale: model prestress (N) = s × prestress (Pa) of the data"
+                     + (" (one scale links the data sets)" if joint else ""))
+    own = {}
+    for k, d in enumerate(datasets):
+        if known[k]:
+            continue
+        own[k] = len(names)
+        if any(known):
+            names.append(f"P_data[{k}]")
+            units.append("Pa")
+            kinds.append("P_data")
+            descs.append(f"prestress (Pa) at which data set {k} ({d.source}) was measured: not stated, so fitted")
+        else:
+            names.append(f"P[{k}]" if joint else "P")
+            units.append("N")
+            kinds.append("P")
+            descs.append("prestress: tendon tensions are P·T0" + (f" for data set {k} ({d.source})" if joint else ""))
+    groups, point_group = [], []
+    for k, d in enumerate(datasets):
+        if known[k]:
+            uniq, inv = np.unique(d.prestress, return_inverse=True)
+            base = len(groups)
+            groups += [(k, float(p), math.log(p), {0: 1.0}) for p in uniq]
+            point_group.append(base + np.asarray(inv).ravel())
+        else:
+            links = {own[k]: 1.0}
+            if any(known):
+                links[0] = 1.0
+            groups.append((k, math.nan, 0.0, links))
+            point_group.append(np.full(d.n, len(groups) - 1))
+    return names, units, descs, kinds, groups, np.concatenate(point_group)
+
+
+def _default_bounds(datasets, L_ref):
+    """Default bounds per parameter kind and the scales used by the initial guess."""
+    Gs = np.concatenate([d.G_storage for d in datasets])
+    omega = 2 * np.pi * np.concatenate([d.frequency_hz for d in datasets])
+    S = float(np.median(Gs)) * L_ref**2
+    w_m = float(np.exp(np.mean(np.log(omega))))
+    known = [d.prestress for d in datasets if d.prestress is not None]
+    P_med = float(np.median(np.concatenate(known))) if known else 1.0
+    defaults = {
+        "EA": (1e-8 * S, 1e6 * S),
+        "c": (1e-6 * S / w_m, 1e6 * S / w_m),
+        "P": (1e-10 * S, 1e4 * S),
+        "s": (1e-10 * S / P_med, 1e4 * S / P_med),
+        "P_data": (1e-3 * P_med, 1e3 * P_med),
+        "L": (1e-3 * L_ref, 1e3 * L_ref),
+    }
+    return defaults, S, w_m, P_med
+
+
+def _apply_bounds(kinds, bounds, defaults):
+    bounds = dict(bounds or {})
+    for key in bounds:
+        if key not in defaults:
+            raise ValueError(f"bounds: unknown parameter kind {key!r}; allowed: {', '.join(defaults)}")
+        if key not in kinds:
+            raise ValueError(f"bounds: {key!r} does not apply to these data (parameters here: "
+                             f"{', '.join(dict.fromkeys(kinds))})")
+    lower = np.empty(len(kinds))
+    upper = np.empty(len(kinds))
+    for i, k in enumerate(kinds):
+        lo, hi = bounds.get(k, defaults[k])
+        lo = positive_scalar(f"bounds[{k!r}] lower", lo)
+        hi = positive_scalar(f"bounds[{k!r}] upper", hi)
+        if not lo < hi:
+            raise ValueError(f"bounds[{k!r}]: the lower bound {lo!r} must be below the upper bound {hi!r}")
+        lower[i], upper[i] = math.log(lo), math.log(hi)
+    return lower, upper
+
+
+def _apply_fixed(names, kinds, lower, upper, fixed, damping, L_ref, P_med):
+    free = np.ones(len(names), dtype=bool)
+    fixed_log = 0.5 * (lower + upper)
+    fixed_log[-1] = math.log(L_ref) if lower[-1] < math.log(L_ref) < upper[-1] else fixed_log[-1]
+    for i, k in enumerate(kinds):  # a data set's own prestress starts at the others' median
+        if k == "P_data" and lower[i] < math.log(P_med) < upper[i]:
+            fixed_log[i] = math.log(P_med)
+    for key, value in dict(fixed or {}).items():
+        if key not in names:  # any parameter may be held fixed (a stiffness group, a damping, a prestress, L)
+            raise ValueError(f"fixed: cannot fix {key!r}; parameters here: {', '.join(names)}")
+        v = positive_scalar(f"fixed[{key!r}]", value)
+        i = names.index(key)
+        if not lower[i] <= math.log(v) <= upper[i]:
+            raise ValueError(f"fixed[{key!r}] = {v!r} lies outside its bounds [{math.exp(lower[i]):.6g}, "
+                             f"{math.exp(upper[i]):.6g}]")
+        free[i] = False
+        fixed_log[i] = math.log(v)
+    return free, fixed_log
+
+
+def _cell_matrices(cell: Cell):
+    """Dense A, the symmetric prestress Hessian Σ T0_j ∇²l_j and the Cholesky factor of A Aᵀ.
+
+    ValueError if C0 would be singular.
+    """
+    dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M, dtype=float)  # noqa: E731
+    A, H = dense(cell.A), dense(cell.prestress_hessian)
     AAt = A @ A.T
     ev = np.linalg.eigvalsh(AAt)
     # Cholesky alone can pass a singular matrix on rounding noise; compare with its scale
@@ -383,109 +762,135 @@ def make_problem(
             "undamped, e.g. the cell without intermediate filaments), so its relaxation spectrum, which the fit "
             "uses, does not exist; fit a cell with a positive definite C0"
         )
-    chol = np.linalg.cholesky(AAt)
+    return A, 0.5 * (H + H.T), np.linalg.cholesky(AAt)
 
-    fam_groups, fams = _family_groups(cell)
-    need = required_points(tendons, damping, n_families=len(fams))
-    if data.n < need:
+
+def _check_options(min_prestress_share, max_decades):
+    if min_prestress_share is not None:
+        min_prestress_share = positive_scalar("min_prestress_share", min_prestress_share)
+        if min_prestress_share >= 1.0:
+            raise ValueError(f"min_prestress_share must be below 1 (a share of the static stiffness), "
+                             f"got {min_prestress_share!r}")
+    if max_decades is not None:
+        max_decades = positive_scalar("max_decades", max_decades, "decades")
+    return min_prestress_share, max_decades
+
+
+def make_problem(
+    data,
+    cell: Cell | None = None,
+    *,
+    tendons: str = "per-tendon",
+    damping: str = "uniform",
+    bounds: dict | None = None,
+    fixed: dict | None = None,
+    min_prestress_share: float | None = None,
+    max_decades: float | None = None,
+) -> FitProblem:
+    """Set up the fit of ``cell``'s linear model to one or several data sets.
+
+    Parameters
+    ----------
+    data : RheologyData or sequence of RheologyData
+        Frequency sweeps, prestress sweeps, or frequency sweeps at a stated
+        prestress (a ``prestress_Pa`` column; see
+        :meth:`RheologyData.with_prestress`). Several data sets are fitted
+        jointly by one parameter set (module docstring: the prestress).
+    cell : Cell, optional
+        The reference (default :func:`tenscell.paper_cell`). Its damping
+        matrix must be positive definite for positive c (true for the paper
+        cell with intermediate filaments).
+    tendons : {"per-tendon", "per-family", "uniform"}
+        Stiffness parametrization.
+    damping : {"uniform", "per-family"}
+        Damping parametrization.
+    bounds : dict, optional
+        ``{"EA": (lo, hi), "c": (lo, hi), "P": (lo, hi), "s": (lo, hi), "P_data": (lo, hi), "L": (lo, hi)}``
+        in N, N·s/m, N, m², Pa, m; each applies to every parameter of that
+        kind. Defaults scale with the data: with ``S = median(G')·L²`` (N),
+        ``ω_m = 2π·geomean(f)`` and ``P_m`` the median stated prestress (Pa):
+        EA in [1e-8, 1e6]·S, c in [1e-6, 1e6]·S/ω_m, P in [1e-10, 1e4]·S,
+        s in [1e-10, 1e4]·S/P_m, P_data in [1e-3, 1e3]·P_m, L in
+        [1e-3, 1e3]·L_cell.
+    fixed : dict, optional
+        Parameters to hold fixed, by name (any of :attr:`FitProblem.names`:
+        ``"L"``, ``"c"`` or ``"c_actin"``, ``"EA_intermediate_filament"``,
+        ``"EA[3]"``, a prestress ``"P"``, ``"s"``, ``"P_data[k]"``...), with
+        values in SI units (Pa for ``P_data``). Fixing any of EA, c, P (or
+        s) or L removes the strut-length gauge (and makes L identifiable).
+    min_prestress_share : float in (0, 1), optional
+        Lower bound on the prestress share of the static stiffness at every
+        prestress of the data (module docstring).
+    max_decades : float, optional
+        Upper bound on the spread log10(max EA / min EA) of the stiffnesses.
+
+    Returns
+    -------
+    FitProblem
+
+    Raises
+    ------
+    ValueError
+        Unknown modes, bad bounds, fixed values or options, a cell with
+        singular damping, or too few data points (:func:`required_points`).
+    """
+    from ..model.shapes import paper_cell
+
+    datasets = as_datasets(data)
+    _choice("tendons", tendons, TENDON_MODES)
+    _choice("damping", damping, DAMPING_MODES)
+    min_prestress_share, max_decades = _check_options(min_prestress_share, max_decades)
+    cell = paper_cell() if cell is None else cell
+    if not isinstance(cell, Cell):
+        raise ValueError(f"cell must be a tenscell Cell, got {type(cell).__name__}")
+    A, H, chol = _cell_matrices(cell)
+
+    ea_groups, ea_names, ea_desc, c_groups, c_names, c_desc = _stiffness_layout(cell, tendons, damping)
+    p_names, p_units, p_desc, p_kinds, groups, point_group = _prestress_layout(datasets)
+    n_points = sum(d.n for d in datasets)
+    need = required_points(tendons, damping, n_families=len(_family_groups(cell)[1])) + len(p_names) - 1
+    if n_points < need:
+        src = datasets[0].source if len(datasets) == 1 else f"{len(datasets)} data sets"
         raise DataError(
-            f"{data.source}: {data.n} data point{'s' if data.n != 1 else ''}, fewer than the {need} the fit "
+            f"{src}: {n_points} data point{'s' if n_points != 1 else ''}, fewer than the {need} the fit "
             f"needs (tendons={tendons!r}, damping={damping!r}: at least as many points as stiffness groups "
-            f"+ damping groups + prestress + L)"
+            f"+ damping groups + prestress parameters + L)"
         )
+    names = tuple(ea_names + c_names + p_names + ["L"])
+    units = tuple(["N"] * len(ea_names) + ["N·s/m"] * len(c_names) + p_units + ["m"])
+    descs = tuple(ea_desc + c_desc + p_desc + ["strut length (redundant with P, EA, c: see docs)"])
+    kinds = tuple(["EA"] * len(ea_names) + ["c"] * len(c_names) + p_kinds + ["L"])
 
-    labels = _tendon_labels(cell)
-    if tendons == "per-tendon":
-        ea_groups = np.arange(m)
-        ea_names = [f"EA[{j}]" for j in range(m)]
-        ea_desc = [f"stiffness of tendon {j}, {lab}" for j, lab in enumerate(labels)]
-    elif tendons == "per-family":
-        ea_groups = fam_groups
-        ea_names = [f"EA_{f}" for f in fams]
-        ea_desc = [f"stiffness of every {f} tendon" for f in fams]
-    else:
-        ea_groups = np.zeros(m, dtype=int)
-        ea_names = ["EA"]
-        ea_desc = ["stiffness of every tendon"]
-    if damping == "per-family":
-        c_groups = fam_groups
-        c_names = [f"c_{f}" for f in fams]
-        c_desc = [f"damping of every {f} tendon" for f in fams]
-    else:
-        c_groups = np.zeros(m, dtype=int)
-        c_names = ["c"]
-        c_desc = ["damping of every tendon"]
-
-    prestress_sweep = data.kind == "prestress"
-    p_name = "s" if prestress_sweep else "P"
-    p_unit = "m²" if prestress_sweep else "N"
-    p_desc = ("prestress scale: model prestress (N) = s × measured prestress (Pa)" if prestress_sweep
-              else "prestress: tendon tensions are P·T0")
-    names = tuple(ea_names + c_names + [p_name, "L"])
-    units = tuple(["N"] * len(ea_names) + ["N·s/m"] * len(c_names) + [p_unit, "m"])
-    descs = tuple(ea_desc + c_desc + [p_desc, "strut length (redundant with P, EA, c: see docs)"])
-
-    # scales for default bounds and the initial guess
     L_ref = float(cell.strut_length)
-    f = data.frequency_hz
-    omega = 2 * np.pi * f
-    S = float(np.median(data.G_storage)) * L_ref**2
-    w_m = float(np.exp(np.mean(np.log(omega))))
-    P_med = float(np.median(data.prestress)) if prestress_sweep else 1.0
-    defaults = {
-        "EA": (1e-8 * S, 1e6 * S),
-        "c": (1e-6 * S / w_m, 1e6 * S / w_m),
-        "P": (1e-10 * S, 1e4 * S),
-        "s": (1e-10 * S / P_med, 1e4 * S / P_med),
-        "L": (1e-3 * L_ref, 1e3 * L_ref),
-    }
-    bounds = dict(bounds or {})
-    for key in bounds:
-        if key not in defaults:
-            raise ValueError(f"bounds: unknown parameter kind {key!r}; allowed: {', '.join(defaults)}")
-        if key == ("P" if prestress_sweep else "s"):
-            raise ValueError(f"bounds: {key!r} does not apply to a {data.kind} sweep (use {p_name!r})")
-    kinds = ["EA"] * len(ea_names) + ["c"] * len(c_names) + [p_name, "L"]
-    lower = np.empty(len(names))
-    upper = np.empty(len(names))
-    for i, k in enumerate(kinds):
-        lo, hi = bounds.get(k, defaults[k])
-        lo = positive_scalar(f"bounds[{k!r}] lower", lo)
-        hi = positive_scalar(f"bounds[{k!r}] upper", hi)
-        if not lo < hi:
-            raise ValueError(f"bounds[{k!r}]: the lower bound {lo!r} must be below the upper bound {hi!r}")
-        lower[i], upper[i] = math.log(lo), math.log(hi)
+    defaults, S, w_m, P_med = _default_bounds(datasets, L_ref)
+    lower, upper = _apply_bounds(kinds, bounds, defaults)
+    free, fixed_log = _apply_fixed(names, kinds, lower, upper, fixed, damping, L_ref, P_med)
 
-    free = np.ones(len(names), dtype=bool)
-    fixed_log = 0.5 * (lower + upper)
-    fixed_log[-1] = math.log(L_ref) if lower[-1] < math.log(L_ref) < upper[-1] else fixed_log[-1]
-    for key, value in dict(fixed or {}).items():
-        allowed = (["c"] if damping == "uniform" else []) + [p_name, "L"]
-        if key not in allowed:
-            raise ValueError(f"fixed: cannot fix {key!r}; fixable here: {', '.join(allowed)}")
-        v = positive_scalar(f"fixed[{key!r}]", value)
-        i = names.index(key)
-        if not lower[i] <= math.log(v) <= upper[i]:
-            raise ValueError(f"fixed[{key!r}] = {v!r} lies outside its bounds [{math.exp(lower[i]):.6g}, "
-                             f"{math.exp(upper[i]):.6g}]")
-        free[i] = False
-        fixed_log[i] = math.log(v)
-
-    if prestress_sweep:
-        uniq, group_index = np.unique(data.prestress, return_inverse=True)
-    else:
-        uniq, group_index = np.array([1.0]), np.zeros(data.n, dtype=int)
-    y_obs = np.concatenate([np.log10(data.G_storage), np.log10(data.G_loss)])
-    weights = np.concatenate([data.weights_storage, data.weights_loss])
+    n_p = len(p_names)
+    group_map = np.zeros((len(groups), n_p))
+    for g, (_, _, _, links) in enumerate(groups):
+        for j, v in links.items():
+            group_map[g, j] = v
+    measured = [d.prestress for d in datasets if d.prestress is not None]
+    varies = bool(measured) and np.unique(np.concatenate(measured)).size > 1
+    load, probe = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
     return FitProblem(
-        names=names, units=units, descriptions=descs, lower=lower, upper=upper, free=free, fixed_log=fixed_log,
-        kind=data.kind, tendons=tendons, damping=damping, n_ea=len(ea_names), n_c=len(c_names),
+        names=names, units=units, descriptions=descs, kinds=kinds, lower=lower, upper=upper, free=free,
+        fixed_log=fixed_log, tendons=tendons, damping=damping, n_ea=len(ea_names), n_c=len(c_names),
         ea_groups=np.asarray(ea_groups), c_groups=np.asarray(c_groups),
-        A=A, lengths=np.asarray(cell.lengths, dtype=float), Kp=0.5 * (Kp + Kp.T),
-        load=np.asarray(cell.load, dtype=float), probe=np.asarray(cell.probe, dtype=float), L_ref=L_ref,
-        white_unit=_whiten(chol, A, 0.5 * (Kp + Kp.T), np.asarray(cell.load, dtype=float),
-                           np.asarray(cell.probe, dtype=float)),
-        omega=omega, group_index=np.asarray(group_index).ravel(), group_prestress=uniq,
-        y_obs=y_obs, weights=weights, scale_stiffness=S, scale_damping=S / w_m,
-        scale_prestress=S / P_med,
+        A=A, lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float), H=H, load=load,
+        probe=probe, L_ref=L_ref, white_unit=_whiten(chol, A, H, load, probe),
+        sources=tuple(d.source for d in datasets),
+        omega=2 * np.pi * np.concatenate([d.frequency_hz for d in datasets]),
+        dataset_index=np.concatenate([np.full(d.n, k) for k, d in enumerate(datasets)]),
+        group_index=point_group,
+        group_log_offset=np.array([g[2] for g in groups]), group_map=group_map,
+        group_measured=np.array([g[1] for g in groups]), group_dataset=np.array([g[0] for g in groups]),
+        y_obs=np.concatenate([np.log10(np.concatenate([d.G_storage for d in datasets])),
+                              np.log10(np.concatenate([d.G_loss for d in datasets]))]),
+        weights=np.concatenate([np.concatenate([d.weights_storage for d in datasets]),
+                                np.concatenate([d.weights_loss for d in datasets])]),
+        scale_stiffness=S, scale_damping=S / w_m,
+        prestress_matters=bool(varies or min_prestress_share is not None),
+        min_prestress_share=min_prestress_share, max_decades=max_decades,
     )

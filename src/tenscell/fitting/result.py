@@ -1,26 +1,39 @@
-"""What a fit returns: FitResult with its parameters, curves and slopes."""
+"""What a fit returns: FitResult with its parameters, per-data-set errors, curves and slopes."""
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._checks import positive_scalar
+from .._results import dataframe, format_repr
 from ..io.data import RheologyData
 from ..linear.linearize import linearize
 from ..model.equilibrium import Cell
 from ..response import compliance, log_slope
 
 if TYPE_CHECKING:
+    from .prestress import PrestressActivity
     from .problem import FitProblem
 
-__all__ = ["FitParameter", "FitAlternative", "FitCurve", "FitResult", "model_curve", "frequency_slopes",
-           "prestress_slopes"]
+__all__ = ["FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "FitResult", "model_curve",
+           "frequency_slopes", "prestress_slopes", "data_axis"]
+
+_MODEL_LABEL = {"uniform": "homogeneous", "per-family": "per family", "per-tendon": "heterogeneous"}
+
+
+def data_axis(data: RheologyData) -> str:
+    """``"prestress"`` for a sweep over prestress at one frequency, else ``"frequency"`` (what a plot puts on x)."""
+    if data.prestress is not None and np.unique(data.prestress).size > 1 and np.unique(data.frequency_hz).size == 1:
+        return "prestress"
+    return "frequency"
+
 
 # ---------------------------------------------------------------------------------
-# public records
+# records
 # ---------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class FitParameter:
@@ -30,7 +43,7 @@ class FitParameter:
     ----------
     name : str
         ``"EA[j]"``, ``"EA_actin"``, ``"EA"``, ``"c"``, ``"c_actin"``, ``"P"``,
-        ``"s"`` or ``"L"``.
+        ``"s"``, ``"P_data[k]"`` or ``"L"``.
     value : float
         In ``unit``.
     lower, upper : float
@@ -107,6 +120,7 @@ class FitCurve:
     label : str
     rms_log10_error : float
     kind : {"frequency", "prestress"}
+        What ``x`` is.
     """
 
     x: np.ndarray
@@ -117,28 +131,114 @@ class FitCurve:
     kind: str
 
 
+@dataclass(frozen=True, eq=False, repr=False)
+class DatasetFit:
+    """How the fitted model meets one of the data sets of a (joint) fit.
+
+    Attributes
+    ----------
+    index : int
+        Position of the data set in the fit.
+    data : RheologyData
+    axis : {"frequency", "prestress"}
+        What varies in the data (see :func:`data_axis`).
+    prestress_pa : float or None
+        Prestress (Pa) the data set states (one value), or None.
+    prestress_fitted_pa : float or None
+        Prestress (Pa) fitted for a data set that does not state it in a
+        joint fit (``P_data[k]``), else None.
+    prestress_model_N : ndarray, shape (n,)
+        Model prestress P (N) at each point, at the fitted strut length.
+    G_storage_model, G_loss_model : ndarray, shape (n,)
+        Model moduli at the data points (Pa).
+    residuals : ndarray, shape (2n,)
+        Unweighted ``log10 G_model − log10 G_data``: G' block, then G''.
+    """
+
+    index: int
+    data: RheologyData
+    axis: str
+    prestress_pa: float | None
+    prestress_fitted_pa: float | None
+    prestress_model_N: np.ndarray
+    G_storage_model: np.ndarray
+    G_loss_model: np.ndarray
+    residuals: np.ndarray
+
+    @property
+    def rms_log10_error(self) -> float:
+        """RMS of :attr:`residuals` (decades)."""
+        return float(np.sqrt(np.mean(self.residuals**2)))
+
+    @property
+    def rms_storage(self) -> float:
+        """RMS of the G' residuals (decades)."""
+        return float(np.sqrt(np.mean(self.residuals[: self.data.n] ** 2)))
+
+    @property
+    def rms_loss(self) -> float:
+        """RMS of the G'' residuals (decades)."""
+        return float(np.sqrt(np.mean(self.residuals[self.data.n:] ** 2)))
+
+    @property
+    def x(self) -> np.ndarray:
+        """The data's x values: prestress (Pa) for a prestress sweep, frequency (Hz) otherwise."""
+        return self.data.prestress if self.axis == "prestress" else self.data.frequency_hz
+
+    def __repr__(self) -> str:
+        at = (f" at {self.prestress_pa:.4g} Pa (stated)" if self.prestress_pa is not None else
+              f" at {self.prestress_fitted_pa:.4g} Pa (fitted)" if self.prestress_fitted_pa is not None else "")
+        return format_repr(f"DatasetFit {self.index}: {self.data.source}",
+                           f"{self.data.n} points, {self.axis} sweep{at}",
+                           f"rms log10 error {self.rms_log10_error:.4g} (G' {self.rms_storage:.4g}, "
+                           f"G'' {self.rms_loss:.4g})")
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary."""
+        return {"index": self.index, "data": self.data.source, "n_points": self.data.n, "axis": self.axis,
+                "prestress_Pa": self.prestress_pa, "prestress_fitted_Pa": self.prestress_fitted_pa,
+                "rms_log10_error": self.rms_log10_error, "rms_log10_error_storage": self.rms_storage,
+                "rms_log10_error_loss": self.rms_loss,
+                "residuals_log10": {"G_storage": self.residuals[: self.data.n].tolist(),
+                                    "G_loss": self.residuals[self.data.n:].tolist()}}
+
+    def to_dataframe(self):
+        """Data, model and log10 errors at each point (columns with units)."""
+        d, n = self.data, self.data.n
+        cols = {"frequency_Hz": d.frequency_hz}
+        if d.prestress is not None:
+            cols["prestress_Pa"] = d.prestress
+        cols.update({"prestress_model_N": self.prestress_model_N, "G_storage_Pa": d.G_storage,
+                     "G_loss_Pa": d.G_loss, "G_storage_model_Pa": self.G_storage_model,
+                     "G_loss_model_Pa": self.G_loss_model, "log10_error_storage": self.residuals[:n],
+                     "log10_error_loss": self.residuals[n:]})
+        return dataframe(cols, {"source": d.source, "rms_log10_error": self.rms_log10_error})
+
+
 # ---------------------------------------------------------------------------------
 # the result
 # ---------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class FitResult:
-    """The outcome of :func:`fit`.
+    """The outcome of :func:`tenscell.fitting.fit`.
 
     Attributes
     ----------
     parameters : tuple of FitParameter
         Best-fit parameters (named, with bounds and whether a bound is hit).
     residuals : ndarray, shape (2N,)
-        Unweighted ``log10 G_model − log10 G_data``: the N G' residuals, then the N G'' ones.
+        Unweighted ``log10 G_model − log10 G_data`` over the points of all
+        data sets in order: the N G' residuals, then the N G'' ones
+        (:attr:`fits` splits them per data set).
     rms_log10_error : float
-        RMS of ``residuals`` (decades).
+        RMS of ``residuals`` (decades), all data sets together.
     tolerance : float
-        The RMS the fit had to reach.
+        The RMS every data set had to reach.
     converged : bool
-        True if ``rms_log10_error <= tolerance``.
+        True if every data set's RMS is within ``tolerance``.
     message : str
-        What happened, in words (including the optimizer's last message).
-    data : RheologyData
+        What happened, in words (including why the search stopped).
+    datasets : tuple of RheologyData
     cell : Cell
         The reference cell (strut length ``L_ref``); the model at the fitted L is its scaled copy.
     problem : FitProblem
@@ -160,6 +260,8 @@ class FitResult:
         ``(seconds since the fit began, best RMS so far)`` at each improvement over all starts.
     history_theta : tuple of ndarray
         The free log-parameters at each entry of ``history``.
+    stop_reason : str
+        Why the search stopped.
     """
 
     parameters: tuple
@@ -168,7 +270,7 @@ class FitResult:
     tolerance: float
     converged: bool
     message: str
-    data: RheologyData
+    datasets: tuple
     cell: Cell
     problem: FitProblem
     theta: np.ndarray
@@ -182,8 +284,26 @@ class FitResult:
     start_rms: tuple
     history: tuple
     history_theta: tuple
+    stop_reason: str = ""
 
     # -- accessors ------------------------------------------------------------------
+    @property
+    def data(self) -> RheologyData:
+        """The data set of a single-data-set fit (a joint fit has :attr:`datasets`)."""
+        if len(self.datasets) != 1:
+            raise ValueError(f"this is a joint fit of {len(self.datasets)} data sets: use .datasets or .fits")
+        return self.datasets[0]
+
+    @property
+    def joint(self) -> bool:
+        """True for a fit of several data sets at once."""
+        return len(self.datasets) > 1
+
+    @property
+    def label(self) -> str:
+        """``"heterogeneous"``, ``"per family"`` or ``"homogeneous"`` (the stiffness parametrization)."""
+        return _MODEL_LABEL[self.tendons]
+
     def value(self, name: str) -> float:
         """The value of parameter ``name`` (SI units)."""
         for p in self.parameters:
@@ -228,72 +348,225 @@ class FitResult:
         """How many varied parameters sit at a bound."""
         return sum(p.at_bound is not None for p in self.parameters)
 
-    def prestress_model(self, prestress_pa=None) -> np.ndarray:
-        """Model prestress P (N) for measured prestresses (Pa) of a prestress sweep, or the fitted P."""
-        vals = self.problem.values(self.theta)
-        if self.problem.kind == "prestress":
-            if prestress_pa is None:
-                raise ValueError("prestress_pa (Pa) is required for a prestress-sweep fit")
-            return vals[-2] * np.asarray(prestress_pa, dtype=float)
-        return np.array([vals[-2]])
+    # -- per data set -------------------------------------------------------------------
+    def group_prestress(self) -> np.ndarray:
+        """Model prestress P (N) of each prestress group of the problem, at the fitted strut length."""
+        pr = self.problem
+        return np.exp(pr.group_log_offset + pr.group_map @ pr.full(self.theta)[pr.prestress_slice])
 
-    def moduli(self, f_hz, prestress_pa=None) -> tuple[np.ndarray, np.ndarray]:
+    @cached_property
+    def fits(self) -> tuple:
+        """One :class:`DatasetFit` per data set, in order."""
+        pr = self.problem
+        Gs, Gl = pr.moduli(self.theta)
+        P_pts = self.group_prestress()[pr.group_index]
+        vals = dict(zip(pr.names, pr.values(self.theta)))
+        out = []
+        for k, d in enumerate(self.datasets):
+            pts = np.flatnonzero(pr.dataset_index == k)
+            stated = float(d.prestress[0]) if d.prestress is not None and np.unique(d.prestress).size == 1 else None
+            out.append(DatasetFit(
+                index=k, data=d, axis=data_axis(d), prestress_pa=stated,
+                prestress_fitted_pa=vals.get(f"P_data[{k}]"), prestress_model_N=P_pts[pts],
+                G_storage_model=Gs[pts], G_loss_model=Gl[pts], residuals=self.residuals[pr.rows(k)]))
+        return tuple(out)
+
+    def prestress_model(self, prestress_pa=None, dataset: int = 0) -> np.ndarray:
+        """Model prestress P (N) for prestresses ``prestress_pa`` (Pa), or the one data set ``dataset`` was fitted at.
+
+        With ``prestress_pa`` the fit must have a prestress scale ``s``
+        (some data set stated its prestress): ``P = s·prestress_pa``.
+        Without it, the data set must have a single prestress (a frequency
+        sweep); its model P is returned as a 1-element array.
+        """
+        if prestress_pa is not None:
+            if "s" not in self.problem.names:
+                raise ValueError("no data set of this fit stated its prestress, so prestress (Pa) has no model "
+                                 "equivalent; use the fitted P (N)")
+            return self.value("s") * np.asarray(prestress_pa, dtype=float)
+        P = np.unique(self.fits[dataset].prestress_model_N)
+        if P.size != 1:
+            raise ValueError(f"data set {dataset} spans several prestresses: give prestress_pa (Pa)")
+        return P
+
+    def moduli(self, f_hz, prestress_pa=None, *, dataset: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Fitted model's G', G'' (Pa) at frequencies ``f_hz`` (Hz), computed by the core pipeline.
 
-        For a prestress-sweep fit ``prestress_pa`` (Pa) is required and must
-        broadcast with ``f_hz``; the model prestress is ``s·prestress_pa``.
+        ``prestress_pa`` (Pa, broadcast with ``f_hz``) maps to the model by
+        the fitted scale ``s``; without it the model prestress is the one of
+        data set ``dataset`` (default: the only data set, or the first with a
+        single prestress).
         """
         f = np.atleast_1d(np.asarray(f_hz, dtype=float))
-        if self.problem.kind == "prestress":
+        if prestress_pa is not None:
             Pm = np.atleast_1d(self.prestress_model(prestress_pa))
         else:
-            Pm = self.prestress_model()
+            Pm = self.prestress_model(dataset=self._single_prestress_dataset() if dataset is None else dataset)
         f, Pm = np.broadcast_arrays(f, Pm)
-        lam = self.L / self.problem.L_ref
-        EA, c = self.EA / lam**2, self.c / lam
         Gs = np.empty(f.shape)
         Gl = np.empty(f.shape)
         for P in np.unique(Pm):
             sel = Pm == P
-            lin = linearize(self.cell, P=P / lam**2, EA=EA, c=c, check=False)
-            G = (0.5 / self.problem.L_ref) / compliance(lin, f[sel])
+            G = (0.5 / self.problem.L_ref) / compliance(self._linear(P), f[sel])
             Gs[sel], Gl[sel] = G.real, G.imag
         return Gs, Gl
 
+    def _single_prestress_dataset(self) -> int:
+        for fit in self.fits:
+            if np.unique(fit.prestress_model_N).size == 1:
+                return fit.index
+        raise ValueError("every data set spans several prestresses: give prestress_pa (Pa)")
+
+    def _linear(self, P: float):
+        """The linear model of the reference cell equivalent to the fitted cell at model prestress P (N).
+
+        The fitted cell is the reference scaled by λ = L/L_ref; on the
+        reference the equivalent properties are (P/λ², EA/λ², c/λ) and the
+        moduli are identical (strut-length gauge).
+        """
+        lam = self.L / self.problem.L_ref
+        return linearize(self.cell, P=float(P) / lam**2, EA=self.EA / lam**2, c=self.c / lam, check=False)
+
+    @cached_property
+    def prestress(self) -> PrestressActivity:
+        """Is the prestress doing anything? Its elasticities and share of the stiffness (:mod:`~.prestress`)."""
+        from .prestress import prestress_activity
+
+        return prestress_activity(self)
+
+    # -- the fitted cell as a model, and what the data determine ---------------------------------
+    @property
+    def model(self):
+        """The fitted cell as a :class:`~tenscell.fitting.fitted.FittedModel` (cell at the fitted L, EA, c, prestress)."""
+        from .fitted import FittedModel, scaled_cell
+
+        names = self.problem.names
+        if "s" in names:  # some data set stated its prestress: P = s × prestress (Pa)
+            stated = [p for f in self.fits for p in (
+                np.unique(f.data.prestress) if f.data.prestress is not None else [f.prestress_fitted_pa])
+                if p is not None]
+            pre = {"s": self.value("s"), "prestress_pa": tuple(float(p) for p in stated)}
+        else:
+            pre = {"P": float(self.prestress_model(dataset=self._single_prestress_dataset())[0])}
+        return FittedModel(cell=scaled_cell(self.cell, self.L), EA=self.EA, c=self.c,
+                           source=" + ".join(d.source for d in self.datasets), **pre)
+
+    def _default_prestress_N(self) -> float:
+        """Model prestress (N) of the first single-prestress data set, else at the first data set's median."""
+        try:
+            return float(self.prestress_model(dataset=self._single_prestress_dataset())[0])
+        except ValueError:
+            return float(np.ravel(self.prestress_model(np.median(self.datasets[0].prestress)))[0])
+
+    @property
+    def linear(self):
+        """The linear model of the fitted cell (at the fitted strut length) at :meth:`_default_prestress_N`."""
+        return self.model.linear(P_N=self._default_prestress_N())
+
+    def identifiability(self, rtol: float = 1e-8):
+        """Rank, standard errors, correlations and determined combinations (:mod:`tenscell.fitting.identifiability`)."""
+        from .identifiability import identifiability
+
+        known = all(d.G_storage_sd is not None and d.G_loss_sd is not None for d in self.datasets)
+        return identifiability(self.problem, self.theta, sigma_known=known, rtol=rtol)
+
+    def predicted_creep(self, t_min: float = 0.1, t_max: float = 10.0, n: int = 41):
+        """Creep compliance (1/Pa) of the fitted cell over [t_min, t_max] s and its power-law exponent."""
+        from .fitted import predicted_creep
+
+        return predicted_creep(self.linear, t_min, t_max, n)
+
+    # -- conventions ----------------------------------------------------------------------
+    def __repr__(self) -> str:
+        sets = ", ".join(f"{_short(f.data.source)} {f.rms_log10_error:.3g}" for f in self.fits)
+        lo, hi, dec = self.stiffness_spread
+        share = self.problem.prestress_share(self.theta)
+        return format_repr(
+            f"FitResult: {self.label} fit ({self.tendons} stiffness, {self.damping} damping), "
+            f"{len(self.datasets)} data set(s), {self.problem.n_points} points, {self.problem.n_free} free parameters",
+            f"rms log10 error {self.rms_log10_error:.4g} (tolerance {self.tolerance:g}): "
+            f"{'converged' if self.converged else 'NOT converged'}; per data set: {sets}",
+            f"stiffness spread {dec:.1f} decades; prestress share of the static stiffness "
+            f"{np.nanmin(share):.3g} to {np.nanmax(share):.3g}",
+            f"{self.starts} start(s), seed {self.seed}, {self.elapsed_s:.1f} s; stopped: {self.stop_reason}",
+        )
+
+    def to_dataframe(self):
+        """Data, model and log10 errors at every point of every data set (columns with units).
+
+        ``attrs["parameters"]`` holds ``{name: (value, unit)}``.
+        """
+        import pandas as pd
+
+        frames = []
+        for f in self.fits:
+            df = f.to_dataframe()
+            df.insert(0, "dataset", f.index)
+            df.insert(1, "source", f.data.source)
+            frames.append(df)
+        out = pd.concat(frames, ignore_index=True)
+        out.attrs.update({"parameters": {p.name: (p.value, p.unit) for p in self.parameters},
+                          "rms_log10_error": self.rms_log10_error})
+        return out
+
+    def parameters_dataframe(self):
+        """The parameters as a DataFrame: name, value, unit, lower, upper, vary, at_bound, description."""
+        rows = [p.to_dict() for p in self.parameters]
+        return dataframe({k: [r[k] for r in rows] for k in rows[0]})
+
+    def plot(self, ax=None, *, dataset: int | None = None, **kw):
+        """Data and fitted model of one data set on ``ax`` (or every data set, one panel each, when ``ax`` is None).
+
+        Returns the axes (an array of axes for several panels).
+        """
+        from ..plotting.fits import plot_fit
+
+        return plot_fit(self, ax=ax, dataset=dataset, **kw)
+
     # -- output ---------------------------------------------------------------------
     def to_dict(self) -> dict:
-        """JSON-ready summary: parameters, rms_log10_error, converged, time taken, alternatives..."""
+        """JSON-ready summary: parameters, per-data-set errors, prestress activity, time taken, alternatives..."""
         lo, hi, dec = self.stiffness_spread
-        return {
-            "data": self.data.source,
-            "kind": self.data.kind,
-            "n_points": self.data.n,
+        first = self.fits[0]
+        doc = {
+            "data": [d.source for d in self.datasets] if self.joint else first.data.source,
+            "kind": None if self.joint else first.data.kind,
+            "n_points": self.problem.n_points,
             "cell": self.cell.describe(),
             "tendons": self.tendons,
             "damping": self.damping,
             "rms_log10_error": self.rms_log10_error,
-            "rms_log10_error_storage": float(np.sqrt(np.mean(self.residuals[: self.data.n] ** 2))),
-            "rms_log10_error_loss": float(np.sqrt(np.mean(self.residuals[self.data.n:] ** 2))),
+            "rms_log10_error_storage": float(np.sqrt(np.mean(self.residuals[: self.problem.n_points] ** 2))),
+            "rms_log10_error_loss": float(np.sqrt(np.mean(self.residuals[self.problem.n_points:] ** 2))),
+            "datasets": [f.to_dict() for f in self.fits],
             "tolerance": self.tolerance,
             "converged": self.converged,
             "message": self.message,
+            "stop_reason": self.stop_reason,
             "time_s": self.elapsed_s,
             "starts": self.starts,
             "seed": None if self.seed is None else int(self.seed),
             "n_evaluations": self.n_evaluations,
             "n_free_parameters": self.problem.n_free,
             "n_residuals": self.problem.n_residuals,
+            "constraints": {"min_prestress_share": self.problem.min_prestress_share,
+                            "max_decades": self.problem.max_decades},
             "parameters": [p.to_dict() for p in self.parameters],
             "tendon_stiffness_spread": {"min_N": lo, "max_N": hi, "decades": dec},
             "tendon_stiffness_spread_not_at_bounds": (
                 None if self.stiffness_spread_interior is None else dict(
                     zip(("min_N", "max_N", "decades"), self.stiffness_spread_interior))),
-            "residuals_log10": {"G_storage": self.residuals[: self.data.n].tolist(),
-                                "G_loss": self.residuals[self.data.n:].tolist()},
+            "prestress_activity": self.prestress.to_dict(),
             "start_rms": list(self.start_rms),
             "alternatives": [a.to_dict() for a in self.alternatives],
             "history": [{"time_s": t, "rms_log10_error": r} for t, r in self.history],
+            "identifiability": self.identifiability().to_dict(),
+            "predicted_creep": self.predicted_creep().to_dict(),
+            "model": self.model.to_dict(),
         }
+        if not self.joint:
+            doc["residuals_log10"] = first.to_dict()["residuals_log10"]
+        return doc
 
     def _interior_text(self) -> str:
         inner = self.stiffness_spread_interior
@@ -304,11 +577,11 @@ class FitResult:
 
     def report(self) -> str:
         """A readable plain-text report (in the spirit of lmfit's ``fit_report``)."""
-        d = self.data
         lo, hi, dec = self.stiffness_spread
         lines = [
             "[[Fit statistics]]",
-            f"    data:               {d.source} ({d.n} points, {d.kind} sweep)",
+            *(f"    data {f.index}:             {f.data.source} ({f.data.n} points, {f.axis} sweep): "
+              f"rms {f.rms_log10_error:.5f}" for f in self.fits),
             f"    model:              {self.cell.describe()}; stiffness {self.tendons}, damping {self.damping}",
             f"    free parameters:    {self.problem.n_free} (residuals: {self.problem.n_residuals})",
             f"    rms log10 error:    {self.rms_log10_error:.5f} (tolerance {self.tolerance:g}): "
@@ -326,12 +599,13 @@ class FitResult:
                 flag += f" at {p.at_bound} bound"
             lines.append(f"    {p.name:<{width}} = {p.value:<12.6g} {p.unit:<6} "
                          f"[{p.lower:.3g}, {p.upper:.3g}]{flag}  {p.description}")
-        lines.append("[[Residuals log10(model/data)]]")
-        x = d.prestress if d.kind == "prestress" else d.frequency_hz
-        xname = "P (Pa)" if d.kind == "prestress" else "f (Hz)"
-        lines.append(f"    {xname:>10}  {'G_storage':>10}  {'G_loss':>10}")
-        for i in range(d.n):
-            lines.append(f"    {x[i]:>10.4g}  {self.residuals[i]:>+10.5f}  {self.residuals[d.n + i]:>+10.5f}")
+        for f in self.fits:
+            d = f.data
+            lines.append(f"[[Residuals log10(model/data): data {f.index}]]")
+            xname = "P (Pa)" if f.axis == "prestress" else "f (Hz)"
+            lines.append(f"    {xname:>10}  {'G_storage':>10}  {'G_loss':>10}")
+            for i in range(d.n):
+                lines.append(f"    {f.x[i]:>10.4g}  {f.residuals[i]:>+10.5f}  {f.residuals[d.n + i]:>+10.5f}")
         if self.alternatives:
             lines.append(f"[[Alternatives]] {len(self.alternatives)} other start(s) fit almost as well:")
             for a in self.alternatives:
@@ -339,30 +613,38 @@ class FitResult:
         return "\n".join(lines) + "\n"
 
 
+def _short(source: str) -> str:
+    return source.replace("\\", "/").rsplit("/", 1)[-1]
+
+
 # ---------------------------------------------------------------------------------
 # analyses of a fit
 # ---------------------------------------------------------------------------------
-def model_curve(result: FitResult, n: int = 200, label: str | None = None) -> FitCurve:
-    """The fitted model on a dense grid spanning the data (for plots).
+def model_curve(result: FitResult, n: int = 200, label: str | None = None, dataset: int = 0) -> FitCurve:
+    """The fitted model on a dense grid spanning data set ``dataset`` (for plots).
 
-    Frequency sweep: ``n`` log-spaced frequencies over the data's range (Hz).
-    Prestress sweep: ``n`` prestresses over the data's range (Pa) at the
-    data's (first) frequency.
+    Frequency sweep: ``n`` log-spaced frequencies over the data's range (Hz)
+    at the data set's prestress. Prestress sweep: ``n`` prestresses over the
+    data's range (Pa) at the data's frequency.
     """
-    d = result.data
-    if d.kind == "prestress":
+    fit = result.fits[dataset]
+    d = fit.data
+    if fit.axis == "prestress":
         x = np.linspace(d.prestress.min(), d.prestress.max(), n)
         Gs, Gl = result.moduli(np.full(n, d.frequency_hz[0]), prestress_pa=x)
     else:
         x = np.logspace(math.log10(d.frequency_hz.min()), math.log10(d.frequency_hz.max()), n)
-        Gs, Gl = result.moduli(x)
-    if label is None:
-        label = {"uniform": "homogeneous", "per-family": "per family", "per-tendon": "heterogeneous"}[result.tendons]
-    return FitCurve(x=x, G_storage=Gs, G_loss=Gl, label=label, rms_log10_error=result.rms_log10_error, kind=d.kind)
+        Gs, Gl = result.moduli(x, dataset=dataset)
+    return FitCurve(x=x, G_storage=Gs, G_loss=Gl, label=result.label if label is None else label,
+                    rms_log10_error=fit.rms_log10_error, kind=fit.axis)
 
 
-def frequency_slopes(result: FitResult, f_lo: float = 0.01, f_hi: float = 100.0, n: int = 1000):
+def frequency_slopes(result: FitResult, f_lo: float = 0.01, f_hi: float = 100.0, n: int = 1000,
+                     dataset: int | None = None):
     """Local log-log slopes of the fitted G' and G'' on ``n`` log-spaced frequencies in [f_lo, f_hi] Hz.
+
+    At the prestress of data set ``dataset`` (default: the first frequency
+    sweep, else the median prestress of the first data set).
 
     Returns
     -------
@@ -370,24 +652,30 @@ def frequency_slopes(result: FitResult, f_lo: float = 0.01, f_hi: float = 100.0,
     """
     f = np.logspace(math.log10(positive_scalar("f_lo", f_lo, "Hz")), math.log10(positive_scalar("f_hi", f_hi, "Hz")),
                     int(n))
-    if result.data.kind == "prestress":
-        Gs, Gl = result.moduli(f, prestress_pa=float(np.median(result.data.prestress)))
+    if dataset is None:
+        dataset = next((x.index for x in result.fits if x.axis == "frequency"), None)
+    if dataset is None or np.unique(result.fits[dataset].prestress_model_N).size > 1:
+        d = result.datasets[dataset or 0]
+        Gs, Gl = result.moduli(f, prestress_pa=float(np.median(d.prestress)))
     else:
-        Gs, Gl = result.moduli(f)
+        Gs, Gl = result.moduli(f, dataset=dataset)
     return f, log_slope(f, Gs), log_slope(f, Gl)
 
 
-def prestress_slopes(result: FitResult, n: int = 100) -> tuple[float, float, float, float]:
-    """Straight-line fit of the model's G', G'' against prestress over the data's range.
+def prestress_slopes(result: FitResult, n: int = 100, dataset: int | None = None) -> tuple[float, float, float, float]:
+    """Straight-line fit of the model's G', G'' against prestress over a prestress sweep's range.
 
     Returns
     -------
     (dG'/dP, G'(0) intercept, dG''/dP, G''(0) intercept): slopes dimensionless (Pa/Pa),
-    intercepts in Pa, from ``n`` prestresses spanning the data at its first frequency.
+    intercepts in Pa, from ``n`` prestresses spanning data set ``dataset``
+    (default: the first prestress sweep) at its frequency.
     """
-    if result.data.kind != "prestress":
-        raise ValueError("prestress_slopes needs a prestress-sweep fit")
-    curve = model_curve(result, n=n)
+    if dataset is None:
+        dataset = next((x.index for x in result.fits if x.axis == "prestress"), None)
+    if dataset is None or result.fits[dataset].axis != "prestress":
+        raise ValueError("prestress_slopes needs a prestress sweep among the fitted data")
+    curve = model_curve(result, n=n, dataset=dataset)
     a1, b1 = np.polyfit(curve.x, curve.G_storage, 1)
     a2, b2 = np.polyfit(curve.x, curve.G_loss, 1)
     return float(a1), float(b1), float(a2), float(b2)

@@ -1,4 +1,4 @@
-"""The search: multi-start trust-region least squares with monotonic basin hopping.
+"""The search: multi-start trust-region least squares with monotonic basin hopping, stopped at its target.
 
 Each start draws tendon stiffnesses log-uniformly over 5–10 decades, places
 the damping (a frequency shift) and the overall scale on the data by a grid
@@ -9,95 +9,154 @@ tendon stiffnesses are redrawn and the fit re-polished, keeping improvements.
 Redrawing a few stiffnesses moves one relaxation time to another decade, which
 is what a power law over many decades needs; it is worth far more than extra
 random starts.
+
+The starts advance together in rounds (one least-squares run per start per
+round, in worker processes when ``jobs > 1``), which makes the result depend
+on the seed only, never on ``jobs`` or timing. After every round the search
+stops when
+
+* the best start meets the polish target (``polish × tolerance`` on every
+  data set), or
+* the tolerance was met earlier and the polishing since then has used
+  ``polish_effort`` × the model evaluations it took to get there, or
+* every start has finished (its hops, or ``patience`` moves without a 5 %
+  improvement).
+
+So a fit that reaches its tolerance takes at most about ``1 + polish_effort``
+times as long as reaching it did.
 """
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.optimize
 from threadpoolctl import threadpool_limits
 
 from .._checks import positive_scalar
-from .._parallel import starmap
+from .._parallel import Workers
 from .._progress import progress_bar
-from ..io.data import RheologyData
 from ..model.equilibrium import Cell
-from .problem import _LN10, _PENALTY, FitProblem, make_problem
+from .problem import _LN10, _PENALTY, _SHARE_WEIGHT, FitProblem, as_datasets, make_problem
 from .result import FitAlternative, FitResult
 
 __all__ = ["fit"]
 
+
 class _Objective:
-    """Residuals and Jacobian sharing one model evaluation per parameter vector."""
+    """Residuals (data, then penalties) and Jacobian in search coordinates, sharing one evaluation per point."""
 
     def __init__(self, problem: FitProblem):
         self.problem = problem
+        self.T = problem.coordinate_map()
+        self.share = problem.n_penalties > 0
         self._key = None
         self._out = None
         self.nfev = 0
 
-    def _eval(self, theta):
-        key = theta.tobytes()
+    def _eval(self, u):
+        key = u.tobytes()
         if key != self._key:
-            self._out = self.problem._evaluate(self.problem.full(theta), jac=True)
+            self._out = self.problem._evaluate(self.problem.full(self.T @ u), jac=True, share=self.share)
             self._key = key
             self.nfev += 1
         return self._out
 
-    def fun(self, theta):
-        return self.problem._residuals_from(self._eval(theta))
+    def fun(self, u):
+        out = self._eval(u)
+        r = self.problem._residuals_from(out)
+        return np.concatenate([r, self.problem._penalty_from(out, jac=False)[0]]) if self.share else r
 
-    def jac(self, theta):
-        return self.problem._jacobian_from(self._eval(theta))
+    def jac(self, u):
+        out = self._eval(u)
+        J = self.problem._jacobian_from(out)
+        if self.share:
+            J = np.vstack([J, self.problem._penalty_from(out, jac=True)[1]])
+        return J @ self.T
 
 
-# ---------------------------------------------------------------------------------
-# the search
-# ---------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
+@dataclass
 class _Chain:
+    """The state of one start between rounds (sent to and from worker processes)."""
+
     start: int
-    theta: np.ndarray
-    rms: float
-    cost: float
-    nfev: int
+    rng: np.random.Generator
+    initial: np.ndarray | None = None  # a given first point (warm start) instead of a drawn one
+    theta: np.ndarray | None = None
+    cost: float = math.inf
+    rms: float = math.inf
+    score: float = math.inf  # the worst data set's RMS
+    feasible: bool = True  # penalties (if any) within 1 % of their bound
+    met_theta: np.ndarray | None = None  # the lowest-cost state that met the tolerance on every data set
+    met_cost: float = math.inf
+    met_score: float = math.inf
+    nfev: int = 0
+    hops: int = 0
+    stale: int = 0
+    finished: bool = False
+    message: str = ""
+    status: int = 0
+    history: list = field(default_factory=list)  # [(seconds since the fit began, rms, theta)] at improvements
+
+
+@dataclass(frozen=True)
+class _Settings:
     hops: int
-    message: str
-    status: int
-    history: tuple  # ((seconds since the fit began, rms, theta), ...) at each improvement
+    patience: int
+    max_nfev: int
+    tolerance: float
+    target: float
+    t_begin: float
 
 
-def _clip(problem: FitProblem, theta):
-    lo, hi = problem.bounds
+def _clip(lo, hi, u):
     pad = 1e-9 * (hi - lo)
-    return np.clip(theta, lo + pad, hi - pad)
+    return np.clip(u, lo + pad, hi - pad)
+
+
+def _prestress_start(problem: FitProblem, trial, p_ref: float, lp: float) -> None:
+    """Place the scalable prestress parameters so that the model prestress is about ``exp(p_ref)·10^lp`` (N)."""
+    measured = problem.group_measured[np.isfinite(problem.group_measured)]
+    log_pm = math.log(float(np.median(measured))) if measured.size else 0.0
+    for i in range(problem.prestress_slice.start, problem.n_params - 1):
+        if not problem.free[i]:
+            continue
+        if problem.kinds[i] == "P":
+            trial[i] = p_ref + lp
+        elif problem.kinds[i] == "s":
+            trial[i] = p_ref + lp - log_pm
 
 
 def _initial_guess(problem: FitProblem, rng: np.random.Generator) -> np.ndarray:
-    """A start: stiffnesses log-uniform over 5–10 decades, damping and scale placed on the data."""
+    """A start (free log-parameters): stiffnesses log-uniform over 5–10 decades, damping and scale placed on the data."""
     phi = problem.fixed_log.copy()
     n_ea, n_c = problem.n_ea, problem.n_c
     spread = rng.uniform(5.0, 10.0) if problem.tendons == "per-tendon" else rng.uniform(0.0, 3.0)
+    if problem.compact:
+        spread = min(spread, problem.max_decades)
     u = rng.uniform(-0.5, 0.5, n_ea) * spread * _LN10 if n_ea > 1 else np.zeros(1)
     u = u + math.log(problem.scale_stiffness)
-    c_jitter = rng.normal(0.0, 0.3, n_c) if n_c > 1 else np.zeros(1)
+    # families' damping may differ by decades (a joint fit of the bundled data puts them ~4 apart)
+    c_jitter = rng.uniform(-2.0, 2.0, n_c) * _LN10 if n_c > 1 else np.zeros(1)
     free = problem.free
     ic = slice(n_ea, n_ea + n_c)
-    base_p = math.log(problem.scale_prestress / problem.scale_stiffness)
+    kinds = np.array(problem.kinds)
+    # scaling every EA, c and absolute prestress together by k scales G by k (exact)
+    scalable = free & np.isin(kinds, ("EA", "c", "P", "s"))
     best = None
     # damping c shifts the spectrum in frequency; the prestress-to-stiffness ratio sets how much P matters
     c_grid = np.linspace(-6.0, 6.0, 25) * _LN10 if free[n_ea] else [None]
-    if problem.kind == "prestress":
-        # the data vary with prestress, so P must matter: relative to a typical tendon, not the
-        # softest (a negligible P is a flat, prestress-blind trap the solver cannot leave)
+    p_free = bool(np.any(free & np.isin(kinds, ("P", "s"))))
+    if problem.prestress_matters:
+        # the data vary with prestress (or must respond to it), so P must matter: relative to a typical
+        # tendon, not the softest (a negligible P is a flat, prestress-blind trap the solver cannot leave)
         p_ref = float(np.median(u))
-        p_grid = np.array([-2.0, -1.0, 0.0, 1.0]) * _LN10 if free[-2] else [None]
+        p_grid = np.array([-2.0, -1.0, 0.0, 1.0]) * _LN10 if p_free else [None]
     else:
         p_ref = float(u.min())
-        p_grid = np.array([-6.0, -3.0, 0.0]) * _LN10 if free[-2] else [None]
+        p_grid = np.array([-6.0, -3.0, 0.0]) * _LN10 if p_free else [None]
     for lc in c_grid:
         for lp in p_grid:
             trial = phi.copy()
@@ -105,16 +164,12 @@ def _initial_guess(problem: FitProblem, rng: np.random.Generator) -> np.ndarray:
             if lc is not None:
                 trial[ic] = math.log(problem.scale_damping) + lc + c_jitter
             if lp is not None:
-                trial[-2] = p_ref + lp + base_p
+                _prestress_start(problem, trial, p_ref, lp)
             out = problem._evaluate(trial, jac=False)
             r = problem._residuals_from(out) / problem.weights
             if out is None or np.any(np.abs(r) >= _PENALTY):
                 continue
-            # scaling every free EA, c and P together by k scales G by k (exact): take the best k
-            shift = -float(np.mean(r)) * _LN10
-            scalable = np.zeros(problem.n_params, dtype=bool)
-            scalable[:-1] = free[:-1]
-            trial[scalable] += shift
+            trial[scalable] -= float(np.mean(r)) * _LN10
             rms = float(np.sqrt(np.mean((r - np.mean(r)) ** 2)))
             if best is None or rms < best[0]:
                 best = (rms, trial)
@@ -122,11 +177,11 @@ def _initial_guess(problem: FitProblem, rng: np.random.Generator) -> np.ndarray:
         trial = phi.copy()
         trial[:n_ea] = u
         best = (np.inf, trial)
-    return _clip(problem, best[1][free])
+    return best[1][free]
 
 
 def _perturb(problem: FitProblem, theta, rng: np.random.Generator) -> np.ndarray:
-    """A basin-hopping move: redraw a few stiffnesses (or jitter every parameter of a small model)."""
+    """A basin-hopping move (free log-parameters): redraw a few stiffnesses, or jitter every parameter of a small model."""
     phi = problem.full(theta)
     free = problem.free
     ea_free = np.flatnonzero(free[: problem.n_ea])
@@ -143,56 +198,127 @@ def _perturb(problem: FitProblem, theta, rng: np.random.Generator) -> np.ndarray
         # L is a gauge of (P, EA, c) unless one of c, P is held fixed: moving it only wanders
         move[-1] &= not bool(np.all(free[problem.n_ea: -1]))
         y[move] += rng.normal(0.0, 1.0, int(move.sum())) * _LN10
-    return _clip(problem, y[free])
+    return y[free]
 
 
 def _least_squares(problem: FitProblem, theta, max_nfev: int):
+    """One trust-region run from ``theta`` (free log-parameters), in the search coordinates."""
     obj = _Objective(problem)
-    lo, hi = problem.bounds
+    lo, hi = problem.coordinate_bounds()
+    u0 = _clip(lo, hi, problem.to_coordinates(theta))
     res = scipy.optimize.least_squares(
-        obj.fun, theta, jac=obj.jac, bounds=(lo, hi), method="trf", x_scale="jac",
+        obj.fun, u0, jac=obj.jac, bounds=(lo, hi), method="trf", x_scale="jac",
         max_nfev=max_nfev, xtol=1e-10, ftol=1e-10, gtol=1e-10,
     )
-    return res, obj.nfev
+    return obj.T @ res.x, res, obj.nfev
 
 
-def _run_chain(problem: FitProblem, start: int, seed_seq, hops: int, patience: int, max_nfev: int,
-               t_begin: float, target: float) -> _Chain:
-    """One start: initial guess, least squares, then monotonic basin hopping."""
+def _assess(problem: FitProblem, theta) -> tuple[float, float, bool]:
+    """(rms over all data, worst data set's rms, penalties within 1 % of their bound)."""
+    rms = problem.rms(theta)
+    score = float(problem.dataset_rms(theta).max())
+    pen = problem.penalty(theta)
+    return rms, score, bool(np.all(pen <= _SHARE_WEIGHT * 0.01))
+
+
+def _step(problem: FitProblem, chain: _Chain, settings: _Settings, max_nfev: int) -> _Chain:
+    """Advance one start by one least-squares run: its first (from an initial guess) or one basin-hopping move."""
     # The matrices are tiny (n ~ 24): BLAS threads only add overhead, and on a
     # shared machine they make each evaluation ~10x slower.
     with threadpool_limits(limits=1, user_api="blas"):
-        return _hop(problem, start, seed_seq, hops, patience, max_nfev, t_begin, target)
-
-
-def _hop(problem: FitProblem, start: int, seed_seq, hops: int, patience: int, max_nfev: int,
-         t_begin: float, target: float) -> _Chain:
-    rng = np.random.default_rng(seed_seq)
-    theta = _initial_guess(problem, rng)
-    res, nfev = _least_squares(problem, theta, max_nfev)
-    best, rms = res, problem.rms(res.x)
-    history = [(time.monotonic() - t_begin, rms, res.x.copy())]
-    stale = done = 0
-    while done < hops and rms > target and stale < patience:
-        done += 1
-        trial, n = _least_squares(problem, _perturb(problem, best.x, rng), max_nfev)
-        nfev += n
-        if trial.cost < best.cost:
-            r = problem.rms(trial.x)
-            stale = 0 if r < 0.95 * rms else stale + 1
-            best, rms = trial, r
-            history.append((time.monotonic() - t_begin, rms, best.x.copy()))
+        first = chain.theta is None
+        if first:
+            x0 = _initial_guess(problem, chain.rng) if chain.initial is None else chain.initial
         else:
-            stale += 1
-    return _Chain(start=start, theta=best.x, rms=rms, cost=float(best.cost), nfev=nfev, hops=done,
-                  message=str(best.message), status=int(best.status), history=tuple(history))
+            x0 = _perturb(problem, chain.theta, chain.rng)
+        theta, res, nfev = _least_squares(problem, x0, max_nfev)
+        chain.nfev += nfev
+        if not first:
+            chain.hops += 1
+        if first or res.cost < chain.cost:
+            rms, score, feasible = _assess(problem, theta)
+            if not first:
+                chain.stale = 0 if score < 0.95 * chain.score else chain.stale + 1
+            chain.theta, chain.cost, chain.rms, chain.score, chain.feasible = theta, float(res.cost), rms, score, feasible
+            chain.message, chain.status = str(res.message), int(res.status)
+            chain.history.append((time.monotonic() - settings.t_begin, rms, theta.copy()))
+            if score <= settings.tolerance and feasible and chain.cost < chain.met_cost:
+                chain.met_theta, chain.met_cost, chain.met_score = theta, chain.cost, score
+        else:
+            chain.stale += 1
+    chain.finished = chain.hops >= settings.hops or chain.stale >= settings.patience or chain.met_score <= settings.target
+    return chain
 
 
-# ---------------------------------------------------------------------------------
-# the driver
-# ---------------------------------------------------------------------------------
+def _best(chains) -> _Chain:
+    """The start whose state the fit returns: the lowest cost among states that met the tolerance, else the lowest cost."""
+    met = [ch for ch in chains if ch.met_theta is not None]
+    return min(met, key=lambda ch: (ch.met_cost, ch.start)) if met else min(chains, key=lambda ch: (ch.cost, ch.start))
+
+
+def _rounds(problem, chains, settings, jobs, polish_effort, bar):
+    """Advance the starts round by round until a stopping rule holds (module docstring); returns the stop reason."""
+    budget = None  # evaluations left for polishing, once the tolerance is met
+    # worker processes kept across rounds, stopped cleanly on Ctrl-C (tenscell._parallel)
+    with Workers(min(jobs, len(chains))) as workers:
+        while True:
+            active = [k for k, ch in enumerate(chains) if not ch.finished]
+            if not active:
+                return "every start finished"
+            cap = settings.max_nfev if budget is None else max(1, min(settings.max_nfev, budget // len(active)))
+            spent = sum(chains[k].nfev for k in active)
+            done = workers.starmap(_step, [(problem, chains[k], settings, cap) for k in active])
+            for k, ch in zip(active, done):
+                chains[k] = ch
+            spent = sum(chains[k].nfev for k in active) - spent
+            best = _best(chains)
+            bar.update(1)
+            bar.set_postfix(rms=f"{min(best.met_score, best.score):.4g}")
+            if best.met_score <= settings.target:
+                return "met the polish target"
+            if budget is None and best.met_theta is not None:
+                budget = int(polish_effort * sum(ch.nfev for ch in chains))
+                if budget <= 0:
+                    return "met the tolerance (no polishing asked)"
+            elif budget is not None:
+                budget -= spent
+                if budget <= 0:
+                    return "polished as long as reaching the tolerance allowed"
+
+
+def _merged_history(chains):
+    """The starts' improvement records merged into one best-so-far trajectory."""
+    events = sorted((t, r_, k, th) for k, ch in enumerate(chains) for (t, r_, th) in ch.history)
+    history, history_theta, so_far = [], [], math.inf
+    for t, r_, _, th in events:
+        if r_ < so_far:
+            so_far = r_
+            history.append((float(t), float(r_)))
+            history_theta.append(th)
+    return tuple(history), tuple(history_theta)
+
+
+def _warm_start(problem: FitProblem, initial):
+    """Free log-parameters of a warm start (None for none), checked against the problem's layout."""
+    if initial is None:
+        return None
+    theta = getattr(initial, "theta", initial)
+    theta = np.array(theta, dtype=float).ravel()
+    if theta.shape != (problem.n_free,) or not np.all(np.isfinite(theta)):
+        raise ValueError(f"initial: expected {problem.n_free} finite free log-parameters (a FitResult of the same "
+                         f"data and parametrization), got {theta.shape[0]} values")
+    lo, hi = problem.bounds
+    return np.clip(theta, lo, hi)
+
+
+def _count(name: str, value, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
 def fit(
-    data: RheologyData,
+    data,
     cell: Cell | None = None,
     *,
     tendons: str = "per-tendon",
@@ -203,18 +329,26 @@ def fit(
     tolerance: float = 0.01,
     hops: int = 30,
     patience: int = 6,
-    max_nfev: int = 300,
+    max_nfev: int = 100,
     polish: float = 0.2,
+    polish_effort: float = 0.5,
     bounds: dict | None = None,
     fixed: dict | None = None,
+    min_prestress_share: float | None = None,
+    max_decades: float | None = None,
+    initial=None,
     progress: bool | None = None,
 ) -> FitResult:
     """Fit the tensegrity model's G', G'' to measured data (multi-start, analytic Jacobian).
 
     Parameters
     ----------
-    data : RheologyData
-        Frequency or prestress sweep (see :mod:`tenscell.io.data`).
+    data : RheologyData or sequence of RheologyData
+        A frequency or prestress sweep (see :mod:`tenscell.io.data`), or
+        several data sets fitted jointly by one parameter set; a frequency
+        sweep that states its prestress (``data.with_prestress(P_Pa)``) is
+        linked to the others by one prestress scale (see
+        :mod:`tenscell.fitting.problem`).
     cell : Cell, optional
         Reference cell; default :func:`tenscell.paper_cell` (strut length 1 m).
     tendons : {"per-tendon", "per-family", "uniform"}
@@ -228,7 +362,8 @@ def fit(
     jobs : int
         Worker processes over starts (1 = in this process).
     tolerance : float
-        RMS of the log10 errors (decades) the fit must reach to count as converged.
+        RMS of the log10 errors (decades) that every data set must reach for
+        the fit to count as converged.
     hops : int
         Basin-hopping moves per start, at most.
     patience : int
@@ -236,10 +371,19 @@ def fit(
     max_nfev : int
         Model evaluations per least-squares run.
     polish : float
-        A start stops early once its RMS is ``polish × tolerance`` (keeps going
-        past the tolerance so that the fit is well inside it, not on its edge).
-    bounds, fixed : dict, optional
-        See :func:`make_problem`.
+        The search stops as soon as one start's RMS is ``polish × tolerance``
+        (on every data set): a fit well inside the tolerance, not on its edge.
+    polish_effort : float
+        Once the tolerance is met, polishing towards ``polish × tolerance``
+        may use at most this multiple of the model evaluations spent so far;
+        0 stops at the tolerance.
+    bounds, fixed, min_prestress_share, max_decades :
+        See :func:`tenscell.fitting.make_problem`.
+    initial : FitResult or array_like, optional
+        A warm start: start 0 begins here instead of at a drawn guess (a
+        FitResult of the same data and parametrization, or its free
+        log-parameters ``theta``); it is moved inside the bounds and, with
+        ``max_decades``, its stiffnesses are compressed to the bound.
     progress : bool or None
         A progress bar: None shows one when someone watches (a terminal or a
         notebook), True always, False never (see :mod:`tenscell._progress`).
@@ -256,8 +400,10 @@ def fit(
     from ..model.shapes import paper_cell
 
     t_begin = time.monotonic()
+    datasets = as_datasets(data)
     cell = paper_cell() if cell is None else cell
-    problem = make_problem(data, cell, tendons=tendons, damping=damping, bounds=bounds, fixed=fixed)
+    problem = make_problem(datasets, cell, tendons=tendons, damping=damping, bounds=bounds, fixed=fixed,
+                           min_prestress_share=min_prestress_share, max_decades=max_decades)
     starts = _count("starts", starts, 1)
     jobs = _count("jobs", jobs, 1)
     hops = _count("hops", hops, 0)
@@ -265,54 +411,44 @@ def fit(
     max_nfev = _count("max_nfev", max_nfev, 1)
     tolerance = positive_scalar("tolerance", tolerance, "decades")
     polish = positive_scalar("polish", polish)
+    if not (isinstance(polish_effort, (int, float)) and math.isfinite(polish_effort) and polish_effort >= 0):
+        raise ValueError(f"polish_effort must be a finite number >= 0, got {polish_effort!r}")
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
         raise ValueError(f"seed must be a non-negative integer or None, got {seed!r}")
-    seq = np.random.SeedSequence(seed)
-    children = seq.spawn(starts)
-    target = polish * tolerance
-    args = [(problem, k, children[k], hops, patience, max_nfev, t_begin, target) for k in range(starts)]
+    rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(starts)]
+    chains = [_Chain(start=k, rng=rngs[k]) for k in range(starts)]
+    chains[0].initial = _warm_start(problem, initial)
+    settings = _Settings(hops=hops, patience=patience, max_nfev=max_nfev, tolerance=tolerance,
+                         target=polish * tolerance, t_begin=t_begin)
+    with progress_bar(total=hops + 1, desc=f"fit ({tendons})", unit="round", progress=progress) as bar:
+        stop = _rounds(problem, chains, settings, jobs, float(polish_effort), bar)
+    return _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin)
 
-    bar = progress_bar(total=starts, desc=f"fit ({tendons})", unit="start", progress=progress)
-    try:
-        # worker processes that stop cleanly on Ctrl-C and die with this process (tenscell._parallel)
-        chains: list[_Chain] = starmap(_run_chain, args, jobs=jobs, on_done=lambda i, ch: bar.update(1))
-    finally:
-        bar.close()
 
-    chains.sort(key=lambda ch: ch.start)
-    best = min(chains, key=lambda ch: (ch.cost, ch.start))
-    theta = best.theta
+def _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin) -> FitResult:
+    best = _best(chains)
+    theta = best.theta if best.met_theta is None else best.met_theta
     r = problem.residuals(theta) / problem.weights
     rms = float(np.sqrt(np.mean(r**2)))
-    converged = bool(rms <= tolerance)
+    per_set = problem.dataset_rms(theta)
+    converged = bool(per_set.max() <= tolerance)
     cutoff = max(tolerance, 1.5 * rms)
     alternatives = tuple(
         FitAlternative(start=ch.start, rms_log10_error=ch.rms, parameters=problem.parameters(ch.theta))
         for ch in sorted(chains, key=lambda ch: (ch.rms, ch.start))
         if ch is not best and ch.rms <= cutoff
     )
-    # merge the starts' improvement records into one best-so-far trajectory
-    events = sorted((t, r_, th) for ch in chains for (t, r_, th) in ch.history)
-    history, history_theta, so_far = [], [], math.inf
-    for t, r_, th in events:
-        if r_ < so_far:
-            so_far = r_
-            history.append((float(t), float(r_)))
-            history_theta.append(th)
-    verdict = (f"reached rms {rms:.4g} <= tolerance {tolerance:g}" if converged
-               else f"did not reach the tolerance: best rms {rms:.4g} > {tolerance:g}")
-    message = (f"{verdict} (best of {starts} start(s), start {best.start} after {best.hops} hop(s); "
-               f"optimizer: {best.message})")
+    history, history_theta = _merged_history(chains)
+    which = "" if len(datasets) == 1 else " on every data set"
+    verdict = (f"reached rms {per_set.max():.4g} <= tolerance {tolerance:g}{which}" if converged
+               else f"did not reach the tolerance{which}: rms {per_set.max():.4g} > {tolerance:g}")
+    message = (f"{verdict} (best of {len(chains)} start(s), start {best.start} after {best.hops} hop(s); "
+               f"search stopped: {stop}; optimizer: {best.message})")
     return FitResult(
         parameters=problem.parameters(theta), residuals=r, rms_log10_error=rms, tolerance=tolerance,
-        converged=converged, message=message, data=data, cell=cell, problem=problem, theta=theta,
-        tendons=tendons, damping=damping, starts=starts, seed=seed, elapsed_s=time.monotonic() - t_begin,
-        n_evaluations=sum(ch.nfev for ch in chains), alternatives=alternatives,
-        start_rms=tuple(ch.rms for ch in chains), history=tuple(history), history_theta=tuple(history_theta),
+        converged=converged, message=message, datasets=datasets, cell=cell, problem=problem, theta=theta,
+        tendons=problem.tendons, damping=problem.damping, starts=len(chains), seed=seed,
+        elapsed_s=time.monotonic() - t_begin, n_evaluations=sum(ch.nfev for ch in chains),
+        alternatives=alternatives, start_rms=tuple(ch.rms for ch in chains), history=history,
+        history_theta=history_theta, stop_reason=stop,
     )
-
-
-def _count(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)

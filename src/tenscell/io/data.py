@@ -40,6 +40,7 @@ __all__ = [
     "write_csv",
     "bundled",
     "bundled_names",
+    "generated_note",
 ]
 
 # Canonical spellings, used for writing and in messages; matching is on the
@@ -112,6 +113,10 @@ class RheologyData:
         ``"prestress"`` when `prestress` is given, else ``"frequency"``.
         Derived when None; an inconsistent value is an error.
 
+    The points are stored in a canonical order (by prestress, then frequency),
+    whatever order they were given in, so that results depend on the data set
+    and not on the order of its rows.
+
     Raises
     ------
     DataError
@@ -168,6 +173,17 @@ class RheologyData:
             raise _error(source, f"arrays have different lengths: {lengths}")
         if lengths["frequency_hz"] == 0:
             raise _error(source, "no data points")
+        # canonical row order (prestress, then frequency, then the values): the same data set gives
+        # the same object, and the same fit, whatever the order of the rows in its file
+        keys = [arrays[k] for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
+                if arrays[k] is not None]
+        order = np.lexsort(keys)
+        if np.any(order != np.arange(order.size)):
+            for name, arr in arrays.items():
+                if arr is not None:
+                    arr = arr[order]
+                    arr.flags.writeable = False
+                    arrays[name] = arr
         for name, arr in arrays.items():
             object.__setattr__(self, name, arr)
 
@@ -198,6 +214,35 @@ class RheologyData:
     def n(self) -> int:
         """Number of data points."""
         return int(self.frequency_hz.shape[0])
+
+    def binned(self, max_points: int | None = None) -> "RheologyData":
+        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`).
+
+        Returns ``self`` when it has no more points than that.
+        """
+        from .thinning import DEFAULT_MAX_POINTS, bin_log_frequency
+
+        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points)
+
+    def with_prestress(self, prestress_pa: float) -> "RheologyData":
+        """A copy that states the prestress (Pa) at which the data were measured (a constant ``prestress`` column).
+
+        A frequency sweep that states its prestress can be fitted jointly
+        with prestress sweeps on one prestress scale
+        (:func:`tenscell.fitting.fit`). Raises DataError if the data already
+        state prestresses, or for a non-positive value.
+        """
+        if self.prestress is not None:
+            raise _error(self.source, "the data already state their prestress (a prestress column)")
+        try:
+            p = float(prestress_pa)
+        except (TypeError, ValueError):
+            raise _error(self.source, f"prestress {prestress_pa!r} is not a number (Pa)") from None
+        if not (math.isfinite(p) and p > 0):
+            raise _error(self.source, f"prestress {prestress_pa!r} Pa must be a finite number > 0")
+        return RheologyData(frequency_hz=self.frequency_hz, G_storage=self.G_storage, G_loss=self.G_loss,
+                            prestress=np.full(self.n, p), G_storage_sd=self.G_storage_sd,
+                            G_loss_sd=self.G_loss_sd, source=self.source, comments=self.comments)
 
     @property
     def weights_storage(self) -> np.ndarray:
@@ -335,13 +380,8 @@ def _parse_header(raw: list[str], source: str, line: int) -> list[str]:
     return canonical
 
 
-def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
-    comments: list[str] = []
-    columns: list[str] | None = None
-    header_line = 0
-    values: dict[str, list[float]] = {}
-    row_lines: list[int] = []
-
+def _csv_lines(text: str, source: str, comments: list[str]):
+    """Yield ``(line number, fields)`` of every non-blank, non-comment line; comments go to ``comments``."""
     # Split on "\n" only (the file was opened in universal-newline mode), so
     # that line numbers agree with what an editor shows; str.splitlines()
     # would also break on form feeds and other rare separators.
@@ -353,10 +393,19 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
             comments.append(stripped[1:].strip())
             continue
         try:
-            fields = next(csv.reader([line], strict=True))
+            yield lineno, next(csv.reader([line], strict=True))
         except csv.Error as exc:
             raise _error(source, f"malformed CSV: {exc}", lineno) from exc
 
+
+def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
+    comments: list[str] = []
+    columns: list[str] | None = None
+    header_line = 0
+    values: dict[str, list[float]] = {}
+    row_lines: list[int] = []
+
+    for lineno, fields in _csv_lines(text, source, comments):
         if columns is None:
             columns = _parse_header(fields, source, lineno)
             header_line = lineno
@@ -603,7 +652,7 @@ def bundled(name: str) -> RheologyData:
     Returns
     -------
     RheologyData
-        ``source`` is the location of the bundled file.
+        ``source`` is the file's name marked as bundled (not its install path).
 
     Raises
     ------
@@ -618,7 +667,8 @@ def bundled(name: str) -> RheologyData:
         available = ", ".join(f"{s!r} ({f})" for s, f in _BUNDLED)
         raise DataError(f"{name!r}: no bundled data set of that name; available: {available}")
     resource = resources.files("tenscell") / "data" / filename
-    source = str(resource)
+    # the name, not the install path: reports and messages say which data set, the same on every machine
+    source = f"{filename} (bundled with tenscell)"
     # Read through the resource API rather than open() so that this also
     # works when the package is installed as a zip file.
     try:
@@ -626,3 +676,26 @@ def bundled(name: str) -> RheologyData:
     except (OSError, UnicodeDecodeError) as exc:
         raise _error(source, f"cannot read bundled file: {exc}") from exc
     return _parse_text(text, source, min_points=1)
+
+
+def generated_note(data) -> str | None:
+    """A phrase saying the data are generated from a published fit law, when their file's comments say so.
+
+    The bundled data sets are not raw measurements: each file's comments say
+    it was generated from a published law. Reports, figures and claims that
+    call them data repeat it; this reads it from the comments (``"not raw
+    measurements"`` or ``"generated from"``) rather than from the file name.
+
+    Parameters
+    ----------
+    data : RheologyData or CreepData
+        Anything with ``comments``.
+
+    Returns
+    -------
+    str or None
+    """
+    text = " ".join(getattr(data, "comments", ()) or ()).lower()
+    if "not raw measurement" in text or "generated from" in text:
+        return "generated from a published fit law, not raw measurements (the file's own comments say so)"
+    return None

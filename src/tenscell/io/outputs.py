@@ -23,11 +23,13 @@ import datetime as _dt
 import json
 import os
 import shutil
+import signal
 import tempfile
+import threading
 from pathlib import Path
 
 __all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text", "OutputSet", "OutputLocationError",
-           "check_output_dir", "check_output_file", "MANIFEST"]
+           "check_output_dir", "check_output_file", "read_manifest", "MANIFEST"]
 
 #: name of the manifest file written into every output set
 MANIFEST = "manifest.json"
@@ -115,12 +117,33 @@ def check_output_dir(path, flag: str = "--out") -> Path:
     path = Path(path)
     if path.exists() and not path.is_dir():
         raise OutputLocationError(f"{flag} {path}: exists and is not a directory")
-    if path.is_dir() and any(path.iterdir()) and not (path / MANIFEST).is_file():
+    if path.is_dir() and any(path.iterdir()) and read_manifest(path) is None:
         raise OutputLocationError(
             f"{flag} {path}: directory is not empty and holds no tenscell {MANIFEST}; "
             "choose a new or empty directory (a run replaces its output directory as a whole)")
+    for ancestor in path.absolute().parents:
+        found = read_manifest(ancestor)
+        if found is not None:
+            raise OutputLocationError(
+                f"{flag} {path}: inside the output set {ancestor} (of `{found.get('command') or 'tenscell'}`), "
+                "which its next run replaces as a whole; choose a directory outside it")
     _check_parent(path, flag)
     return path
+
+
+def read_manifest(directory) -> dict | None:
+    """The tenscell manifest of an output set in ``directory``, or None if it holds none."""
+    try:
+        text = (Path(directory) / MANIFEST).read_text(encoding="utf-8")
+        doc = json.loads(text)
+    except (OSError, ValueError, RecursionError):
+        return None
+    return doc if isinstance(doc, dict) and "tenscell_version" in doc else None
+
+
+def _command_name(command: str) -> str:
+    """``"tenscell fit data.csv --out x"`` -> ``"tenscell fit"`` (what kind of set it is)."""
+    return " ".join(str(command).split()[:2])
 
 
 def _check_parent(path: Path, flag: str) -> None:
@@ -182,6 +205,26 @@ def _clean_stale(target: Path) -> None:
             shutil.rmtree(entry, ignore_errors=True)
 
 
+@contextlib.contextmanager
+def _sigint_deferred():
+    """Hold SIGINT during the block (main thread only); raise KeyboardInterrupt after it if one came."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught = []
+    try:
+        previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    except ValueError:  # pragma: no cover - signals unavailable here
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if caught and previous not in (signal.SIG_IGN, None):
+        raise KeyboardInterrupt
+
+
 _RENAME_EXCHANGE = 2
 
 
@@ -230,6 +273,13 @@ class OutputSet:
         self.flag = flag
         self.staging: Path | None = None
         _clean_stale(self.target)
+        previous = read_manifest(self.target)
+        if previous is not None and command and previous.get("command"):
+            mine, theirs = _command_name(command), _command_name(previous["command"])
+            if mine != theirs:
+                raise OutputLocationError(
+                    f"{flag} {self.target}: holds the output set of `{previous['command']}`; `{mine}` would "
+                    "replace it as a whole; choose another directory (or delete that one)")
 
     def __enter__(self) -> Path:
         check_output_dir(self.target, self.flag)
@@ -243,15 +293,17 @@ class OutputSet:
     def __exit__(self, exc_type, exc, tb) -> bool:
         staging, self.staging = self.staging, None
         assert staging is not None
-        if exc_type is not None:
-            shutil.rmtree(staging, ignore_errors=True)
-            return False
-        try:
-            self._write_manifest(staging)
-            self._commit(staging)
-        except BaseException:
-            shutil.rmtree(staging, ignore_errors=True)
-            raise
+        # a second Ctrl-C must not cut the clean-up or the swap in half: it is held until they are done
+        with _sigint_deferred():
+            if exc_type is not None:
+                shutil.rmtree(staging, ignore_errors=True)
+                return False
+            try:
+                self._write_manifest(staging)
+                self._commit(staging)
+            except BaseException:
+                shutil.rmtree(staging, ignore_errors=True)
+                raise
         return False
 
     def _write_manifest(self, staging: Path) -> None:
@@ -272,5 +324,9 @@ class OutputSet:
             return
         old = target.parent / f".{target.name}{_OLD}{os.getpid()}"
         os.rename(target, old)
-        os.rename(staging, target)
+        try:
+            os.rename(staging, target)
+        except BaseException:
+            os.rename(old, target)  # the previous set goes back; a crash right here is undone by _clean_stale
+            raise
         shutil.rmtree(old, ignore_errors=True)

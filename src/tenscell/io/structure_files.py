@@ -28,6 +28,7 @@ e.g. ``"cell.json: tendon 17 joins node 4 to itself"``.
 from __future__ import annotations
 
 import json
+import sys
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -120,6 +121,9 @@ class StructureFile:
 
 
 # ---- reading ------------------------------------------------------------------------
+#: largest structure file read (bytes); a 10^6-member lattice is about 100 MB
+MAX_FILE_BYTES = 1 << 30
+
 def load_structure(path) -> Structure:
     """Read a structure file (JSON) and return its :class:`Structure` (SI units).
 
@@ -146,15 +150,33 @@ def load_structure_file(path) -> StructureFile:
     StructureFile
     """
     path = Path(path)
-    text = path.read_text(encoding="utf-8")
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise StructureError(f"{path.name}: {size / 2**20:.0f} MiB; structure files up to "
+                             f"{MAX_FILE_BYTES / 2**20:.0f} MiB are read (about 10^6 members)")
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise StructureError(f"{path.name}: not a UTF-8 text file (byte {err.start}); "
+                             "a structure file is JSON (docs/structure-format.md)") from None
     try:
         obj = json.loads(text)
     except json.JSONDecodeError as err:
         raise StructureError(f"{path.name}: not valid JSON (line {err.lineno}, column {err.colno}: {err.msg})") from None
+    except RecursionError:
+        raise StructureError(f"{path.name}: JSON nested too deeply to be a structure file") from None
+    except ValueError:  # the only other ValueError json raises: an integer with too many digits to convert
+        raise StructureError(f"{path.name}: holds an integer with more than {sys.get_int_max_str_digits()} "
+                             "digits; not a structure file") from None
     try:
         return structure_from_dict(obj, default_name=path.stem)
     except StructureError as err:
         raise StructureError(f"{path.name}: {err}") from None
+    except (ValueError, TypeError, OverflowError, RecursionError) as err:
+        # a value the checks above let through but that cannot be a number (an over-long integer
+        # cannot even be shown); one line naming the file, never a traceback
+        raise StructureError(f"{path.name}: not a valid structure file ({type(err).__name__}: "
+                             f"{str(err)[:200]})") from None
 
 
 def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:

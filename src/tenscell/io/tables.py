@@ -22,20 +22,24 @@ def moduli_table(response):
 
 
 def fit_table(result, baseline):
-    """(header, rows) of fit.csv: data, model and homogeneous baseline at each data point."""
-    d = result.data
-    Gs, Gl = result.problem.moduli(result.theta)
-    Bs, Bl = baseline.problem.moduli(baseline.theta)
-    n = d.n
-    sweep = d.kind == "prestress"
-    header = (["prestress_Pa"] if sweep else []) + [
-        "frequency_Hz", "G_storage_Pa", "G_loss_Pa", "G_storage_model_Pa", "G_loss_model_Pa",
-        "log10_error_storage", "log10_error_loss", "G_storage_baseline_Pa", "G_loss_baseline_Pa"]
+    """(header, rows) of fit.csv: data, model and homogeneous baseline at each point of each data set.
+
+    ``prestress_Pa`` is the data's own (stated) prestress, or for a data set
+    whose prestress was fitted in a joint fit the fitted value; empty for a
+    frequency sweep fitted alone.
+    """
+    header = ["dataset", "source", "prestress_Pa", "frequency_Hz", "G_storage_Pa", "G_loss_Pa",
+              "G_storage_model_Pa", "G_loss_model_Pa", "log10_error_storage", "log10_error_loss",
+              "G_storage_baseline_Pa", "G_loss_baseline_Pa"]
     rows = []
-    for i in range(n):
-        rows.append(([float(d.prestress[i])] if sweep else []) + [
-            float(d.frequency_hz[i]), float(d.G_storage[i]), float(d.G_loss[i]), float(Gs[i]), float(Gl[i]),
-            float(result.residuals[i]), float(result.residuals[n + i]), float(Bs[i]), float(Bl[i])])
+    for f, b in zip(result.fits, baseline.fits):
+        d, n = f.data, f.data.n
+        for i in range(n):
+            P = float(d.prestress[i]) if d.prestress is not None else (
+                "" if f.prestress_fitted_pa is None else f.prestress_fitted_pa)
+            rows.append([f.index, d.source, P, float(d.frequency_hz[i]), float(d.G_storage[i]), float(d.G_loss[i]),
+                         float(f.G_storage_model[i]), float(f.G_loss_model[i]), float(f.residuals[i]),
+                         float(f.residuals[n + i]), float(b.G_storage_model[i]), float(b.G_loss_model[i])])
     return header, rows
 
 

@@ -16,6 +16,8 @@ that linearizing at many prestresses costs only a few small matrix products.
 """
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
@@ -431,8 +433,15 @@ class Cell:
 def _label(name: str, parameters) -> str:
     if not parameters:
         return name
-    ps = ", ".join(f"{k}={v:.6g}" if isinstance(v, float) else f"{k}={v}" for k, v in parameters.items())
+    ps = ", ".join(_show_parameter(k, v) for k, v in parameters.items())
     return f"{name} ({ps})"
+
+
+def _show_parameter(key: str, value) -> str:
+    """``key=value``; angles (alpha, delta, theta_*) in degrees, as people (and the CLI flags) give them."""
+    if isinstance(value, float) and (key in ("alpha", "delta") or key.startswith("theta")):
+        return f"{key}={math.degrees(value):.6g}°"
+    return f"{key}={value:.6g}" if isinstance(value, float) else f"{key}={value}"
 
 
 def equilibrate(

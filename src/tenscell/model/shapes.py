@@ -130,7 +130,7 @@ def if_free_delta(alpha: float = 0.0) -> float:
     brackets = [i for i in range(len(grid) - 1) if vals[i] == 0 or vals[i] * vals[i + 1] < 0]
     if not brackets:
         raise NotPrestressableError(
-            f"the cell without intermediate filaments has no prestressable reference at alpha={alpha:.6g} rad "
+            f"the cell without intermediate filaments has no prestressable reference at alpha={math.degrees(alpha):.6g}° "
             "for declinations between 20° and 85°"
         )
     i = min(brackets, key=lambda k: abs(grid[k] - REGULAR_DELTA))
@@ -202,14 +202,14 @@ def paper_cell(
             star = if_free_delta(alpha)
             if abs(star - delta) < 1e-9:
                 hint = (
-                    f" This is the IF-free prestressable curve delta*(alpha) itself, but at alpha={alpha:.6g} rad "
+                    f" This is the IF-free prestressable curve delta*(alpha) itself, but at alpha={math.degrees(alpha):.6g}° "
                     "its self-stress puts the tendons listed above in compression; at alpha=0 (the regular member) "
                     "every actin tendon is in tension."
                 )
             else:
                 hint = (
                     f" Without intermediate filaments a self-stress exists only on the curve delta*(alpha); "
-                    f"at alpha={alpha:.6g} rad that is delta={math.degrees(star):.6g}° (call with delta=None); "
+                    f"at alpha={math.degrees(alpha):.6g}° that is delta={math.degrees(star):.6g}° (call with delta=None); "
                     f"you asked for {math.degrees(delta):.6g}°."
                 )
         raise NotPrestressableError(str(err) + "." + hint) from None
@@ -333,7 +333,7 @@ def semiflexible_paper_cell(
     m). With intermediate filaments: 30 coordinates (10 point nodes) and 39
     members; without: 27 coordinates and 27 members. Give the struts their
     axial stiffness and damping through
-    :func:`tenscell.studies.variants.linearize_semiflexible`.
+    :func:`tenscell.studies.semiflexible.linearize_semiflexible`.
     """
     rigid = paper_cell(alpha, delta, L, intermediate_filaments)
     p = dict(rigid.parameters)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from ._style import STYLE, colors, figure_of, moduli_panels, save, style
 from .dynamics import creep_loglog, force_displacement_loop, harmonic_spectrum, time_traces
-from .fits import data_points, fit_figure, measured
+from .fits import compactness_front, data_points, fit_figure, fit_panels, measured, plot_fit, stiffness_histogram
 from .spectra import loglog_curve, rates_bar, spectrum_stems
 from .paper import fig2_prestress, fig3_frequency, moduli_vs_frequency, moduli_vs_prestress
 from .structures import MEMBER_STYLE, relaxation_modes_3d, structure_3d
@@ -37,7 +37,7 @@ __all__ = [
     "no_if_figure", "no_if_peaks_figure", "elasticities_figure", "monte_carlo_figure", "reference_map_figure",
     "references_figure", "semiflexible_figure", "stiffening_figure",
     # fits
-    "fit_figure", "data_points", "measured",
+    "fit_figure", "data_points", "measured", "plot_fit", "fit_panels", "compactness_front", "stiffness_histogram",
     # time domain
     "time_traces", "force_displacement_loop", "harmonic_spectrum", "creep_loglog",
     # spectra and time curves of the linear model

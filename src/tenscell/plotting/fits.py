@@ -1,4 +1,8 @@
-"""Measured moduli against fitted models (paper Figs. 4–5)."""
+"""Measured moduli against fitted models (paper Figs. 4–5, joint fits), the compactness front, stiffness histograms.
+
+Nothing here computes physics beyond evaluating a fitted model on a grid
+(:func:`tenscell.fitting.model_curve`).
+"""
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Sequence
@@ -11,15 +15,37 @@ from ._style import new_axes, new_panels, styled
 if TYPE_CHECKING:
     from ..io.data import RheologyData
 
-__all__ = ["fit_figure", "data_points", "measured"]
+__all__ = ["fit_figure", "data_points", "measured", "plot_fit", "fit_panels", "compactness_front",
+           "stiffness_histogram"]
+
+
+def _x_axis(data: RheologyData) -> str:
+    """``"prestress"`` for a sweep over prestress at one frequency, else ``"frequency"``."""
+    from ..fitting.result import data_axis
+
+    return data_axis(data)
 
 
 def data_points(data: RheologyData, ax: Axes, **kw) -> Axes:
     """Measured G' (filled circles) and G'' (open circles) on ``ax`` against f or prestress."""
-    x = data.prestress if data.kind == "prestress" else data.frequency_hz
-    ax.plot(x, data.G_storage, "o", color="C0", label="G′ data", **kw)
-    ax.plot(x, data.G_loss, "o", mfc="none", color="C3", label="G″ data", **kw)
+    from ..io.data import generated_note
+
+    x = data.prestress if _x_axis(data) == "prestress" else data.frequency_hz
+    # data generated from a published law (the bundled sets) say so in the legend
+    what = "data (published law, not raw)" if generated_note(data) else "data"
+    ax.plot(x, data.G_storage, "o", color="C0", label=f"G′ {what}", **kw)
+    ax.plot(x, data.G_loss, "o", mfc="none", color="C3", label=f"G″ {what}", **kw)
     return ax
+
+
+def _axis_labels(ax: Axes, kind: str) -> None:
+    if kind == "frequency":
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("frequency f (Hz)")
+    else:
+        ax.set_xlabel("prestress (Pa)")
+        ax.set_ylim(bottom=0.0)
 
 
 @styled
@@ -27,12 +53,7 @@ def measured(data: RheologyData, ax: Axes | None = None, *, title: str | None = 
     """Measured G' and G'' on labelled axes: log-log against f (Hz), or linear against prestress (Pa)."""
     ax = new_axes(ax, (5.0, 3.8))
     data_points(data, ax, **kw)
-    if data.kind == "prestress":
-        ax.set_xlabel("prestress (Pa)")
-    else:
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("frequency f (Hz)")
+    _axis_labels(ax, _x_axis(data))
     ax.set_ylabel("modulus (Pa)")
     ax.legend(loc="best")
     if title:
@@ -64,20 +85,103 @@ def fit_figure(data: RheologyData, curves: Sequence, title: str | None = None,
     Frequency sweeps are drawn on log-log axes against f (Hz); prestress
     sweeps on linear axes against prestress (Pa), as in the paper.
     """
-    prestress = data.kind == "prestress"
     ax = new_panels(axes, len(curves), (4.2 * len(curves), 3.6), title=title, sharey=True)
     for a, cv in zip(ax, curves):
         data_points(data, a)
         a.plot(cv.x, cv.G_storage, "-", color="C0", label="G′ model")
         a.plot(cv.x, cv.G_loss, "--", color="C3", label="G″ model")
-        if not prestress:
-            a.set_xscale("log")
-            a.set_yscale("log")
-            a.set_xlabel("frequency f (Hz)")
-        else:
-            a.set_xlabel("prestress (Pa)")
-            a.set_ylim(bottom=0.0)
+        _axis_labels(a, _x_axis(data))
         a.set_title(f"{cv.label}: rms log10 error {cv.rms_log10_error:.3g}")
     ax[0].set_ylabel("modulus (Pa)")
     ax[0].legend(loc="best")
+    return ax
+
+
+def _short(source: str) -> str:
+    return source.replace("\\", "/").rsplit("/", 1)[-1]
+
+
+@styled
+def plot_fit(result, ax: Axes | None = None, *, dataset: int | None = None, baseline=None, n: int = 200):
+    """Data (circles) and fitted model (lines) of one data set of a fit on ``ax``.
+
+    With ``ax`` and ``dataset`` both None and several data sets, every data
+    set gets a panel of a new figure (:func:`fit_panels`) and the array of
+    axes is returned; otherwise the given (or a new) axes. ``baseline`` (a
+    fit of the same data sets, e.g. the homogeneous one) is drawn dotted.
+    Frequency sweeps on log-log axes against f (Hz); prestress sweeps on
+    linear axes against prestress (Pa), as in the paper.
+    """
+    from ..fitting.result import model_curve
+
+    if ax is None and dataset is None and len(result.datasets) > 1:
+        return fit_panels(result, baseline=baseline, n=n)
+    ax = new_axes(ax, (4.4, 3.6))
+    k = 0 if dataset is None else int(dataset)
+    fit = result.fits[k]
+    cv = model_curve(result, n=n, dataset=k)
+    data_points(fit.data, ax)
+    ax.plot(cv.x, cv.G_storage, "-", color="C0", label=f"G′ {cv.label}")
+    ax.plot(cv.x, cv.G_loss, "--", color="C3", label=f"G″ {cv.label}")
+    if baseline is not None:
+        bv = model_curve(baseline, n=n, dataset=k, label="homogeneous")
+        ax.plot(bv.x, bv.G_storage, ":", color="C0", label="G′ homogeneous")
+        ax.plot(bv.x, bv.G_loss, ":", color="C3", label="G″ homogeneous")
+    _axis_labels(ax, fit.axis)
+    ax.set_ylabel("modulus (Pa)")
+    at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else
+          f" at {fit.prestress_fitted_pa:.4g} Pa (fitted)" if fit.prestress_fitted_pa is not None else "")
+    ax.set_title(f"{_short(fit.data.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}")
+    return ax
+
+
+@styled
+def fit_panels(result, baseline=None, title: str | None = None, n: int = 200,
+               axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """One panel per data set of ``result`` (the combined figure of a joint fit); returns the axes."""
+    ax = new_panels(axes, len(result.datasets), (4.4 * len(result.datasets), 3.8), title=title)
+    for i, a in enumerate(ax):
+        plot_fit(result, ax=a, dataset=i, baseline=baseline, n=n)
+    ax[0].legend(loc="best")
+    return ax
+
+
+@styled
+def compactness_front(decades, rms, tolerance: float | None = None, knee: float | None = None,
+                      ax: Axes | None = None, title: str | None = None) -> Axes:
+    """Best RMS log10 error reached against the bound on the stiffness spread (decades).
+
+    ``knee`` (decades) is marked if given; ``tolerance`` drawn as a line.
+    """
+    ax = new_axes(ax, (4.8, 3.6))
+    ax.semilogy(decades, rms, "o-", color="C0", label="best RMS reached")
+    if tolerance is not None:
+        ax.axhline(tolerance, color="0.4", ls="--", lw=1, label=f"tolerance {tolerance:g}")
+    if knee is not None:
+        ax.axvline(knee, color="C3", ls=":", lw=1.2, label=f"narrowest within tolerance: {knee:g}")
+    ax.set_xlabel("bound on the stiffness spread (decades)")
+    ax.set_ylabel("RMS log10 error (decades)")
+    ax.legend(loc="best")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+@styled
+def stiffness_histogram(EA, ax: Axes | None = None, title: str | None = None, families=None) -> Axes:
+    """Histogram of log10 tendon stiffness (N), stacked by family when ``families`` (one label per tendon) is given."""
+    ax = new_axes(ax, (4.8, 3.6))
+    x = np.log10(np.asarray(EA, dtype=float))
+    lo, hi = np.floor(x.min()), np.ceil(x.max())
+    bins = np.arange(lo, max(hi, lo + 1) + 0.5, 0.5)
+    if families is None:
+        ax.hist(x, bins=bins, color="C0")
+    else:
+        fams = list(dict.fromkeys(families))
+        ax.hist([x[np.array(families) == f] for f in fams], bins=bins, stacked=True, label=fams)
+        ax.legend(loc="best")
+    ax.set_xlabel("log10 EA (EA in N)")
+    ax.set_ylabel("tendons")
+    if title:
+        ax.set_title(title)
     return ax

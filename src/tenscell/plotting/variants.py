@@ -26,7 +26,7 @@ def no_if_figure(study, title: str = "Without intermediate filaments: G'' has a 
                  axes: Sequence[Axes] | None = None) -> np.ndarray:
     """G', G'' against f for each prestress, without IFs (solid) and with them (dashed); peaks marked.
 
-    ``study`` is a :class:`tenscell.studies.variants.NoIFStudy`. Returns the
+    ``study`` is a :class:`tenscell.studies.no_if.NoIFStudy`. Returns the
     (G', G'') axes.
     """
     w, i = study.without, study.with_ifs
@@ -56,7 +56,8 @@ def no_if_peaks_figure(study, title: str = "Peak of G'' without IFs against pres
     hp = np.array([p.height for p in study.peaks])
     a1, a2 = ax = new_panels(axes, 2, _PANELS, title=title)
     a1.loglog(P, fp, "o-")
-    a1.axhline(1e3, color="0.5", ls=":", label="upper end of the paper's window (1000 Hz)")
+    w = getattr(study, "window_hz", 1e3)
+    a1.axhline(w, color="0.5", ls=":", label=f"upper end of the frequency window ({w:g} Hz)")
     a1.set_xlabel("prestress P (N)")
     a1.set_ylabel("peak frequency of G″ (Hz)")
     a1.legend(loc="upper left")
@@ -126,7 +127,7 @@ def monte_carlo_figure(results, bound: float = 0.08, title: str = "Monte Carlo o
 @styled
 def reference_map_figure(mp, if_free_curve=None, title: str = "Valid references q0(α, δ) of the paper cell",
                          ax: Axes | None = None) -> Axes:
-    """The validity map of :func:`tenscell.studies.variants.prestress_map`, with the IF-free curve δ*(α)."""
+    """The validity map of :func:`tenscell.studies.references.prestress_map`, with the IF-free curve δ*(α)."""
     from matplotlib.colors import ListedColormap
 
     own = ax is None

@@ -1,14 +1,30 @@
-"""The Markdown report of a fit, rendered only from the fit's result fields."""
+"""The Markdown report of a fit, rendered only from the fit's result fields.
+
+The report is a sequence of sections; each section is a function
+``(result, baseline) -> list of lines`` (``baseline`` is the homogeneous fit of
+the same data, or None) listed in :data:`SECTIONS`. A new analysis adds its
+section function there.
+"""
 from __future__ import annotations
 
 import math
 
 import numpy as np
 
+from ..fitting.prestress import CELL_ELASTICITY
 from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
 from ..io.data import RheologyData
+from ..io.thinning import binning_notes
+from ._format import num, table
+from .fit_analysis import section_comparison, section_creep, section_identifiability, section_provenance
 
-__all__ = ["fit_markdown"]
+__all__ = ["fit_markdown", "SECTIONS", "section_summary", "section_datasets", "section_baseline", "section_shape",
+           "section_prestress", "section_stiffness", "section_parameters", "section_errors",
+           "section_alternatives"]
+
+
+def _name(source: str) -> str:
+    return source.replace("\\", "/").rsplit("/", 1)[-1]
 
 
 def _data_slopes(data: RheologyData):
@@ -17,70 +33,130 @@ def _data_slopes(data: RheologyData):
     return float(a1), float(b1), float(a2), float(b2)
 
 
-def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None) -> str:
-    """A markdown report: verdict, parameters (bounds hit), error table, the homogeneous baseline beside it.
-
-    Parameters
-    ----------
-    result : FitResult
-        The (heterogeneous) fit.
-    baseline : FitResult, optional
-        The homogeneous fit (``tendons="uniform"``) of the same data.
-    """
-    d = result.data
-    title = title or f"Fit of the tensegrity model to {d.source}"
-    lo, hi, dec = result.stiffness_spread
-    out = [f"# {title}", ""]
+def section_summary(result: FitResult, baseline=None) -> list[str]:
+    """What was fitted to what, the verdict, the search."""
+    pr = result.problem
     verdict = "**converged**" if result.converged else "**NOT converged**"
-    out += [
-        f"- Data: `{d.source}`: {d.n} points, {d.kind} sweep.",
+    each = " on every data set" if result.joint else ""
+    lines = [f"- Data: {len(result.datasets)} data set(s), {pr.n_points} points:"]
+    for f in result.fits:
+        at = (f", measured at {num(f.prestress_pa)} Pa (stated)" if f.prestress_pa is not None else
+              f", prestress not stated: fitted {num(f.prestress_fitted_pa)} Pa" if f.prestress_fitted_pa is not None
+              else "")
+        lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {f.axis} sweep{at}.")
+        lines += [f"     Thinned: {note}." for note in binning_notes(f.data)]
+    lines += [
         f"- Model: {result.cell.describe()}; stiffness {result.tendons}, damping {result.damping}; "
-        f"{result.problem.n_free} free parameters against {result.problem.n_residuals} residuals.",
-        f"- RMS of the log10 errors: **{result.rms_log10_error:.5f}** decades "
-        f"(tolerance {result.tolerance:g}): {verdict}.",
+        f"{pr.n_free} free parameters against {pr.n_residuals} residuals.",
+        f"- RMS of the log10 errors: **{num(result.rms_log10_error, 4)}** decades over all points; the tolerance "
+        f"{num(result.tolerance)} applies{each}: {verdict}.",
         f"- {result.message}",
         f"- Starts: {result.starts} (seed {result.seed}); time {result.elapsed_s:.1f} s; "
         f"{result.n_evaluations} model evaluations.",
-        f"- Tendon stiffness spread: {lo:.3g} to {hi:.3g} N ({dec:.1f} decades){result._interior_text()}.",
         "",
     ]
-    if baseline is not None:
-        out += ["## Heterogeneous fit versus the homogeneous baseline", "",
-                "| model | stiffness | free parameters | RMS log10 error | converged |", "|---|---|---|---|---|"]
-        for name, r in (("heterogeneous", result), ("homogeneous baseline", baseline)):
-            out.append(f"| {name} | {r.tendons} | {r.problem.n_free} | {r.rms_log10_error:.5f} | "
-                       f"{'yes' if r.converged else 'no'} |")
+    return lines
+
+
+def section_datasets(result: FitResult, baseline=None) -> list[str]:
+    """Per-data-set errors of a joint fit (one line for a single data set)."""
+    if not result.joint:
+        return []
+    rows = [(f.index, f"`{_name(f.data.source)}`", f.data.n, num(f.rms_log10_error, 4), num(f.rms_storage, 4),
+             num(f.rms_loss, 4), "yes" if f.rms_log10_error <= result.tolerance else "no") for f in result.fits]
+    out = ["## Each data set", "", table(("data set", "file", "points", "RMS log10 error", "G' RMS", "G'' RMS",
+                                         "within tolerance"), rows)]
+    if "s" in result.problem.names:
+        out.append(f"One prestress scale links the data sets: model prestress (N) = s × prestress (Pa), "
+                   f"s = {num(result.value('s'))} m².")
+    unknown = [f for f in result.fits if f.prestress_fitted_pa is not None]
+    for f in unknown:
+        out.append(f"Data set {f.index} does not state its prestress; the fit places it at "
+                   f"{num(f.prestress_fitted_pa)} Pa on the scale of the others (a fitted parameter, not a "
+                   "measurement).")
+    return out + [""]
+
+
+def section_baseline(result: FitResult, baseline=None) -> list[str]:
+    """The heterogeneous fit beside the homogeneous baseline."""
+    if baseline is None:
+        return []
+    rows = [(name, r.tendons, r.problem.n_free, num(r.rms_log10_error, 4), "yes" if r.converged else "no")
+            for name, r in (("this fit", result), ("homogeneous baseline", baseline))]
+    return ["## Against the homogeneous baseline", "",
+            table(("model", "stiffness", "free parameters", "RMS log10 error", "converged"), rows)]
+
+
+def section_shape(result: FitResult, baseline=None) -> list[str]:
+    """Slopes of the fitted model: log-log in frequency, straight lines in prestress."""
+    out = ["## Shape of the fitted model", ""]
+    for f in result.fits:
+        d = f.data
+        head = f"Data set {f.index} (`{_name(d.source)}`): " if result.joint else ""
+        if f.axis == "frequency":
+            f_lo, f_hi = float(d.frequency_hz.min()), float(d.frequency_hz.max())
+            _, s1, s2 = frequency_slopes(result, f_lo, f_hi, 1000, dataset=f.index)
+            line = (f"{head}local log-log slopes on 1000 frequencies from {num(f_lo)} to {num(f_hi)} Hz: "
+                    f"G' {s1.min():.3f} to {s1.max():.3f}; G'' {s2.min():.3f} to {s2.max():.3f}.")
+            if baseline is not None and not baseline.joint:
+                _, b1, _ = frequency_slopes(baseline, f_lo, f_hi, 1000)
+                line += f" Homogeneous baseline: G' slope {b1.min():.3f} to {b1.max():.3f}."
+            out.append(line)
+        else:
+            a1, b1, a2, b2 = prestress_slopes(result, dataset=f.index)
+            da1, db1, da2, db2 = _data_slopes(d)
+            rows = [("data", num(da1), num(db1), num(da2), num(db2)), ("fitted model", num(a1), num(b1), num(a2),
+                                                                       num(b2))]
+            if baseline is not None and not baseline.joint:
+                rows.append(("homogeneous baseline", *(num(v) for v in prestress_slopes(baseline))))
+            out += [f"{head}straight lines over the data's prestress range:", "",
+                    table(("", "dG'/dP", "G'(0) (Pa)", "dG''/dP", "G''(0) (Pa)"), rows)]
         out.append("")
-    # shape checks
-    out += ["## Shape of the fitted model", ""]
-    if d.kind == "frequency":
-        f_lo, f_hi = float(d.frequency_hz.min()), float(d.frequency_hz.max())
-        _, s1, s2 = frequency_slopes(result, f_lo, f_hi, 1000)
-        out.append(f"Local log-log slopes on 1000 frequencies from {f_lo:g} to {f_hi:g} Hz: "
-                   f"G' {s1.min():.3f} to {s1.max():.3f}; G'' {s2.min():.3f} to {s2.max():.3f}.")
-        if f_lo <= 0.01 and f_hi >= 100:
-            _, s1, _ = frequency_slopes(result, 0.01, 100, 1000)
-            out.append(f"G' slope from 0.01 to 100 Hz: {s1.min():.3f} to {s1.max():.3f}.")
-        if baseline is not None:
-            _, b1, _ = frequency_slopes(baseline, f_lo, f_hi, 1000)
-            out.append(f"Homogeneous baseline: G' slope {b1.min():.3f} to {b1.max():.3f}.")
-    else:
-        a1, b1, a2, b2 = prestress_slopes(result)
-        da1, db1, da2, db2 = _data_slopes(d)
-        out += ["| straight line over the data's prestress range | dG'/dP | G'(0) (Pa) | dG''/dP | G''(0) (Pa) |",
-                "|---|---|---|---|---|",
-                f"| data | {da1:.4f} | {db1:.2f} | {da2:.4f} | {db2:.2f} |",
-                f"| fitted model | {a1:.4f} | {b1:.2f} | {a2:.4f} | {b2:.2f} |"]
-        if baseline is not None:
-            c1, e1, c2, e2 = prestress_slopes(baseline)
-            out.append(f"| homogeneous baseline | {c1:.4f} | {e1:.2f} | {c2:.4f} | {e2:.2f} |")
-    out.append("")
-    # parameters
-    out += ["## Parameters", "", "| parameter | value | unit | lower | upper | note |", "|---|---|---|---|---|---|"]
+    return out
+
+
+def section_prestress(result: FitResult, baseline=None) -> list[str]:
+    """Is the prestress doing anything? Elasticities and share, with the verdict in words."""
+    pa = result.prestress
+    out = ["## Is the prestress doing anything?", "", pa.verdict(), ""]
+    if pa.min_share_bound is not None:
+        out += [f"This fit was required to keep the prestress share of the static stiffness at or above "
+                f"{num(pa.min_share_bound)} (a one-sided penalty; the values below are the ones reached).", ""]
+    rows = []
+    for k, P, a, b, s in zip(pa.reference_dataset, pa.reference_prestress_N, pa.reference_storage,
+                             pa.reference_loss, pa.reference_share):
+        rows.append((k, num(P), num(a, 3), num(b, 3), num(s, 3)))
+    out += [f"At {num(pa.reference_frequency_hz)} Hz, for each prestress of the data (model P in N at the fitted "
+            "strut length):", "",
+            table(("data set", "P (N)", "∂lnG'/∂lnP", "∂lnG''/∂lnP", "share of static stiffness carried by P·Kp"),
+                  rows),
+            f"Adherent cells show ∂lnG'/∂lnP of about {num(CELL_ELASTICITY)} (G' nearly proportional to the "
+            "prestress). The share is the ω → 0 limit of ∂lnG/∂lnP. Elasticities at every data point are in "
+            "`fit.json` (`prestress_activity`) and `PrestressActivity.to_dataframe()`. This section shows how the "
+            "fitted model responds to a change of prestress; it does not show that the data determine that "
+            "response (a fit to a frequency sweep alone does not constrain it).", ""]
+    return out
+
+
+def section_stiffness(result: FitResult, baseline=None) -> list[str]:
+    """The spread of the fitted stiffnesses (and the bound on it, if any)."""
+    lo, hi, dec = result.stiffness_spread
+    line = f"Tendon stiffnesses span {num(lo)} to {num(hi)} N: {dec:.1f} decades{result._interior_text()}."
+    D = result.problem.max_decades
+    if D is not None:
+        line += (f" The fit bounded the spread to {num(D)} decades" +
+                 (" (no constraint here: the bound is wider than the stiffness bounds)." if not result.problem.compact
+                  else "."))
+    return ["## Stiffness spread", "", line, ""]
+
+
+def section_parameters(result: FitResult, baseline=None) -> list[str]:
+    """Every parameter with bounds and whether it sits at one."""
+    rows = []
     for p in result.parameters:
         note = ("fixed" if not p.vary else "") + (f"at {p.at_bound} bound" if p.at_bound else "")
-        out.append(f"| {p.name} | {p.value:.6g} | {p.unit} | {p.lower:.3g} | {p.upper:.3g} | {note} |")
-    out.append("")
+        rows.append((p.name, f"{p.value:.6g}", p.unit, num(p.lower, 3), num(p.upper, 3), note))
+    out = ["## Parameters", "", table(("parameter", "value", "unit", "lower", "upper", "note"), rows)]
     if result.n_at_bound:
         out += [f"{result.n_at_bound} parameter(s) sit at a bound: a stiffness at its lower bound is a tendon "
                 "the fit switched off, one at its upper bound a tendon it made rigid.", ""]
@@ -88,31 +164,73 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
         out += ["Homogeneous baseline parameters: " + ", ".join(
             f"{p.name} = {p.value:.4g} {p.unit}" + (f" ({p.at_bound} bound)" if p.at_bound else "")
             for p in baseline.parameters), ""]
-    # error table
-    x = d.prestress if d.kind == "prestress" else d.frequency_hz
-    xname = "prestress (Pa)" if d.kind == "prestress" else "frequency (Hz)"
-    Gs, Gl = result.problem.moduli(result.theta)
-    head = f"| {xname} | G' data (Pa) | G' model (Pa) | log10 error | G'' data (Pa) | G'' model (Pa) | log10 error |"
-    sep = "|---|---|---|---|---|---|---|"
-    if baseline is not None:
-        head += " G' baseline | G'' baseline |"
-        sep += "---|---|"
-        Bs, Bl = baseline.problem.moduli(baseline.theta)
-    out += ["## Errors", "", head, sep]
-    for i in range(d.n):
-        row = (f"| {x[i]:.4g} | {d.G_storage[i]:.4g} | {Gs[i]:.4g} | {result.residuals[i]:+.4f} | "
-               f"{d.G_loss[i]:.4g} | {Gl[i]:.4g} | {result.residuals[d.n + i]:+.4f} |")
-        if baseline is not None:
-            row += f" {Bs[i]:.4g} | {Bl[i]:.4g} |"
-        out.append(row)
-    out.append("")
-    if result.alternatives:
-        out += ["## Other solutions that fit almost as well", "",
-                "| start | RMS log10 error | c (N·s/m) | stiffness spread (decades) |", "|---|---|---|---|"]
-        for a in result.alternatives:
-            vals = {p.name: p.value for p in a.parameters}
-            ea = np.array([p.value for p in a.parameters if p.name.startswith("EA")])
-            cs = ", ".join(f"{v:.4g}" for k, v in vals.items() if k == "c" or k.startswith("c_"))
-            out.append(f"| {a.start} | {a.rms_log10_error:.5f} | {cs} | {math.log10(ea.max() / ea.min()):.1f} |")
-        out.append("")
+    return out
+
+
+def section_errors(result: FitResult, baseline=None) -> list[str]:
+    """Data, model and log10 error at every point, per data set."""
+    out = ["## Errors", ""]
+    base_fits = baseline.fits if baseline is not None and len(baseline.datasets) == len(result.datasets) else None
+    for f in result.fits:
+        d = f.data
+        xname = "prestress (Pa)" if f.axis == "prestress" else "frequency (Hz)"
+        head = [xname, "G' data (Pa)", "G' model (Pa)", "log10 error", "G'' data (Pa)", "G'' model (Pa)",
+                "log10 error"]
+        if base_fits is not None:
+            head += ["G' baseline", "G'' baseline"]
+        rows = []
+        for i in range(d.n):
+            row = [num(f.x[i]), num(d.G_storage[i]), num(f.G_storage_model[i]), f"{f.residuals[i]:+.4f}",
+                   num(d.G_loss[i]), num(f.G_loss_model[i]), f"{f.residuals[d.n + i]:+.4f}"]
+            if base_fits is not None:
+                row += [num(base_fits[f.index].G_storage_model[i]), num(base_fits[f.index].G_loss_model[i])]
+            rows.append(row)
+        if result.joint:
+            out += [f"Data set {f.index} (`{_name(d.source)}`):", ""]
+        out.append(table(head, rows))
+    return out
+
+
+def section_alternatives(result: FitResult, baseline=None) -> list[str]:
+    """Other starts' solutions that fit almost as well (the non-uniqueness)."""
+    if not result.alternatives:
+        return []
+    rows = []
+    for a in result.alternatives:
+        vals = {p.name: p.value for p in a.parameters}
+        ea = np.array([p.value for p in a.parameters if p.name.startswith("EA")])
+        cs = ", ".join(f"{v:.4g}" for k, v in vals.items() if k == "c" or k.startswith("c_"))
+        rows.append((a.start, num(a.rms_log10_error, 4), cs, f"{math.log10(ea.max() / ea.min()):.1f}"))
+    return ["## Other solutions that fit almost as well", "",
+            table(("start", "RMS log10 error", "c (N·s/m)", "stiffness spread (decades)"), rows)]
+
+
+#: the report's sections, in order
+SECTIONS = [section_summary, section_provenance, section_datasets, section_baseline, section_shape,
+            section_prestress, section_identifiability, section_comparison, section_creep, section_stiffness,
+            section_parameters, section_errors, section_alternatives]
+
+
+def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None,
+                 comparison=None) -> str:
+    """A Markdown report: verdict, each data set, prestress activity, identifiability, model comparison,
+    predicted creep, parameters, errors, baseline beside it.
+
+    Parameters
+    ----------
+    result : FitResult
+        The (heterogeneous, possibly joint) fit.
+    baseline : FitResult, optional
+        The homogeneous fit (``tendons="uniform"``) of the same data.
+    title : str, optional
+    comparison : ModelComparison, optional
+        From :func:`tenscell.fitting.models.compare_models` (e.g. with held-out
+        data); computed from ``result`` and ``baseline`` when not given.
+    """
+    if title is None:
+        title = "Fit of the tensegrity model to " + " and ".join(f"`{_name(d.source)}`" for d in result.datasets)
+    out = [f"# {title}", ""]
+    for section in SECTIONS:
+        out += section(result, baseline, comparison=comparison) if section is section_comparison \
+            else section(result, baseline)
     return "\n".join(out)

@@ -1,0 +1,172 @@
+"""Is the prestress doing anything? Prestress elasticities and the prestress share of a fitted cell.
+
+A tensegrity model is worth fitting because its stiffness comes from its
+prestress: in cells ∂ln G'/∂ln P is about 0.7 (G' proportional to the
+tension). A fit can nevertheless put P at its lower bound, where the tendons'
+elastic stiffness carries everything and the model is a network of Voigt
+springs. For every data point this module reports, at the fitted parameters,
+
+* ``∂ln G'/∂ln P`` and ``∂ln G''/∂ln P`` (exact, from
+  :func:`tenscell.sensitivity.analytic_elasticities` on the fitted linear
+  model), and
+* the share of the static stiffness carried by ``P·Kp``:
+  ``P·yᵀKp x / yᵀK0 x`` with ``x = K0⁻¹(−H0)``, ``y = K0⁻ᵀD0ᵀ`` — the
+  ω → 0 limit of ``∂ln G/∂ln P``,
+
+and says in words when the prestress is inert.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .._results import dataframe, format_repr
+
+if TYPE_CHECKING:
+    from .result import FitResult
+
+__all__ = ["PrestressActivity", "prestress_activity", "INERT_SHARE", "INERT_ELASTICITY", "CELL_ELASTICITY"]
+
+#: a prestress share of the static stiffness below this is "inert" (together with INERT_ELASTICITY)
+INERT_SHARE = 0.01
+#: ... and so is a ∂ln G'/∂ln P below this at every data point
+INERT_ELASTICITY = 0.01
+#: ∂ln G'/∂ln P measured in adherent cells (G' about proportional to the prestress; Stamenović 2002, Wang 2002)
+CELL_ELASTICITY = 0.7
+#: frequency (Hz) at which the elasticity is also reported for every prestress (the prestress data's frequency)
+REFERENCE_FREQUENCY_HZ = 0.1
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class PrestressActivity:
+    """Prestress elasticities and share at the fitted parameters.
+
+    Attributes
+    ----------
+    dataset : ndarray of int, shape (N,)
+        Data set of each point.
+    frequency_hz : ndarray, shape (N,)
+        The data's frequencies (Hz).
+    prestress_model_N : ndarray, shape (N,)
+        Model prestress P (N) at each point.
+    storage, loss : ndarray, shape (N,)
+        ``∂ln G'/∂ln P`` and ``∂ln G''/∂ln P`` at each point.
+    share : ndarray, shape (N,)
+        Share of the static stiffness carried by ``P·Kp`` at each point's prestress.
+    reference_frequency_hz : float
+    reference_prestress_N : ndarray, shape (groups,)
+        Each distinct model prestress of the fit.
+    reference_dataset : ndarray of int, shape (groups,)
+    reference_storage, reference_loss : ndarray, shape (groups,)
+        The elasticities at ``reference_frequency_hz`` for each distinct prestress.
+    reference_share : ndarray, shape (groups,)
+    min_share_bound : float or None
+        The lower bound the fit imposed on the share (``min_prestress_share``), if any.
+    """
+
+    dataset: np.ndarray
+    frequency_hz: np.ndarray
+    prestress_model_N: np.ndarray
+    storage: np.ndarray
+    loss: np.ndarray
+    share: np.ndarray
+    reference_frequency_hz: float
+    reference_prestress_N: np.ndarray
+    reference_dataset: np.ndarray
+    reference_storage: np.ndarray
+    reference_loss: np.ndarray
+    reference_share: np.ndarray
+    min_share_bound: float | None = None
+
+    @property
+    def inert(self) -> bool:
+        """True if the prestress carries (almost) none of the stiffness and G' does not respond to it."""
+        return bool(np.nanmax(self.share) < INERT_SHARE and np.nanmax(np.abs(self.storage)) < INERT_ELASTICITY)
+
+    def verdict(self) -> str:
+        """The finding in plain words."""
+        s_lo, s_hi = float(np.nanmin(self.share)), float(np.nanmax(self.share))
+        e_lo, e_hi = float(np.nanmin(self.storage)), float(np.nanmax(self.storage))
+        share = f"{s_lo:.3g}" if np.isclose(s_lo, s_hi, rtol=1e-3) else f"{s_lo:.3g} to {s_hi:.3g}"
+        text = (f"P·Kp carries {share} of the static stiffness; ∂lnG'/∂lnP is {e_lo:.3g} to {e_hi:.3g} at the "
+                f"data's frequencies (adherent cells: about {CELL_ELASTICITY:g}).")
+        if self.inert:
+            return ("The prestress is mechanically inert: " + text + " This fit is a network of Voigt springs, "
+                    "not a prestressed tensegrity; its stiffness does not come from the prestress.")
+        if e_hi < 0.1 * CELL_ELASTICITY:
+            return "The prestress is nearly inert: " + text
+        return "The prestress is mechanically active: " + text
+
+    def __repr__(self) -> str:
+        return format_repr(
+            f"PrestressActivity: {self.storage.size} points, {self.reference_prestress_N.size} prestress(es)",
+            f"share of the static stiffness {np.nanmin(self.share):.3g} to {np.nanmax(self.share):.3g}",
+            f"dlnG'/dlnP {np.nanmin(self.storage):.3g} to {np.nanmax(self.storage):.3g}; "
+            f"dlnG''/dlnP {np.nanmin(self.loss):.3g} to {np.nanmax(self.loss):.3g}",
+            "inert" if self.inert else "active",
+        )
+
+    def to_dataframe(self):
+        """One row per data point: dataset, frequency_Hz, prestress_model_N, elasticities, share."""
+        return dataframe({"dataset": self.dataset, "frequency_Hz": self.frequency_hz,
+                          "prestress_model_N": self.prestress_model_N, "dlnGstorage_dlnP": self.storage,
+                          "dlnGloss_dlnP": self.loss, "prestress_share": self.share})
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary, with the verdict."""
+        return {
+            "inert": self.inert,
+            "verdict": self.verdict(),
+            "min_share_bound": self.min_share_bound,
+            "share_min": float(np.nanmin(self.share)), "share_max": float(np.nanmax(self.share)),
+            "dlnGstorage_dlnP": {"min": float(np.nanmin(self.storage)), "max": float(np.nanmax(self.storage))},
+            "dlnGloss_dlnP": {"min": float(np.nanmin(self.loss)), "max": float(np.nanmax(self.loss))},
+            "at_reference_frequency": {
+                "frequency_Hz": self.reference_frequency_hz,
+                "rows": [{"dataset": int(k), "prestress_model_N": float(P), "dlnGstorage_dlnP": float(a),
+                          "dlnGloss_dlnP": float(b), "prestress_share": float(s)}
+                         for k, P, a, b, s in zip(self.reference_dataset, self.reference_prestress_N,
+                                                  self.reference_storage, self.reference_loss, self.reference_share)],
+            },
+        }
+
+
+def _elasticity_P(result: FitResult, P: float, f_hz) -> tuple[np.ndarray, np.ndarray]:
+    """(∂lnG'/∂lnP, ∂lnG''/∂lnP) of the fitted cell at model prestress P (N), frequencies f_hz."""
+    from ..sensitivity import analytic_elasticities
+
+    el = analytic_elasticities(result._linear(P), f_hz)
+    k = el.index("P")
+    return el.storage[k], el.loss[k]
+
+
+def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERENCE_FREQUENCY_HZ) -> PrestressActivity:
+    """The prestress elasticities and share of a fit, at its data points and at a reference frequency.
+
+    Parameters
+    ----------
+    result : FitResult
+    reference_frequency_hz : float
+        Frequency (Hz) of the per-prestress summary (default 0.1 Hz).
+    """
+    pr = result.problem
+    P_groups = result.group_prestress()
+    share_groups = pr.prestress_share(result.theta)
+    f = pr.omega / (2 * np.pi)
+    storage = np.empty(f.size)
+    loss = np.empty(f.size)
+    ref = np.empty((2, P_groups.size))
+    for g, P in enumerate(P_groups):
+        sel = pr.group_index == g
+        storage[sel], loss[sel] = _elasticity_P(result, P, f[sel])
+        a, b = _elasticity_P(result, P, [reference_frequency_hz])
+        ref[:, g] = a[0], b[0]
+    return PrestressActivity(
+        dataset=pr.dataset_index.copy(), frequency_hz=f, prestress_model_N=P_groups[pr.group_index],
+        storage=storage, loss=loss, share=share_groups[pr.group_index],
+        reference_frequency_hz=float(reference_frequency_hz), reference_prestress_N=P_groups,
+        reference_dataset=pr.group_dataset.copy(), reference_storage=ref[0], reference_loss=ref[1],
+        reference_share=share_groups, min_share_bound=pr.min_prestress_share,
+    )

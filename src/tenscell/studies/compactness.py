@@ -1,0 +1,142 @@
+"""Compactness: how narrow can the distribution of tendon stiffnesses be and still fit the data?
+
+The paper fits Fabry's power law with tendon stiffnesses spread over 8–9
+decades, calls that unrealistic and conjectures that more compact
+distributions could also fit. This study answers it for any data: for each
+bound ``D`` on the spread ``log10(max EA / min EA)`` it fits the model with
+``max_decades=D`` (an exact constraint; see :mod:`tenscell.fitting.problem`)
+and records the best RMS reached. Bounds are scanned from the widest to the
+narrowest, each fit warm-started from the previous one (its stiffnesses
+compressed to the new bound) besides fresh starts, so the front is what a
+search of the given effort finds, not a proven optimum.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._progress import progress_bar
+from .._results import dataframe, format_repr
+
+__all__ = ["CompactnessStudy", "compactness_study", "DEFAULT_DECADES"]
+
+#: bounds scanned by default (decades)
+DEFAULT_DECADES = tuple(float(d) for d in range(14, 0, -1))
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class CompactnessStudy:
+    """Best fit against the bound on the stiffness spread.
+
+    Attributes
+    ----------
+    decades : ndarray, shape (k,)
+        The bounds D (decades), increasing.
+    rms : ndarray, shape (k,)
+        Best RMS log10 error found with the spread at most D (decades; the worst data set's for a joint
+        fit): the best of the searches at this bound and every narrower one, whose fits are feasible
+        here too, so the front never rises with D.
+    spread : ndarray, shape (k,)
+        Spread of the fitted stiffnesses of that best fit (decades, ≤ D).
+    fits : tuple of FitResult
+        That best fit at each bound.
+    search_rms : ndarray, shape (k,)
+        What the search at each bound itself reached.
+    tolerance : float
+    sources : tuple of str
+    """
+
+    decades: np.ndarray
+    rms: np.ndarray
+    spread: np.ndarray
+    fits: tuple
+    tolerance: float
+    sources: tuple
+    search_rms: np.ndarray
+
+    @property
+    def knee(self) -> float | None:
+        """The narrowest bound (decades) whose fit is within the tolerance, or None."""
+        ok = self.rms <= self.tolerance
+        return float(self.decades[ok].min()) if ok.any() else None
+
+    @property
+    def knee_fit(self):
+        """The fit at :attr:`knee` (None if no bound reached the tolerance)."""
+        if self.knee is None:
+            return None
+        return self.fits[int(np.flatnonzero(self.decades == self.knee)[0])]
+
+    def __repr__(self) -> str:
+        knee = "no bound reaches the tolerance" if self.knee is None else (
+            f"narrowest within tolerance {self.tolerance:g}: {self.knee:g} decades "
+            f"(spread {self.spread[self.decades == self.knee][0]:.2f})")
+        return format_repr(f"CompactnessStudy: {len(self.decades)} bounds from {self.decades.min():g} to "
+                           f"{self.decades.max():g} decades, {len(self.sources)} data set(s)",
+                           knee, f"best RMS from {self.rms.min():.3g} to {self.rms.max():.3g}")
+
+    def to_dataframe(self):
+        """One row per bound: max_decades, rms_log10_error, spread_decades, converged, search_rms_log10_error."""
+        return dataframe({"max_decades": self.decades, "rms_log10_error": self.rms, "spread_decades": self.spread,
+                          "converged": self.rms <= self.tolerance, "search_rms_log10_error": self.search_rms},
+                         {"tolerance": self.tolerance})
+
+    #: header of :meth:`rows`
+    HEADER = ("max_decades", "rms_log10_error", "spread_decades", "within_tolerance", "search_rms_log10_error")
+
+    def rows(self):
+        """(max_decades, rms, spread, within tolerance, this bound's own search rms) per bound, for CSV."""
+        return [(float(d), float(r), float(s), bool(r <= self.tolerance), float(q))
+                for d, r, s, q in zip(self.decades, self.rms, self.spread, self.search_rms)]
+
+    def plot(self, ax=None, **kw):
+        """The front: best RMS against the bound (see :func:`tenscell.plotting.fits.compactness_front`)."""
+        from ..plotting.fits import compactness_front
+
+        return compactness_front(self.decades, self.rms, tolerance=self.tolerance, knee=self.knee, ax=ax, **kw)
+
+
+def compactness_study(data, decades=DEFAULT_DECADES, *, cell=None, tendons: str = "per-tendon",
+                      damping: str = "uniform", starts: int = 4, seed: int | None = 0, jobs: int = 1,
+                      tolerance: float = 0.01, hops: int = 20, patience: int = 6,
+                      progress: bool | None = None, **fit_options) -> CompactnessStudy:
+    """Fit ``data`` with the stiffness spread bounded by each of ``decades``.
+
+    Parameters
+    ----------
+    data : RheologyData or sequence of RheologyData
+        As for :func:`tenscell.fitting.fit` (several: a joint fit at each bound).
+    decades : sequence of float
+        The bounds D (decades), each > 0; scanned from the widest.
+    cell, tendons, damping, starts, seed, jobs, tolerance, hops, patience, fit_options :
+        Passed to :func:`tenscell.fitting.fit` for every bound (a lighter
+        search than its defaults: 20 hops, patience 6).
+    progress : bool or None
+
+    Returns
+    -------
+    CompactnessStudy
+    """
+    from ..fitting import fit
+
+    D = np.array(sorted({float(d) for d in decades}, reverse=True))
+    if D.size == 0 or not np.all(np.isfinite(D)) or np.any(D <= 0):
+        raise ValueError(f"decades must be positive numbers, got {list(decades)!r}")
+    fits = []
+    previous = None
+    for d in progress_bar(D, desc="compactness", unit="bound", progress=progress):
+        r = fit(data, cell, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
+                tolerance=tolerance, hops=hops, patience=patience, max_decades=float(d), initial=previous,
+                progress=False, **fit_options)
+        fits.append(r)
+        previous = r
+    order = np.argsort(D)
+    fits = [fits[i] for i in order]
+    search = np.array([max(f.rms_log10_error for f in r.fits) for r in fits])
+    # a fit within a narrower bound is feasible within a wider one: the front is the running best
+    best = [int(np.argmin(search[: k + 1])) for k in range(len(fits))]
+    fits = [fits[b] for b in best]
+    sources = tuple(d.source for d in fits[0].datasets)
+    return CompactnessStudy(decades=D[order], rms=search[best], spread=np.array([r.stiffness_spread[2] for r in fits]),
+                            fits=tuple(fits), tolerance=float(tolerance), sources=sources, search_rms=search)

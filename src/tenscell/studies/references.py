@@ -1,0 +1,221 @@
+"""Which references of the paper cell are valid, and how other references compare.
+
+:func:`prestress_map` maps the appendix family q0(α, δ) (all tendons in
+tension, K0 positive definite); :func:`references_study` compares the
+spherical reference with the regular member (its IF-free self-stress), a
+cylindrical reference found by form-finding and the cell without IFs.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._checks import positive_scalar
+from .._results import dataframe, format_repr
+from ..linear.linearize import NotPositiveDefiniteError, linearize
+from ..model.equilibrium import NotPrestressableError
+from ..model.shapes import cylindrical_cell, if_free_delta, paper_cell, regular_cell
+from ..model.structure import INTERMEDIATE_FILAMENT
+from ..response import frequency_response
+from ._common import grid
+
+__all__ = ["ReferenceMap", "prestress_map", "ReferencesStudy", "references_study", "VALID", "NOT_PRESTRESSABLE",
+           "NOT_STABLE"]
+
+
+#: status codes of :func:`prestress_map`
+VALID, NOT_PRESTRESSABLE, NOT_STABLE = 0, 1, 2
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ReferenceMap:
+    """Validity of the references q0(α, δ) of the paper cell (with IFs).
+
+    Attributes
+    ----------
+    alpha, delta : ndarray, shape (na,), (nd,)
+        Grid (rad).
+    status : ndarray of int, shape (nd, na)
+        :data:`VALID`, :data:`NOT_PRESTRESSABLE` (no equal-IF self-stress with
+        every tendon in tension) or :data:`NOT_STABLE` (K0 not positive definite).
+    min_tension : ndarray, shape (nd, na)
+        Smallest normalized tendon tension of the equal-IF state (NaN where none).
+    if_tension : ndarray, shape (nd, na)
+        The common IF tension (normalized; NaN where none).
+    P, EA : float
+        Prestress (N) and uniform stiffness (N) of the stability check.
+    """
+
+    alpha: np.ndarray
+    delta: np.ndarray
+    status: np.ndarray
+    min_tension: np.ndarray
+    if_tension: np.ndarray
+    P: float
+    EA: float
+
+    @property
+    def fraction_valid(self) -> float:
+        """Share of the grid that is a valid reference."""
+        return float(np.mean(self.status == VALID))
+
+    def delta_band(self, alpha: float = 0.0) -> tuple[float, float]:
+        """Smallest and largest valid δ (rad) on the grid column nearest ``alpha`` (NaN if none)."""
+        k = int(np.argmin(np.abs(self.alpha - alpha)))
+        ok = self.delta[self.status[:, k] == VALID]
+        return (float(ok.min()), float(ok.max())) if ok.size else (math.nan, math.nan)
+
+    def __repr__(self) -> str:
+        lo, hi = self.delta_band(0.0)
+        return format_repr(
+            f"ReferenceMap of {self.alpha.size} × {self.delta.size} references q0(α, δ)",
+            f"{100 * self.fraction_valid:.1f}% valid (K0 checked at P = {self.P:g} N, EA = {self.EA:g} N)",
+            f"at α = 0: valid δ = {math.degrees(lo):.4g}°…{math.degrees(hi):.4g}°",
+        )
+
+    def to_dataframe(self):
+        """One row per grid point: α, δ (degrees), status, smallest and IF tension (normalized)."""
+        A, D = np.meshgrid(self.alpha, self.delta)
+        names = np.array(["valid", "not prestressable", "K0 not positive definite"])
+        return dataframe({"alpha_deg": np.degrees(A).ravel(), "delta_deg": np.degrees(D).ravel(),
+                          "status": names[self.status.ravel()], "min_tension_per_P": self.min_tension.ravel(),
+                          "if_tension_per_P": self.if_tension.ravel()}, {"prestress_N": self.P, "EA_N": self.EA})
+
+    def plot(self, ax=None, **kw):
+        """The validity map over (α, δ) in degrees; returns the axes."""
+        from ..plotting.variants import reference_map_figure
+
+        return reference_map_figure(self, ax=ax, **kw)
+
+
+def prestress_map(
+    alpha=np.radians(np.arange(-30.0, 60.1, 2.5)),
+    delta=np.radians(np.arange(30.0, 70.1, 1.25)),
+    *,
+    P: float = 1000.0,
+    EA: float = 1.0,
+) -> ReferenceMap:
+    """Map which references q0(α, δ) (with IFs) are valid: T0 > 0 and K0 positive definite.
+
+    Parameters
+    ----------
+    alpha, delta : array_like
+        Grid of the reference angles (rad); δ in (0, π/2).
+    P, EA : float
+        Prestress (N) and uniform tendon stiffness (N) of the K0 check
+        (stability depends on them; T0 does not).
+    """
+    a = np.atleast_1d(np.asarray(alpha, dtype=float)).ravel()
+    d = np.atleast_1d(np.asarray(delta, dtype=float)).ravel()
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(d))):
+        raise ValueError("alpha and delta must be finite angles in radians")
+    if np.any(d <= 0) or np.any(d >= math.pi / 2):
+        raise ValueError("delta values must lie strictly between 0 and pi/2 rad")
+    P, EA = positive_scalar("P (prestress)", P, "N"), positive_scalar("EA", EA, "N")
+    status = np.zeros((d.size, a.size), dtype=int)
+    tmin = np.full((d.size, a.size), np.nan)
+    tif = np.full((d.size, a.size), np.nan)
+    for i, dd in enumerate(d):
+        for k, aa in enumerate(a):
+            try:
+                cell = paper_cell(alpha=float(aa), delta=float(dd))
+            except NotPrestressableError:
+                status[i, k] = NOT_PRESTRESSABLE
+                continue
+            tmin[i, k] = cell.T0.min()
+            tif[i, k] = cell.T0[cell.structure.family_indices(INTERMEDIATE_FILAMENT)[0]]
+            try:
+                linearize(cell, P=P, EA=EA, c=1.0)
+            except NotPositiveDefiniteError:
+                status[i, k] = NOT_STABLE
+    return ReferenceMap(alpha=a, delta=d, status=status, min_tension=tmin, if_tension=tif, P=P, EA=EA)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class ReferencesStudy:
+    """Several prestressable references compared.
+
+    Attributes
+    ----------
+    map : ReferenceMap
+    if_free_curve : ndarray, shape (k, 2)
+        Points (α, δ*(α)) (rad) of the IF-free prestressable curve.
+    cells : dict of str -> Cell
+        In this order: the spherical default reference (its key names its
+        α and δ), ``"regular member, IFs unprestressed"``, ``"cylindrical"``,
+        ``"spherical, no IFs (regular member)"``.
+    responses : dict of str -> FrequencyResponse
+        Moduli of each cell at the study's prestresses and frequencies.
+    EA, c : float
+        Uniform tendon stiffness (N) and damping (N·s/m) of the responses.
+    """
+
+    map: ReferenceMap
+    if_free_curve: np.ndarray
+    cells: dict
+    responses: dict
+    EA: float
+    c: float
+
+    @property
+    def roles(self) -> dict:
+        """``{"spherical", "regular", "cylindrical", "no_ifs"}`` -> the key of that cell."""
+        return dict(zip(("spherical", "regular", "cylindrical", "no_ifs"), self.cells))
+
+    def __repr__(self) -> str:
+        r = next(iter(self.responses.values()))
+        return format_repr(
+            f"ReferencesStudy: {len(self.cells)} references, {r.prestress.size} prestresses × {r.frequency_hz.size} "
+            "frequencies",
+            f"EA = {self.EA:g} N, c = {self.c:g} N·s/m",
+            f"validity map: {100 * self.map.fraction_valid:.1f}% of {self.map.status.size} references valid",
+        )
+
+    def to_dataframe(self):
+        """Moduli of every reference: one row per (reference, prestress, frequency)."""
+        rows = [(name, *row) for name, r in self.responses.items() for row in r.rows()]
+        cols = list(zip(*rows)) if rows else [()] * 5
+        return dataframe({"reference": cols[0], "prestress_N": cols[1], "frequency_Hz": cols[2],
+                          "G_storage_Pa": cols[3], "G_loss_Pa": cols[4]}, {"EA_N": self.EA, "c_Ns_per_m": self.c})
+
+    def plot(self, ax=None, P: float | None = None, **kw):
+        """G' and G'' of every reference against f at prestress ``P`` (default: the middle one), on a pair of axes."""
+        from ..plotting.variants import references_figure
+
+        first = next(iter(self.responses.values()))
+        P = float(first.prestress[first.prestress.size // 2]) if P is None else float(P)
+        return references_figure(self.responses, P, axes=ax, **kw)
+
+
+def references_study(
+    prestress=(500.0, 1000.0, 4500.0),
+    f_hz=np.logspace(-2, 3, 51),
+    *,
+    EA: float = 1.0,
+    c: float = 1.0,
+    map_alpha=np.radians(np.arange(-25.0, 35.1, 2.5)),
+    map_delta=np.radians(np.arange(30.0, 65.1, 1.25)),
+    curve_alpha=np.radians([-10.0, -5.0, 0.0, 5.0, 10.0, 15.0, 20.0]),
+) -> ReferencesStudy:
+    """The valid-reference map and the moduli of the spherical, regular, cylindrical and IF-free cells."""
+    Ps = grid("prestress", prestress, "N")
+    f = grid("frequency", f_hz, "Hz")
+    mp = prestress_map(map_alpha, map_delta, P=float(Ps[len(Ps) // 2]), EA=EA)
+    curve = []
+    for a in np.atleast_1d(curve_alpha):
+        try:
+            curve.append((float(a), if_free_delta(float(a))))
+        except NotPrestressableError:
+            continue
+    sph = paper_cell()
+    cells = {
+        f"spherical (α={math.degrees(sph.parameters['alpha']):g}°, δ={math.degrees(sph.parameters['delta']):g}°)": sph,
+        "regular member, IFs unprestressed": regular_cell(),
+        "cylindrical": cylindrical_cell(),
+        "spherical, no IFs (regular member)": paper_cell(intermediate_filaments=False),
+    }
+    responses = {k: frequency_response(v, f, Ps, EA=EA, c=c) for k, v in cells.items()}
+    return ReferencesStudy(map=mp, if_free_curve=np.array(curve).reshape(-1, 2), cells=cells, responses=responses,
+                           EA=float(EA), c=float(c))

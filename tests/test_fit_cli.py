@@ -1,0 +1,136 @@
+"""The fitted cell from the command line: creep, simulate and show with --from-fit."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from tenscell.cli import main as cli_main
+from tenscell.fitting import fit
+from tenscell.io.data import bundled
+
+
+@pytest.fixture(scope="module")
+def fit_json(tmp_path_factory):
+    """fit.json of a fast per-family fit of the prestress sweep (its model prestress is s × prestress in Pa)."""
+    result = fit(bundled("stamenovic2002"), tendons="per-family", starts=1, hops=2, seed=0, progress=False)
+    path = tmp_path_factory.mktemp("fit") / "fit.json"
+    path.write_text(json.dumps(result.to_dict()))
+    return path, result
+
+
+def test_creep_from_fit_is_the_fitted_cells_linear_creep(fit_json, tmp_path):
+    path, result = fit_json
+    out = tmp_path / "creep"
+    assert cli_main(["creep", "--from-fit", str(path), "--t-min", "0.1", "--t-max", "10", "--out", str(out)]) == 0
+    doc = json.loads((out / "creep.json").read_text())
+    P = result.value("s") * float(np.median(result.data.prestress))
+    assert doc["model"]["prestress_N"] == pytest.approx(P)
+    assert doc["steps"] == []  # no nonlinear steps by default with --from-fit
+    pc = result.predicted_creep(0.1, 10.0, 61)
+    # creep.json is in m/N; the fit's prediction in 1/Pa is J·2L
+    assert doc["power_law_fits"]["linear"]["alpha"] == pytest.approx(pc.alpha, rel=1e-9)
+    assert doc["power_law_fits"]["linear"]["A_m_per_N"] * 2 * result.L == pytest.approx(pc.A, rel=1e-9)
+
+
+def test_simulate_from_fit_builds_the_fitted_law(fit_json):
+    # the flags' plumbing (the integration itself is tested in test_dynamics)
+    from tenscell.cli import build_parser
+    from tenscell.cli.dynamics import law_from_args
+
+    path, result = fit_json
+    args = build_parser().parse_args(["simulate", "--from-fit", str(path), "--prestress", "500", "--amplitude", "0.01",
+                                      "--freq", "0.1", "--out", "unused"])
+    cell, law, _ = law_from_args(args)
+    assert args.prestress_N == pytest.approx(result.value("s") * 500.0)
+    np.testing.assert_array_equal(law.EA, result.EA)
+    assert cell.strut_length == pytest.approx(result.L)
+    np.testing.assert_allclose(np.asarray(law.elastic(cell.lengths)), args.prestress_N * cell.T0, rtol=1e-9)
+
+
+def test_show_from_fit(fit_json, tmp_path):
+    path, result = fit_json
+    assert cli_main(["show", "--from-fit", str(path), "--modes", "0", "--out", str(tmp_path / "show")]) == 0
+    text = (tmp_path / "show" / "fit_summary.txt").read_text()
+    assert f"P={result.value('s') * np.median(result.data.prestress):.6g} N" in text
+
+
+@pytest.mark.parametrize("extra,match", [
+    (["--EA", "3"], "--EA cannot be combined with --from-fit"),
+    (["--L", "2"], "--L cannot be combined with --from-fit"),
+])
+def test_from_fit_refuses_model_options(fit_json, tmp_path, capsys, extra, match):
+    path, _ = fit_json
+    assert cli_main(["creep", "--from-fit", str(path), *extra, "--out", str(tmp_path / "x")]) == 2
+    assert match in capsys.readouterr().err
+    assert not (tmp_path / "x").exists()
+
+
+def test_from_fit_errors(tmp_path, capsys):
+    bad = tmp_path / "fit.json"
+    bad.write_text("{}")
+    assert cli_main(["creep", "--from-fit", str(bad), "--out", str(tmp_path / "x")]) == 2
+    assert "no fitted model" in capsys.readouterr().err
+    assert cli_main(["show", "--out", str(tmp_path / "x")]) == 2
+    assert "TARGET" in capsys.readouterr().err
+    assert cli_main(["show", "paper", "--from-fit", str(bad), "--out", str(tmp_path / "x")]) == 2
+    assert "cannot be combined with --from-fit" in capsys.readouterr().err
+
+
+def test_fitted_cell_with_inert_prestress_refuses_a_nonlinear_run_but_gives_linear_creep(tmp_path, capsys):
+    from tenscell import paper_cell
+    from tenscell.fitting.fitted import FittedModel
+
+    rng = np.random.default_rng(0)
+    cell = paper_cell()
+    model = FittedModel(cell=cell, EA=10 ** rng.uniform(-7, 6, cell.m), c=10 ** rng.uniform(0, 3, cell.m), P=5.6e-8)
+    path = tmp_path / "fit.json"
+    path.write_text(json.dumps({"model": model.to_dict()}))
+    assert cli_main(["creep", "--from-fit", str(path), "--out", str(tmp_path / "c")]) == 0
+    assert cli_main(["creep", "--from-fit", str(path), "--amplitude", "1e-12", "--out", str(tmp_path / "d")]) == 2
+    assert "integration noise" in capsys.readouterr().err
+
+
+# --- fit: --bound, --fix, --holdout --------------------------------------------------------------
+@pytest.mark.parametrize("flag,match", [
+    (["--bound", "EA=1e3:1e-3"], "--bound: EA: the lower bound 1000 N must be below the upper bound 0.001 N"),
+    (["--bound", "X=1:2"], "unknown parameter kind 'X'"),
+    (["--bound", "c=1"], "c: expected LO:HI in N·s/m"),
+    (["--fix", "L"], "expected NAME=VALUE"),
+    (["--fix", "L=-1"], "--fix: -1 is out of range"),
+    (["--bound", "s=1:2"], "--bound s=1:2: no parameter of kind 's'"),
+    (["--fix", "c_actin=1"], "--fix c_actin=1: no parameter named 'c_actin'"),
+    (["--fix", "L=5000"], "--fix L=5000: outside its bounds"),
+    (["--holdout", "10:1"], "FMIN 10 Hz must be below FMAX 1 Hz"),
+    (["--holdout", "1e5:1e6"], "holds 0 of the 16 points"),
+])
+def test_fit_flags_refused_naming_the_flag(tmp_path, capsys, flag, match):
+    out = tmp_path / "fit"
+    assert cli_main(["fit", "bundled:fabry2001", "--tendons", "uniform", *flag, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert match in err and len(err.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_fit_with_bound_fix_and_holdout(tmp_path):
+    out = tmp_path / "fit"
+    code = cli_main(["fit", "bundled:fabry2001", "--tendons", "per-family", "--damping", "per-family",
+                     "--fix", "L=1", "--fix", "c_actin=2", "--bound", "EA=1e-2:1e6", "--holdout", "0.3:3",
+                     "--starts", "1", "--baseline-starts", "1", "--out", str(out)])
+    assert code in (0, 1)
+    doc = json.loads((out / "fit.json").read_text())
+    pars = {p["name"]: p for p in doc["parameters"]}
+    assert pars["L"]["value"] == 1.0 and not pars["L"]["vary"]
+    assert pars["c_actin"]["value"] == 2.0 and not pars["c_actin"]["vary"]
+    assert pars["EA_actin"]["lower"] == pytest.approx(1e-2) and pars["EA_actin"]["upper"] == pytest.approx(1e6)
+    assert doc["n_points"] == 16 - 3  # 0.3..3 Hz holds 3 of the 16 frequencies (0.46, 1, 2.2 Hz)
+    cmp_ = doc["model_comparison"]
+    assert cmp_["holdout_Hz"] == [0.3, 3.0] and cmp_["n_holdout_points"] == 3
+    rows = {m["model"]: m for m in cmp_["models"]}
+    assert rows["structural damping (power law)"]["holdout_rms_log10_error"] < 1e-3  # the law the data came from
+    assert all(m["holdout_rms_log10_error"] is not None for m in cmp_["models"])
+    # fixing c and L breaks the gauge: L is not analysed (fixed), no combination is relabelled
+    assert not doc["identifiability"]["gauge_removed"]
+    md = (out / "report.md").read_text()
+    assert "held-out RMS log10 error" in md and "that no model was fitted to" in md

@@ -1,0 +1,134 @@
+"""The structural-damping law, AIC/BIC and held-out error (tenscell.fitting.models)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.stats
+
+from tenscell.fitting.models import (PHI0, StructuralDampingProblem, compare_models, fit_structural_damping,
+                                     information_criteria, split_holdout, structural_damping_moduli)
+from tenscell.io.data import DataError, RheologyData, bundled
+
+F = np.logspace(-2, 2.5, 14)
+
+
+def _law_data(G0=300.0, x=1.18, mu=0.05, sd=None, seed=None):
+    G = structural_damping_moduli(2 * np.pi * F, G0, x, mu)
+    Gs, Gl = G.real, G.imag
+    if seed is not None:
+        rng = np.random.default_rng(seed)
+        Gs = Gs * 10 ** rng.normal(0, 0.01, F.size)
+        Gl = Gl * 10 ** rng.normal(0, 0.01, F.size)
+    kw = {} if sd is None else {"G_storage_sd": sd * Gs, "G_loss_sd": sd * Gl}
+    return RheologyData(F, Gs, Gl, source="law", **kw)
+
+
+def test_law_matches_its_definition_and_eta_is_the_loss_tangent():
+    w = 2 * np.pi * F
+    G = structural_damping_moduli(w, 250.0, 1.2, 0.0, phi0=3.0)
+    a = 0.2
+    eta = math.tan(math.pi * a / 2)
+    expected = 250.0 * (w / 3.0) ** a * (1 + 1j * eta) * math.gamma(2 - 1.2) * math.cos(math.pi * a / 2)
+    np.testing.assert_allclose(G, expected, rtol=1e-13)
+    np.testing.assert_allclose(G.imag / G.real, eta, rtol=1e-12)
+
+
+@pytest.mark.parametrize("newtonian", [True, False])
+def test_jacobian_matches_finite_differences(newtonian):
+    d = _law_data(sd=0.05)
+    p = StructuralDampingProblem(omega=2 * np.pi * d.frequency_hz,
+                                 y_obs=np.concatenate([np.log10(d.G_storage), np.log10(d.G_loss)]),
+                                 weights=np.concatenate([d.weights_storage, d.weights_loss]), phi0=2.0,
+                                 newtonian=newtonian)
+    theta = np.array([math.log(120.0), 0.31, math.log(0.2)])[: p.n_params]
+    J = p.jacobian(theta)
+    np.testing.assert_allclose(J, p.jacobian_fd(theta), rtol=1e-6, atol=1e-8 * np.abs(J).max())
+
+
+def test_fit_recovers_the_law():
+    r = fit_structural_damping(_law_data())
+    assert r.G0 == pytest.approx(300.0, rel=1e-6)
+    assert r.x == pytest.approx(1.18, abs=1e-7)
+    assert r.mu == pytest.approx(0.05, rel=1e-5)
+    assert r.rms_log10_error < 1e-8
+    assert r.phi0 == PHI0
+    assert "x = 1.18" in repr(r)
+    df = r.to_dataframe()
+    assert {"frequency_Hz", "G_storage_model_Pa"} <= set(df.columns)
+
+
+def test_fit_of_the_bundled_data_finds_the_law_it_was_generated_from():
+    r = fit_structural_damping(bundled("fabry2001"))
+    assert r.x == pytest.approx(1.20, abs=1e-4)  # the CSV comment: x − 1 = 0.20
+    assert r.mu == pytest.approx(0.239363, rel=1e-3)
+    assert r.rms_log10_error < 1e-4
+
+
+def test_prestress_sweep_is_refused():
+    with pytest.raises(DataError, match="frequency sweep"):
+        fit_structural_damping(bundled("stamenovic2002"))
+
+
+# --- information criteria ------------------------------------------------------------------
+def test_aic_bic_unknown_sigma_by_hand():
+    r = np.array([0.1, -0.2, 0.05, 0.03, -0.07])
+    n, k = r.size, 2
+    s2 = np.sum(r**2) / n  # maximum-likelihood σ²
+    loglik = scipy.stats.norm.logpdf(r, scale=math.sqrt(s2)).sum()
+    aic, bic, m2 = information_criteria(r, k, sigma_known=False)
+    assert m2 == pytest.approx(-2 * loglik, rel=1e-12)
+    assert aic == pytest.approx(-2 * loglik + 2 * (k + 1), rel=1e-12)
+    assert bic == pytest.approx(-2 * loglik + (k + 1) * math.log(n), rel=1e-12)
+
+
+def test_aic_bic_known_sigma_by_hand():
+    s = np.array([0.01, 0.02, 0.05, 0.01])
+    raw = np.array([0.005, -0.03, 0.02, 0.0])  # decades
+    loglik = scipy.stats.norm.logpdf(raw, scale=s).sum()
+    aic, bic, m2 = information_criteria(raw / s, 3, sigma_known=True, weights=1 / s)
+    assert m2 == pytest.approx(-2 * loglik, rel=1e-12)
+    assert aic == pytest.approx(-2 * loglik + 6, rel=1e-12)
+    assert bic == pytest.approx(-2 * loglik + 3 * math.log(4), rel=1e-12)
+    with pytest.raises(ValueError, match="weights"):
+        information_criteria(raw / s, 3, sigma_known=True)
+
+
+# --- held-out data ------------------------------------------------------------------------
+def test_split_holdout():
+    d = _law_data(sd=0.05)
+    train, held = split_holdout(d, 1.0, 30.0)
+    assert train.n + held.n == d.n
+    assert np.all((held.frequency_hz >= 1.0) & (held.frequency_hz <= 30.0))
+    assert not np.any((train.frequency_hz >= 1.0) & (train.frequency_hz <= 30.0))
+    assert held.G_storage_sd is not None
+    with pytest.raises(ValueError, match="both sides"):
+        split_holdout(d, 1e-6, 1e6)
+    with pytest.raises(ValueError, match="FMIN must be below FMAX"):
+        split_holdout(d, 10.0, 1.0)
+    with pytest.raises(ValueError, match="frequency sweep"):
+        split_holdout(bundled("stamenovic2002"), 0.05, 0.2)
+
+
+def test_compare_models_scores_every_model_on_the_same_residuals():
+    from tenscell.fitting import fit
+
+    data = _law_data(seed=3)
+    train, held = split_holdout(data, 0.3, 3.0)
+    homog = fit(train, tendons="uniform", starts=1, hops=3, seed=0, progress=False)
+    cmp_ = compare_models(homog, held_out=held, holdout=(0.3, 3.0))
+    assert [s.name for s in cmp_.scores] == ["homogeneous tensegrity", "structural damping (power law)"]
+    sd = fit_structural_damping(train)
+    row = cmp_.score("structural damping (power law)")
+    assert row.n_params == 3
+    assert row.rms_log10_error == pytest.approx(sd.rms_log10_error)
+    aic, bic, _ = information_criteria(sd.weighted_residuals, 3, sigma_known=False)
+    assert (row.aic, row.bic) == (pytest.approx(aic), pytest.approx(bic))
+    # the tensegrity's k excludes the exact gauge: EA, c, P, L free -> 3
+    assert cmp_.score("homogeneous tensegrity").n_params == 3
+    # data generated by the power law with 1 % noise: the law interpolates the held-out decade
+    assert row.holdout_rms_log10_error < 0.02
+    assert cmp_.best("holdout") == "structural damping (power law)"
+    assert cmp_.n_holdout == held.n and cmp_.to_dict()["holdout_Hz"] == [0.3, 3.0]
+    assert set(cmp_.to_dataframe().columns) >= {"model", "AIC", "BIC", "holdout_rms_log10_error"}

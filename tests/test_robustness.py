@@ -1,0 +1,234 @@
+"""Robustness of the command line: every numeric flag of every command against bad values.
+
+Each case runs ``tenscell.cli.main`` in this process and must give exit status
+2, exactly one line on stderr that names the flag, no traceback, nothing on
+stdout, and nothing written (the working directory stays empty, the output
+directory is not created). The table is generated: every numeric flag ×
+{negative, zero, NaN, inf, huge, non-numeric, empty}, minus the values that
+are valid for that flag (listed with the flag, so that the table says why a
+value is not tried).
+"""
+from __future__ import annotations
+
+import ast
+import math
+from pathlib import Path
+
+import pytest
+
+from tenscell.cli import COMMAND_MODULES, build_parser, main
+
+BAD_VALUES = {"negative": "-1", "zero": "0", "nan": "nan", "inf": "inf", "huge": "1e300",
+              "non-numeric": "abc", "empty": ""}
+
+#: the bad data file a `fit` case reads is never reached: flags are refused first
+FIT = ["fit", "DATA"]
+#: command prefix (enough to be valid) -> numeric flags -> values that are valid for it
+NUMERIC_FLAGS = {
+    ("moduli",): {"--prestress": (), "--P": (), "--freq": (), "--alpha-deg": ("negative", "zero"),
+                  "--delta-deg": (), "--EA": (), "--c": (), "--L": ()},
+    tuple(FIT): {"--starts": (), "--seed": ("zero",), "--jobs": (), "--tolerance": (), "--baseline-starts": (),
+                 "--max-points": (), "--min-prestress-share": (), "--max-decades": ()},
+    ("simulate", "--amplitude", "1", "--freq", "1"): {
+        "--amplitude": (), "--amplitudes": (), "--freq": (), "--cycles": (), "--samples": (),
+        "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),
+        "--prestress": (), "--P": (), "--beta": (), "--velocity-scale": (), "--rtol": ()},
+    ("creep",): {"--amplitude": (), "--t-min": (), "--t-max": (), "--points": (), "--window": (),
+                 "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),
+                 "--prestress": (), "--P": (), "--beta": (), "--velocity-scale": (), "--rtol": ()},
+    ("study", "sensitivity"): {"--draws": (), "--seed": ("zero",)},
+    ("study", "compactness", "DATA"): {"--decades": (), "--starts": (), "--jobs": (), "--tolerance": (),
+                                       "--min-prestress-share": (), "--max-decades": ()},
+    ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
+    ("show", "block"): {"--size": ()},
+}
+
+
+def _cases():
+    tried, skipped = [], []
+    for prefix, flags in NUMERIC_FLAGS.items():
+        for flag, valid in flags.items():
+            for kind, value in BAD_VALUES.items():
+                case = (prefix, flag, kind, value)
+                (skipped if kind in valid else tried).append(case)
+    return tried, skipped
+
+
+TRIED, SKIPPED = _cases()
+
+#: bad values that only the model (or the output location) can refuse: argv, word the message must hold
+SEMANTIC = [
+    (["moduli", "--EA", "1,2,3"], "--EA"),
+    (["moduli", "--EA", "strut=3"], "--EA"),
+    (["moduli", "--c", "actin=1"], "--c"),
+    (["moduli", "--delta-deg", "40"], "positive definite"),
+    (["moduli", "--alpha-deg", "90"], "alpha=90°"),
+    (["moduli", "--freq", "1:10:100000000"], "--freq"),
+    (["moduli", "--freq", "1:10:1000", "--prestress", ",".join(["1000"] * 2000)], "--prestress"),
+    (["moduli", "--freq", "1:10"], "--freq"),
+    (["moduli", "--freq", "1:10:2.5"], "--freq"),
+    (["moduli", "--freq", "1:10:" + "9" * 5000], "--freq"),
+    (["simulate", "--amplitude", "1", "--freq", "1e9", "--out", "OUT"], "--freq"),
+    (["simulate", "--amplitude", "1", "--freq", "1,2", "--out", "OUT"], "--freq"),
+    (["simulate", "--amplitude", "1", "--freq", "1", "--samples", "100000", "--out", "OUT"], "--samples"),
+    (["simulate", "--amplitude", "1", "--freq", "1", "--no-if", "--out", "OUT"], "damping matrix"),
+    (["creep", "--t-min", "1", "--t-max", "0.1", "--out", "OUT"], "--t-min"),
+    (["creep", "--window", "1:0.1", "--out", "OUT"], "--window"),
+    (["show", "block", "--size", "100x100x100"], "--size"),
+    (["show", "block", "--size", "infx2x2"], "--size"),
+    (["show", "block", "--size", "2x2"], "--size"),
+    (["show", "paper", "--size", "2x2"], "--size"),
+    (["show", "nonesuch"], "neither a file nor a built-in"),
+    (["show", "paper", "--save", "SAVEDIR/"], "--save"),
+    (["study", "nonsense"], "name"),
+    (["fit", "DATA", "--tendons", "all"], "--tendons"),
+    (["fit", "MISSING", "--out", "OUT"], "missing.csv"),
+    (["fit", "DATA", "--out", "FILE"], "--out"),
+    (["moduli", "--no-such-flag"], "--no-such-flag"),
+]
+
+
+def _substitute(argv, tmp_path):
+    data = tmp_path / "in" / "data.csv"
+    table = {"DATA": str(data), "MISSING": str(tmp_path / "in" / "missing.csv"), "OUT": str(tmp_path / "work" / "o"),
+             "FILE": str(tmp_path / "in" / "data.csv"), "SAVEDIR/": str(tmp_path / "in") + "/"}
+    return [table.get(a, a) for a in argv]
+
+
+@pytest.fixture
+def workdir(tmp_path, monkeypatch):
+    """An empty working directory (commands' default outputs land here) and an input directory."""
+    (tmp_path / "in").mkdir()
+    (tmp_path / "in" / "data.csv").write_text(
+        "frequency_Hz,G_storage_Pa,G_loss_Pa\n" + "".join(f"{f},{100 * f ** 0.2},{10 * f ** 0.2}\n"
+                                                          for f in (0.1, 0.3, 1, 3, 10, 30, 100)))
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)
+    return tmp_path
+
+
+def _refused(argv, capsys, workdir):
+    before = sorted(p.name for p in (workdir / "in").iterdir())
+    code = main(argv)
+    out, err = capsys.readouterr()
+    assert code == 2, (argv, code, err)
+    assert out == "", (argv, out)
+    assert err.count("\n") == 1 and err.endswith("\n"), (argv, err)
+    assert "Traceback" not in err and "Warning" not in err, (argv, err)
+    assert list((workdir / "work").iterdir()) == [], (argv, "wrote files")
+    assert sorted(p.name for p in (workdir / "in").iterdir()) == before, (argv, "touched the input directory")
+    return err
+
+
+@pytest.mark.parametrize("prefix, flag, kind, value", TRIED,
+                         ids=[f"{p[0]}{'-' + p[1] if p[0] == 'show' else ''}{f}={k}" for p, f, k, _ in TRIED])
+def test_bad_numeric_flag_is_refused(prefix, flag, kind, value, capsys, workdir):
+    argv = _substitute(list(prefix), workdir) + [f"{flag}={value}"]
+    if prefix[0] in ("fit", "simulate", "creep"):
+        argv += ["--out", str(workdir / "work" / "o")]
+    err = _refused(argv, capsys, workdir)
+    assert flag in err, (argv, err)
+
+
+@pytest.mark.parametrize("argv, word", SEMANTIC, ids=[" ".join(a)[:60] for a, _ in SEMANTIC])
+def test_bad_value_found_by_the_model_is_refused(argv, word, capsys, workdir):
+    err = _refused(_substitute(argv, workdir), capsys, workdir)
+    assert word in err, err
+
+
+def test_table_size():
+    """The table covers every flag listed (reported in the issue's closing note)."""
+    assert len(TRIED) + len(SKIPPED) == sum(len(f) for f in NUMERIC_FLAGS.values()) * len(BAD_VALUES)
+    assert len(TRIED) >= 300
+
+
+def test_every_numeric_flag_is_in_the_table():
+    """A new numeric flag must join the table: flags with a checked type are listed above."""
+    listed = {}
+    for prefix, flags in NUMERIC_FLAGS.items():
+        listed.setdefault(prefix[0], set()).update(flags)
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for name, parser in sub.choices.items():
+        for action in parser._actions:
+            typename = getattr(action.type, "__name__", "")
+            if action.option_strings and typename in ("number", "integer", "list", "frequencies", "member values",
+                                                      "size", "window", "frequency"):
+                for opt in action.option_strings:
+                    assert opt in listed.get(name, set()), f"tenscell {name} {opt} is not in the bad-input table"
+
+
+def test_defaults_are_shown_in_help(capsys):
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for name, parser in sub.choices.items():
+        text = parser.format_help()
+        assert "%%" not in text, name
+        for action in parser._actions:
+            if action.option_strings and action.default not in (None, False) and action.help != "==SUPPRESS==" \
+                    and action.dest != "help":
+                h = parser._get_formatter()._expand_help(action)
+                assert "default" in h.lower(), f"tenscell {name} {action.option_strings[0]}: default not shown"
+
+
+def test_building_the_parser_imports_only_the_standard_library():
+    """`tenscell --help` stays quick: module-level imports of tenscell.cli are stdlib or cli itself."""
+    import sys
+    cli_dir = Path(main.__code__.co_filename).parent
+    stdlib = set(sys.stdlib_module_names)
+    for path in cli_dir.glob("*.py"):
+        for node in ast.parse(path.read_text()).body:
+            if isinstance(node, ast.Import):
+                names = [a.name.split(".")[0] for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level == 1 and path.name != "__main__.py":
+                    continue  # tenscell.cli's own modules
+                names = [] if node.module == "__future__" else [(node.module or "").split(".")[0]]
+                if node.level == 1:
+                    continue
+            else:
+                continue
+            for n in names:
+                assert n in stdlib, f"{path.name} imports {n} at module level"
+    assert set(COMMAND_MODULES) <= {p.stem for p in cli_dir.glob("*.py")}
+
+
+def test_fit_choices_match_the_fitting_code():
+    from tenscell import fitting
+    from tenscell.cli import fit as cli_fit
+
+    assert cli_fit.TENDON_MODES == fitting.TENDON_MODES and cli_fit.DAMPING_MODES == fitting.DAMPING_MODES
+
+
+def test_interrupt_and_broken_pipe_in_process(monkeypatch, capsys):
+    from tenscell.cli import moduli
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(moduli, "run", interrupted)
+    assert main(["moduli"]) == 130
+    out, err = capsys.readouterr()
+    assert err == "tenscell: interrupted\n" and out == ""
+
+    def broken(args):
+        raise BrokenPipeError
+
+    monkeypatch.setattr(moduli, "run", broken)
+    assert main(["moduli"]) == 141
+    out, err = capsys.readouterr()
+    assert err == "" and out == ""
+
+
+def test_overflow_never_reaches_the_user(capsys):
+    """Extreme but allowed combinations give finite moduli or a one-line refusal; never inf/NaN rows."""
+    for argv in (["moduli", "--EA", "1e30", "--c", "1e-30", "--freq", "1e12", "--L", "1e-9"],
+                 ["moduli", "--prestress", "1e30", "--EA", "1e-30", "--c", "1e30", "--freq", "1e-12,1e12"],
+                 ["moduli", "--prestress", "1e-30", "--L", "1e6", "--freq", "1e12"]):
+        code = main(argv)
+        out, err = capsys.readouterr()
+        assert code in (0, 2) and "Warning" not in err and "Traceback" not in err, err
+        if code == 0:
+            rows = [list(map(float, line.split(","))) for line in out.strip().splitlines()[1:]]
+            assert rows and all(math.isfinite(v) for r in rows for v in r)
+        else:
+            assert err.count("\n") == 1
