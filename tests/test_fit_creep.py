@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from decimal import Decimal, getcontext
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.integrate
@@ -100,7 +102,7 @@ def test_creep_csv_round_trip_and_detection(tmp_path):
     assert back.comments == ("synthetic",) and back.kind == "creep"
     np.testing.assert_allclose(back.weights, d.compliance * np.log(10) / d.compliance_sd)
     assert isinstance(read_measurements(p), CreepData)
-    assert isinstance(read_measurements(tenscell.io.data.bundled("fabry2001").source), RheologyData)
+    assert isinstance(read_measurements(Path(tenscell.io.data.__file__).parents[1] / "data" / "fabry2001_hasm_powerlaw.csv"), RheologyData)
     df = back.to_dataframe()
     assert list(df.columns) == ["time_s", "creep_compliance_per_Pa", "creep_compliance_sd_per_Pa"]
 

@@ -41,6 +41,15 @@ NUMERIC_FLAGS = {
                                        "--min-prestress-share": (), "--max-decades": ()},
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
+    ("synth-population", "--out", "OUT"): {"--cells": (), "--noise": ("zero",), "--spread": ("zero",), "--freq": (),
+                                           "--seed": ("zero",)},
+    ("fit-population", "DATA", "--out", "OUT"): {"--workers": ("zero",), "--seed": ("zero",), "--starts": (),
+                                                 "--hops": ("zero",), "--tolerance": ()},
+    ("large-study", "monte-carlo", "--draws", "5", "--out", "OUT"): {
+        "--draws": (), "--spread": (), "--chunk": (), "--workers": ("zero",), "--seed": ("zero",)},
+    ("large-study", "sweep", "--prestress", "1", "--heterogeneity", "0", "--out", "OUT"): {
+        "--prestress": (), "--heterogeneity": ("zero",), "--freq": (), "--realizations": (), "--workers": ("zero",),
+        "--seed": ("zero",)},
 }
 
 

@@ -48,6 +48,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "response": ("FrequencyResponse", "compliance", "frequency_response", "log_slope", "loss_tangent", "moduli",
                  "static_modulus", "viscosity_limit"),
     "linear.krylov": ("krylov_compliance",),
+    "_threads": ("set_threads", "threads"),
     "timedomain": ("CreepSpectrum", "PowerLawFit", "StressRelaxation", "creep_compliance", "creep_spectrum",
                    "fit_power_law", "local_exponent", "relaxation_modulus", "stress_relaxation"),
     # measured data
@@ -103,6 +104,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
         SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, oscillatory_response,
         simulate,
     )
+    from ._threads import set_threads, threads
     from .fitting import FitParameter, FitResult, fit
     from .io.data import DataError, RheologyData, bundled, bundled_names, read_csv
     from .io.importers import ColumnMap, read_rheocompass, read_table

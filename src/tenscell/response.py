@@ -17,6 +17,7 @@ from .model.equilibrium import Cell, weighted_gram
 from .linear.krylov import krylov_compliance
 from .linear.linearize import LinearModel, linearize
 from .linear.modal import modal_compliance, modulus, prestress_grid_compliance
+from ._threads import hot_path
 
 __all__ = [
     "compliance",
@@ -34,6 +35,7 @@ def _frequencies(f_hz) -> np.ndarray:
     return positive_array("frequency", f_hz, unit="Hz")
 
 
+@hot_path
 def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     """Transfer function ``J = z1/F1`` (m/N) at frequencies ``f_hz`` (Hz).
 
@@ -60,6 +62,7 @@ def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     return modal_compliance(m.tau, m.weights, 2 * np.pi * f.ravel()).reshape(f.shape)
 
 
+@hot_path
 def moduli(lin: LinearModel, f_hz) -> tuple[np.ndarray, np.ndarray]:
     """Storage and loss moduli ``G'``, ``G''`` (Pa) at frequencies ``f_hz`` (Hz).
 
@@ -69,11 +72,13 @@ def moduli(lin: LinearModel, f_hz) -> tuple[np.ndarray, np.ndarray]:
     return G.real, G.imag
 
 
+@hot_path
 def static_modulus(lin: LinearModel) -> float:
     """Low-frequency limit ``G'(f→0) = (0.5/L)/(D0 K0⁻¹ (−H0))`` (Pa)."""
     return float(modulus(lin.pencil.static_compliance(), lin.L))
 
 
+@hot_path
 def viscosity_limit(lin: LinearModel) -> float:
     """High-frequency limit ``G''/ω → (0.5/L)/(D0 C0⁻¹ (−H0))`` (Pa·s); needs C0 positive definite.
 
@@ -198,6 +203,7 @@ class FrequencyResponse:
         return draw(self, axes, **kw)
 
 
+@hot_path
 def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0) -> FrequencyResponse:
     """Compliance and moduli for arrays of prestresses and frequencies in one call.
 

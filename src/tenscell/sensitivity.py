@@ -40,6 +40,7 @@ from ._checks import finite_scalar, positive_array, positive_scalar
 from ._progress import progress_bar, stage
 from ._results import dataframe, format_repr
 from .linear.linearize import LinearModel, linearize
+from .linear.modal import modulus
 from .response import compliance
 from .model.shapes import paper_cell
 from .model.structure import STRUT
@@ -54,6 +55,9 @@ __all__ = [
     "summarize",
     "MonteCarloResult",
     "monte_carlo",
+    "monte_carlo_draws",
+    "monte_carlo_factors",
+    "monte_carlo_names",
     "SensitivityStudy",
     "sensitivity_study",
     "SENSITIVITY_FREQUENCIES",
@@ -189,11 +193,9 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
     f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
     w = 2 * np.pi * f
     dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M)  # noqa: E731
-    K0, C0, Kp, A = dense(lin.K0), dense(lin.C0), dense(lin.Kp), dense(lin.cell.A)
-    Z = K0[None] + 1j * w[:, None, None] * C0[None]
-    b = (-lin.H0).astype(complex)
-    X = np.linalg.solve(Z, np.broadcast_to(b, (f.size, b.size))[..., None])[..., 0]
-    Y = np.linalg.solve(np.transpose(Z, (0, 2, 1)), np.broadcast_to(lin.D0.astype(complex), X.shape)[..., None])[..., 0]
+    Kp, A = dense(lin.Kp), dense(lin.cell.A)
+    X = lin.pencil.resolvent(w, -lin.H0)  # the model's one modal decomposition (tenscell.linear.modal)
+    Y = lin.pencil.resolvent(w, lin.D0)  # Z = K0 + iωC0 is symmetric: Z⁻ᵀD0 = Z⁻¹D0
     J = X @ lin.D0
     prod = (Y @ A) * (X @ A)  # (nf, m): (yᵀa_j)(a_jᵀx)
     cell, l = lin.cell, lin.cell.lengths
@@ -216,13 +218,13 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
     n = len(names)
     return Elasticities(
         frequency_hz=f, names=tuple(names), groups=tuple(groups), values=np.concatenate(values),
-        complex=np.vstack(rows), G=(0.5 / lin.L) / J, methods=("analytic",) * n, errors=np.zeros(n),
+        complex=np.vstack(rows), G=modulus(J, lin.L), methods=("analytic",) * n, errors=np.zeros(n),
     )
 
 
 def _modulus(alpha, delta, L, P, EA, c, f, intermediate_filaments=True):
     cell = paper_cell(alpha=alpha, delta=delta, L=L, intermediate_filaments=intermediate_filaments)
-    return (0.5 / cell.strut_length) / compliance(linearize(cell, P=P, EA=EA, c=c), f)
+    return modulus(compliance(linearize(cell, P=P, EA=EA, c=c), f), cell.strut_length)
 
 
 def _geometry_derivative(G_of, x0, h, relative):
@@ -400,7 +402,7 @@ def perturbation_table(
     fam = [_family_tag(x) for x in cell.structure.families]
 
     def G_material(P_, EA_, c_):
-        return (0.5 / cell.strut_length) / compliance(linearize(cell, P=P_, EA=EA_, c=c_), f)
+        return modulus(compliance(linearize(cell, P=P_, EA=EA_, c=c_), f), cell.strut_length)
 
     G0 = G_material(P, EA, c)
     rows = []
@@ -611,8 +613,9 @@ def monte_carlo(
     ----------
     n : int
         Number of draws, ≥ 1.
-    progress : bool, optional
-        Progress bar (the :mod:`tenscell._progress` convention).
+    progress : bool or None
+        A progress bar: None shows one when someone watches (a terminal or a
+        notebook), True always, False never (see :mod:`tenscell._progress`).
 
     Returns
     -------
@@ -620,25 +623,71 @@ def monte_carlo(
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n (number of draws) must be a whole number >= 1, got {n!r}")
+    spread, alpha_spread = _mc_spreads(spread, alpha_spread, parameters)
+    names = monte_carlo_names(paper_cell().m, parameters)
+    factors = monte_carlo_factors(np.random.default_rng(seed), n, len(names), spread, alpha_spread, parameters)
+    cs, cl, reasons = monte_carlo_draws(factors, parameters=parameters, alpha=alpha, delta=delta, L=L, P=P, EA=EA,
+                                        c=c, f_hz=f_hz, progress=progress)
+    f = np.atleast_1d(np.asarray(f_hz, dtype=float)).ravel()
+    label = "all parameters" if parameters == "all" else "material parameters (EA_j, c_j, P)"
+    return MonteCarloResult(names=names, factors=factors, change_storage=cs, change_loss=cl, reasons=tuple(reasons),
+                            spread=spread, seed=seed, alpha_spread=alpha_spread if parameters == "all" else 0.0,
+                            label=label, frequency_hz=f)
+
+
+def _mc_spreads(spread, alpha_spread, parameters):
     spread = positive_scalar("spread", spread)
     if spread >= 1:
         raise ValueError(f"spread must be a fraction below 1, got {spread!r}")
     if parameters not in ("all", "material"):
         raise ValueError(f"parameters must be 'all' or 'material', got {parameters!r}")
     alpha_spread = spread if alpha_spread is None else positive_scalar("alpha_spread", alpha_spread, "rad")
+    return spread, alpha_spread
+
+
+def monte_carlo_names(m: int, parameters: str = "all") -> tuple[str, ...]:
+    """Names of the perturbed parameters of :func:`monte_carlo` for a cell of ``m`` tendons (factor columns)."""
+    names = tuple(f"EA[{j}]" for j in range(m)) + tuple(f"c[{j}]" for j in range(m)) + ("P",)
+    return names + (("L", "delta", "alpha") if parameters == "all" else ())
+
+
+def monte_carlo_factors(rng: np.random.Generator, n: int, k: int, spread: float, alpha_spread: float,
+                        parameters: str = "all") -> np.ndarray:
+    """Draw ``n`` rows of ``k`` factors as :func:`monte_carlo` does, shape (n, k) (α column: shifts in rad)."""
+    factors = 1 + spread * rng.uniform(-1.0, 1.0, size=(n, k))
+    if parameters == "all":
+        factors[:, -1] = alpha_spread * rng.uniform(-1.0, 1.0, size=n)
+    return factors
+
+
+def monte_carlo_draws(factors, *, parameters: str = "all", alpha: float = 0.0, delta: float | None = None,
+                      L: float = 1.0, P: float = 1000.0, EA=1.0, c=1.0, f_hz=SENSITIVITY_FREQUENCIES,
+                      progress: bool | None = False):
+    """Evaluate given draws of :func:`monte_carlo` (a pure function: the same factors, the same numbers).
+
+    Parameters
+    ----------
+    factors : ndarray, shape (n, k)
+        Rows as drawn by :func:`monte_carlo_factors`, columns :func:`monte_carlo_names`.
+    parameters, alpha, delta, L, P, EA, c, f_hz
+        The reference, as in :func:`monte_carlo`.
+
+    Returns
+    -------
+    change_storage, change_loss : ndarray, shape (n,)
+        Largest |ΔG'/G'| and |ΔG''/G''| over frequency (NaN for an invalid draw).
+    reasons : list of str
+        The error type of each invalid draw, "" for valid ones.
+    """
+    from ._progress import progress_bar
+
+    factors = np.atleast_2d(np.asarray(factors, dtype=float))
+    n = factors.shape[0]
     f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
     cell, EA, c = _base_parameters(alpha, delta, L, P, EA, c, True)
     delta0 = float(cell.parameters["delta"])
     m = cell.m
-    G0 = (0.5 / cell.strut_length) / compliance(linearize(cell, P=P, EA=EA, c=c), f)
-    names = tuple(f"EA[{j}]" for j in range(m)) + tuple(f"c[{j}]" for j in range(m)) + ("P",)
-    if parameters == "all":
-        names += ("L", "delta", "alpha")
-    rng = np.random.default_rng(seed)
-    k = len(names)
-    factors = 1 + spread * rng.uniform(-1.0, 1.0, size=(n, k))
-    if parameters == "all":
-        factors[:, -1] = alpha_spread * rng.uniform(-1.0, 1.0, size=n)
+    G0 = modulus(compliance(linearize(cell, P=P, EA=EA, c=c), f), cell.strut_length)
     cs, cl, reasons = np.full(n, np.nan), np.full(n, np.nan), []
     for i in progress_bar(range(n), desc="Monte Carlo", unit="draw", progress=progress):
         fa = factors[i]
@@ -648,17 +697,14 @@ def monte_carlo(
             else:
                 cell_i = cell
             lin = linearize(cell_i, P=P * fa[2 * m], EA=EA * fa[:m], c=c * fa[m:2 * m])
-            G1 = (0.5 / cell_i.strut_length) / compliance(lin, f)
+            G1 = modulus(compliance(lin, f), cell_i.strut_length)
         except ValueError as err:
             reasons.append(type(err).__name__)
             continue
         cs[i] = np.max(np.abs(G1.real / G0.real - 1))
         cl[i] = np.max(np.abs(G1.imag / G0.imag - 1))
         reasons.append("")
-    label = "all parameters" if parameters == "all" else "material parameters (EA_j, c_j, P)"
-    return MonteCarloResult(names=names, factors=factors, change_storage=cs, change_loss=cl, reasons=tuple(reasons),
-                            spread=spread, seed=seed, alpha_spread=alpha_spread if parameters == "all" else 0.0,
-                            label=label, frequency_hz=f)
+    return cs, cl, reasons
 
 
 # ---- the whole study ---------------------------------------------------------------------------------

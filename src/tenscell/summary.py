@@ -24,6 +24,7 @@ from .model.formfinding import rigid_body_modes
 from .linear.krylov import load_modes
 from .linear.linearize import LinearModel, NotPositiveDefiniteError, linearize
 from .model.structure import STRUT, Structure
+from ._threads import hot_path
 
 __all__ = ["StructureSummary", "summarize", "relaxation_modes", "RelaxationModes", "node_displacements"]
 
@@ -293,6 +294,7 @@ class RelaxationModes:
         return rates_bar(self.rates, ax=ax, **kw)
 
 
+@hot_path
 def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     """The ``k`` slowest relaxation modes, also when C0 is singular or the structure is free-standing.
 

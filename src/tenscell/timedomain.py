@@ -45,6 +45,7 @@ import scipy.linalg
 from ._checks import positive_array, positive_scalar
 from .linear.linearize import LinearModel
 from .linear.modal import ZERO_TIME, continuum_factor
+from ._threads import hot_path
 
 __all__ = [
     "CreepSpectrum",
@@ -162,6 +163,7 @@ class CreepSpectrum:
                             ylabel="creep compliance J(t) (m/N)", **kw)
 
 
+@hot_path
 def creep_spectrum(lin: LinearModel) -> CreepSpectrum:
     """Retardation times and weights of the linear model (works for singular C0 too).
 
@@ -309,6 +311,7 @@ def _merge_modes(lam: np.ndarray, r: np.ndarray, rtol: float = 1e-9) -> tuple[np
     return np.array(out_l), np.array(out_r)
 
 
+@hot_path
 def stress_relaxation(lin: LinearModel) -> StressRelaxation:
     """Relaxation function of the linear model from the zeros of ``J(s)``.
 

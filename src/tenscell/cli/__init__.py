@@ -30,6 +30,7 @@ COMMAND_MODULES = (
     "dynamics",
     "study",
     "show",
+    "population",
 )
 
 

@@ -9,6 +9,7 @@ import numpy as np
 from .._checks import positive_scalar
 from .._results import dataframe, format_repr
 from ..linear.linearize import LinearModel
+from ..linear.modal import modulus
 from ..model.equilibrium import Cell
 from ..response import compliance
 
@@ -172,7 +173,7 @@ class Harmonics:
     @property
     def G(self) -> complex:
         """``G' + iG'' = (0.5/L)/J`` (Pa)."""
-        return (0.5 / self.L) / self.J
+        return modulus(self.J, self.L)
 
     @property
     def G_storage(self) -> float:
@@ -252,8 +253,7 @@ class OscillatoryResponse:
     def _lin(self) -> complex:
         if self.linear is None:
             return complex(float("nan"), float("nan"))
-        J = complex(compliance(self.linear, self.harmonics.frequency_hz))
-        return (0.5 / self.linear.L) / J
+        return complex(modulus(self.J_linear, self.linear.L))
 
     @property
     def G_storage_linear(self) -> float:
@@ -268,7 +268,9 @@ class OscillatoryResponse:
     @property
     def J_linear(self) -> complex:
         """Linear compliance J(ω) (m/N)."""
-        return complex((0.5 / self.linear.L) / self._lin()) if self.linear is not None else complex("nan")
+        if self.linear is None:
+            return complex("nan")
+        return complex(compliance(self.linear, self.harmonics.frequency_hz))
 
     def cycle(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(t, z, F)`` over the analysed cycles, both ends included (a closed loop); s, m, N."""

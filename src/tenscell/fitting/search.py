@@ -33,7 +33,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.optimize
-from threadpoolctl import threadpool_limits
 
 from .._checks import positive_scalar
 from .._parallel import Workers
@@ -41,6 +40,7 @@ from .._progress import progress_bar
 from ..model.equilibrium import Cell
 from .problem import _LN10, _PENALTY, _SHARE_WEIGHT, FitProblem, as_datasets, make_problem
 from .result import FitAlternative, FitResult
+from .._threads import limited
 
 __all__ = ["fit"]
 
@@ -225,7 +225,7 @@ def _step(problem: FitProblem, chain: _Chain, settings: _Settings, max_nfev: int
     """Advance one start by one least-squares run: its first (from an initial guess) or one basin-hopping move."""
     # The matrices are tiny (n ~ 24): BLAS threads only add overhead, and on a
     # shared machine they make each evaluation ~10x slower.
-    with threadpool_limits(limits=1, user_api="blas"):
+    with limited():  # one place for BLAS threads (tenscell._threads), overridable by the user
         first = chain.theta is None
         if first:
             x0 = _initial_guess(problem, chain.rng) if chain.initial is None else chain.initial

@@ -37,6 +37,7 @@ __all__ = [
     "DataError",
     "RheologyData",
     "read_csv",
+    "parse_text",
     "write_csv",
     "bundled",
     "bundled_names",
@@ -572,6 +573,16 @@ def read_csv(path: str | os.PathLike[str], *, min_points: int = 1) -> RheologyDa
     except (OSError, UnicodeDecodeError) as exc:
         raise _error(source, f"cannot read file: {exc}") from exc
     return _parse_text(text, source, min_points)
+
+
+def parse_text(text: str, source: str = "<text>", *, min_points: int = 1) -> RheologyData:
+    """Parse rheology data from CSV text (what :func:`read_csv` does after reading the file).
+
+    For data that arrive as text rather than as a file, e.g. one cell's rows
+    of a long table sent to a worker. ``source`` names the data in error
+    messages; see :func:`read_csv` for the layouts and the errors raised.
+    """
+    return _parse_text(text, str(source), min_points)
 
 
 def _format(x: float) -> str:

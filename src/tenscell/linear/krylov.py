@@ -49,6 +49,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._checks import positive_array
+from .._threads import hot_path
 
 if TYPE_CHECKING:  # pragma: no cover
     from .linearize import LinearModel
@@ -240,6 +241,7 @@ def converge(run: LanczosRun, error, tol: float, what: str, max_steps: int | Non
     return err
 
 
+@hot_path
 def krylov_compliance(lin: "LinearModel", f_hz, *, tol: float = 1e-12, shift: float | None = None,
                       max_steps: int | None = None) -> KrylovResponse:
     """Compliance ``J(f)`` (m/N) of a (sparse) linear model by one factorization and a Lanczos run.
@@ -295,6 +297,7 @@ def krylov_compliance(lin: "LinearModel", f_hz, *, tol: float = 1e-12, shift: fl
                           error_estimate=max(errs), rates=rates, _factor=pencil.factor(sigma))
 
 
+@hot_path
 def load_modes(lin: "LinearModel", k: int = 3, tol: float = 1e-6, max_steps: int = 150):
     """The ``k`` slowest relaxation modes that the load excites, for sparse models.
 

@@ -24,6 +24,7 @@ from ..model.equilibrium import Cell, tangent_stiffness
 from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
 )
+from .._threads import hot_path
 
 __all__ = [
     "LinearModel",
@@ -160,6 +161,7 @@ class LinearModel:
         return resp.plot(axes=axes, **kw)
 
 
+@hot_path
 def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
     """Linearize the cell's equations of motion at prestress ``P`` (Voigt tendons, the paper's model).
 
@@ -200,6 +202,7 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     return _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
 
 
+@hot_path
 def linearize_tangent(cell: Cell, P: float, k, c=1.0, *, l0=None, check: bool = True) -> LinearModel:
     """Linearize with given tangent stiffnesses ``k_j = dT_j/dl_j`` of the members at the reference.
 

@@ -19,17 +19,18 @@ Positive definiteness (:attr:`Pencil.cholesky`)
     ``check=True`` computes it) and it is kept for every later solve.
 
 Dense modal decomposition (:attr:`Pencil.modes`)
-    With ``K0 = L Lᵀ`` from the check, one symmetric eigensolve of the
-    whitened damping ``L⁻¹ C0 L⁻ᵀ = U diag(τ) Uᵀ`` gives ``C0 v = τ K0 v``
-    with ``V = L⁻ᵀU`` (``VᵀK0V = I``, τ ≥ 0 in s, τ = 0 for a mode the
+    One Cholesky and one symmetric eigensolve of the whitened pencil (by C0
+    when it is positive definite, else by K0's factor from the check) give
+    ``C0 v = τ K0 v`` with ``VᵀK0V = I`` (τ ≥ 0 in s, τ = 0 for a mode the
     tendons do not damp), and
 
         J(s) = D0 (K0 + s·C0)⁻¹ b = Σ_k ρ_k / (1 + s·τ_k),  ρ_k = (D0·v_k)(b·v_k),  b = −H0,
 
     which serves the compliance at every frequency, creep and relaxation at
-    every time, and the relaxation spectrum ``λ = 1/τ``. Singular C0 needs no
-    special case. Grids of prestresses use the same identity with C0 whitened
-    once for all P (:func:`prestress_grid_compliance`).
+    every time, the relaxation spectrum ``λ = 1/τ`` and the resolvent
+    ``(K0 + iωC0)⁻¹`` of the elasticities. Singular C0 needs no special case.
+    Grids of prestresses use the same identity with C0 whitened once for all
+    P (:func:`prestress_grid_compliance`).
 
 Sparse models (:meth:`Pencil.lanczos_runs`)
     Besides the Cholesky of K0 (the check, and static solves), one Cholesky of
@@ -54,11 +55,13 @@ from functools import cached_property
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.lapack
 import scipy.sparse as sp
 
 from ..model.equilibrium import weighted_gram
 from .krylov import DEFAULT_BAND_HZ, LanczosRun, converge, default_shift
 from .sparse import NotPositiveDefinite, factorize_spd
+from .._threads import hot_path
 
 __all__ = [
     "NotPositiveDefiniteError",
@@ -156,13 +159,21 @@ def modal_compliance(tau: np.ndarray, rho: np.ndarray, w: np.ndarray) -> np.ndar
     return parts[..., 0, :] - 1j * (w * parts[..., 1, :])
 
 
-_tri = scipy.linalg.solve_triangular
+def _tri(L: np.ndarray, B: np.ndarray, trans: int = 0) -> np.ndarray:
+    """``L⁻¹B`` (``L⁻ᵀB`` with trans=1) for a lower-triangular L: LAPACK trtrs without the wrapper's checks."""
+    X, info = _trtrs(L, B, lower=1, trans=trans)
+    if info != 0:  # pragma: no cover - L comes from a successful Cholesky
+        raise np.linalg.LinAlgError(f"triangular solve failed (info={info})")
+    return X
+
+
+_trtrs = scipy.linalg.lapack.dtrtrs
 
 
 def _whiten(L: np.ndarray, M: np.ndarray) -> np.ndarray:
     """``L⁻¹ M L⁻ᵀ`` (symmetrized) for a lower-triangular L, with M of shape (n, n)."""
-    X = _tri(L, M, lower=True, check_finite=False)
-    X = _tri(L, X.T, lower=True, check_finite=False)
+    X = _tri(L, M)
+    X = _tri(L, X.T)
     return 0.5 * (X + X.T)
 
 
@@ -255,22 +266,14 @@ class Pencil:
 
     # -- dense: one eigensolve ---------------------------------------------------------------------
     @cached_property
-    def damping_cholesky(self) -> np.ndarray | None:
-        """Lower Cholesky factor of a dense positive definite C0, or None if C0 is singular.
-
-        Round-off lets Cholesky "succeed" on a singular matrix with tiny pivots,
-        so pivots below :data:`ZERO_TIME` of the largest count as zero.
-        """
-        return None if self.sparse else _cholesky_or_none(np.asarray(self.C0))
-
-    @cached_property
     def modes(self) -> Modes:
         """The dense modal decomposition ``C0 v = τ K0 v``: one Cholesky, one symmetric eigensolve.
 
-        The pencil is whitened by C0 when C0 is positive definite (the rates
-        λ = 1/τ are then eigenvalues of ``Lc⁻¹K0Lc⁻ᵀ``, the identity the
-        prestress grids use too), otherwise by K0's factor from the check
-        (undamped modes get τ = 0). Either way K0 is checked first.
+        The pencil is whitened by K0's factor from the positive-definiteness
+        check, so the modes are K0-orthonormal and ``Σ ρ_k = D0ᵀK0⁻¹b`` holds to
+        round-off whatever the conditioning of C0: the static compliance
+        (creep J(∞), G'(0)) stays exact for fitted cells whose damping spans
+        many decades, and undamped modes get τ = 0 without a special case.
         """
         if self.sparse:
             raise ValueError(
@@ -278,18 +281,22 @@ class Pencil:
                 "use Pencil.retardation() (Lanczos) instead"
             )
         L = self.cholesky  # the positive-definiteness check
-        Lc = self.damping_cholesky
-        if Lc is not None:
-            lam, U = np.linalg.eigh(_whiten(Lc, np.asarray(self.K0)))
-            Vc = _tri(Lc, U, lower=True, trans="T", check_finite=False)  # C0-orthonormal, VᵀK0V = diag(λ)
-            lam, Vc = lam[::-1], Vc[:, ::-1]  # τ ascending
-            tau = 1.0 / lam
-            V = Vc * np.sqrt(tau)
-        else:
-            tau, U = np.linalg.eigh(_whiten(L, np.asarray(self.C0)))
-            tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding
-            V = _tri(L, U, lower=True, trans="T", check_finite=False)
+        tau, U = np.linalg.eigh(_whiten(L, np.asarray(self.C0)))
+        tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding
+        V = _tri(L, U, trans=1)
         return Modes(tau=tau, vectors=V, weights=(self.probe @ V) * (self.load @ V))
+
+    def resolvent(self, w, rhs: np.ndarray) -> np.ndarray:
+        """``x(ω) = (K0 + iωC0)⁻¹ rhs`` for every ω (rad/s), shape (nf, n), from the modal decomposition (dense).
+
+        ``(K0 + iωC0)⁻¹ = V diag(1/(1 + iωτ)) Vᵀ``; the pencil is symmetric, so
+        this also gives ``(K0 + iωC0)⁻ᵀ rhs``. For elasticities and other
+        derivatives of J (:func:`tenscell.analytic_elasticities`).
+        """
+        m = self.modes
+        V = m.vectors
+        g = 1.0 / (1.0 + 1j * np.multiply.outer(np.atleast_1d(np.asarray(w, dtype=float)), m.tau))
+        return (g * (np.asarray(rhs, dtype=float) @ V)) @ V.T
 
     # -- sparse: factors and Lanczos runs per shift ----------------------------------------------------
     def factor(self, shift: float = 0.0):
@@ -429,7 +436,12 @@ class RelaxationSpectrum:
     residues : ndarray, shape (k,)
         ``r_k = (D0·v_k)(−H0·v_k)`` (m/(N·s)); non-negative when probe = load.
     modes : ndarray, shape (n, k)
-        C0-orthonormal eigenvectors (Ritz vectors for sparse models) as columns.
+        C0-orthonormal eigenvectors as columns. For sparse models these are
+        the Ritz vectors, exact eigenvectors only where a Ritz pair has
+        converged: a cluster of (nearly) equal rates, such as a lattice's
+        identical local modes, is represented by fewer Ritz pairs carrying its
+        total weight (what J needs; see :func:`tenscell.relaxation_modes` for
+        converged slowest modes).
     error_estimate : float
         Relative accuracy of the spectrum's ``J`` (0 for the dense, exact decomposition).
     """
@@ -474,6 +486,7 @@ class RelaxationSpectrum:
                               ylabel="compliance weight r/λ (m/N)", **kw)
 
 
+@hot_path
 def relaxation_spectrum(lin) -> RelaxationSpectrum:
     """Solve ``K0 v = λ C0 v`` (rates λ in 1/s, ``vᵀC0v = 1``), dense or sparse.
 
@@ -517,6 +530,7 @@ def relaxation_spectrum(lin) -> RelaxationSpectrum:
 
 
 # ---- grids of prestresses ---------------------------------------------------------------------------
+@hot_path
 def prestress_grid_compliance(Kp, K_material, C0, load, probe, P: np.ndarray, w: np.ndarray,
                               describe: str = "the model") -> np.ndarray | None:
     """``J(iω)`` (m/N) of the dense pencils ``(P·Kp + K_material, C0)`` for many prestresses at once.
@@ -540,8 +554,8 @@ def prestress_grid_compliance(Kp, K_material, C0, load, probe, P: np.ndarray, w:
     if Lc is None:
         return None
     Kpt, Kmt = _whiten(Lc, np.asarray(Kp)), _whiten(Lc, np.asarray(K_material))
-    bt = _tri(Lc, load, lower=True, check_finite=False)
-    dt = _tri(Lc, probe, lower=True, check_finite=False)
+    bt = _tri(Lc, np.asarray(load, dtype=float))
+    dt = _tri(Lc, np.asarray(probe, dtype=float))
     lam, U = np.linalg.eigh(P[:, None, None] * Kpt + Kmt)
     bad = np.flatnonzero(lam[:, 0] <= 0)
     if bad.size:

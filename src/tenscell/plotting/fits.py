@@ -15,8 +15,8 @@ from ._style import new_axes, new_panels, styled
 if TYPE_CHECKING:
     from ..io.data import RheologyData
 
-__all__ = ["fit_figure", "data_points", "measured", "plot_fit", "fit_panels", "compactness_front",
-           "stiffness_histogram"]
+__all__ = ["fit_figure", "data_points", "plot_fit", "fit_panels", "compactness_front", "stiffness_histogram",
+           "measured"]
 
 
 def _x_axis(data: RheologyData) -> str:

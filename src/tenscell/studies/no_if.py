@@ -15,6 +15,7 @@ import scipy.optimize
 from .._checks import positive_scalar
 from .._results import dataframe, format_repr
 from ..linear.linearize import LinearModel, linearize
+from ..linear.modal import continuum_factor, modulus
 from ..model.equilibrium import Cell
 from ..model.shapes import paper_cell
 from ..response import FrequencyResponse, compliance, frequency_response
@@ -60,7 +61,7 @@ def loss_peak(lin: LinearModel, f_min: float = 1e-4, f_max: float = 1e8, n: int 
     if f_max <= f_min:
         raise ValueError(f"f_max must exceed f_min, got {f_min!r} and {f_max!r} Hz")
     f = np.logspace(math.log10(f_min), math.log10(f_max), n)
-    Gl = ((0.5 / lin.L) / compliance(lin, f)).imag
+    Gl = (modulus(compliance(lin, f), lin.L)).imag
     k = int(np.argmax(Gl))
     if k == 0 or k == n - 1:
         raise ValueError(
@@ -69,12 +70,12 @@ def loss_peak(lin: LinearModel, f_min: float = 1e-4, f_max: float = 1e8, n: int 
         )
 
     def neg(u):
-        return -float(((0.5 / lin.L) / compliance(lin, [10.0 ** u])).imag[0])
+        return -float((modulus(compliance(lin, [10.0 ** u]), lin.L)).imag[0])
 
     r = scipy.optimize.minimize_scalar(neg, bounds=(math.log10(f[k - 1]), math.log10(f[k + 1])), method="bounded",
                                        options={"xatol": 1e-8})
     fp = 10.0 ** r.x
-    G = (0.5 / lin.L) / compliance(lin, [fp])[0]
+    G = modulus(compliance(lin, [fp])[0], lin.L)
     return LossPeak(frequency_hz=float(fp), height=float(G.imag), storage=float(G.real))
 
 
@@ -193,7 +194,7 @@ def no_if_study(
     v = V[:, 0]
     resid = float(np.linalg.norm(cell.A.T @ v) / np.linalg.norm(cell.A))
     # as ω → ∞ only the undamped mechanism v can move: J → (D0·v)²/(vᵀK0v), and vᵀK0v = P·vᵀKp v
-    limit = float((0.5 / cell.strut_length) * (v @ cell.Kp @ v) / (lin.D0 @ v) ** 2)
+    limit = float(continuum_factor(cell.strut_length) * (v @ cell.Kp @ v) / (lin.D0 @ v) ** 2)
     fp = np.array([p.frequency_hz for p in peaks])
     hp = np.array([p.height for p in peaks])
     a = float(np.polyfit(np.log(Ps), np.log(fp), 1)[0]) if Ps.size > 1 else math.nan

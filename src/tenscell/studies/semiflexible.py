@@ -10,6 +10,7 @@ from .._checks import positive_array, positive_scalar
 from .._results import dataframe, format_repr
 from ..laws import Voigt
 from ..linear.linearize import LinearModel, linearize, linearize_law
+from ..linear.modal import modulus
 from ..model.equilibrium import Cell
 from ..model.shapes import paper_cell, semiflexible_paper_cell
 from ..model.structure import STRUT
@@ -231,7 +232,7 @@ def semiflexible_study(
     P = positive_scalar("P (prestress)", P, "N")
     EA, c = positive_scalar("EA", EA, "N"), positive_scalar("c", c, "N·s/m")
     rigid = paper_cell()
-    G_r = (0.5 / rigid.strut_length) / compliance(linearize(rigid, P=P, EA=EA, c=c), f)
+    G_r = modulus(compliance(linearize(rigid, P=P, EA=EA, c=c), f), rigid.strut_length)
     cell = semiflexible_paper_cell()
     comp = float(-P * cell.T0[_strut_indices(cell)].min())
     G = np.full((EAs.size, f.size), np.nan + 0j)
@@ -240,7 +241,7 @@ def semiflexible_study(
             lin = linearize_semiflexible(cell, P, EA, c, EA_strut=e, c_strut=c_strut)
         except ValueError:
             continue
-        G[i] = (0.5 / cell.strut_length) / compliance(lin, f)
+        G[i] = modulus(compliance(lin, f), cell.strut_length)
     es = np.max(np.abs(G.real / G_r.real - 1), axis=1)
     el = np.max(np.abs(G.imag / G_r.imag - 1), axis=1)
     stiff = EAs >= EAs.max() / 1e3  # the three stiffest decades: the asymptotic regime
@@ -271,7 +272,7 @@ def semiflexible_study(
     soft = np.full(f.size, np.nan + 0j)
     if not math.isnan(crit):
         lin = linearize_semiflexible(cell, P, EA, c, EA_strut=crit, c_strut=c_strut)
-        soft = (0.5 / cell.strut_length) / compliance(lin, f)
+        soft = modulus(compliance(lin, f), cell.strut_length)
     return SemiflexibleStudy(
         EA_strut=EAs, G=G, G_rigid=G_r, frequency_hz=f, error_storage=es, error_loss=el, rate_storage=rs, rate_loss=rl,
         constant_storage=ks, constant_loss=kl, critical_EA=float(crit), G_softest=soft, strut_compression=comp,

@@ -15,6 +15,7 @@ from .._checks import positive_scalar
 from .._results import dataframe, format_repr
 from ..laws import stiffening_law
 from ..linear.linearize import LinearModel, linearize_law
+from ..linear.modal import modulus
 from ..model.equilibrium import Cell
 from ..model.shapes import paper_cell
 from ..model.structure import INTERMEDIATE_FILAMENT
@@ -153,7 +154,7 @@ def stiffening_study(
     for i, bb in enumerate(bs):
         for k, P in enumerate(Ps):
             lin = linearize_stiffening(cell, P, EA, c, b=bb, family=family)
-            G[i, k] = (0.5 / cell.strut_length) / compliance(lin, f)
+            G[i, k] = modulus(compliance(lin, f), cell.strut_length)
             st[i, k] = static_modulus(lin)
             kt[i, k] = lin.law.tangent_at_rest(cell.lengths, P * cell.T0)[0][j]
     return StiffeningStudy(b=bs, prestress=Ps, frequency_hz=f, G=G, static=st, if_tangent=kt, EA=EA, c=c,

@@ -1,0 +1,131 @@
+"""BLAS threads on tenscell's hot paths, decided in one place.
+
+The matrices of a cell model are small (tens of coordinates) or sparse; their
+factorizations, eigensolves and triangular solves gain nothing from several
+BLAS threads, and on a shared machine they lose a lot (measured here: complex
+sparse solves ran 80–120× slower with several OpenBLAS threads, the fitter's
+evaluations about 10×). So every hot path — linearization and its check,
+compliance and moduli, creep and relaxation, Lanczos runs, fits — runs with
+**one** BLAS thread, and the caller's own setting is restored on return.
+
+Override it, for instance for dense models of thousands of coordinates on an
+idle many-core machine:
+
+* the environment variable ``TENSCELL_THREADS`` (an integer ≥ 1, or ``all``
+  to leave the BLAS libraries' own setting untouched), read at each call;
+* :func:`set_threads` (``None`` goes back to the environment/default);
+* the context manager :func:`threads`, e.g. ``with tenscell._threads.threads(4): ...``.
+
+Hot paths are marked with :func:`hot_path`; nested hot paths set the limit
+once (a thread-local depth counter), so the overhead is paid per public call.
+"""
+from __future__ import annotations
+
+import contextlib
+import functools
+import os
+import sys
+import threading
+
+__all__ = ["ENV_VAR", "DEFAULT_THREADS", "thread_count", "set_threads", "threads", "limited", "hot_path"]
+
+ENV_VAR = "TENSCELL_THREADS"
+#: BLAS threads on hot paths unless overridden
+DEFAULT_THREADS = 1
+
+_local = threading.local()
+_override: int | str | None = None
+_controller = None
+
+
+def _parse(value, where: str) -> int | None:
+    if value is None:
+        return None
+    if isinstance(value, str):
+        v = value.strip().lower()
+        if v in ("all", "auto", "none", ""):
+            return None if v else DEFAULT_THREADS
+        try:
+            value = int(v)
+        except ValueError:
+            raise ValueError(f"{where} must be a whole number >= 1 or 'all', got {value!r}") from None
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise ValueError(f"{where} must be a whole number >= 1 or 'all', got {value!r}")
+    return value
+
+
+def thread_count() -> int | None:
+    """BLAS threads the hot paths will use; None means "leave the libraries' setting alone"."""
+    if _override is not None:
+        return None if _override == "all" else _override
+    env = os.environ.get(ENV_VAR)
+    return DEFAULT_THREADS if env is None else _parse(env, ENV_VAR)
+
+
+def set_threads(n: int | str | None) -> None:
+    """Set the BLAS threads for tenscell's hot paths: an integer ≥ 1, ``"all"`` (no limit) or None (default)."""
+    global _override
+    _override = None if n is None else ("all" if _parse(n, "threads") is None else _parse(n, "threads"))
+
+
+@contextlib.contextmanager
+def threads(n: int | str | None):
+    """Within the block, hot paths use ``n`` BLAS threads (see :func:`set_threads`)."""
+    global _override
+    before = _override
+    set_threads(n)
+    try:
+        yield
+    finally:
+        _override = before
+
+
+def _blas_libraries():
+    """threadpoolctl's controllers of the loaded BLAS libraries (looked up once, again if more load later)."""
+    global _controller
+    # a module imported since the last look may have brought its own BLAS (cvxopt does)
+    if _controller is None or _controller[0] != len(sys.modules):
+        from threadpoolctl import ThreadpoolController
+
+        libs = [lc for lc in ThreadpoolController().lib_controllers if lc.user_api == "blas"]
+        _controller = (len(sys.modules), libs)
+    return _controller[1]
+
+
+@contextlib.contextmanager
+def limited():
+    """Run the block with the hot-path thread count (once, however deeply nested).
+
+    Sets each BLAS library's thread count directly (a few C calls) rather
+    than through ``threadpool_limits``, which inspects the process at every
+    use (about 40 µs, as much as a small model's whole response).
+    """
+    depth = getattr(_local, "depth", 0)
+    n = thread_count() if depth == 0 else None
+    changed = []
+    if n is not None:
+        for lc in _blas_libraries():
+            old = lc.num_threads
+            if old != n:
+                lc.set_num_threads(n)
+                changed.append((lc, old))
+    _local.depth = depth + 1
+    try:
+        yield
+    finally:
+        _local.depth = depth
+        for lc, old in changed:
+            lc.set_num_threads(old)
+
+
+def hot_path(fn):
+    """Decorator: run ``fn`` under :func:`limited`."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        if getattr(_local, "depth", 0):
+            return fn(*args, **kwargs)
+        with limited():
+            return fn(*args, **kwargs)
+
+    return wrapper

@@ -1,0 +1,124 @@
+"""Figures of cell populations: parameter distributions per condition, population moduli bands.
+
+Nothing here computes physics: the functions draw a population table
+(:attr:`tenscell.population.PopulationResult.table`) or result.
+"""
+from __future__ import annotations
+
+import math
+import warnings
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from ._style import colors, label_moduli, new_panels, styled
+
+__all__ = ["parameter_distributions", "population_moduli"]
+
+_LABELS = {
+    "EA_actin_N": "EA actin (N)", "EA_intermediate_filament_N": "EA IF (N)", "c_Ns_per_m": "c (N·s/m)",
+    "P_N": "P (N)", "L_m": "L (m)", "s_m2": "s (m²)", "rms_log10_error": "RMS log10 error",
+    "prestress_elasticity_storage": "∂lnG′/∂lnP", "stiffness_spread_decades": "EA spread (decades)",
+    "G_storage_ref_Pa": "G′(f_ref) (Pa)", "storage_slope": "∂lnG′/∂lnf",
+}
+
+
+def _conditions(table):
+    conds = sorted(set(table["condition"]))
+    return conds or [""]
+
+
+@styled
+def parameter_distributions(table, columns=(), ax=None, title: str | None = "Fitted parameters per condition",
+                            extra=("rms_log10_error", "prestress_elasticity_storage")):
+    """One panel per quantity: each fitted cell as a jittered point, with the median and quartiles per condition.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Population table (only ``status == "ok"`` rows are drawn).
+    columns : sequence of str
+        Quantities to draw (default: every parameter column that varies, then ``extra``).
+    ax : matplotlib Axes or array of Axes, optional
+        One axes per quantity; default a new figure.
+    extra : sequence of str
+        Further columns drawn after the parameters.
+
+    Returns
+    -------
+    ndarray of Axes
+    """
+    ok = table[table["status"] == "ok"]
+    cols = [c for c in (*columns, *extra) if c in ok.columns]
+    cols = [c for c in cols if ok[c].nunique(dropna=True) > 1] or cols[:1]
+    conds = _conditions(table)
+    palette = colors(max(len(conds), 1))
+    if ax is None:
+        n = len(cols)
+        ncol = min(n, 3)
+        fig, grid = plt.subplots(math.ceil(n / ncol), ncol, figsize=(3.2 * ncol, 2.8 * math.ceil(n / ncol)),
+                                 layout="constrained", squeeze=False)
+        for a in grid.flat[n:]:
+            a.set_visible(False)
+        axes = grid.ravel()[:n]
+        if title:
+            fig.suptitle(title)
+    else:
+        axes = np.atleast_1d(np.asarray(ax, dtype=object)).ravel()
+    rng = np.random.default_rng(0)  # jitter only: the same picture every time
+    for a, col in zip(axes, cols):
+        for k, cond in enumerate(conds):
+            v = ok.loc[ok["condition"] == cond, col].to_numpy(float)
+            v = v[np.isfinite(v)]
+            if not v.size:
+                continue
+            a.plot(k + 0.15 * rng.uniform(-1, 1, v.size), v, "o", ms=3, alpha=0.5, color=palette[k])
+            q25, med, q75 = np.percentile(v, [25, 50, 75])
+            a.errorbar(k + 0.3, med, yerr=[[med - q25], [q75 - med]], fmt="s", color="k", ms=4, capsize=3)
+        vals = ok[col].to_numpy(float)
+        vals = vals[np.isfinite(vals)]
+        if vals.size and np.all(vals > 0) and vals.max() / vals.min() > 3:
+            a.set_yscale("log")
+        a.set_xticks(range(len(conds)), [c or "all" for c in conds], rotation=30 if len(conds) > 3 else 0)
+        a.set_title(_LABELS.get(col, col))
+    return np.asarray(axes)
+
+
+@styled
+def population_moduli(result, ax=None, title: str | None = "Population moduli: median and interquartile band"):
+    """G′ (left) and G″ (right) against f: fitted median line and band, data median and quartiles, per condition.
+
+    Parameters
+    ----------
+    result : PopulationResult
+    ax : pair of Axes, optional
+        G′ and G″ panels; default a new figure.
+
+    Returns
+    -------
+    ndarray of two Axes
+    """
+    f = result.frequency_hz
+    conds = _conditions(result.table)
+    palette = colors(max(len(conds), 1))
+    cond_of = result.table["condition"].to_numpy()
+    axes = new_panels(ax, 2, (8.0, 3.4), title=title)
+    for a, kind in ((axes[0], "storage"), (axes[1], "loss")):
+        for k, cond in enumerate(conds):
+            sel = cond_of == cond
+            model, data = result.curves[f"model_{kind}"][sel], result.curves[f"data_{kind}"][sel]
+            have = np.isfinite(model).sum(axis=0) >= 1
+            if not have.any():
+                continue
+            with warnings.catch_warnings():  # all-NaN columns of one condition: a gap, not an error
+                warnings.simplefilter("ignore", RuntimeWarning)
+                mq = np.nanpercentile(model[:, have], [25, 50, 75], axis=0)
+                dq = np.nanpercentile(data[:, have], [25, 50, 75], axis=0)
+            label = cond or "all cells"
+            a.fill_between(f[have], mq[0], mq[2], color=palette[k], alpha=0.25, lw=0)
+            a.loglog(f[have], mq[1], color=palette[k], label=f"{label}: fit")
+            a.errorbar(f[have][::2], dq[1][::2], yerr=[(dq[1] - dq[0])[::2], (dq[2] - dq[1])[::2]], fmt="o",
+                       ms=3, color=palette[k], mfc="none", capsize=2, lw=0.8, label=f"{label}: data")
+    label_moduli(axes, "f (Hz)")
+    axes[0].legend(loc="best")
+    return np.asarray(axes)

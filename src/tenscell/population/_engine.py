@@ -1,0 +1,187 @@
+"""The Dask side of populations and studies: connect to a cluster, stream tasks through it.
+
+One place for what every distributed run needs:
+
+* :func:`cluster` — a client on an existing scheduler (tcp address or scheduler
+  file) or on a local cluster of processes started here (loopback only, no
+  dashboard, one thread per worker), or no client at all (``workers=0``: the
+  tasks run in this process, in order);
+* :func:`stream` — submit tasks through a bounded window and yield each result
+  as it completes, so that 10⁵ tasks never sit in memory at once and the
+  caller can write each result to disk as it arrives.
+
+A worker that dies while running a task is replaced (by its nanny on a local
+cluster) and the scheduler reruns the task elsewhere; after
+``distributed.scheduler.allowed-failures`` deaths (default 3) the task is given
+up with :class:`distributed.KilledWorker`, which :func:`stream` yields as that
+task's outcome instead of stopping the run.
+"""
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+from pathlib import Path
+from typing import Callable, Iterable, Iterator
+
+__all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
+           "WorkDirError"]
+
+
+class WorkDirError(ValueError):
+    """A work directory holds a different or unfinished run (one line naming it)."""
+
+
+def open_work_dir(path, settings_file: str, settings: dict, resume: bool) -> Path:
+    """Prepare the work directory of a resumable run: new or empty, or an unfinished run with the same settings.
+
+    ``settings`` are written to ``path/settings_file``. Raises :class:`WorkDirError`
+    when the directory holds an unfinished run and ``resume`` is False, a run
+    with other settings, or files of something else.
+    """
+    import json
+
+    from ..io.outputs import write_json
+
+    path = Path(path)
+    info = path / settings_file
+    if info.is_file():
+        if not resume:
+            raise WorkDirError(f"{path}: holds an unfinished run; resume it (--resume) or remove the directory")
+        old = json.loads(info.read_text())
+        diff = sorted(k for k in set(old) | set(settings) if old.get(k) != settings.get(k))
+        if diff:
+            raise WorkDirError(f"{path}: the unfinished run used different settings ({', '.join(diff)}); "
+                               "resume with the same settings or remove the directory")
+    elif path.exists() and any(path.iterdir()):
+        raise WorkDirError(f"{path}: exists, is not empty and holds no {settings_file}")
+    path.mkdir(parents=True, exist_ok=True)
+    write_json(info, settings)
+    return path
+
+
+class TaskLost(Exception):
+    """A task whose workers kept dying (Dask gave up on it); carries Dask's message."""
+
+
+class SchedulerLost(ConnectionError):
+    """The connection to the Dask scheduler was lost: the run stops; what was written is kept."""
+
+
+def check_scheduler(address: str, flag: str = "--scheduler") -> str:
+    """Validate a scheduler address (``tcp://host:port``, ``host:port``) or an existing scheduler file.
+
+    Only the form is checked here (before any computation); connecting is :func:`cluster`'s job.
+    """
+    text = str(address).strip()
+    if not text:
+        raise ValueError(f"{flag}: empty scheduler address")
+    if Path(text).is_file():
+        return text
+    body = text.split("://", 1)[1] if "://" in text else text
+    host, _, port = body.rpartition(":")
+    if not host or not port.isdigit():
+        raise ValueError(f"{flag} {text}: neither an existing scheduler file nor an address like tcp://HOST:PORT")
+    return text
+
+
+@contextlib.contextmanager
+def cluster(*, client=None, workers: int | None = None, scheduler: str | None = None,
+            timeout: float = 30.0) -> Iterator[object | None]:
+    """Yield a Dask client (or None for in-process execution when ``workers == 0``).
+
+    Parameters
+    ----------
+    client : distributed.Client, optional
+        Used as is (not closed here).
+    workers : int, optional
+        Size of the local cluster started when no client or scheduler is given
+        (default: the machine's CPU count); 0 runs every task in this process.
+    scheduler : str, optional
+        Address or scheduler file of an existing cluster.
+    timeout : float
+        Seconds to wait for the scheduler (s).
+    """
+    if client is not None:
+        yield client
+        return
+    if scheduler is None and workers == 0:
+        yield None
+        return
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        scheduler = check_scheduler(scheduler)
+        kw = {"scheduler_file": scheduler} if Path(scheduler).is_file() else {"address": scheduler}
+        with Client(timeout=timeout, **kw) as c:
+            yield c
+        return
+    n = (os.cpu_count() or 1) if workers is None else int(workers)
+    # loopback only, no dashboard: a run on a shared machine opens no port to the network
+    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None, silence_logs=logging.ERROR) as lc, Client(lc) as c:
+        yield c
+
+
+def n_threads(client) -> int:
+    """Total worker threads of a client's cluster (1 for in-process execution)."""
+    if client is None:
+        return 1
+    return max(1, sum(client.nthreads().values()))
+
+
+def stream(client, fn: Callable, items: Iterable[tuple[object, tuple]], *, window: int | None = None,
+           name: str = "tenscell") -> Iterator[tuple[object, object]]:
+    """Run ``fn(*args)`` for each ``(tag, args)`` of ``items``; yield ``(tag, result)`` as each completes.
+
+    At most ``window`` tasks are in the cluster at a time (default: 8 per
+    worker thread, at least 32), refilled as results arrive. A task given up
+    by Dask after repeated worker deaths yields a :class:`TaskLost` as its
+    result. With ``client=None`` the tasks run here, in order.
+
+    Closing the generator (or an interrupt) cancels the tasks still in flight.
+    """
+    if client is None:
+        for tag, args in items:
+            yield tag, fn(*args)
+        return
+    from concurrent.futures import CancelledError
+
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
+    window = window or max(32, 8 * n_threads(client))
+    it = iter(items)
+    pending: dict = {}
+    done = as_completed()
+
+    def submit_next() -> bool:
+        nxt = next(it, None)
+        if nxt is None:
+            return False
+        tag, args = nxt
+        fut = client.submit(fn, *args, pure=False, key=f"{name}-{os.urandom(8).hex()}")
+        pending[fut.key] = (tag, fut)
+        done.add(fut)
+        return True
+
+    try:
+        for _ in range(window):
+            if not submit_next():
+                break
+        for fut in done:
+            tag, _ = pending.pop(fut.key)
+            try:
+                result = fut.result()
+            except KilledWorker as err:
+                result = TaskLost(f"the workers running it died repeatedly ({err})")
+            except CancelledError:
+                # only a lost scheduler cancels our futures; the finished results are already written
+                raise SchedulerLost("lost the Dask scheduler; the finished results are kept: "
+                                    "run the same command with --resume when the cluster is back") from None
+            fut.release()
+            yield tag, result
+            submit_next()
+    finally:
+        if pending and client.status == "running":
+            client.cancel([f for _, f in pending.values()])
