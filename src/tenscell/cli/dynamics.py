@@ -296,7 +296,7 @@ def run_creep(args) -> int:
     except LinearizationError as err:  # beta < 1: only the nonlinear curves exist
         lin, note = None, str(err)
     curves, expo, fits = {}, {}, {}
-    summary = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0,
+    summary: dict = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0,
                          "from_fit": args.from_fit},
                "linear_note": note, "power_law_window_s": [float(win[0]), float(win[1])]}
     tables = {}
