@@ -70,3 +70,15 @@ def test_a_set_of_another_command_or_inside_a_set_is_refused(tmp_path):
     with pytest.raises(OutputLocationError, match="holds no tenscell"):
         OutputSet(tmp_path / "web")
     assert _names(d) == ["a.txt", MANIFEST]
+
+
+def test_temp_file_of_a_killed_writer_is_removed_by_the_next_write(tmp_path):
+    from tenscell.io.outputs import write_text
+
+    target = tmp_path / "fit.png"
+    code = ("import os; from tenscell.io.outputs import atomic_path\n"
+            f"cm = atomic_path({str(target)!r}); cm.__enter__(); os._exit(0)")
+    subprocess.run([sys.executable, "-c", code], check=True)
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".fit.png")]  # the 0-byte temp file
+    write_text(target, "new")
+    assert _names(tmp_path) == ["fit.png"]

@@ -97,6 +97,11 @@ SEMANTIC = [
 ]
 
 
+#: refusals that only the computation finds (after its stage lines): the simulation of the cell without
+#: intermediate filaments loses its damping as soon as tendons go slack
+FOUND_WHILE_COMPUTING = {"damping matrix"}
+
+
 def _substitute(argv, tmp_path):
     data = tmp_path / "in" / "data.csv"
     table = {"DATA": str(data), "MISSING": str(tmp_path / "in" / "missing.csv"), "OUT": str(tmp_path / "work" / "o"),
@@ -117,12 +122,15 @@ def workdir(tmp_path, monkeypatch):
     return tmp_path
 
 
-def _refused(argv, capsys, workdir):
+def _refused(argv, capsys, workdir, stages=False):
+    """Exit 2, one error line (after stage lines when ``stages``: found during the computation)."""
     before = sorted(p.name for p in (workdir / "in").iterdir())
     code = main(argv)
     out, err = capsys.readouterr()
     assert code == 2, (argv, code, err)
     assert out == "", (argv, out)
+    if stages:
+        err = "".join(line for line in err.splitlines(keepends=True) if not line.startswith("tenscell: "))
     assert err.count("\n") == 1 and err.endswith("\n"), (argv, err)
     assert "Traceback" not in err and "Warning" not in err, (argv, err)
     assert list((workdir / "work").iterdir()) == [], (argv, "wrote files")
@@ -142,7 +150,7 @@ def test_bad_numeric_flag_is_refused(prefix, flag, kind, value, capsys, workdir)
 
 @pytest.mark.parametrize("argv, word", SEMANTIC, ids=[" ".join(a)[:60] for a, _ in SEMANTIC])
 def test_bad_value_found_by_the_model_is_refused(argv, word, capsys, workdir):
-    err = _refused(_substitute(argv, workdir), capsys, workdir)
+    err = _refused(_substitute(argv, workdir), capsys, workdir, stages=word in FOUND_WHILE_COMPUTING)
     assert word in err, err
 
 

@@ -20,13 +20,14 @@ processes and returns the results in order. What it guarantees, and why:
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
 import threading
 from typing import Any, Callable, Iterable, Literal, Sequence
 
-__all__ = ["starmap", "Workers", "GRACE_S"]
+__all__ = ["starmap", "Workers", "sigint_deferred", "GRACE_S"]
 
 #: seconds terminated workers get to exit before they are killed
 GRACE_S = 0.5
@@ -151,13 +152,10 @@ class Workers:
 
         pool = self._start()
         try:
-            # workers are forked at the first submit; SIGINT ignored meanwhile, so that no worker can
-            # receive one before its initializer has run (an ignored signal stays ignored in the child)
-            previous = _ignore_sigint()
-            try:
+            # workers are forked at the first submit; Ctrl-C is held meanwhile (and raised right after), so
+            # that no worker can receive one before its initializer has run and none is lost
+            with sigint_deferred():
                 futures = [pool.submit(fn, *a) for a in tasks]
-            finally:
-                _restore_sigint(previous)
             index = {f: i for i, f in enumerate(futures)}
             pending = set(futures)
             while pending:
@@ -175,12 +173,24 @@ class Workers:
             raise
 
 
-def _ignore_sigint():
+@contextlib.contextmanager
+def sigint_deferred():
+    """Hold Ctrl-C (SIGINT) during the block; raise KeyboardInterrupt after it if one came.
+
+    For code that must not be cut in half (forking workers, swapping an output
+    set into place). Only in the main thread, where Python handles signals;
+    elsewhere the block runs unprotected. A process forked inside the block
+    inherits the holding handler: a SIGINT it receives before it installs its
+    own is recorded and dropped, never a KeyboardInterrupt traceback.
+    """
     if threading.current_thread() is not threading.main_thread():
-        return None
-    return signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def _restore_sigint(previous) -> None:
-    if previous is not None:
+        yield
+        return
+    caught = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
+    try:
+        yield
+    finally:
         signal.signal(signal.SIGINT, previous)
+    if caught and previous not in (signal.SIG_IGN, None):
+        raise KeyboardInterrupt

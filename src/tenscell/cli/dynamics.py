@@ -196,7 +196,8 @@ def run_simulate(args) -> int:
     import numpy as np
 
     from .. import plotting
-    from ..dynamics import amplitude_sweep, oscillatory_response
+    from .._progress import stage
+    from ..dynamics import EquationsOfMotion, SineForce, amplitude_sweep, oscillatory_response
     from ..io.outputs import write_csv_rows, write_json
     from ..io.tables import finite
 
@@ -206,12 +207,16 @@ def run_simulate(args) -> int:
     f = args.freq
     check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
     check_resolvable_frequency(cell, law, f, solver["rtol"])
+    EquationsOfMotion(cell, law, SineForce(1.0, f))  # refuses a singular damping matrix before any output
     kw = dict(control=args.control, cycles=args.cycles, samples_per_cycle=args.samples, **solver)
+    stage(f"simulating {args.cycles or 'until periodic,'} cycles at {f:g} Hz, amplitude {amplitude:g} "
+          f"{'N' if args.control == 'force' else 'm'}")
     res = oscillatory_response(cell, law, amplitude, f, **kw)
     finite([res.G_storage, res.G_loss], "G', G'' of the simulation")
     sim, h = res.simulation, res.harmonics
     sweep = None
     if sweep_amps:
+        stage(f"amplitude sweep: {len(sweep_amps)} simulations")
         sweep = amplitude_sweep(cell, law, f, np.asarray(sweep_amps), **{k: v for k, v in kw.items() if k != "control"})
     unit = "N" if args.control == "force" else "m"
     label = f"{args.control} amplitude {amplitude:g} {unit}, {f:g} Hz"
@@ -278,7 +283,8 @@ def run_creep(args) -> int:
     import numpy as np
 
     from .. import plotting
-    from ..dynamics import creep_response, linearize_law
+    from .._progress import stage
+    from ..dynamics import EquationsOfMotion, StepForce, creep_response, linearize_law
     from ..io.outputs import write_csv_rows, write_json
     from ..io.tables import finite
     from ..laws import LinearizationError
@@ -288,6 +294,7 @@ def run_creep(args) -> int:
     amplitudes = args.amplitude if args.amplitude is not None else (() if args.from_fit else (0.1, 30.0))
     if len(amplitudes):
         check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
+    EquationsOfMotion(cell, law, StepForce(1.0))  # refuses a singular damping matrix before any output
     t = np.logspace(math.log10(args.t_min), math.log10(args.t_max), args.points)
     win = args.window or (float(t[0]), float(t[-1]))
     P0 = args.prestress_N
@@ -318,7 +325,8 @@ def run_creep(args) -> int:
                            "times_s": rel.times.tolist(), "weights_N_per_m": rel.weights.tolist()},
         })
     steps = []
-    for F in amplitudes:
+    for k, F in enumerate(amplitudes, 1):
+        stage(f"creep after a {F:g} N step ({k}/{len(amplitudes)})")
         cr = creep_response(cell, law, float(F), t, **solver)
         key = f"step {F:g} N"
         curves[key] = finite(cr.compliance, f"the creep compliance after the {F:g} N step")

@@ -229,6 +229,7 @@ def fit_outputs(result, baseline, title, comparison=None):
 def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, **search):
     """The fit and its homogeneous baseline (the fit itself when it is homogeneous and unconstrained)."""
     from .. import fitting
+    from .._progress import stage
 
     result = fitting.fit(data, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
                          tolerance=tolerance, **search)
@@ -236,6 +237,7 @@ def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_star
         baseline = result
     else:
         # the baseline only shows what a homogeneous cell cannot do: a short search suffices
+        stage(f"homogeneous baseline: {baseline_starts} start(s)")
         baseline = fitting.fit(data, tendons="uniform", starts=baseline_starts, seed=seed, jobs=1,
                                tolerance=tolerance, hops=10, patience=3)
     return result, baseline
@@ -267,6 +269,8 @@ def run(args) -> int:
             raise ValueError(f"--holdout {args.holdout[0]:g}:{args.holdout[1]:g}: {err}") from None
         datasets = [train]
     space = search_space(args, datasets)  # bad input: before any fitting
+    stage(f"fitting {sum(d.n for d in datasets)} points: {args.starts} start(s), stiffness "
+          f"{args.tendons}, damping {args.damping}, {args.jobs} process(es)")
     result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,
                                args.tolerance, args.baseline_starts, **space)
     from ..fitting.models import compare_models

@@ -26,13 +26,18 @@ def run(args) -> int:
         raise ValueError(f"--prestress × --freq is {len(args.prestress):,} × {len(args.freq):,} = {n:,} points; "
                          f"at most {MAX_GRID_POINTS:,} per run")
     from ._args import model_from_args
+    from .._progress import progress_bar
     from ..io.tables import check_finite_rows, moduli_table
     from ..response import frequency_response
 
     cell, EA, c = model_from_args(args)
-    resp = frequency_response(cell, args.freq, args.prestress, EA=EA, c=c)
-    header, rows = moduli_table(resp)
-    rows = list(check_finite_rows(rows, "G', G''", "(--prestress, --EA, --c, --L, --freq)"))
+    # one prestress at a time (a bar on a terminal for large grids); every row is checked before any is
+    # written, so that bad numbers never reach the output
+    rows = []
+    for P in progress_bar(args.prestress, desc="moduli", unit="prestress", progress=None if n > 10**5 else False):
+        resp = frequency_response(cell, args.freq, [P], EA=EA, c=c)
+        header, block = moduli_table(resp)
+        rows.extend(check_finite_rows(block, "G', G''", "(--prestress, --EA, --c, --L, --freq)"))
     out = sys.stdout
     out.write(",".join(header) + "\n")
     for P, f, gs, gl in rows:

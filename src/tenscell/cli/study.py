@@ -186,10 +186,13 @@ def run(args) -> int:
     if (args.name == "compactness") != bool(args.data):
         raise ValueError("study compactness needs data files (e.g. bundled:fabry2001)" if args.name == "compactness"
                          else f"study {args.name} takes no data files, got {' '.join(args.data)}")
+    from .._progress import stage
+
     out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")
     t = time.perf_counter()
+    stage(f"study {args.name} ...")
     with out as d:
-        STUDIES[args.name](d, lambda msg: print(f"tenscell: {msg}", file=sys.stderr, flush=True), args)
+        STUDIES[args.name](d, lambda msg: stage(f"    computed {msg}"), args)
     print(f"tenscell: study {args.name} finished in {time.perf_counter() - t:.1f} s; wrote {out.target}/",
           file=sys.stderr)
     return 0

@@ -20,14 +20,15 @@ import csv
 import ctypes
 import ctypes.util
 import datetime as _dt
+import glob
 import json
 import os
 import shutil
-import signal
 import tempfile
 from typing import Literal
-import threading
 from pathlib import Path
+
+from .._parallel import sigint_deferred
 
 __all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text", "OutputSet", "OutputLocationError",
            "check_output_dir", "check_output_file", "read_manifest", "MANIFEST"]
@@ -36,6 +37,7 @@ __all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text", "OutputS
 MANIFEST = "manifest.json"
 _STAGING = ".tenscell-staging-"
 _OLD = ".tenscell-old-"
+_TEMP = ".tenscell-tmp-"
 
 
 @contextlib.contextmanager
@@ -50,7 +52,9 @@ def atomic_path(path, *, make_parents: bool = True):
     path = Path(path)
     if make_parents:
         path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix or ".tmp", dir=path.parent)
+    _clean_stale_temps(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}{_TEMP}{os.getpid()}-", suffix=path.suffix or ".tmp",
+                               dir=path.parent)
     os.close(fd)
     try:
         yield Path(tmp)
@@ -66,6 +70,15 @@ def atomic_path(path, *, make_parents: bool = True):
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def _clean_stale_temps(path: Path) -> None:
+    """Remove temporary files that killed writers (SIGKILL) left beside ``path``."""
+    for entry in path.parent.glob(f".{glob.escape(path.name)}{_TEMP}*"):
+        pid = entry.name[len(path.name) + 1 + len(_TEMP):].split("-", 1)[0]
+        if pid.isdigit() and not _pid_alive(int(pid)):
+            with contextlib.suppress(OSError):
+                entry.unlink()
 
 
 def write_csv_rows(path, header, rows) -> None:
@@ -192,11 +205,11 @@ def _clean_stale(target: Path) -> None:
     parent = target.absolute().parent
     if not parent.is_dir():
         return
-    for entry in parent.glob(f".{target.name}{_STAGING}*"):
+    for entry in parent.glob(f".{glob.escape(target.name)}{_STAGING}*"):
         pid = entry.name.rsplit("-", 1)[-1]
         if not pid.isdigit() or not _pid_alive(int(pid)):
             shutil.rmtree(entry, ignore_errors=True)
-    for entry in parent.glob(f".{target.name}{_OLD}*"):
+    for entry in parent.glob(f".{glob.escape(target.name)}{_OLD}*"):
         pid = entry.name.rsplit("-", 1)[-1]
         if pid.isdigit() and _pid_alive(int(pid)):
             continue
@@ -204,26 +217,6 @@ def _clean_stale(target: Path) -> None:
             os.rename(entry, target)  # a run died between its two renames: the old set comes back
         else:
             shutil.rmtree(entry, ignore_errors=True)
-
-
-@contextlib.contextmanager
-def _sigint_deferred():
-    """Hold SIGINT during the block (main thread only); raise KeyboardInterrupt after it if one came."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught = []
-    try:
-        previous = signal.signal(signal.SIGINT, lambda signum, frame: caught.append(signum))
-    except ValueError:  # pragma: no cover - signals unavailable here
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-    if caught and previous not in (signal.SIG_IGN, None):
-        raise KeyboardInterrupt
 
 
 _RENAME_EXCHANGE = 2
@@ -295,7 +288,7 @@ class OutputSet:
         staging, self.staging = self.staging, None
         assert staging is not None
         # a second Ctrl-C must not cut the clean-up or the swap in half: it is held until they are done
-        with _sigint_deferred():
+        with sigint_deferred():
             if exc_type is not None:
                 shutil.rmtree(staging, ignore_errors=True)
                 return False
