@@ -33,5 +33,14 @@ $(DOCS_STAMP): $(STAMP)
 docs: $(DOCS_STAMP)
 	TENSCELL_PROGRESS=0 $(VENV)/bin/sphinx-build -W --keep-going -b html docs docs/_build/html
 
+# static types (mypy, configured in pyproject.toml)
+DEV_STAMP := $(VENV)/.dev-installed
+$(DEV_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e '.[dev]'
+	touch $(DEV_STAMP)
+
+typecheck: $(DEV_STAMP)
+	$(VENV)/bin/mypy
+
 clean:
 	rm -rf $(VENV) out build src/*.egg-info .pytest_cache docs/_build docs/api/generated docs/auto_examples docs/jupyter_execute

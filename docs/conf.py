@@ -85,7 +85,8 @@ _SECTIONS = {
 }
 #: modules documented whole, below the top-level names
 API_MODULES = ["tenscell.plotting", "tenscell.io.importers", "tenscell.io.data", "tenscell.fitting",
-               "tenscell.dynamics", "tenscell.sensitivity", "tenscell.studies", "tenscell.linear", "tenscell.model"]
+               "tenscell.dynamics", "tenscell.sensitivity", "tenscell.studies", "tenscell.population", "tenscell.linear",
+               "tenscell.model"]
 
 
 def _section(module: str) -> str:

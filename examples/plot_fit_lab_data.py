@@ -38,10 +38,13 @@ print(data.comments[-1])
 result = tc.fit(data, tendons="per-tendon", starts=1, seed=0, progress=False)
 print(f"rms log10 error {result.rms_log10_error:.4f} decades; converged: {result.converged}")
 
+print(result)
+
 # %%
 # Data (circles) against the fitted model (lines).
-tc.plotting.fit_figure(data, [tc.fitting.model_curve(result)], title="paper cell fitted to HASM data")
+ax = result.plot()
+ax.set_title("paper cell fitted to HASM data")
 
 # %%
 # The fitted parameters as a table.
-pd.DataFrame([p.to_dict() for p in result.parameters])[["name", "value", "unit"]]
+result.parameters_dataframe()[["name", "value", "unit"]]

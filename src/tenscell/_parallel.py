@@ -25,7 +25,7 @@ import os
 import signal
 import sys
 import threading
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable, Iterable, Literal, Sequence
 
 __all__ = ["starmap", "Workers", "sigint_deferred", "GRACE_S"]
 
@@ -119,7 +119,7 @@ class Workers:
     def __enter__(self) -> "Workers":
         return self
 
-    def __exit__(self, exc_type, exc, tb) -> bool:
+    def __exit__(self, exc_type, exc, tb) -> Literal[False]:
         pool, self._pool = self._pool, None
         if pool is not None:
             if exc_type is None:
@@ -160,9 +160,10 @@ class Workers:
             pending = set(futures)
             while pending:
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for f in sorted(done, key=index.get):
-                    if f.exception() is not None:
-                        raise f.exception()
+                for f in sorted(done, key=lambda f: index[f]):
+                    err = f.exception()
+                    if err is not None:
+                        raise err
                     if on_done is not None:
                         on_done(index[f], f.result())
             return [f.result() for f in futures]

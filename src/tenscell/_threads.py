@@ -57,7 +57,7 @@ def _parse(value, where: str) -> int | None:
 def thread_count() -> int | None:
     """BLAS threads the hot paths will use; None means "leave the libraries' setting alone"."""
     if _override is not None:
-        return None if _override == "all" else _override
+        return None if isinstance(_override, str) else _override  # "all": leave the libraries alone
     env = os.environ.get(ENV_VAR)
     return DEFAULT_THREADS if env is None else _parse(env, ENV_VAR)
 

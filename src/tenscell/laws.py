@@ -73,7 +73,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import ClassVar, Mapping, NamedTuple
+from typing import Any, ClassVar, Mapping, NamedTuple, Self
 
 import numpy as np
 
@@ -211,7 +211,7 @@ class TendonLaw:
     #: the per-tendon parameters, in order (their fields hold scalars or (m,) arrays)
     parameters: ClassVar[tuple[Parameter, ...]] = ()
     rate_linear: ClassVar[bool] = True
-    l0: object = None
+    l0: Any = None
 
     # -- to implement -----------------------------------------------------------------------------
     def tension(self, l, ldot):
@@ -273,22 +273,22 @@ class TendonLaw:
             )
         return self.l0
 
-    def with_rest_lengths(self, l0) -> "TendonLaw":
+    def with_rest_lengths(self, l0) -> Self:
         """The same law with rest lengths ``l0`` (m)."""
-        return dataclasses.replace(self, l0=l0)
+        return dataclasses.replace(self, l0=l0)  # type: ignore[type-var]  # every law is a dataclass
 
-    def _placed(self, l0) -> "TendonLaw":
+    def _placed(self, l0) -> Self:
         """The same law with rest lengths ``l0`` already known to be valid (no re-validation)."""
         obj = object.__new__(type(self))
         obj.__dict__.update(self.__dict__)
         obj.__dict__["l0"] = np.asarray(l0, dtype=float)
         return obj
 
-    def at_tension(self, l, T) -> "TendonLaw":
+    def at_tension(self, l, T) -> Self:
         """The law with the rest lengths that give tensions ``T`` (N) at lengths ``l`` (m) at rest."""
         return self.with_rest_lengths(self.rest_lengths(l, T))
 
-    def at_prestress(self, cell: Cell, P: float) -> "TendonLaw":
+    def at_prestress(self, cell: Cell, P: float) -> Self:
         """The law placed at ``cell``'s reference with tensions ``P·T0`` (rest lengths from the inverse law)."""
         P = positive_scalar("P (prestress)", P, "N")
         m = self.m
@@ -447,9 +447,9 @@ class Voigt(_SpringEA):
     ``∂k/∂T = 1/l``, ``∂k/∂EA = 1/l``, ``∂c/∂c = 1``.
     """
 
-    EA: object
-    c: object
-    l0: object = None
+    EA: Any
+    c: Any
+    l0: Any = None
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("c", "N·s/m", True))
     rate_linear: ClassVar = True
 
@@ -523,9 +523,9 @@ class PowerDashpot(_SpringEA):
         Smoothing velocity ε > 0 (m/s).
     """
 
-    EA: object
-    c: object
-    l0: object = None
+    EA: Any
+    c: Any
+    l0: Any = None
     beta: float = 2.0
     velocity_scale: float = DEFAULT_VELOCITY_SCALE
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("c", "N·(s/m)^beta", True))
@@ -536,7 +536,7 @@ class PowerDashpot(_SpringEA):
         object.__setattr__(self, "velocity_scale", positive_scalar("velocity_scale", self.velocity_scale, "m/s"))
 
     @property
-    def rate_linear(self) -> bool:
+    def rate_linear(self) -> bool:  # type: ignore[override]  # per instance here, a class constant elsewhere
         """True only for β = 1 (then the law is exactly Voigt)."""
         return self.beta == 1.0
 
@@ -654,10 +654,10 @@ class StiffeningFilament(TendonLaw):
         Rest lengths (m).
     """
 
-    EA: object
-    c: object
+    EA: Any
+    c: Any
     b: object = 0.0
-    l0: object = None
+    l0: Any = None
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("c", "N·s/m", True), Parameter("b", "", True))
     rate_linear: ClassVar = True
 
@@ -735,9 +735,9 @@ class LinearSpring(TendonLaw):
         Rest lengths (m).
     """
 
-    k: object
-    c: object
-    l0: object = None
+    k: Any
+    c: Any
+    l0: Any = None
     parameters: ClassVar = (Parameter("k", "N/m"), Parameter("c", "N·s/m", True))
     rate_linear: ClassVar = True
 
@@ -823,7 +823,7 @@ class CompositeLaw(TendonLaw):
         return self._gather(lambda law, i: np.broadcast_to(law.l0, i.shape))
 
     @property
-    def rate_linear(self) -> bool:
+    def rate_linear(self) -> bool:  # type: ignore[override]  # per instance here, a class constant elsewhere
         """Every part is rate-linear."""
         return all(law.rate_linear for law in self.laws)
 
@@ -901,7 +901,7 @@ class CompositeLaw(TendonLaw):
         """Each part's :class:`Tangent`, assembled (exact where the parts are)."""
         l, T = _refs(l, T)
         names, m = self.names, self.m
-        units = {}
+        units: dict[str, str] = {}
         k, c, dkT, dcT = (np.empty(m) for _ in range(4))
         dk, dc = np.zeros((len(names), m)), np.zeros((len(names), m))
         for law, i in zip(self.laws, self.indices):
@@ -1038,7 +1038,7 @@ def stiffening_law(cell: Cell, P: float | None = 1000.0, EA=1.0, c=1.0, *, b: fl
     if stiff.size == 0:
         raise ValueError(f"{cell.describe()} has no tendons of family {family!r}")
     rest = np.setdiff1d(np.arange(cell.m), stiff)
-    parts = [StiffeningFilament(EA=EA[stiff], c=c[stiff], b=np.full(stiff.size, b))]
+    parts: list[TendonLaw] = [StiffeningFilament(EA=EA[stiff], c=c[stiff], b=np.full(stiff.size, b))]
     idx = [stiff]
     if rest.size:
         parts.append(Voigt(EA=EA[rest], c=c[rest]))

@@ -301,7 +301,8 @@ def _merge_modes(lam: np.ndarray, r: np.ndarray, rtol: float = 1e-9) -> tuple[np
     lam, r = lam[keep], r[keep]
     order = np.argsort(lam)
     lam, r = lam[order], r[order]
-    out_l, out_r = [], []
+    out_l: list[float] = []
+    out_r: list[float] = []
     for lk, rk in zip(lam, r):
         if out_l and lk - out_l[-1] <= rtol * lk:
             out_r[-1] += rk

@@ -303,7 +303,7 @@ def run_creep(args) -> int:
     except LinearizationError as err:  # beta < 1: only the nonlinear curves exist
         lin, note = None, str(err)
     curves, expo, fits = {}, {}, {}
-    summary = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0,
+    summary: dict = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0,
                          "from_fit": args.from_fit},
                "linear_note": note, "power_law_window_s": [float(win[0]), float(win[1])]}
     tables = {}
@@ -325,8 +325,8 @@ def run_creep(args) -> int:
                            "times_s": rel.times.tolist(), "weights_N_per_m": rel.weights.tolist()},
         })
     steps = []
-    for k, F in enumerate(amplitudes, 1):
-        stage(f"creep after a {F:g} N step ({k}/{len(amplitudes)})")
+    for n_step, F in enumerate(amplitudes, 1):
+        stage(f"creep after a {F:g} N step ({n_step}/{len(amplitudes)})")
         cr = creep_response(cell, law, float(F), t, **solver)
         key = f"step {F:g} N"
         curves[key] = finite(cr.compliance, f"the creep compliance after the {F:g} N step")

@@ -172,7 +172,7 @@ class EquationsOfMotion:
         self.n, self.m = cell.n, cell.m
         self.cable = np.array([f != STRUT for f in cell.structure.families], dtype=bool)
         self.displacement_control = loading.controls == "displacement"
-        self.gamma = 10.0 * loading.omega if self.displacement_control else 0.0
+        self.gamma = 10.0 * getattr(loading, "omega") if self.displacement_control else 0.0  # a SineDisplacement
         geom0 = cell.geometry
         idx = np.where(geom0.index < 0, self.n, geom0.index)
         self._idx = idx
@@ -406,6 +406,7 @@ class EquationsOfMotion:
         n = self.n
         w = active.astype(float)
         Hs = member_geometry(self.coords, state.q, kin).hess
+        assert Hs is not None  # member_geometry computes the Hessians unless told not to
         vloc = np.r_[state.v, 0.0][self._idx]
         Hv = np.einsum("mkl,ml->mk", Hs, vloc)
         T = state.trial

@@ -144,7 +144,7 @@ def simulate(
             f"tendon {j} ({fam[j]}) would go into compression at t={float(sol.t_events[k][0]):.6g} s "
             f"(load {loading!r}); run with slack='allow' to let it go slack"
         )
-    for k, j in enumerate(cables):
+    for k, j in enumerate(map(int, cables)):
         # the constitutive tension changes sign at each root, so the switches alternate
         slack_now = not st0.taut[j]
         for te in sol.t_events[k]:

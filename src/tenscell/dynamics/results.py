@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -58,8 +59,8 @@ class Simulation:
     """
 
     cell: Cell
-    law: object
-    loading: object
+    law: Any
+    loading: Any
     t: np.ndarray
     q: np.ndarray
     force: np.ndarray

@@ -105,6 +105,7 @@ class FittedModel:
             if prestress_pa is not None:
                 raise ValueError("this fit has a fitted prestress P (N); prestress_pa applies to fits with a "
                                  "measured prestress (a prestress scale s)")
+            assert self.P is not None  # a fit without a prestress scale fits P itself
             return float(self.P)
         if prestress_pa is None:
             prestress_pa = self.default_prestress_pa

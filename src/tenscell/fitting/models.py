@@ -260,6 +260,7 @@ def fit_structural_damping(data: RheologyData, *, phi0: float = PHI0, newtonian:
                                            gtol=1e-12)
         if best is None or res.cost < best.cost:
             best = res
+    assert best is not None  # _starts yields at least one start
     theta = best.x
     r_w = prob.residuals(theta)
     r = r_w / prob.weights
@@ -461,7 +462,7 @@ def _tensegrity_params(result) -> int:
     return p.n_free - (1 if np.all(p.free[g != 0]) else 0)
 
 
-def compare_models(result, *, homogeneous=None, structural: StructuralDampingFit | bool = True,
+def compare_models(result, *, homogeneous=None, structural: StructuralDampingFit | bool | None = True,
                    held_out: RheologyData | None = None, holdout: tuple | None = None,
                    name: str | None = None) -> ModelComparison:
     """Score a tensegrity fit beside the homogeneous tensegrity and the structural-damping law.

@@ -543,7 +543,9 @@ class FitProblem:
     def prestress_share(self, theta) -> np.ndarray:
         """Prestress share of the static stiffness at each prestress group, shape (groups,); NaN if unstable."""
         out = self._evaluate(self.full(theta), jac=False, share=True)
-        return np.full(self.n_groups, np.nan) if out is None else out.share
+        if out is None or out.share is None:  # share=True always computes it when the model is stable
+            return np.full(self.n_groups, np.nan)
+        return out.share
 
     def prestress_elasticity(self, theta) -> np.ndarray:
         """``∂ln G'/∂ln P`` at :attr:`elasticity_omega` at each prestress group, shape (groups,); NaN if unstable."""
@@ -610,6 +612,12 @@ class FitProblem:
             return False
         return self.max_decades * _LN10 < float(self.upper[0] - self.lower[0])
 
+    @property
+    def _decades(self) -> float:
+        """``max_decades`` where it is known to be set (the compact coordinates)."""
+        assert self.max_decades is not None, "only used when compact"
+        return self.max_decades
+
     def coordinate_map(self) -> np.ndarray:
         """``T`` with ``theta = T @ u`` (search coordinates ``u``), shape (n_free, n_u).
 
@@ -621,7 +629,7 @@ class FitProblem:
             return np.eye(n)
         T = np.zeros((n, n + 1))
         T[: self.n_ea, 0] = 1.0
-        T[: self.n_ea, 1: self.n_ea + 1] = np.eye(self.n_ea) * (self.max_decades * _LN10)
+        T[: self.n_ea, 1: self.n_ea + 1] = np.eye(self.n_ea) * (self._decades * _LN10)
         T[self.n_ea:, self.n_ea + 1:] = np.eye(n - self.n_ea)
         return T
 
@@ -630,7 +638,7 @@ class FitProblem:
         lo, hi = self.bounds
         if not self.compact:
             return lo, hi
-        half = 0.5 * self.max_decades * _LN10
+        half = 0.5 * self._decades * _LN10
         s = np.full(self.n_ea, 0.5)
         return (np.concatenate([[lo[0] + half], -s, lo[self.n_ea:]]),
                 np.concatenate([[hi[0] - half], s, hi[self.n_ea:]]))
@@ -641,7 +649,7 @@ class FitProblem:
         if not self.compact:
             return theta.copy()
         e = theta[: self.n_ea]
-        width = self.max_decades * _LN10
+        width = self._decades * _LN10
         spread = float(e.max() - e.min())
         centre = 0.5 * float(e.max() + e.min())
         lo, hi = self.coordinate_bounds()

@@ -183,7 +183,8 @@ class DatasetFit:
     @property
     def x(self) -> np.ndarray:
         """The data's x values: prestress (Pa) for a prestress sweep, frequency (Hz) otherwise."""
-        return self.data.prestress if self.axis == "prestress" else self.data.frequency_hz
+        prestress = self.data.prestress
+        return prestress if self.axis == "prestress" and prestress is not None else self.data.frequency_hz
 
     def __repr__(self) -> str:
         at = (f" at {self.prestress_pa:.4g} Pa (stated)" if self.prestress_pa is not None else

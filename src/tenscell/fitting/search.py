@@ -135,7 +135,7 @@ def _initial_guess(problem: FitProblem, rng: np.random.Generator) -> np.ndarray:
     n_ea, n_c = problem.n_ea, problem.n_c
     spread = rng.uniform(5.0, 10.0) if problem.tendons == "per-tendon" else rng.uniform(0.0, 3.0)
     if problem.compact:
-        spread = min(spread, problem.max_decades)
+        spread = min(spread, problem._decades)
     u = rng.uniform(-0.5, 0.5, n_ea) * spread * _LN10 if n_ea > 1 else np.zeros(1)
     u = u + math.log(problem.scale_stiffness)
     # families' damping may differ by decades (a joint fit of the bundled data puts them ~4 apart)
@@ -432,6 +432,7 @@ def fit(
 def _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin) -> FitResult:
     best = _best(chains)
     theta = best.theta if best.met_theta is None else best.met_theta
+    assert theta is not None  # every chain that ran holds a point
     r = problem.residuals(theta) / problem.weights
     rms = float(np.sqrt(np.mean(r**2)))
     per_set = problem.dataset_rms(theta)

@@ -158,7 +158,8 @@ def is_creep_header(text: str, source: str = "<text>") -> bool:
 
 
 def _parse(text: str, source: str) -> CreepData:
-    comments, columns, rows = [], None, []
+    comments: list[str] = []
+    columns, rows = None, []
     for lineno, fields in _csv_lines(text, source, comments):
         if columns is None:
             columns = _header(fields, source, lineno)

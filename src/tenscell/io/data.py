@@ -176,8 +176,8 @@ class RheologyData:
             raise _error(source, "no data points")
         # canonical row order (prestress, then frequency, then the values): the same data set gives
         # the same object, and the same fit, whatever the order of the rows in its file
-        keys = [arrays[k] for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
-                if arrays[k] is not None]
+        keys = [a for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
+                if (a := arrays[k]) is not None]
         order = np.lexsort(keys)
         if np.any(order != np.arange(order.size)):
             for name, arr in arrays.items():

@@ -589,6 +589,7 @@ def _rheocompass_map(table: _Table, found: Mapping[str, str | None], units: Mapp
     if found["frequency"] is None:
         raise _error(table, "no 'Angular Frequency' or 'Frequency' column")
     f = found["frequency"]
+    cols: dict[str, str | None]
     if found["storage"] and found["loss"]:
         cols = {"storage": found["storage"], "loss": found["loss"]}
     elif found["loss_tangent"] and (found["storage"] or found["loss"]):

@@ -25,6 +25,7 @@ import json
 import os
 import shutil
 import tempfile
+from typing import Literal
 from pathlib import Path
 
 from .._parallel import sigint_deferred
@@ -283,7 +284,7 @@ class OutputSet:
         self.staging.mkdir()
         return self.staging
 
-    def __exit__(self, exc_type, exc, tb) -> bool:
+    def __exit__(self, exc_type, exc, tb) -> Literal[False]:
         staging, self.staging = self.staging, None
         assert staging is not None
         # a second Ctrl-C must not cut the clean-up or the swap in half: it is held until they are done

@@ -31,6 +31,7 @@ import json
 import sys
 import math
 from dataclasses import dataclass
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -219,7 +220,7 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
             pos = nd
         xyz.append(_vector(pos, 3, f"node {i} position"))
     nodes = np.array(xyz) * lu
-    index = {}
+    index: dict[str, int] = {}
     for i, nm in enumerate(names):
         if nm is None:
             continue
@@ -359,7 +360,8 @@ def _point(p, what, ref) -> Point:
     if norm == 0:
         raise StructureError(f"the {what}'s direction must not be the zero vector")
     try:
-        return Point(nodes=tuple(nodes), weights=tuple(weights), direction=tuple(d / norm for d in direction))
+        unit = (direction[0] / norm, direction[1] / norm, direction[2] / norm)
+        return Point(nodes=tuple(nodes), weights=tuple(weights), direction=unit)
     except StructureError as err:
         raise StructureError(f"the {what}: {err}") from None
 
@@ -386,7 +388,7 @@ def structure_to_dict(structure: Structure, EA=None, c=None, T0=None, descriptio
     label = (lambda i: s.node_names[i]) if named else (lambda i: int(i))
     nodes = []
     for i, x in enumerate(s.nodes):
-        d = {"xyz": [float(v) for v in x]}
+        d: dict[str, Any] = {"xyz": [float(v) for v in x]}
         if named:
             d = {"name": s.node_names[i], **d}
         nodes.append(d)

@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -87,7 +87,7 @@ class KrylovResponse:
     shift: float
     error_estimate: float
     rates: np.ndarray
-    _factor: object = field(default=None, repr=False)
+    _factor: Any = field(default=None, repr=False)
 
     @property
     def fill(self) -> int:

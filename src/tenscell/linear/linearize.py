@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -76,12 +77,12 @@ class LinearModel:
     P: float
     EA: np.ndarray
     c: np.ndarray
-    K0: object
-    C0: object
+    K0: Any  # ndarray or scipy.sparse matrix
+    C0: Any
     H0: np.ndarray
     D0: np.ndarray
     l0: np.ndarray
-    law: object = None
+    law: Any = None
 
     @property
     def tendon_law(self):

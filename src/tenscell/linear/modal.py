@@ -392,7 +392,7 @@ class _CreepChange:
     """Relative change of the reduced creep compliance since the previous check (the run's error estimate)."""
 
     def __init__(self):
-        self.prev = None
+        self.prev: tuple[np.ndarray, np.ndarray] | None = None
 
     def __call__(self, run: LanczosRun) -> float:
         if run.steps == 0:

@@ -21,6 +21,7 @@ import math
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 import scipy.linalg
@@ -76,7 +77,7 @@ class MemberGeometry:
 
     lengths: np.ndarray
     grad: np.ndarray
-    hess: np.ndarray
+    hess: np.ndarray | None
     index: np.ndarray
     n: int
 
@@ -360,9 +361,9 @@ class Cell:
     coords: Coordinates
     q0: np.ndarray
     lengths: np.ndarray
-    A: object
+    A: Any  # ndarray or scipy.sparse matrix
     T0: np.ndarray
-    Kp: object
+    Kp: Any
     load: np.ndarray
     probe: np.ndarray
     self_stress_dim: int

@@ -160,7 +160,7 @@ def rigid_body_modes(coords: Coordinates, q: np.ndarray | None = None, rtol: flo
     nn = s.n_nodes
     # node velocities of the 6 rigid motions, v_i = t + ω × x_i, about the centroid (conditioning)
     xc = x - x.mean(axis=0)
-    V = np.zeros((nn, 3, 6))
+    V: np.ndarray = np.zeros((nn, 3, 6))
     V[:, :, :3] = np.eye(3)
     for k, e in enumerate(np.eye(3)):
         V[:, :, 3 + k] = np.cross(e, xc)

@@ -85,7 +85,7 @@ def paper_structure(alpha: float, delta: float, L: float, intermediate_filaments
     tendons = list(_actin_pairs())
     families = [ACTIN] * len(tendons)
     groups: tuple = ()
-    names = PAPER_NODE_NAMES
+    names: tuple[str, ...] = PAPER_NODE_NAMES
     if intermediate_filaments:
         first_if = len(tendons)
         tendons += [(i, _N) for i in range(12)]

@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 import inspect
 from contextlib import nullcontext
-from typing import Any, Callable, Sequence, TypeVar
+from typing import Any, Callable, Iterable, Sequence, TypeVar
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -61,8 +61,11 @@ def colors(n: int) -> np.ndarray:
     return plt.cm.viridis(np.linspace(0.0, 0.9, n))
 
 
-def new_axes(ax: Axes | None = None, figsize: tuple[float, float] = (5.6, 4.2), projection: str | None = None) -> Axes:
-    """``ax`` itself, or the axes of a new figure of size ``figsize`` (inches)."""
+def new_axes(ax: Axes | None = None, figsize: tuple[float, float] = (5.6, 4.2), projection: str | None = None) -> Any:
+    """``ax`` itself, or the axes of a new figure of size ``figsize`` (inches).
+
+    Typed ``Any``: an Axes, or an Axes3D for ``projection="3d"``.
+    """
     if ax is not None:
         if projection is not None and getattr(ax, "name", None) != projection:
             raise ValueError(f"ax: this plot needs a {projection!r} axes (add_subplot(projection={projection!r}))")
@@ -93,7 +96,7 @@ def moduli_panels(title: str | None = None, figsize: tuple[float, float] = (8.0,
     return axes[0].figure, axes
 
 
-def label_moduli(axes: Sequence[Axes], xlabel: str) -> None:
+def label_moduli(axes: Iterable[Axes], xlabel: str) -> None:
     """Label a G' | G'' pair of axes."""
     for ax, name in zip(axes, ("G′", "G″")):
         ax.set_xlabel(xlabel)
@@ -104,11 +107,12 @@ def figure_of(obj: Any) -> Figure:
     """The figure behind a Figure, an Axes, or an array/sequence of Axes."""
     if isinstance(obj, Figure):
         return obj
-    if isinstance(obj, Axes):
-        return obj.figure  # type: ignore[return-value]
     first = np.asarray(obj, dtype=object).ravel()
     if first.size and isinstance(first[0], Axes):
-        return first[0].figure
+        fig = first[0].figure
+        while not isinstance(fig, Figure):  # a subfigure: its figure is the one saved
+            fig = fig.figure
+        return fig
     raise TypeError(f"save: expected a Figure or Axes, got {type(obj).__name__}")
 
 

@@ -1,7 +1,7 @@
 """Time-domain figures: simulated traces, force–displacement loops, harmonics, creep curves."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 from matplotlib.axes import Axes
@@ -104,6 +104,7 @@ def creep_loglog(t, curves: Mapping[str, np.ndarray], exponent: Mapping[str, np.
     -------
     Axes, or ndarray of two Axes when ``exponent`` is given
     """
+    ax: Any
     if exponent:
         a1, a2 = ax = new_panels(axes, 2, (5.6, 6.0), title=title, vertical=True, sharex=True,
                                  gridspec_kw={"height_ratios": [2, 1]})

@@ -30,7 +30,7 @@ def data_points(data: RheologyData, ax: Axes, **kw) -> Axes:
     """Measured G' (filled circles) and G'' (open circles) on ``ax`` against f or prestress."""
     from ..io.data import generated_note
 
-    x = data.prestress if _x_axis(data) == "prestress" else data.frequency_hz
+    x = data.prestress if _x_axis(data) == "prestress" and data.prestress is not None else data.frequency_hz
     # data generated from a published law (the bundled sets) say so in the legend
     what = "data (published law, not raw)" if generated_note(data) else "data"
     ax.plot(x, data.G_storage, "o", color="C0", label=f"G′ {what}", **kw)
@@ -193,7 +193,7 @@ def stiffness_histogram(EA, ax: Axes | None = None, title: str | None = None, fa
     ax = new_axes(ax, (4.8, 3.6))
     x = np.log10(np.asarray(EA, dtype=float))
     lo, hi = np.floor(x.min()), np.ceil(x.max())
-    bins = np.arange(lo, max(hi, lo + 1) + 0.5, 0.5)
+    bins = np.arange(lo, max(hi, lo + 1) + 0.5, 0.5).tolist()
     if families is None:
         ax.hist(x, bins=bins, color="C0")
     else:

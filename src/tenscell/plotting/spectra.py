@@ -32,7 +32,9 @@ def spectrum_stems(times, weights, ax: Axes | None = None, *, xlabel: str = "tim
     ax = new_axes(ax, (5.6, 3.6))
     t, w = np.asarray(times, dtype=float), np.asarray(weights, dtype=float)
     kw.setdefault("color", "C0")
-    ax.vlines(t, 0.0, w, label=label, **kw)
+    if label:
+        kw["label"] = label
+    ax.vlines(t, 0.0, w, **kw)
     ax.plot(t, w, "o", ms=3, color=kw["color"])
     ax.set_xscale("log")
     ax.axhline(0.0, color="0.5", lw=0.6)

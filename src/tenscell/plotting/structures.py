@@ -1,7 +1,7 @@
 """3D views of structures and of their slowest relaxation modes, coloured as the paper's Fig. 1."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -15,7 +15,7 @@ if TYPE_CHECKING:
 __all__ = ["MEMBER_STYLE", "structure_3d", "relaxation_modes_3d"]
 
 #: member colours and widths of the paper's Fig. 1: struts grey and thick, actin black, IFs red
-MEMBER_STYLE = {
+MEMBER_STYLE: dict[str, dict[str, Any]] = {
     "strut": {"color": "0.55", "linewidth": 3.2, "label": "struts (microtubules)"},
     "actin": {"color": "black", "linewidth": 0.9, "label": "actin"},
     "intermediate_filament": {"color": "red", "linewidth": 0.9, "label": "intermediate filaments"},
@@ -86,18 +86,18 @@ def structure_3d(structure: Structure, title: str | None = None, x=None, load: b
     Axes3D
     """
     x = structure.nodes if x is None else np.asarray(x)
-    ax = new_axes(ax, (6.0, 5.6), projection="3d")
-    _draw_members(ax, structure, x)
+    ax3: Any = new_axes(ax, (6.0, 5.6), projection="3d")
+    _draw_members(ax3, structure, x)
     if load:
         p = structure.load
         at = np.asarray(p.weights) @ x[list(p.nodes)]
         d = np.asarray(p.direction) * 0.3 * float(np.ptp(x, axis=0).max() or 1.0)
-        ax.quiver(*(at - d), *d, color="green", linewidth=2.5, arrow_length_ratio=0.3, label="load")
-    _frame(ax, x)
-    ax.view_init(elev=elev, azim=azim)
-    ax.legend(loc="upper left", fontsize=7)
-    ax.set_title(title or structure.name)
-    return ax
+        ax3.quiver(*(at - d), *d, color="green", linewidth=2.5, arrow_length_ratio=0.3, label="load")
+    _frame(ax3, x)
+    ax3.view_init(elev=elev, azim=azim)
+    ax3.legend(loc="upper left", fontsize=7)
+    ax3.set_title(title or structure.name)
+    return ax3
 
 
 @styled

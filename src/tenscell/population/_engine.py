@@ -22,7 +22,7 @@ import contextlib
 import logging
 import os
 from pathlib import Path
-from typing import Callable, Iterable, Iterator
+from typing import Any, Callable, Iterable, Iterator
 
 __all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
            "WorkDirError"]
@@ -87,7 +87,7 @@ def check_scheduler(address: str, flag: str = "--scheduler") -> str:
 
 @contextlib.contextmanager
 def cluster(*, client=None, workers: int | None = None, scheduler: str | None = None,
-            timeout: float = 30.0) -> Iterator[object | None]:
+            timeout: float = 30.0) -> Iterator[Any]:
     """Yield a Dask client (or None for in-process execution when ``workers == 0``).
 
     Parameters
@@ -131,7 +131,7 @@ def n_threads(client) -> int:
 
 
 def stream(client, fn: Callable, items: Iterable[tuple[object, tuple]], *, window: int | None = None,
-           name: str = "tenscell") -> Iterator[tuple[object, object]]:
+           name: str = "tenscell") -> Iterator[tuple[Any, Any]]:
     """Run ``fn(*args)`` for each ``(tag, args)`` of ``items``; yield ``(tag, result)`` as each completes.
 
     At most ``window`` tasks are in the cluster at a time (default: 8 per

@@ -36,6 +36,7 @@ import hashlib
 import io
 import os
 from dataclasses import dataclass
+from typing import Any
 from pathlib import Path, PurePosixPath
 
 import numpy as np
@@ -76,7 +77,7 @@ class CellSource:
     condition: str
     source: str
     text: str | None = None
-    data: object = None
+    data: Any = None
     error: str | None = None
 
     @property

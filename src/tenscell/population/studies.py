@@ -254,7 +254,7 @@ def _sweep_chunk(settings: dict, k: int, lo: int, hi: int) -> dict:
     P, sigma = s["prestress_N"][k // n_sigma], s["heterogeneity_decades"][k % n_sigma]
     f = np.asarray(s["frequency_Hz"])
     cell = paper_cell()
-    rows = {"prestress_N": [], "heterogeneity_decades": [], "realization": [], "frequency_Hz": [],
+    rows: dict[str, list] = {"prestress_N": [], "heterogeneity_decades": [], "realization": [], "frequency_Hz": [],
             "G_storage_Pa": [], "G_loss_Pa": []}
     with threadpool_limits(1):
         for r in range(s["realizations"]):

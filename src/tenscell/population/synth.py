@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -124,7 +125,7 @@ class SyntheticCell:
 
     cell: str
     condition: str
-    data: object
+    data: Any
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -151,7 +152,7 @@ class SyntheticPopulation:
     """
 
     cells: tuple
-    parameters: object
+    parameters: Any
     model: str
     medians: dict
     spread_decades: float

@@ -32,6 +32,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -117,12 +118,12 @@ class PopulationResult:
         Cells whose records were taken from an earlier, interrupted run.
     """
 
-    table: object
+    table: Any
     parameter_columns: tuple
     records: tuple
     frequency_hz: np.ndarray
     curves: dict
-    options: object
+    options: Any
     seed: int
     elapsed_s: float
     n_workers: int

@@ -28,6 +28,7 @@ def _name(source: str) -> str:
 
 
 def _data_slopes(data: RheologyData):
+    assert data.prestress is not None, "a prestress sweep"
     a1, b1 = np.polyfit(data.prestress, data.G_storage, 1)
     a2, b2 = np.polyfit(data.prestress, data.G_loss, 1)
     return float(a1), float(b1), float(a2), float(b2)
@@ -110,7 +111,7 @@ def section_shape(result: FitResult, baseline=None) -> list[str]:
         else:
             a1, b1, a2, b2 = prestress_slopes(result, dataset=f.index)
             da1, db1, da2, db2 = _data_slopes(d)
-            rows = [("data", num(da1), num(db1), num(da2), num(db2)), ("fitted model", num(a1), num(b1), num(a2),
+            rows: list[tuple[str, ...]] = [("data", num(da1), num(db1), num(da2), num(db2)), ("fitted model", num(a1), num(b1), num(a2),
                                                                        num(b2))]
             if baseline is not None and not baseline.joint:
                 rows.append(("homogeneous baseline", *(num(v) for v in prestress_slopes(baseline))))

@@ -286,6 +286,8 @@ def against_cells(study: HomogeneousStudy, prestress_data=None, frequency_data=N
     f3, P3 = study.fig3.frequency_hz, study.fig3.prestress
     f_p = float(pdata.frequency_hz[0])
     i = int(np.argmin(np.abs(np.log(f3 / f_p))))
+    if pdata.prestress is None:
+        raise ValueError(f"prestress_data: {pdata.source} is a frequency sweep; a prestress sweep is needed")
     order = np.argsort(pdata.prestress)
     Pc = pdata.prestress[order]
     rows = []

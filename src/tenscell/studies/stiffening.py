@@ -83,6 +83,8 @@ class StiffeningStudy:
     @property
     def stiffening_indices(self) -> np.ndarray:
         """Indices of the stiffening tendons in the cell."""
+        if self.cell is None:
+            raise ValueError("this study was built without its cell: the stiffening tendons are unknown")
         return self.cell.structure.family_indices(self.family)
 
     def __repr__(self) -> str:
