@@ -8,17 +8,28 @@ import pytest
 
 import tenscell
 
-HEAVY = ("scipy", "scipy.optimize", "matplotlib", "pandas")
+HEAVY = ("numpy", "scipy", "scipy.optimize", "matplotlib", "pandas")
 
 
 def _loaded_after(code: str) -> set[str]:
-    probe = f"{code}; import sys; print(' '.join(m for m in {HEAVY!r} if m in sys.modules))"
+    """The heavy modules in sys.modules after running ``code`` in a fresh interpreter."""
+    probe = (f"{code}\nimport sys\n"
+             f"print('loaded:', *(m for m in {HEAVY!r} if m in sys.modules), file=sys.__stdout__)")
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
-    return set(out.stdout.split())
+    words = out.stdout.split()
+    assert words[:1] == ["loaded:"], out.stdout  # the probe ran to the end
+    return set(words[1:])
 
 
 def test_import_tenscell_loads_no_heavy_module():
     assert _loaded_after("import tenscell") == set()
+
+
+def test_help_needs_only_the_standard_library():
+    code = ("import contextlib, io\nfrom tenscell.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()) as text:\n    assert main(['--help']) == 0\n"
+            "assert 'usage: tenscell' in text.getvalue()")
+    assert _loaded_after(code) == set()
 
 
 def test_building_the_paper_cell_needs_no_optimizer_or_plotting():

@@ -19,8 +19,10 @@ scripts that need one corner of the package do not pay for all of it.
 """
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from importlib import import_module
+
+# typing.TYPE_CHECKING without importing typing (mypy and pyright treat this name as true)
+TYPE_CHECKING = False
 
 __version__ = "0.1.0"
 
@@ -49,6 +51,9 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "_threads": ("set_threads", "threads"),
     "timedomain": ("CreepSpectrum", "PowerLawFit", "StressRelaxation", "creep_compliance", "creep_spectrum",
                    "fit_power_law", "local_exponent", "relaxation_modulus", "stress_relaxation"),
+    # measured data
+    "io.data": ("DataError", "RheologyData", "bundled", "bundled_names", "read_csv"),
+    "io.importers": ("ColumnMap", "read_rheocompass", "read_table"),
     # analyses
     "summary": ("relaxation_modes", "summarize"),
     "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
@@ -66,14 +71,14 @@ _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 __all__ = list(_WHERE)
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     """Import a public name, or a submodule (``tenscell.plotting``), on first use."""
     module = _WHERE.get(name)
     if module is not None:
-        value = getattr(importlib.import_module(f".{module}", __name__), name)
+        value = getattr(import_module(f".{module}", __name__), name)
     elif not name.startswith("_"):
         try:
-            value = importlib.import_module(f".{name}", __name__)
+            value = import_module(f".{name}", __name__)
         except ModuleNotFoundError as err:
             if err.name != f"{__name__}.{name}":
                 raise  # the submodule exists but one of its imports is missing
@@ -101,6 +106,8 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
     )
     from ._threads import set_threads, threads
     from .fitting import FitParameter, FitResult, fit
+    from .io.data import DataError, RheologyData, bundled, bundled_names, read_csv
+    from .io.importers import ColumnMap, read_rheocompass, read_table
     from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
     from .laws import (
         CompositeLaw, LinearSpring, LinearizationError, PowerDashpot, StiffeningFilament, Tangent, TendonLaw, Voigt,

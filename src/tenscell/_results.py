@@ -8,7 +8,9 @@ A result is a frozen dataclass declared with ``repr=False`` and gives
 ``to_dataframe()``
     a :class:`pandas.DataFrame` whose column names carry their units
     (``frequency_Hz``, ``G_storage_Pa``, ``time_s``, ``EA_N``...), built with
-    :func:`dataframe` so pandas is imported only when asked for;
+    :func:`dataframe` so pandas is imported only when asked for; a float
+    column either ends in one of :data:`UNIT_SUFFIXES` or is one of the
+    dimensionless names in :data:`DIMENSIONLESS`;
 ``plot(ax=None, ...)``
     draws on the given matplotlib axes (or a new figure's) and returns the
     axes; the drawing code lives in :mod:`tenscell.plotting`, which never
@@ -16,9 +18,26 @@ A result is a frozen dataclass declared with ``repr=False`` and gives
 """
 from __future__ import annotations
 
-from typing import Any, Mapping
+from collections import Counter
+from typing import TYPE_CHECKING, Any, Iterable, Mapping
 
-__all__ = ["format_repr", "dataframe"]
+import numpy as np
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+__all__ = ["format_repr", "dataframe", "span", "counts", "UNIT_SUFFIXES", "DIMENSIONLESS", "has_unit"]
+
+#: unit suffixes of DataFrame columns (SI, written out without symbols so they are valid identifiers)
+UNIT_SUFFIXES = (
+    "_Hz", "_rad_per_s", "_Pa", "_kPa", "_N", "_m", "_s", "_per_s", "_rad", "_deg", "_N_per_m", "_Ns_per_m",
+    "_m_per_N", "_per_Pa", "_m_per_Ns", "_Pa_s", "_J", "_percent",
+)
+#: float columns that are dimensionless by definition (the name says what they are)
+DIMENSIONLESS = frozenset({
+    "T0", "min_T0", "loss_tangent", "alpha", "exponent", "rms_log", "max_rel", "rms_log10_error", "relative_error",
+    "weight_fraction", "elasticity", "thd",
+})
 
 
 def format_repr(title: str, *lines: str) -> str:
@@ -26,7 +45,7 @@ def format_repr(title: str, *lines: str) -> str:
     return "\n".join([f"<{title}>", *("  " + line for line in lines)])
 
 
-def dataframe(columns: Mapping[str, Any], attrs: Mapping[str, Any] | None = None):
+def dataframe(columns: Mapping[str, Any], attrs: Mapping[str, Any] | None = None) -> pd.DataFrame:
     """A DataFrame from unit-named columns; ``attrs`` (units, parameters) go to ``DataFrame.attrs``."""
     import pandas as pd
 
@@ -34,3 +53,26 @@ def dataframe(columns: Mapping[str, Any], attrs: Mapping[str, Any] | None = None
     if attrs:
         df.attrs.update(attrs)
     return df
+
+
+def span(values: Any, unit: str = "", fmt: str = ".4g") -> str:
+    """``"a – b unit"`` for the finite range of ``values``, ``"a unit (all)"`` when they are all equal."""
+    v = np.asarray(values, dtype=float).ravel()
+    v = v[np.isfinite(v)]
+    u = f" {unit}" if unit else ""
+    if v.size == 0:
+        return "none"
+    lo, hi = float(v.min()), float(v.max())
+    if lo == hi:
+        return f"{lo:{fmt}}{u}" + (" (all)" if v.size > 1 else "")
+    return f"{lo:{fmt}} – {hi:{fmt}}{u}"
+
+
+def counts(labels: Iterable[str]) -> str:
+    """``"24 actin, 9 intermediate_filament"`` in order of first appearance."""
+    return ", ".join(f"{n} {name}" for name, n in Counter(labels).items())
+
+
+def has_unit(column: str) -> bool:
+    """Whether a float column's name states its unit (or is a known dimensionless quantity)."""
+    return column in DIMENSIONLESS or column.endswith(UNIT_SUFFIXES)

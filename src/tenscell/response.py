@@ -102,7 +102,7 @@ def log_slope(f_hz, G) -> np.ndarray:
     return np.gradient(np.log(np.asarray(G)), np.log(np.asarray(f_hz)), axis=-1)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class FrequencyResponse:
     """Compliance and moduli over a grid of prestresses × frequencies.
 
@@ -153,6 +153,54 @@ class FrequencyResponse:
         for i, P in enumerate(self.prestress):
             for k, f in enumerate(self.frequency_hz):
                 yield float(P), float(f), float(Gs[i, k]), float(Gl[i, k])
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from ._results import format_repr, span
+
+        nP, nf = self.J.shape
+        return format_repr(
+            f"FrequencyResponse: {nP} prestress(es) × {nf} frequencies",
+            f"f {span(self.frequency_hz, 'Hz')}; P {span(self.prestress, 'N')}; L = {self.L:.4g} m",
+            f"G' {span(self.G_storage, 'Pa')}; G'' {span(self.G_loss, 'Pa')}",
+        )
+
+    def to_dataframe(self):
+        """Long format, one row per (P, f): ``prestress_N, frequency_Hz, G_storage_Pa, G_loss_Pa, loss_tangent``.
+
+        ``df.pivot(index="frequency_Hz", columns="prestress_N", values="G_storage_Pa")``
+        gives the grid back.
+        """
+        from ._results import dataframe
+
+        nP, nf = self.J.shape
+        return dataframe({
+            "prestress_N": np.repeat(self.prestress, nf), "frequency_Hz": np.tile(self.frequency_hz, nP),
+            "G_storage_Pa": self.G_storage.ravel(), "G_loss_Pa": self.G_loss.ravel(),
+            "loss_tangent": self.loss_tangent.ravel(),
+        }, {"L_m": self.L})
+
+    def plot(self, axes=None, x: str = "frequency", **kw):
+        """G' and G'' on a pair of axes: against frequency (log-log, one curve per P) or prestress.
+
+        Parameters
+        ----------
+        axes : pair of Axes, optional
+        x : {"frequency", "prestress"}
+        **kw
+            Passed to :func:`tenscell.plotting.moduli_vs_frequency` or
+            :func:`~tenscell.plotting.moduli_vs_prestress` (``title``, ``legend``, line styles).
+
+        Returns
+        -------
+        ndarray of two Axes
+        """
+        from . import plotting
+
+        if x not in ("frequency", "prestress"):
+            raise ValueError(f"x: expected 'frequency' or 'prestress', got {x!r}")
+        draw = plotting.moduli_vs_frequency if x == "frequency" else plotting.moduli_vs_prestress
+        return draw(self, axes, **kw)
 
 
 @hot_path

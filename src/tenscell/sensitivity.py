@@ -613,8 +613,9 @@ def monte_carlo(
     ----------
     n : int
         Number of draws, ≥ 1.
-    progress : bool, optional
-        Progress bar (the :mod:`tenscell._progress` convention).
+    progress : bool or None
+        A progress bar: None shows one when someone watches (a terminal or a
+        notebook), True always, False never (see :mod:`tenscell._progress`).
 
     Returns
     -------

@@ -29,7 +29,7 @@ from ._threads import hot_path
 __all__ = ["StructureSummary", "summarize", "relaxation_modes", "RelaxationModes", "node_displacements"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class StructureSummary:
     """Counts and verdicts for one structure.
 
@@ -99,6 +99,28 @@ class StructureSummary:
             f"verdict        {self.verdict}",
         ]
         return "\n".join(lines) + "\n"
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from ._results import format_repr
+
+        fam = ", ".join(f"{v} {k}" for k, v in self.members)
+        return format_repr(
+            f"StructureSummary {self.name!r}",
+            f"{self.n_nodes} nodes ({self.n_fixed} fixed), {self.n_struts} rigid struts, members: {fam}",
+            f"{self.n_coordinates} coordinates; self-stresses {self.self_stress_dim if self.self_stress_dim >= 0 else '?'}"
+            f", mechanisms {self.mechanisms if self.mechanisms >= 0 else '?'}",
+            self.verdict,
+        )
+
+    def to_dataframe(self):
+        """One row of the counts and verdicts (``P_N`` is the prestress used for ``stable``)."""
+        from ._results import dataframe
+
+        row = {k: [getattr(self, k)] for k in ("name", "n_nodes", "n_fixed", "n_point_nodes", "n_struts",
+                                               "n_anchored", "n_coordinates", "rank", "self_stress_dim",
+                                               "mechanisms", "rigid_body_dof", "prestressable", "stable")}
+        return dataframe({**row, "min_T0": [self.min_tension], "P_N": [self.P], "verdict": [self.verdict]})
 
 
 def _rigid_dof(structure: Structure) -> int:
@@ -224,7 +246,7 @@ def node_displacements(coords: Coordinates, v: np.ndarray, q: np.ndarray | None 
     return np.einsum("nxk,nk->nx", kin.jac, vv[kin.index])
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class RelaxationModes:
     """The slowest relaxation modes ``K0 v = λ C0 v``.
 
@@ -246,6 +268,30 @@ class RelaxationModes:
     displacements: np.ndarray
     vectors: np.ndarray
     residuals: np.ndarray | None = None
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from ._results import format_repr, span
+
+        how = "exact (dense)" if self.residuals is None else f"approximate, Ritz residuals {span(self.residuals)}"
+        return format_repr(f"RelaxationModes: the {self.rates.size} slowest", f"rates λ {span(self.rates, '1/s')}",
+                           f"{self.displacements.shape[1]} nodes; {how}")
+
+    def to_dataframe(self):
+        """One row per mode: ``mode, rate_per_s, time_s`` (and ``relative_error`` for approximate modes)."""
+        from ._results import dataframe
+
+        with np.errstate(divide="ignore"):
+            cols = {"mode": np.arange(1, self.rates.size + 1), "rate_per_s": self.rates, "time_s": 1.0 / self.rates}
+        if self.residuals is not None:
+            cols["relative_error"] = self.residuals
+        return dataframe(cols)
+
+    def plot(self, ax=None, **kw):
+        """The rates as bars; draw the mode shapes with :func:`tenscell.plotting.relaxation_modes_3d`."""
+        from .plotting import rates_bar
+
+        return rates_bar(self.rates, ax=ax, **kw)
 
 
 @hot_path

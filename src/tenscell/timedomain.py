@@ -66,7 +66,14 @@ def _times(t) -> np.ndarray:
     return positive_array("t (time)", t, unit="s", allow_zero=True)
 
 
-@dataclass(frozen=True, eq=False)
+def _plot_times(times: np.ndarray, n: int = 200) -> np.ndarray:
+    """Log-spaced times (s) from a hundredth of the shortest to a hundred times the longest mode time."""
+    t = times[np.isfinite(times) & (times > 0)]
+    lo, hi = (float(t.min()), float(t.max())) if t.size else (1e-1, 1e1)
+    return np.logspace(np.log10(lo) - 2, np.log10(hi) + 2, n)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
 class CreepSpectrum:
     """Discrete retardation spectrum of the linear model's creep compliance.
 
@@ -129,6 +136,32 @@ class CreepSpectrum:
         s = np.asarray(s, dtype=complex)
         return self.instantaneous + (1.0 / (1.0 + np.multiply.outer(s, self.times))) @ self.weights
 
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from ._results import format_repr, span
+
+        excited = self.significant()[0].size
+        return format_repr(
+            f"CreepSpectrum: {self.times.size} retardation modes ({excited} excited by the load)",
+            f"times τ {span(self.times, 's')}",
+            f"J(0+) = {self.instantaneous:.6g} m/N, J(∞) = {self.static:.6g} m/N; L = {self.L:.4g} m",
+        )
+
+    def to_dataframe(self):
+        """One row per mode: ``retardation_time_s, weight_m_per_N``; ``attrs`` hold J(0+), J(∞) and L."""
+        from ._results import dataframe
+
+        return dataframe({"retardation_time_s": self.times, "weight_m_per_N": self.weights},
+                         {"instantaneous_m_per_N": self.instantaneous, "static_m_per_N": self.static, "L_m": self.L})
+
+    def plot(self, ax=None, t=None, **kw):
+        """Creep compliance J(t) (m/N) on log-log axes; ``t`` (s) defaults to span the retardation times."""
+        from .plotting import loglog_curve
+
+        t = _plot_times(self.times) if t is None else positive_array("t (time)", t, unit="s")
+        return loglog_curve(t, self.compliance(t), ax=ax, xlabel="time after the step t (s)",
+                            ylabel="creep compliance J(t) (m/N)", **kw)
+
 
 @hot_path
 def creep_spectrum(lin: LinearModel) -> CreepSpectrum:
@@ -178,7 +211,7 @@ def creep_compliance(lin: LinearModel, t, *, continuum: bool = False) -> np.ndar
     return J / continuum_factor(spec.L) if continuum else J
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class StressRelaxation:
     """Force response to a unit displacement step of the probe (linear model).
 
@@ -234,6 +267,32 @@ class StressRelaxation:
         s = np.asarray(s, dtype=complex)
         return (self.impulse + self.equilibrium / s
                 + (1.0 / (1.0 + np.multiply.outer(s, self.times))) @ (self.weights * self.times))
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from ._results import format_repr, span
+
+        return format_repr(
+            f"StressRelaxation: {self.times.size} relaxation modes",
+            f"times θ {span(self.times, 's')}",
+            f"R(0+) = {self.initial:.6g} N/m, R(∞) = {self.equilibrium:.6g} N/m, impulse η = {self.impulse:.6g} "
+            f"N·s/m; L = {self.L:.4g} m",
+        )
+
+    def to_dataframe(self):
+        """One row per mode: ``relaxation_time_s, weight_N_per_m``; ``attrs`` hold k_∞, η and L."""
+        from ._results import dataframe
+
+        return dataframe({"relaxation_time_s": self.times, "weight_N_per_m": self.weights},
+                         {"equilibrium_N_per_m": self.equilibrium, "impulse_Ns_per_m": self.impulse, "L_m": self.L})
+
+    def plot(self, ax=None, t=None, **kw):
+        """Relaxation modulus G(t) (Pa, regular part) on log-log axes; ``t`` (s) defaults to span the mode times."""
+        from .plotting import loglog_curve
+
+        t = _plot_times(self.times) if t is None else positive_array("t (time)", t, unit="s")
+        return loglog_curve(t, self.modulus(t), ax=ax, xlabel="time after the step t (s)",
+                            ylabel="relaxation modulus G(t) (Pa)", **kw)
 
 
 def _merge_modes(lam: np.ndarray, r: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
@@ -348,7 +407,7 @@ def local_exponent(t, y) -> np.ndarray:
     return np.gradient(np.log(y), np.log(t), axis=-1)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class PowerLawFit:
     """Least-squares fit ``J(t) = A·t^α`` in log-log coordinates over a window.
 
@@ -379,6 +438,32 @@ class PowerLawFit:
     def __call__(self, t) -> np.ndarray:
         """``A·t^α`` at times ``t`` (s)."""
         return self.A * np.asarray(t, dtype=float) ** self.alpha
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from ._results import format_repr
+
+        return format_repr(
+            f"PowerLawFit: J = A·t^α with α = {self.alpha:.4g}, A = {self.A:.4g} (J's unit at t = 1 s)",
+            f"window {self.t_min:.4g} – {self.t_max:.4g} s, {self.n} points; rms log error {self.rms_log:.3g}, "
+            f"largest relative error {self.max_rel:.3g}",
+        )
+
+    def to_dataframe(self):
+        """One row: ``A_unit_of_J, alpha, t_min_s, t_max_s, n, rms_log, max_rel``."""
+        from ._results import dataframe
+
+        return dataframe({"A_unit_of_J": [self.A], "alpha": [self.alpha], "t_min_s": [self.t_min],
+                          "t_max_s": [self.t_max], "n": [self.n], "rms_log": [self.rms_log],
+                          "max_rel": [self.max_rel]})
+
+    def plot(self, ax=None, **kw):
+        """The fitted ``A·t^α`` over its window on log-log axes (e.g. over a creep curve's axes)."""
+        from .plotting import loglog_curve
+
+        t = np.logspace(np.log10(self.t_min), np.log10(self.t_max), 50)
+        kw.setdefault("label", f"A·t^α, α = {self.alpha:.3f}")
+        return loglog_curve(t, self(t), ax=ax, xlabel="time t (s)", ylabel="J(t)", **kw)
 
 
 def fit_power_law(t, J, t_min: float | None = None, t_max: float | None = None) -> PowerLawFit:

@@ -385,7 +385,8 @@ def fit(
         log-parameters ``theta``); it is moved inside the bounds and, with
         ``max_decades``, its stiffnesses are compressed to the bound.
     progress : bool or None
-        Progress bar on stderr; None = only when stderr is a terminal.
+        A progress bar: None shows one when someone watches (a terminal or a
+        notebook), True always, False never (see :mod:`tenscell._progress`).
 
     Returns
     -------

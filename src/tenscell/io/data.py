@@ -84,7 +84,7 @@ def _error(source: str, problem: str, line: int | None = None) -> DataError:
     return DataError(f"{where}: {problem}")
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class RheologyData:
     """Measured complex shear modulus of cells, as storage and loss moduli.
 
@@ -262,6 +262,49 @@ class RheologyData:
         log10 G'', if `G_loss_sd` is given; otherwise ones.
         """
         return _log_weights(self.G_loss, self.G_loss_sd, self.n)
+
+    # ---- notebook conventions (tenscell._results) and DataFrames in --------------
+    @classmethod
+    def from_dataframe(cls, df, columns=None, **kwargs) -> RheologyData:
+        """Measured moduli from a pandas DataFrame with your own column names and units.
+
+        See :func:`tenscell.io.importers.from_dataframe` (``columns`` is a
+        :class:`~tenscell.io.importers.ColumnMap` or a dict of its fields;
+        default ``frequency_Hz, G_storage_Pa, G_loss_Pa``).
+        """
+        from .importers import from_dataframe
+
+        return from_dataframe(df, columns, **kwargs)
+
+    def __repr__(self) -> str:
+        from .._results import format_repr, span
+
+        sweep = (f"prestress sweep, P {span(self.prestress, 'Pa')}" if self.prestress is not None
+                 else "frequency sweep")
+        sd = "with" if self.G_storage_sd is not None else "without"
+        return format_repr(
+            f"RheologyData: {self.n} points, {sweep}",
+            f"f {span(self.frequency_hz, 'Hz')}; G' {span(self.G_storage, 'Pa')}; G'' {span(self.G_loss, 'Pa')}",
+            f"{sd} standard deviations; source {self.source}",
+        )
+
+    def to_dataframe(self):
+        """``[prestress_Pa,] frequency_Hz, G_storage_Pa, G_loss_Pa[, G_storage_sd_Pa, G_loss_sd_Pa]``."""
+        from .._results import dataframe
+
+        cols = {} if self.prestress is None else {_PRESTRESS: self.prestress}
+        cols.update({_FREQUENCY: self.frequency_hz, _STORAGE: self.G_storage, _LOSS: self.G_loss})
+        if self.G_storage_sd is not None:
+            cols[_STORAGE_SD] = self.G_storage_sd
+        if self.G_loss_sd is not None:
+            cols[_LOSS_SD] = self.G_loss_sd
+        return dataframe(cols, {"source": self.source, "comments": self.comments})
+
+    def plot(self, ax=None, **kw):
+        """G' (filled) and G'' (open circles) against f (log-log) or prestress (:func:`tenscell.plotting.measured`)."""
+        from ..plotting import measured
+
+        return measured(self, ax=ax, **kw)
 
 
 def _log_weights(G: np.ndarray, sd: np.ndarray | None, n: int) -> np.ndarray:

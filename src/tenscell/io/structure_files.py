@@ -72,7 +72,7 @@ _TENDON_KEYS = {"nodes", "family", "EA", "c", "T0"}
 _POINT_KEYS = {"nodes", "weights", "direction"}
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class StructureFile:
     """The content of a structure file.
 
@@ -97,6 +97,27 @@ class StructureFile:
     c: np.ndarray
     T0: np.ndarray | None = None
     description: str = ""
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from .._results import format_repr, span
+
+        about = self.description.strip().splitlines()[0][:70] if self.description.strip() else "no description"
+        return format_repr(
+            f"StructureFile {self.structure.name!r}: {about}",
+            *(line.strip() for line in repr(self.structure).splitlines()[1:]),
+            f"EA {span(self.EA, 'N')}; c {span(self.c, 'N·s/m')}; "
+            f"self-stress {'given' if self.T0 is not None else 'not given'}",
+        )
+
+    def to_dataframe(self):
+        """One row per tendon: the structure's columns and ``EA_N, c_Ns_per_m`` (and ``T0`` when given)."""
+        extra = {} if self.T0 is None else {"T0": self.T0}
+        return self.structure.to_dataframe("tendons", EA_N=self.EA, c_Ns_per_m=self.c, **extra)
+
+    def plot(self, ax=None, **kw):
+        """The structure in 3D (:func:`tenscell.plotting.structure_3d`)."""
+        return self.structure.plot(ax=ax, **kw)
 
 
 # ---- reading ------------------------------------------------------------------------

@@ -41,7 +41,7 @@ __all__ = [
 _STABILITY_HINT = "For the paper cell keep delta between about 45.5° and 54.7° at alpha=0."
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class LinearModel:
     """The linearized cell at one prestress and one set of tendon properties.
 
@@ -122,6 +122,43 @@ class LinearModel:
 
     def __setstate__(self, state):
         self.__dict__.update(state)
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from .._results import format_repr, span
+
+        return format_repr(
+            f"LinearModel of {self.cell.describe()} at P = {self.P:.6g} N",
+            f"{self.cell.n} coordinates, {self.cell.m} tendons; {'sparse' if sp.issparse(self.K0) else 'dense'} "
+            "K0, C0",
+            f"EA {span(self.EA, 'N')}; c {span(self.c, 'N·s/m')}; tensions {span(self.tensions, 'N')}",
+            f"strut length L = {self.L:.4g} m",
+        )
+
+    def to_dataframe(self):
+        """One row per tendon: the cell's columns and ``EA_N, c_Ns_per_m, rest_length_m, tension_N``."""
+        df = self.cell.to_dataframe()
+        df["EA_N"] = self.EA
+        df["c_Ns_per_m"] = self.c
+        df["rest_length_m"] = self.l0
+        df["tension_N"] = self.tensions
+        df.attrs["P_N"] = self.P
+        return df
+
+    def plot(self, axes=None, f_hz=None, **kw):
+        """G' and G'' of this model against frequency (log-log), on a pair of axes.
+
+        ``f_hz`` defaults to 61 frequencies from 0.01 to 1000 Hz (the paper's
+        window). The moduli come from :func:`tenscell.compliance`; for several
+        prestresses use :func:`tenscell.frequency_response` and its ``plot``.
+        Returns the two axes.
+        """
+        from ..response import FrequencyResponse, compliance
+
+        f = np.logspace(-2, 3, 61) if f_hz is None else np.atleast_1d(np.asarray(f_hz, dtype=float))
+        resp = FrequencyResponse(frequency_hz=f, prestress=np.array([self.P]), J=compliance(self, f)[None, :],
+                                 L=self.L)
+        return resp.plot(axes=axes, **kw)
 
 
 @hot_path

@@ -422,7 +422,7 @@ def _creep_features(tau, rho, t):
 
 
 # ---- the relaxation spectrum -----------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class RelaxationSpectrum:
     """Modes of the linear model: ``J(ω) = Σ_k r_k / (λ_k + iω)``.
 
@@ -460,6 +460,30 @@ class RelaxationSpectrum:
     def weights(self) -> np.ndarray:
         """Compliance weights ``r_k/λ_k`` (m/N): each mode's share of the static compliance."""
         return self.residues / self.rates
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from .._results import format_repr, span
+
+        return format_repr(
+            f"RelaxationSpectrum: {self.rates.size} modes",
+            f"rates λ {span(self.rates, '1/s')} (times {span(self.times, 's')})",
+            f"static compliance Σ r/λ = {self.weights.sum():.6g} m/N; relative error of J {self.error_estimate:.2g}",
+        )
+
+    def to_dataframe(self):
+        """One row per mode: ``rate_per_s, time_s, residue_m_per_Ns, weight_m_per_N``."""
+        from .._results import dataframe
+
+        return dataframe({"rate_per_s": self.rates, "time_s": self.times, "residue_m_per_Ns": self.residues,
+                          "weight_m_per_N": self.weights})
+
+    def plot(self, ax=None, **kw):
+        """Each mode's compliance weight r/λ (m/N) against its relaxation time 1/λ (s), as stems."""
+        from ..plotting import spectrum_stems
+
+        return spectrum_stems(self.times, self.weights, ax=ax, xlabel="relaxation time 1/λ (s)",
+                              ylabel="compliance weight r/λ (m/N)", **kw)
 
 
 @hot_path

@@ -38,7 +38,7 @@ PARAMETRIZATIONS = ("angles", "local")
 _W = 5  # widest coordinate block a node depends on (a free strut)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Coordinates:
     """How a structure's generalized coordinates map to its nodes.
 
@@ -72,8 +72,11 @@ class Coordinates:
     point_start: np.ndarray  # first coordinate of each point node
     tendon_nodes: np.ndarray  # (m, 2) node pairs of the working tendons, as an array once
 
+    def __repr__(self) -> str:
+        return f"<Coordinates: {self.n} {self.kind!r} coordinates of {self.structure.name!r}>"
 
-@dataclass(frozen=True, eq=False)
+
+@dataclass(frozen=True, eq=False, repr=False)
 class NodeKinematics:
     """Node positions and their exact derivatives at one configuration.
 
@@ -93,6 +96,9 @@ class NodeKinematics:
     jac: np.ndarray
     hess: np.ndarray
     index: np.ndarray
+
+    def __repr__(self) -> str:
+        return f"<NodeKinematics: {self.x.shape[0]} nodes>"
 
 
 def make_coordinates(structure: Structure, kind: str = "angles") -> Coordinates:

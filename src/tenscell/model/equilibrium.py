@@ -56,7 +56,7 @@ class NotPrestressableError(ValueError):
     """The requested reference admits no self-stress with all tendons in tension."""
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class MemberGeometry:
     """Lengths and exact derivatives of all members at one configuration.
 
@@ -79,6 +79,9 @@ class MemberGeometry:
     hess: np.ndarray
     index: np.ndarray
     n: int
+
+    def __repr__(self) -> str:
+        return f"<MemberGeometry: {self.lengths.size} members, {self.n} coordinates>"
 
 
 def member_geometry(coords: Coordinates, q: np.ndarray, kin: NodeKinematics | None = None, *,
@@ -317,7 +320,7 @@ def self_stress_lp(
     return T / np.linalg.norm(T[cable])
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Cell:
     """A structure at its prestressable reference configuration.
 
@@ -399,6 +402,32 @@ class Cell:
     def describe(self) -> str:
         """A short description with the cell's parameters."""
         return _label(self.structure.name, self.parameters)
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from .._results import counts, format_repr, span
+
+        st = self.structure
+        dim = "not computed (sparse size)" if self.self_stress_dim < 0 else str(self.self_stress_dim)
+        return format_repr(
+            f"Cell {self.describe()}",
+            f"{st.n_nodes} nodes, {len(st.struts)} rigid struts, {self.m} tendons ({counts(st.families)}); "
+            f"{self.n} coordinates ({self.coords.kind}, {'sparse' if self.sparse else 'dense'})",
+            f"self-stress T0 {span(self.T0)} (tensions P·T0 N), self-stress space dimension {dim}",
+            f"strut length L = {self.L:.4g} m (continuum factor 0.5/L)",
+        )
+
+    def to_dataframe(self):
+        """One row per tendon: ``tendon, family, node_a, node_b, length_m, T0`` (tensions are ``P·T0`` N)."""
+        df = self.structure.to_dataframe("tendons", length_m=self.lengths, T0=self.T0)
+        df.attrs["cell"] = self.describe()
+        return df
+
+    def plot(self, ax=None, **kw):
+        """The cell's structure in 3D (:func:`tenscell.plotting.structure_3d`)."""
+        from ..plotting import structure_3d
+
+        return structure_3d(self.structure, ax=ax, **{"title": self.describe(), **kw})
 
 
 def _label(name: str, parameters) -> str:

@@ -62,7 +62,7 @@ class FormFindingError(NotPrestressableError):
     """Form-finding found no prestressable configuration; the message says why."""
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class FormFindingResult:
     """A configuration found by :func:`find_form`.
 
@@ -98,6 +98,28 @@ class FormFindingResult:
     residual: float
     stable: bool | None
     rigid_body_dof: int
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from .._results import format_repr, span
+
+        stable = {True: "a strict energy minimum", False: "NOT a strict energy minimum", None: "stability not checked"}
+        return format_repr(
+            f"FormFindingResult {self.structure.name!r}",
+            f"{self.structure.n_nodes} nodes, {len(self.structure.struts)} rigid struts, "
+            f"{self.structure.n_tendons} members; member forces {span(self.tensions, 'N')}",
+            f"{self.iterations} Newton steps, residual {self.residual:.3g}; {stable[self.stable]}; "
+            f"{self.rigid_body_dof} rigid-body motion(s) free",
+        )
+
+    def to_dataframe(self):
+        """One row per member: the structure's columns, ``force_density_N_per_m`` and ``tension_N``."""
+        return self.structure.to_dataframe("tendons", force_density_N_per_m=self.force_density,
+                                           tension_N=self.tensions)
+
+    def plot(self, ax=None, **kw):
+        """The found structure in 3D (:func:`tenscell.plotting.structure_3d`)."""
+        return self.structure.plot(ax=ax, **kw)
 
 
 def _force_density(structure: Structure, force_density) -> np.ndarray:

@@ -72,7 +72,7 @@ class Point:
             raise StructureError(f"point direction must be a unit 3-vector, got {self.direction!r}")
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Structure:
     """A tensegrity structure in its reference configuration.
 
@@ -218,3 +218,62 @@ class Structure:
     def family_indices(self, family: str) -> np.ndarray:
         """Indices of the tendons of one family."""
         return np.array([j for j, f in enumerate(self.families) if f == family], dtype=int)
+
+    # ---- notebook conventions (tenscell._results) ---------------------------------
+    def __repr__(self) -> str:
+        from .._results import counts, format_repr
+
+        def at(p: Point) -> str:
+            where = f"node {p.nodes[0]}" if len(p.nodes) == 1 else f"{len(p.nodes)} nodes"
+            return f"{where} along ({', '.join(f'{d:.3g}' for d in p.direction)})"
+
+        return format_repr(
+            f"Structure {self.name!r}",
+            f"{self.n_nodes} nodes ({len(self.fixed)} fixed), {len(self.struts)} rigid struts, "
+            f"{self.n_tendons} tendons ({counts(self.families) or 'none'})",
+            f"load at {at(self.load)}; probe at {at(self.probe)}",
+        )
+
+    def to_dataframe(self, members: str = "tendons", **columns):
+        """One row per tendon (default), per rigid strut, or per node, with lengths and positions in m.
+
+        Parameters
+        ----------
+        members : {"tendons", "struts", "nodes"}
+        **columns : array_like, one value per row
+            Extra columns (unit-named, e.g. ``EA_N=...``) appended or replacing
+            these; results built on a structure use this for their own tables.
+
+        Returns
+        -------
+        pandas.DataFrame
+            tendons: ``tendon, family, node_a, node_b, length_m``;
+            struts: ``strut, node_a, node_b, length_m, anchored``;
+            nodes: ``node, name, x_m, y_m, z_m, fixed``.
+        """
+        from .._results import dataframe
+
+        cols: dict
+        if members == "nodes":
+            names = self.node_names or tuple(str(i) for i in range(self.n_nodes))
+            fixed = set(self.fixed)
+            cols = {"node": np.arange(self.n_nodes), "name": names, "x_m": self.nodes[:, 0],
+                    "y_m": self.nodes[:, 1], "z_m": self.nodes[:, 2], "fixed": [i in fixed for i in range(self.n_nodes)]}
+        elif members in ("tendons", "struts"):
+            pairs = np.asarray(self.tendons if members == "tendons" else self.struts, dtype=int).reshape(-1, 2)
+            cols = {members[:-1]: np.arange(len(pairs))}
+            if members == "tendons":
+                cols["family"] = list(self.families)
+            cols.update(node_a=pairs[:, 0], node_b=pairs[:, 1],
+                        length_m=np.linalg.norm(self.nodes[pairs[:, 1]] - self.nodes[pairs[:, 0]], axis=1))
+            if members == "struts":
+                cols["anchored"] = [self.is_anchored(k) for k in range(len(pairs))]
+        else:
+            raise ValueError(f"members: expected 'tendons', 'struts' or 'nodes', got {members!r}")
+        return dataframe({**cols, **columns}, {"structure": self.name})
+
+    def plot(self, ax=None, **kw):
+        """The structure in 3D, coloured as the paper's Fig. 1 (:func:`tenscell.plotting.structure_3d`)."""
+        from ..plotting import structure_3d
+
+        return structure_3d(self, ax=ax, **kw)

@@ -12,13 +12,15 @@ Topics: :mod:`~tenscell.plotting.paper` (Figs. 2–3),
 :mod:`~tenscell.plotting.variants` (variants, sensitivity),
 :mod:`~tenscell.plotting.fits` (data against fits),
 :mod:`~tenscell.plotting.dynamics` (time domain),
+:mod:`~tenscell.plotting.spectra` (modes, creep and relaxation curves),
 :mod:`~tenscell.plotting.structures` (3D views).
 """
 from __future__ import annotations
 
 from ._style import STYLE, colors, figure_of, moduli_panels, save, style
 from .dynamics import creep_loglog, force_displacement_loop, harmonic_spectrum, time_traces
-from .fits import data_points, fit_figure
+from .fits import data_points, fit_figure, measured
+from .spectra import loglog_curve, rates_bar, spectrum_stems
 from .paper import fig2_prestress, fig3_frequency, moduli_vs_frequency, moduli_vs_prestress
 from .structures import MEMBER_STYLE, relaxation_modes_3d, structure_3d
 from .variants import (
@@ -35,9 +37,11 @@ __all__ = [
     "no_if_figure", "no_if_peaks_figure", "elasticities_figure", "monte_carlo_figure", "reference_map_figure",
     "references_figure", "semiflexible_figure", "stiffening_figure",
     # fits
-    "fit_figure", "data_points",
+    "fit_figure", "data_points", "measured",
     # time domain
     "time_traces", "force_displacement_loop", "harmonic_spectrum", "creep_loglog",
+    # spectra and time curves of the linear model
+    "spectrum_stems", "loglog_curve", "rates_bar",
     # structures
     "structure_3d", "relaxation_modes_3d", "MEMBER_STYLE",
 ]

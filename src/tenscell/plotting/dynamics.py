@@ -147,32 +147,16 @@ def simulation_axes(sim, ax=None, **kw):
 
 
 def harmonics_axes(harm, ax=None, **kw):
-    """Response harmonics relative to the fundamental, log scale."""
-    ax = new_axes(ax)
-    h = harm.harmonic_numbers[1:]
-    amp = np.abs(harm.response[1:])
-    rel = np.maximum(amp / amp[0], 1e-300)
-    ax.bar(h, rel, **{"color": "C0", **kw})
-    ax.set_yscale("log")
-    ax.set_ylim(max(rel.min(), 1e-12) / 3, 2.0)
-    ax.set_xlabel(f"harmonic of {harm.frequency_hz:g} Hz")
-    ax.set_ylabel("|z_h| / |z_1|")
-    ax.set_title(f"THD = {100 * harm.thd:.3g} %")
-    return ax
+    """Response harmonics relative to the fundamental, log scale (:func:`harmonic_spectrum` on ``ax``)."""
+    return harmonic_spectrum(harm, ax=ax)
 
 
 def loop_axes(resp, ax=None, **kw):
     """Force (N) against probe displacement (mm) over the analysed cycles, with the linear model's loop."""
-    ax = new_axes(ax)
     _, z, F = resp.cycle()
     zl, Fl = resp.linear_cycle()
-    ax.plot(1e3 * z, F, **{"color": "C0", "label": "nonlinear", **kw})
-    if np.all(np.isfinite(zl)) and np.all(np.isfinite(Fl)):
-        ax.plot(1e3 * zl, Fl, color="k", lw=0.8, ls="--", label="linear model")
-    ax.set_xlabel("probe displacement z (mm)")
-    ax.set_ylabel("load F (N)")
-    ax.legend(loc="upper left")
-    return ax
+    finite = bool(np.all(np.isfinite(zl)) and np.all(np.isfinite(Fl)))
+    return force_displacement_loop(z, F, zl if finite else None, Fl if finite else None, ax=ax)
 
 
 def amplitude_sweep_axes(sweep, ax=None, **kw):

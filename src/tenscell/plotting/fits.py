@@ -15,7 +15,8 @@ from ._style import new_axes, new_panels, styled
 if TYPE_CHECKING:
     from ..io.data import RheologyData
 
-__all__ = ["fit_figure", "data_points", "plot_fit", "fit_panels", "compactness_front", "stiffness_histogram"]
+__all__ = ["fit_figure", "data_points", "plot_fit", "fit_panels", "compactness_front", "stiffness_histogram",
+           "measured"]
 
 
 def _x_axis(data: RheologyData) -> str:
@@ -45,6 +46,19 @@ def _axis_labels(ax: Axes, kind: str) -> None:
     else:
         ax.set_xlabel("prestress (Pa)")
         ax.set_ylim(bottom=0.0)
+
+
+@styled
+def measured(data: RheologyData, ax: Axes | None = None, *, title: str | None = None, **kw) -> Axes:
+    """Measured G' and G'' on labelled axes: log-log against f (Hz), or linear against prestress (Pa)."""
+    ax = new_axes(ax, (5.0, 3.8))
+    data_points(data, ax, **kw)
+    _axis_labels(ax, _x_axis(data))
+    ax.set_ylabel("modulus (Pa)")
+    ax.legend(loc="best")
+    if title:
+        ax.set_title(title)
+    return ax
 
 
 @styled

@@ -1,0 +1,146 @@
+"""Sphinx configuration of the tenscell documentation (``make docs``)."""
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+os.environ.setdefault("MPLBACKEND", "Agg")     # the examples and the notebook draw into files
+os.environ.setdefault("TENSCELL_PROGRESS", "0")  # no progress bars in the built pages
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "src"))
+
+import tenscell  # noqa: E402
+
+project = "tenscell"
+author = "tenscell developers"
+copyright = "tenscell developers, MIT licence"
+release = version = tenscell.__version__
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+    "myst_nb",
+    "sphinx_gallery.gen_gallery",
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
+exclude_patterns = ["_build", "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip",
+                    "**.ipynb_checkpoints", "jupyter_execute"]
+templates_path = ["_templates"]
+
+# ---- API reference from the numpydoc docstrings ----
+autosummary_generate = True
+autosummary_ignore_module_all = False        # a module's public names are its __all__
+autodoc_default_options = {"members": True, "show-inheritance": False}
+autodoc_typehints = "none"                   # the numpydoc sections state types and units
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_xref_param_type = False
+
+
+# ---- guides (Markdown) and the tutorial notebook ----
+myst_enable_extensions = ["dollarmath", "colon_fence"]
+myst_heading_anchors = 3
+nb_execution_mode = "force"                  # the tutorial runs at every build, so it cannot go stale
+nb_execution_timeout = 300
+nb_execution_raise_on_error = True
+nb_execution_show_tb = True
+
+# ---- the example gallery ----
+sphinx_gallery_conf = {
+    "examples_dirs": str(ROOT / "examples"),
+    "gallery_dirs": "auto_examples",
+    "filename_pattern": r"/plot_",
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "abort_on_example_error": True,
+    "within_subsection_order": "FileNameSortKey",
+}
+
+html_theme = "pydata_sphinx_theme"
+html_title = f"tenscell {release}"
+html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
+html_static_path: list[str] = []
+
+
+# ---- the API reference page is generated from tenscell's export table, so a name added there appears here ----
+_SECTIONS = {
+    "model": "Structures and cells",
+    "io.structure_files": "Structure files",
+    "laws": "Tendon laws",
+    "linear": "Linearization",
+    "response": "Frequency response",
+    "timedomain": "Creep and relaxation",
+    "io": "Measured data",
+    "summary": "Summaries",
+    "dynamics": "Nonlinear time domain",
+    "fitting": "Fitting",
+    "sensitivity": "Sensitivity",
+    "studies": "Studies of the paper's discussion",
+    "population": "Populations of cells",
+}
+#: modules documented whole, below the top-level names
+API_MODULES = ["tenscell.plotting", "tenscell.io.importers", "tenscell.io.data", "tenscell.fitting",
+               "tenscell.dynamics", "tenscell.sensitivity", "tenscell.studies", "tenscell.linear", "tenscell.model"]
+
+
+def _section(module: str) -> str:
+    for prefix in sorted(_SECTIONS, key=len, reverse=True):
+        if module == prefix or module.startswith(prefix + "."):
+            return _SECTIONS[prefix]
+    return module
+
+
+def _write_api_index() -> None:
+    groups: dict[str, list[str]] = {}
+    for module, names in tenscell._EXPORTS.items():
+        groups.setdefault(_section(module), []).extend(names)
+    lines = ["API reference", "=============", "",
+             "Everything below is importable from the top level (``import tenscell as tc; tc.paper_cell()``);",
+             "submodules load on first use. Units are SI: N, m, s, Pa, Hz.", "", ".. currentmodule:: tenscell", ""]
+    for title, names in groups.items():
+        lines += [title, "-" * len(title), "", ".. autosummary::", "   :toctree: generated", ""]
+        lines += [f"   {n}" for n in sorted(names, key=str.lower)] + [""]
+    lines += ["Modules", "-------", "", ".. autosummary::", "   :toctree: generated", ""]
+    lines += [f"   {m.removeprefix('tenscell.')}" for m in API_MODULES if _importable(m)] + [""]
+    target = Path(__file__).parent / "api" / "index.rst"
+    target.parent.mkdir(exist_ok=True)
+    text = "\n".join(lines)
+    if not target.exists() or target.read_text() != text:
+        target.write_text(text)
+
+
+def _importable(module: str) -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec(module) is not None
+
+
+_write_api_index()
+
+
+# ---- docstrings written for terminals as well as for Sphinx ----
+import re  # noqa: E402
+
+# "|G|", "|ΔG'/G'|": absolute values in plain-text docstrings, not reST substitutions
+_ABS = re.compile(r"(?<![`|\\\w])\|([^|`\s][^|`]*?)\|(?![`|_\w])")
+
+
+def _absolute_values(app, what, name, obj, options, lines):
+    lines[:] = [_ABS.sub(r"\\|\1\\|", line) for line in lines]
+
+
+def _skip_top_level_names(app, what, name, obj, skip, options):
+    """On a module's page, leave out what has its own page as a top-level name (one description each)."""
+    if what == "module" and name in tenscell._WHERE and getattr(tenscell, name, None) is obj:
+        return True
+    return None
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _absolute_values, priority=100)
+    app.connect("autodoc-skip-member", _skip_top_level_names)
