@@ -102,8 +102,8 @@ class PrestressActivity:
         share, storage = self._at_points("share"), self._at_points("storage")
         s_lo, s_hi = float(np.nanmin(share)), float(np.nanmax(share))
         e_lo, e_hi = float(np.nanmin(storage)), float(np.nanmax(storage))
-        share = f"{s_lo:.3g}" if np.isclose(s_lo, s_hi, rtol=1e-3) else f"{s_lo:.3g} to {s_hi:.3g}"
-        text = (f"P·Kp carries {share} of the static stiffness; ∂lnG'/∂lnP is {e_lo:.3g} to {e_hi:.3g} at the "
+        share_text = f"{s_lo:.3g}" if np.isclose(s_lo, s_hi, rtol=1e-3) else f"{s_lo:.3g} to {s_hi:.3g}"
+        text = (f"P·Kp carries {share_text} of the static stiffness; ∂lnG'/∂lnP is {e_lo:.3g} to {e_hi:.3g} at the "
                 f"data's frequencies (adherent cells: about {CELL_ELASTICITY:g}).")
         if self.inert:
             return ("The prestress is mechanically inert: " + text + " This fit is a network of Voigt springs, "

@@ -382,12 +382,13 @@ class FitProblem:
             # J in 1/Pa is the cell's compliance (m/N) times 2L (the continuum factor of G = (0.5/L)/J)
             Jc[sel] = 2.0 * self.L_ref * creep_from_modes(spec.lam[g], spec.alpha[g], spec.beta[g], t)
             if jac:
+                assert dJ is not None and AV is not None and M is not None  # computed above when jac
                 d_EA, d_c, d_Pg = creep_derivatives(spec.lam[g], spec.alpha[g], spec.beta[g], AV[g], M[g], t,
                                                     spec.dk[g], spec.deta, spec.P[g])
                 d_P = np.zeros((sel.size, self.n_groups))
                 d_P[:, g] = d_Pg
                 dJ[sel] = 2.0 * self.L_ref * self._to_params(d_EA, d_c, d_P)
-        return Jc, (dJ / Jc[:, None] if jac else None)
+        return Jc, (None if dJ is None else dJ / Jc[:, None])
 
     def _modal(self, spec):
         """AV = a_jᵀ v_k (groups, m, n) and M = Vᵀ Kp V (groups, n, n)."""
@@ -550,7 +551,9 @@ class FitProblem:
     def prestress_elasticity(self, theta) -> np.ndarray:
         """``∂ln G'/∂ln P`` at :attr:`elasticity_omega` at each prestress group, shape (groups,); NaN if unstable."""
         out = self._evaluate(self.full(theta), jac=False, elasticity=True)
-        return np.full(self.n_groups, np.nan) if out is None else out.elasticity
+        if out is None or out.elasticity is None:  # elasticity=True always computes it when the model is stable
+            return np.full(self.n_groups, np.nan)
+        return out.elasticity
 
     def _constraints(self) -> list:
         """The active activity constraints: [(lower bound, field of _Evaluation, its d ln field)]."""
@@ -584,10 +587,11 @@ class FitProblem:
                 ok = short & (v > 0)
                 r[ok] = _SHARE_WEIGHT * np.log(bound / v[ok])
                 r[short & ~(v > 0)] = _SHARE_WEIGHT * 50.0  # no positive value: a flat wall
-                if jac and ok.any():
+                if Jr is not None and ok.any():
                     Jr[ok] = -_SHARE_WEIGHT * getattr(out, dname)[ok][:, self.free]
             rows.append(r)
-            jrows.append(Jr)
+            if Jr is not None:
+                jrows.append(Jr)
         if not rows:
             return np.zeros(0), (np.zeros((0, self.n_free)) if jac else None)
         return np.concatenate(rows), (np.vstack(jrows) if jac else None)

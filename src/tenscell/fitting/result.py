@@ -16,6 +16,7 @@ from ..model.equilibrium import Cell
 from ..response import compliance, log_slope
 
 if TYPE_CHECKING:
+    from ..io.creep_data import CreepData
     from .prestress import PrestressActivity
     from .problem import FitProblem
 
@@ -237,7 +238,7 @@ class CreepFit:
     """
 
     index: int
-    data: object
+    data: CreepData
     axis: str
     prestress_pa: float | None
     prestress_fitted_pa: float | None
@@ -421,12 +422,13 @@ class FitResult:
         Gs, Gl = pr.moduli(self.theta)
         P_pts = self.group_prestress()[pr.group_index]
         vals = dict(zip(pr.names, pr.values(self.theta)))
-        out = []
+        out: list[DatasetFit | CreepFit] = []
         Jc = pr.creep(self.theta) if pr.n_creep else None
         for k, d in enumerate(self.datasets):
             pts = np.flatnonzero(pr.dataset_index == k)
             stated = float(d.prestress[0]) if d.prestress is not None and np.unique(d.prestress).size == 1 else None
             if getattr(d, "kind", None) == "creep":
+                assert Jc is not None  # a creep data set makes pr.n_creep > 0
                 sel = np.flatnonzero(pr.creep_dataset == k)
                 out.append(CreepFit(index=k, data=d, axis="time", prestress_pa=stated,
                                     prestress_fitted_pa=vals.get(f"P_data[{k}]"),
