@@ -289,6 +289,7 @@ def run_creep(args) -> int:
     from ..io.tables import finite
     from ..laws import LinearizationError
     from ..timedomain import creep_spectrum, fit_power_law, local_exponent, stress_relaxation
+    from ..linear.modal import continuum_factor
 
     cell, law, solver = law_from_args(args)
     amplitudes = args.amplitude if args.amplitude is not None else (() if args.from_fit else (0.1, 30.0))
@@ -321,7 +322,7 @@ def run_creep(args) -> int:
             "instantaneous_compliance_m_per_N": spec.instantaneous,
             "retardation_times_s": spec.times.tolist(),
             "retardation_weights_m_per_N": spec.weights.tolist(),
-            "relaxation": {"equilibrium_modulus_Pa": (0.5 / rel.L) * rel.equilibrium, "viscosity_Pa_s": rel.viscosity,
+            "relaxation": {"equilibrium_modulus_Pa": continuum_factor(rel.L) * rel.equilibrium, "viscosity_Pa_s": rel.viscosity,
                            "times_s": rel.times.tolist(), "weights_N_per_m": rel.weights.tolist()},
         })
     steps = []

@@ -67,7 +67,7 @@ from .._checks import positive_scalar
 from .._results import format_repr
 from ..io.data import DataError, RheologyData
 from ..laws import Voigt
-from ..linear.modal import prestress_grid_modes
+from ..linear.modal import modulus, prestress_grid_modes
 from ..model.equilibrium import Cell
 from .result import FitParameter
 
@@ -361,7 +361,7 @@ class FitProblem:
         aR = spec.alpha[g] * R
         bR = spec.beta[g] * R
         J = np.sum(spec.alpha[g] * bR, axis=1)
-        G = (0.5 / self.L_ref) / J
+        G = modulus(J, self.L_ref)
         dlogG = self._dlogG(spec, J, aR, bR) if jac else None
         sh, dsh = self._share(spec, jac) if share else (None, None)
         el, de = self._storage_elasticity(spec, jac) if elasticity else (None, None)

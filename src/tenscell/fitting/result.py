@@ -12,6 +12,7 @@ from .._checks import positive_scalar
 from .._results import dataframe, format_repr
 from ..io.data import RheologyData
 from ..linear.linearize import linearize
+from ..linear.modal import modulus
 from ..model.equilibrium import Cell
 from ..response import compliance, log_slope
 
@@ -477,7 +478,7 @@ class FitResult:
         Gl = np.empty(f.shape)
         for P in np.unique(Pm):
             sel = Pm == P
-            G = (0.5 / self.problem.L_ref) / compliance(self._linear(P), f[sel])
+            G = modulus(compliance(self._linear(P), f[sel]), self.problem.L_ref)
             Gs[sel], Gl[sel] = G.real, G.imag
         return Gs, Gl
 

@@ -204,12 +204,13 @@ def _model(model: str) -> str:
 def _tensegrity_cell(rng, medians, spread, cond, cell, fams, f):
     """Draw one tensegrity cell: its parameters and noise-free complex modulus (Pa) at ``f``."""
     from ..linear.linearize import linearize
+    from ..linear.modal import modulus
     from ..response import compliance
 
     p = {k: medians[k] * cond.factor(k) * 10 ** (spread * rng.standard_normal()) for k in _TENSEGRITY_UNITS}
     EA = np.where(fams == "actin", p["EA_actin"], p["EA_intermediate_filament"])
     lin = linearize(cell, P=p["P"], EA=EA, c=p["c"])
-    G = (0.5 / cell.strut_length) / compliance(lin, f)
+    G = modulus(compliance(lin, f), cell.strut_length)
     return {f"{k}_{_TENSEGRITY_UNITS[k]}": v for k, v in p.items()}, G
 
 
