@@ -134,3 +134,35 @@ def test_fit_with_bound_fix_and_holdout(tmp_path):
     assert not doc["identifiability"]["gauge_removed"]
     md = (out / "report.md").read_text()
     assert "held-out RMS log10 error" in md and "that no model was fitted to" in md
+
+
+def test_fit_creep_file(tmp_path):
+    import tenscell
+    from tenscell.io.creep_data import CreepData, write_creep_csv
+
+    cell = tenscell.paper_cell()
+    t = np.logspace(-2, 1, 8)
+    J = tenscell.creep_compliance(tenscell.linearize(cell, P=4.0, EA=2.0, c=0.5), t, continuum=True)
+    path = tmp_path / "creep.csv"
+    write_creep_csv(CreepData(time_s=t, compliance=J, compliance_sd=0.02 * J), path)
+    out = tmp_path / "fit"
+    assert cli_main(["fit", str(path), "--tendons", "uniform", "--starts", "1", "--out", str(out)]) == 0
+    doc = json.loads((out / "fit.json").read_text())
+    assert doc["datasets"][0]["axis"] == "time" and doc["rms_log10_error"] < 0.01
+    assert doc["identifiability"]["sigma_source"] == "data standard deviations"
+    rows = (out / "fit.csv").read_text().splitlines()
+    assert "creep_compliance_model_per_Pa" in rows[0] and len(rows) == 1 + t.size
+    md = (out / "report.md").read_text()
+    assert "creep compliance J(t)" in md and "J data (1/Pa)" in md
+
+
+def test_study_sensitivity_from_fit_takes_the_fitted_paper_cell(fit_json, tmp_path, capsys):
+    from tenscell.cli.study import _fitted_paper_cell
+
+    path, result = fit_json
+    kw = _fitted_paper_cell(path)
+    assert kw["L"] == pytest.approx(result.L) and kw["P"] == pytest.approx(
+        result.value("s") * np.median(result.data.prestress))
+    np.testing.assert_array_equal(kw["EA"], result.EA)
+    assert cli_main(["study", "no-if", "--from-fit", str(path), "--out", str(tmp_path / "x")]) == 2
+    assert "applies to study sensitivity" in capsys.readouterr().err

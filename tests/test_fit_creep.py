@@ -3,8 +3,6 @@ from __future__ import annotations
 
 from decimal import Decimal, getcontext
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 import scipy.integrate
@@ -102,7 +100,9 @@ def test_creep_csv_round_trip_and_detection(tmp_path):
     assert back.comments == ("synthetic",) and back.kind == "creep"
     np.testing.assert_allclose(back.weights, d.compliance * np.log(10) / d.compliance_sd)
     assert isinstance(read_measurements(p), CreepData)
-    assert isinstance(read_measurements(Path(tenscell.io.data.__file__).parents[1] / "data" / "fabry2001_hasm_powerlaw.csv"), RheologyData)
+    moduli = tmp_path / "moduli.csv"
+    tenscell.io.data.write_csv(tenscell.io.data.bundled("fabry2001"), moduli)
+    assert isinstance(read_measurements(moduli), RheologyData)
     df = back.to_dataframe()
     assert list(df.columns) == ["time_s", "creep_compliance_per_Pa", "creep_compliance_sd_per_Pa"]
 
@@ -122,3 +122,70 @@ def test_creep_csv_errors_name_the_line(tmp_path, text, match):
     p.write_text(text)
     with pytest.raises(DataError, match=match):
         read_creep_csv(p)
+
+
+# --- creep data in fits: residuals, analytic Jacobian, joint fits -----------------------------------
+def _creep_data(cell, t, P, EA, c, L=1.0, prestress_pa=None):
+    from tenscell.fitting.fitted import scaled_cell
+    from tenscell.io.creep_data import CreepData
+
+    lin = tenscell.linearize(scaled_cell(cell, L), P=P, EA=EA, c=c)
+    J = creep_compliance(lin, t, continuum=True)
+    pre = None if prestress_pa is None else np.full(t.size, prestress_pa)
+    return CreepData(time_s=t, compliance=J, prestress=pre, source="synthetic creep")
+
+
+@pytest.mark.parametrize("tendons,damping", [("per-tendon", "uniform"), ("per-family", "per-family"),
+                                             ("uniform", "uniform")])
+def test_creep_residuals_match_the_core_pipeline_and_jacobian_matches_fd(tendons, damping):
+    from tenscell.fitting import make_problem
+    from tenscell.io.creep_data import CreepData
+
+    cell = tenscell.paper_cell()
+    t = np.logspace(-2, 2, 9)
+    p = make_problem(CreepData(time_s=t, compliance=np.full(t.size, 1e-3)), cell, tendons=tendons, damping=damping)
+    rng = np.random.default_rng(7)
+    phi = rng.normal(0.0, 0.5, p.n_params) + np.log(np.r_[np.ones(p.n_ea + p.n_c), 5.0, 1.3])
+    theta = phi[p.free]
+    vals = p.values(theta)
+    EA, c = vals[: p.n_ea][p.ea_groups], vals[p.n_ea: p.n_ea + p.n_c][p.c_groups]
+    ref = _creep_data(cell, t, vals[-2], EA, c, L=vals[-1])
+    np.testing.assert_allclose(p.creep(theta), ref.compliance, rtol=1e-10)
+    J = p.jacobian(theta)
+    np.testing.assert_allclose(J, p.jacobian_fd(theta, 1e-6), rtol=1e-5, atol=1e-7 * np.abs(J).max())
+
+
+def test_joint_creep_frequency_and_prestress_jacobian():
+    from tenscell.fitting import make_problem
+    from tenscell.io.data import RheologyData, bundled
+
+    cell = tenscell.paper_cell()
+    t = np.logspace(-1, 1, 5)
+    f = np.logspace(-1, 1, 4)
+    creep = _creep_data(cell, t, 3.0, 1.0, 1.0, prestress_pa=300.0)
+    freq = RheologyData(f, np.ones(4), np.ones(4))  # prestress not stated: fitted (P_data)
+    p = make_problem([bundled("stamenovic2002"), creep, freq], cell, tendons="per-family")
+    assert p.n_creep == 5 and p.n_residuals == 2 * (8 + 4) + 5
+    assert list(p.rows(1)) == list(range(24, 29))
+    theta = np.random.default_rng(2).normal(0.0, 0.4, p.n_free) + p.fixed_log[p.free]
+    J = p.jacobian(theta)
+    np.testing.assert_allclose(J, p.jacobian_fd(theta, 1e-6), rtol=1e-5, atol=1e-7 * np.abs(J).max())
+
+
+def test_joint_fit_of_creep_and_frequency_data_recovers_the_model():
+    from tenscell.fitting import fit
+    from tenscell.io.data import RheologyData
+
+    cell = tenscell.paper_cell()
+    P, EA, c, L = 4.0, 2.0, 0.5, 1.0
+    t = np.logspace(-2, 1, 8)
+    f = np.logspace(-1, 2, 8)
+    creep = _creep_data(cell, t, P, EA, c).with_prestress(400.0)
+    Gs, Gl = tenscell.moduli(tenscell.linearize(cell, P=P, EA=EA, c=c), f)
+    freq = RheologyData(f, Gs, Gl, prestress=np.full(f.size, 400.0), source="synthetic moduli")
+    r = fit([creep, freq], cell, tendons="uniform", starts=2, hops=3, seed=0, fixed={"L": L}, progress=False)
+    assert max(x.rms_log10_error for x in r.fits) < 1e-3
+    assert r.fits[0].axis == "time" and r.fits[0].J_model.shape == t.shape
+    assert r.value("EA") == pytest.approx(EA, rel=1e-3)
+    assert r.value("c") == pytest.approx(c, rel=1e-3)
+    assert r.value("s") * 400.0 == pytest.approx(P, rel=1e-2)

@@ -121,6 +121,39 @@ def test_share_and_penalty_jacobians_match_finite_differences(cell, tendons, dam
                                atol=1e-5 * np.abs(pr.penalty_jacobian(theta)).max(), rtol=0)
 
 
+def test_storage_elasticity_matches_core_and_its_jacobian(cell):
+    """∂lnG'/∂lnP at 0.1 Hz in the problem equals analytic_elasticities; its d ln and the penalty's against FD."""
+    sweep, freq, _, _ = _joint_truth(cell, state_prestress=False)
+    pr = fitting.make_problem([sweep, freq], cell, damping="per-family", min_prestress_elasticity=0.95,
+                              elasticity_frequency_hz=0.3)
+    rng = np.random.default_rng(2)
+    theta = _initial_guess(pr, rng) + rng.normal(0, 0.3, pr.n_free)
+    E = pr.prestress_elasticity(theta)
+    EA, c, P = pr.effective_properties(theta)
+    for g in (0, 6):
+        el = analytic_elasticities(tenscell.linearize(cell, P=P[g], EA=EA, c=c), [0.3])
+        assert E[g] == pytest.approx(el.storage[el.index("P"), 0], rel=1e-9)
+    out = pr._evaluate(pr.full(theta), jac=True, elasticity=True)
+    d = _central(lambda t: np.log(pr.prestress_elasticity(t)), theta, 1e-5)
+    np.testing.assert_allclose(out.delasticity[:, pr.free], d, atol=1e-5 * np.abs(d).max(), rtol=0)
+    assert np.abs(out.delasticity[:, pr.prestress_slice.start]).max() > 0  # the prestress moves it
+    assert pr.n_penalties == pr.n_groups and np.all(pr.penalty(theta) > 0)
+    np.testing.assert_allclose(pr.penalty_jacobian(theta), _central(pr.penalty, theta, 1e-5),
+                               atol=1e-5 * np.abs(pr.penalty_jacobian(theta)).max(), rtol=0)
+
+
+def test_min_prestress_elasticity_is_respected(cell):
+    data = bundled("fabry2001")
+    kw = dict(tendons="per-family", damping="per-family", starts=1, hops=1, seed=0, progress=False)
+    free = fitting.fit(data, cell, **kw)
+    bound = 0.5 * (1.0 + float(free.problem.prestress_elasticity(free.theta).max()))
+    held = fitting.fit(data, cell, min_prestress_elasticity=bound, **kw)
+    assert held.problem.prestress_elasticity(held.theta).min() >= 0.99 * bound
+    assert held.prestress.reference_storage.min() == pytest.approx(
+        float(held.problem.prestress_elasticity(held.theta).min()), rel=1e-9)
+    assert "∂lnG'/∂lnP at 0.1 Hz at or above" in fit_markdown(held)
+
+
 def test_min_prestress_share_is_respected(cell):
     """A fit whose prestress ends with a small share keeps the asked share when the option asks for more."""
     data = bundled("fabry2001")

@@ -240,7 +240,8 @@ def test_external_scheduler_on_loopback(serial, population, tmp_path):
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
         deadline = time.monotonic() + 60
-        while not sched_file.is_file() and time.monotonic() < deadline:
+        # the scheduler creates its file first and fills it after: wait for the address, not the file
+        while time.monotonic() < deadline and not (sched_file.is_file() and '"address"' in sched_file.read_text()):
             time.sleep(0.1)
         assert '"tcp://127.0.0.1:' in sched_file.read_text()
         procs.append(subprocess.Popen([dask, "worker", "--scheduler-file", str(sched_file), "--nthreads", "1",

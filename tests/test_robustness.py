@@ -28,7 +28,8 @@ NUMERIC_FLAGS = {
     ("moduli",): {"--prestress": (), "--P": (), "--freq": (), "--alpha-deg": ("negative", "zero"),
                   "--delta-deg": (), "--EA": (), "--c": (), "--L": ()},
     tuple(FIT): {"--starts": (), "--seed": ("zero",), "--jobs": (), "--tolerance": (), "--baseline-starts": (),
-                 "--max-points": (), "--min-prestress-share": (), "--max-decades": ()},
+                 "--max-points": (), "--min-prestress-share": (), "--max-decades": (),
+                 "--min-prestress-elasticity": ()},
     ("simulate", "--amplitude", "1", "--freq", "1"): {
         "--amplitude": (), "--amplitudes": (), "--freq": (), "--cycles": (), "--samples": (),
         "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),
@@ -249,3 +250,22 @@ def test_overflow_never_reaches_the_user(capsys):
             assert rows and all(math.isfinite(v) for r in rows for v in r)
         else:
             assert err.count("\n") == 1
+
+
+@pytest.mark.parametrize("call", [
+    lambda t: t.moduli(t.linearize(t.paper_cell(), 1000.0), [1e300]),
+    lambda t: t.linearize(t.paper_cell(), 1e303),
+    lambda t: t.linearize(t.paper_cell(), 1000.0, EA=1e300),
+    lambda t: t.linearize(t.paper_cell(), 1000.0, c=1e-300),
+    lambda t: t.paper_cell(L=1e300),
+])
+def test_api_refuses_values_that_overflow(call):
+    """The library's own checks (tenscell._checks.MAGNITUDE): a ValueError naming the value, no numpy warning."""
+    import warnings
+
+    import tenscell
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="must lie in"):
+            call(tenscell)

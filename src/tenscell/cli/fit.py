@@ -23,16 +23,16 @@ BUNDLED_FREQUENCY_PRESTRESS_PA = 1000.0
 
 def register(sub) -> None:
     p = sub.add_parser(
-        "fit", help="fit the tensegrity model to measured G', G'' (CSV; several files: one joint fit)",
+        "fit", help="fit the tensegrity model to measured G', G'' or creep J(t) (CSV; several files: one joint fit)",
         description="Fit tendon stiffnesses, damping, prestress and strut length so that the model's G', G'' "
-                    "match CSV files of measured moduli (frequency sweep, prestress sweep or |G|/phase; see "
-                    "docs/fitting.md). Several files are fitted jointly by one parameter set: a frequency sweep "
+                    "match CSV files of measured moduli (frequency sweep, prestress sweep or |G|/phase) or creep "
+                    "compliance (time_s, creep_compliance_per_Pa); see docs/fitting.md. Several files are fitted jointly by one parameter set: a frequency sweep "
                     "that states its prestress (a prestress_Pa column, or --prestress FILE=PA) is linked to the "
                     "others by one prestress scale; otherwise its prestress is a fitted, reported parameter. "
                     "bundled:NAME reads a data set shipped with tenscell (fabry2001, stamenovic2002). "
                     "Writes fit.json, fit.csv, fit.png and report.md into --out. Exit status 0 if every data "
                     "set's RMS of the log10 errors reached --tolerance, 1 if not, 2 for bad input.")
-    p.add_argument("data", nargs="+", help="CSV file(s) of measured moduli, or bundled:NAME")
+    p.add_argument("data", nargs="+", help="CSV file(s) of measured moduli or creep compliance, or bundled:NAME")
     p.add_argument("--prestress", action="append", metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     p.add_argument("--tendons", choices=TENDON_MODES, default="per-tendon",
@@ -122,7 +122,8 @@ def search_space(args, datasets) -> dict:
     """
     from .. import fitting
 
-    space = {"min_prestress_share": args.min_prestress_share, "max_decades": args.max_decades}
+    space = {"min_prestress_share": args.min_prestress_share, "max_decades": args.max_decades,
+             "min_prestress_elasticity": args.min_prestress_elasticity}
     plain = fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **space)
     bounds = dict(args.bound or ())
     for kind, (lo, hi) in bounds.items():
@@ -155,21 +156,25 @@ def _names_text(names) -> str:
 
 
 def add_constraints(p) -> None:
-    """``--min-prestress-share`` and ``--max-decades`` (fit and the compactness study)."""
+    """The search-space constraints: ``--min-prestress-share``, ``--min-prestress-elasticity``, ``--max-decades``."""
     p.add_argument("--min-prestress-share", type=number(0.0, 1.0, open_lo=True), default=None, metavar="S",
                    help="keep the prestress mechanically active: P·Kp must carry at least this share (0-1) of "
                         "the static stiffness at every prestress of the data")
+    p.add_argument("--min-prestress-elasticity", type=number(0.0, 10.0, open_lo=True), default=None, metavar="E",
+                   help="keep the prestress mechanically active: dlnG'/dlnP at 0.1 Hz must be at least E at every "
+                        "prestress of the data (adherent cells: about 0.7)")
     p.add_argument("--max-decades", type=number(0.0, 100.0, "decades", open_lo=True), default=None, metavar="D",
                    help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
 
 
 def read_data_arg(text: str, min_points: int):
-    """A data file, or ``bundled:NAME`` for a data set shipped with tenscell."""
-    from ..io.data import bundled, read_csv
+    """A data file (moduli or creep compliance, by its header), or ``bundled:NAME`` for a data set shipped with tenscell."""
+    from ..io.creep_data import read_measurements
+    from ..io.data import bundled
 
     if text.lower().startswith("bundled:"):
         return bundled(text.split(":", 1)[1])
-    return read_csv(text, min_points=min_points)
+    return read_measurements(text, min_points=min_points)
 
 
 def read_datasets(paths, prestress_options, min_points: int):
@@ -233,7 +238,9 @@ def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_star
 
     result = fitting.fit(data, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
                          tolerance=tolerance, **search)
-    if tendons == "uniform" and damping == "uniform" and not search.get("min_prestress_share"):
+    constrained = search.get("min_prestress_share") or search.get("min_prestress_elasticity") or search.get(
+        "max_decades")
+    if tendons == "uniform" and damping == "uniform" and not constrained:
         baseline = result
     else:
         # the baseline only shows what a homogeneous cell cannot do: a short search suffices
@@ -253,7 +260,7 @@ def run(args) -> int:
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
     for i, data in enumerate(datasets):
-        if data.n > args.max_points:
+        if data.n > args.max_points and hasattr(data, "binned"):  # moduli only: creep data are kept as they are
             datasets[i] = data.binned(args.max_points)
             stage(f"{data.n:,} points of {Path(args.data[i]).name} binned to {datasets[i].n:,} in log frequency "
                   f"(--max-points {args.max_points})")

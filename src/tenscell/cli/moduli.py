@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import sys
 
-from ._args import MAX_GRID_POINTS, add_model_options, add_prestress, frequencies
+from ._args import MAX_GRID_POINTS, add_model_options, add_prestress, frequencies, grid_cost
 
 DEFAULT_FREQ = "0.01:1000:61"
 
@@ -23,8 +23,8 @@ def register(sub) -> None:
 def run(args) -> int:
     n = len(args.prestress) * len(args.freq)
     if n > MAX_GRID_POINTS:
-        raise ValueError(f"--prestress × --freq is {len(args.prestress):,} × {len(args.freq):,} = {n:,} points; "
-                         f"at most {MAX_GRID_POINTS:,} per run")
+        raise ValueError(f"--prestress × --freq is {len(args.prestress):,} × {len(args.freq):,} = {n:,} points, "
+                         f"{grid_cost(n)}; at most {MAX_GRID_POINTS:,} per run")
     from ._args import model_from_args
     from .._progress import progress_bar
     from ..io.tables import check_finite_rows, moduli_table

@@ -32,7 +32,7 @@ def _study_sensitivity(out: Path, log, args=None) -> None:
 
     draws = getattr(args, "draws", 200)
     seed = getattr(args, "seed", 0)
-    study = sensitivity.sensitivity_study(draws, seed=seed)
+    study = sensitivity.sensitivity_study(draws, seed=seed, **getattr(args, "fitted_cell", {}))
     el, table, summary, mcs = study.elasticities, study.table, study.summary, list(study.monte_carlo)
     f = el.frequency_hz
     write_csv_rows(out / "elasticities.csv", ["parameter", "group", "value", "method", "frequency_Hz",
@@ -164,6 +164,9 @@ def register(sub) -> None:
     add_out(p, derived="study-NAME")
     p.add_argument("--draws", type=integer(1, 100_000), default=200, help="Monte Carlo draws per set (sensitivity)")
     p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed (sensitivity, compactness)")
+    p.add_argument("--from-fit", metavar="FIT_JSON", default=None,
+                   help="sensitivity: of the fitted paper cell of a `tenscell fit` run (its fit.json: strut length, "
+                        "EA, c and prestress; a fit to data that state their prestress at their median)")
     g = p.add_argument_group("compactness (fits with the stiffness spread bounded to each of --decades)")
     g.add_argument("--decades", type=number_list(0.0, 100.0, "decades", open_lo=True),
                    default=tuple(float(d) for d in range(1, 15)), help="bounds on the spread (comma list)")
@@ -177,6 +180,19 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+def _fitted_paper_cell(path) -> dict:
+    """The sensitivity study's keyword arguments for the fitted paper cell in ``path`` (ValueError otherwise)."""
+    from ..fitting.fitted import load_fit
+
+    model = load_fit(path)
+    p = model.cell.parameters
+    if not {"alpha", "delta"} <= set(p) or not p.get("intermediate_filaments", False):
+        raise ValueError(f"--from-fit {path}: the sensitivity study varies the paper cell's α, δ and L; this fit's "
+                         f"cell is {model.cell.describe()}")
+    return {"alpha": float(p["alpha"]), "delta": float(p["delta"]), "L": model.L, "P": model.prestress(),
+            "EA": model.EA, "c": model.c}
+
+
 def run(args) -> int:
     import sys
     import time
@@ -186,6 +202,10 @@ def run(args) -> int:
     if (args.name == "compactness") != bool(args.data):
         raise ValueError("study compactness needs data files (e.g. bundled:fabry2001)" if args.name == "compactness"
                          else f"study {args.name} takes no data files, got {' '.join(args.data)}")
+    if args.from_fit is not None:
+        if args.name != "sensitivity":
+            raise ValueError(f"--from-fit applies to study sensitivity, not to study {args.name}")
+        args.fitted_cell = _fitted_paper_cell(args.from_fit)
     from .._progress import stage
 
     out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")

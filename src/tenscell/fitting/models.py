@@ -490,7 +490,7 @@ def compare_models(result, *, homogeneous=None, structural: StructuralDampingFit
     ModelComparison
     """
     datasets = result.datasets
-    sigma_known = all(d.G_storage_sd is not None and d.G_loss_sd is not None for d in datasets)
+    sigma_known = all(d.has_sd for d in datasets)
     w = result.problem.weights
     rows = []
 
@@ -507,7 +507,7 @@ def compare_models(result, *, homogeneous=None, structural: StructuralDampingFit
         add("homogeneous tensegrity", homogeneous.problem.residuals(homogeneous.theta),
             _tensegrity_params(homogeneous), homogeneous.rms_log10_error, homogeneous.moduli)
     if structural is True:  # the law has no prestress dependence: one frequency sweep only
-        one = len(datasets) == 1 and _one_prestress(datasets[0])
+        one = len(datasets) == 1 and datasets[0].kind != "creep" and _one_prestress(datasets[0])
         structural = fit_structural_damping(datasets[0]) if one else None
     if isinstance(structural, StructuralDampingFit):
         add("structural damping (power law)", structural.weighted_residuals, structural.n_params,

@@ -64,6 +64,10 @@ class PrestressActivity:
     reference_share : ndarray, shape (groups,)
     min_share_bound : float or None
         The lower bound the fit imposed on the share (``min_prestress_share``), if any.
+    min_elasticity_bound : float or None
+        The lower bound the fit imposed on ``∂ln G'/∂ln P`` (``min_prestress_elasticity``), if any.
+    elasticity_bound_frequency_hz : float
+        The frequency (Hz) of that bound.
     """
 
     dataset: np.ndarray
@@ -79,18 +83,27 @@ class PrestressActivity:
     reference_loss: np.ndarray
     reference_share: np.ndarray
     min_share_bound: float | None = None
+    min_elasticity_bound: float | None = None
+    elasticity_bound_frequency_hz: float = REFERENCE_FREQUENCY_HZ
+
+    def _at_points(self, name: str) -> np.ndarray:
+        # a fit to creep data only has no moduli points: its reference values stand for them
+        values = getattr(self, name)
+        return values if values.size else getattr(self, f"reference_{name}")
 
     @property
     def inert(self) -> bool:
         """True if the prestress carries (almost) none of the stiffness and G' does not respond to it."""
-        return bool(np.nanmax(self.share) < INERT_SHARE and np.nanmax(np.abs(self.storage)) < INERT_ELASTICITY)
+        return bool(np.nanmax(self._at_points("share")) < INERT_SHARE
+                    and np.nanmax(np.abs(self._at_points("storage"))) < INERT_ELASTICITY)
 
     def verdict(self) -> str:
         """The finding in plain words."""
-        s_lo, s_hi = float(np.nanmin(self.share)), float(np.nanmax(self.share))
-        e_lo, e_hi = float(np.nanmin(self.storage)), float(np.nanmax(self.storage))
-        share = f"{s_lo:.3g}" if np.isclose(s_lo, s_hi, rtol=1e-3) else f"{s_lo:.3g} to {s_hi:.3g}"
-        text = (f"P·Kp carries {share} of the static stiffness; ∂lnG'/∂lnP is {e_lo:.3g} to {e_hi:.3g} at the "
+        share, storage = self._at_points("share"), self._at_points("storage")
+        s_lo, s_hi = float(np.nanmin(share)), float(np.nanmax(share))
+        e_lo, e_hi = float(np.nanmin(storage)), float(np.nanmax(storage))
+        share_text = f"{s_lo:.3g}" if np.isclose(s_lo, s_hi, rtol=1e-3) else f"{s_lo:.3g} to {s_hi:.3g}"
+        text = (f"P·Kp carries {share_text} of the static stiffness; ∂lnG'/∂lnP is {e_lo:.3g} to {e_hi:.3g} at the "
                 f"data's frequencies (adherent cells: about {CELL_ELASTICITY:g}).")
         if self.inert:
             return ("The prestress is mechanically inert: " + text + " This fit is a network of Voigt springs, "
@@ -102,9 +115,10 @@ class PrestressActivity:
     def __repr__(self) -> str:
         return format_repr(
             f"PrestressActivity: {self.storage.size} points, {self.reference_prestress_N.size} prestress(es)",
-            f"share of the static stiffness {np.nanmin(self.share):.3g} to {np.nanmax(self.share):.3g}",
-            f"dlnG'/dlnP {np.nanmin(self.storage):.3g} to {np.nanmax(self.storage):.3g}; "
-            f"dlnG''/dlnP {np.nanmin(self.loss):.3g} to {np.nanmax(self.loss):.3g}",
+            f"share of the static stiffness {np.nanmin(self._at_points('share')):.3g} to "
+            f"{np.nanmax(self._at_points('share')):.3g}",
+            f"dlnG'/dlnP {np.nanmin(self._at_points('storage')):.3g} to {np.nanmax(self._at_points('storage')):.3g}; "
+            f"dlnG''/dlnP {np.nanmin(self._at_points('loss')):.3g} to {np.nanmax(self._at_points('loss')):.3g}",
             "inert" if self.inert else "active",
         )
 
@@ -120,9 +134,14 @@ class PrestressActivity:
             "inert": self.inert,
             "verdict": self.verdict(),
             "min_share_bound": self.min_share_bound,
-            "share_min": float(np.nanmin(self.share)), "share_max": float(np.nanmax(self.share)),
-            "dlnGstorage_dlnP": {"min": float(np.nanmin(self.storage)), "max": float(np.nanmax(self.storage))},
-            "dlnGloss_dlnP": {"min": float(np.nanmin(self.loss)), "max": float(np.nanmax(self.loss))},
+            "min_elasticity_bound": self.min_elasticity_bound,
+            "elasticity_bound_frequency_Hz": self.elasticity_bound_frequency_hz,
+            "share_min": float(np.nanmin(self._at_points("share"))),
+            "share_max": float(np.nanmax(self._at_points("share"))),
+            "dlnGstorage_dlnP": {"min": float(np.nanmin(self._at_points("storage"))),
+                                 "max": float(np.nanmax(self._at_points("storage")))},
+            "dlnGloss_dlnP": {"min": float(np.nanmin(self._at_points("loss"))),
+                              "max": float(np.nanmax(self._at_points("loss")))},
             "at_reference_frequency": {
                 "frequency_Hz": self.reference_frequency_hz,
                 "rows": [{"dataset": int(k), "prestress_model_N": float(P), "dlnGstorage_dlnP": float(a),
@@ -160,7 +179,8 @@ def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERE
     ref = np.empty((2, P_groups.size))
     for g, P in enumerate(P_groups):
         sel = pr.group_index == g
-        storage[sel], loss[sel] = _elasticity_P(result, P, f[sel])
+        if sel.any():  # a creep data set's group has no moduli points, only the reference
+            storage[sel], loss[sel] = _elasticity_P(result, P, f[sel])
         a, b = _elasticity_P(result, P, [reference_frequency_hz])
         ref[:, g] = a[0], b[0]
     return PrestressActivity(
@@ -169,4 +189,6 @@ def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERE
         reference_frequency_hz=float(reference_frequency_hz), reference_prestress_N=P_groups,
         reference_dataset=pr.group_dataset.copy(), reference_storage=ref[0], reference_loss=ref[1],
         reference_share=share_groups, min_share_bound=pr.min_prestress_share,
+        min_elasticity_bound=pr.min_prestress_elasticity,
+        elasticity_bound_frequency_hz=float(pr.elasticity_omega / (2 * np.pi)),
     )

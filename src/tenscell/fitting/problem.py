@@ -37,6 +37,14 @@ Two options shape the search space:
     every prestress of the data. Enforced as a one-sided penalty residual
     ``ρ·ln(S_min/share)`` (zero when satisfied), with its exact Jacobian; the
     share is scale-free, so it depends on P relative to the stiffnesses only.
+``min_prestress_elasticity``
+    ``∂ln G'/∂ln P`` at ``elasticity_frequency_hz`` (default 0.1 Hz, where
+    cells show about 0.7) must stay at or above this value at every prestress
+    of the data; the same kind of penalty, with the exact Jacobian of
+    ``Re(G·e)/Re(G)``, ``e = P·yᵀKp x / J`` at that frequency. The static
+    share can be large while G' at the data's frequencies does not respond to
+    P (the tendons' dashpots stiffen them there), so this is the constraint
+    that keeps the measured response prestress-driven.
 ``max_decades``
     The spread ``log10(max EA / min EA)`` of the fitted stiffnesses is at most
     ``D``: the search works in coordinates ``ln EA_j = m + D·ln10·σ_j`` with
@@ -49,7 +57,7 @@ Two options shape the search space:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
@@ -59,6 +67,7 @@ from .._checks import positive_scalar
 from .._results import format_repr
 from ..io.data import DataError, RheologyData
 from ..laws import Voigt
+from ..linear.modal import prestress_grid_modes
 from ..model.equilibrium import Cell
 from .result import FitParameter
 
@@ -133,6 +142,10 @@ class _Evaluation:
     dlogG: np.ndarray | None  # (N, n_params) d ln G / d phi
     share: np.ndarray | None  # (groups,) prestress share of the static stiffness
     dshare: np.ndarray | None  # (groups, n_params) d ln share / d phi
+    elasticity: np.ndarray | None = None  # (groups,) ∂ln G'/∂ln P at elasticity_omega
+    delasticity: np.ndarray | None = None  # (groups, n_params) its d ln / d phi
+    Jc: np.ndarray | None = None  # (Nc,) creep compliance at the creep data's times (1/Pa)
+    dlogJc: np.ndarray | None = None  # (Nc, n_params) d ln Jc / d phi
 
 
 # ---------------------------------------------------------------------------------
@@ -168,8 +181,10 @@ class FitProblem:
     group_measured : ndarray, shape (groups,)
         Measured prestress (Pa) of each group, NaN where the data set did not state it.
     group_dataset : ndarray of int, shape (groups,)
-    min_prestress_share, max_decades : float or None
+    min_prestress_share, min_prestress_elasticity, max_decades : float or None
         The search-space options (module docstring).
+    elasticity_omega : float
+        Angular frequency (rad/s) of ``min_prestress_elasticity``.
     """
 
     names: tuple
@@ -212,9 +227,16 @@ class FitProblem:
     prestress_matters: bool
     min_prestress_share: float | None = None
     max_decades: float | None = None
+    min_prestress_elasticity: float | None = None
+    elasticity_omega: float = 2 * math.pi * 0.1
+    # creep data (times after a stress step): their residuals follow the moduli's in y_obs and weights
+    creep_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    creep_dataset: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    creep_group: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     def __repr__(self) -> str:
         opts = [f"{k}={v:g}" for k, v in (("min_prestress_share", self.min_prestress_share),
+                                         ("min_prestress_elasticity", self.min_prestress_elasticity),
                                          ("max_decades", self.max_decades)) if v is not None]
         return format_repr(
             f"FitProblem: {self.n_datasets} data set(s), {self.n_points} points, {self.n_groups} prestress(es)",
@@ -240,8 +262,13 @@ class FitProblem:
 
     @property
     def n_residuals(self) -> int:
-        """Number of data residuals: 2 per data point (G' and G'')."""
+        """Number of data residuals: 2 per moduli point (G' and G''), 1 per creep point."""
         return int(self.y_obs.size)
+
+    @property
+    def n_creep(self) -> int:
+        """Number of creep points, all creep data sets together (their residuals come last)."""
+        return int(self.creep_t.size)
 
     @property
     def n_datasets(self) -> int:
@@ -274,7 +301,10 @@ class FitProblem:
         return np.exp(self.full(theta))
 
     def rows(self, dataset: int) -> np.ndarray:
-        """Positions of data set ``dataset``'s residuals (its G' rows, then its G'' rows), shape (2n_k,)."""
+        """Positions of data set ``dataset``'s residuals: its G' rows then its G'' rows, or its creep rows."""
+        creep = np.flatnonzero(self.creep_dataset == dataset)
+        if creep.size:
+            return 2 * self.n_points + creep
         pts = np.flatnonzero(self.dataset_index == dataset)
         return np.concatenate([pts, self.n_points + pts])
 
@@ -313,8 +343,7 @@ class FitProblem:
         if wh is None:
             return None
         B, Ht, bt, Dt = wh
-        Kt = P[:, None, None] * Ht[None] + np.matmul(B[None] * k[:, None, :], B.T[None])
-        lam, W = np.linalg.eigh(Kt)
+        lam, W = prestress_grid_modes(Ht, np.matmul(B[None] * k[:, None, :], B.T[None]), P)
         if not np.all(lam > 0):
             return None
         alpha = np.einsum("gnk,n->gk", W, Dt)  # probe projections, D0·v_k
@@ -322,8 +351,8 @@ class FitProblem:
         Kpt = Ht[None] + np.matmul(B[None] * kP[:, None, :], B.T[None])
         return _Spectrum(P=P, dk=dk, deta=deta, B=B, Kpt=Kpt, lam=lam, W=W, alpha=alpha, beta=beta)
 
-    def _evaluate(self, phi, jac: bool, share: bool = False) -> _Evaluation | None:
-        """Moduli (and, if asked, their log-derivatives and the prestress share); None if unstable."""
+    def _evaluate(self, phi, jac: bool, share: bool = False, elasticity: bool = False) -> _Evaluation | None:
+        """Moduli (and, if asked, their log-derivatives, the prestress share and elasticity); None if unstable."""
         spec = self._spectrum(phi)
         if spec is None:
             return None
@@ -335,7 +364,31 @@ class FitProblem:
         G = (0.5 / self.L_ref) / J
         dlogG = self._dlogG(spec, J, aR, bR) if jac else None
         sh, dsh = self._share(spec, jac) if share else (None, None)
-        return _Evaluation(G=G, dlogG=dlogG, share=sh, dshare=dsh)
+        el, de = self._storage_elasticity(spec, jac) if elasticity else (None, None)
+        Jc, dJc = self._creep(spec, jac) if self.n_creep else (None, None)
+        return _Evaluation(G=G, dlogG=dlogG, share=sh, dshare=dsh, elasticity=el, delasticity=de, Jc=Jc,
+                           dlogJc=dJc)
+
+    def _creep(self, spec, jac: bool):
+        """Creep compliance (1/Pa) at the creep points and, if ``jac``, d ln J / d phi (module :mod:`.creep`)."""
+        from .creep import creep_derivatives, creep_from_modes
+
+        Jc = np.empty(self.n_creep)
+        dJ = np.zeros((self.n_creep, self.n_params)) if jac else None
+        AV, M = self._modal(spec) if jac else (None, None)
+        for g in np.unique(self.creep_group):
+            sel = np.flatnonzero(self.creep_group == g)
+            t = self.creep_t[sel]
+            # J in 1/Pa is the cell's compliance (m/N) times 2L (the continuum factor of G = (0.5/L)/J)
+            Jc[sel] = 2.0 * self.L_ref * creep_from_modes(spec.lam[g], spec.alpha[g], spec.beta[g], t)
+            if jac:
+                assert dJ is not None and AV is not None and M is not None  # computed above when jac
+                d_EA, d_c, d_Pg = creep_derivatives(spec.lam[g], spec.alpha[g], spec.beta[g], AV[g], M[g], t,
+                                                    spec.dk[g], spec.deta, spec.P[g])
+                d_P = np.zeros((sel.size, self.n_groups))
+                d_P[:, g] = d_Pg
+                dJ[sel] = 2.0 * self.L_ref * self._to_params(d_EA, d_c, d_P)
+        return Jc, (None if dJ is None else dJ / Jc[:, None])
 
     def _modal(self, spec):
         """AV = a_jᵀ v_k (groups, m, n) and M = Vᵀ Kp V (groups, n, n)."""
@@ -375,32 +428,57 @@ class FitProblem:
         d_P[np.arange(J.size), g] = dJ_P
         return -self._to_params(dJ_EA, dJ_c, d_P) / J[:, None]
 
-    def _share(self, spec, jac: bool):
-        """Prestress share of the static stiffness per group, and d ln share / d phi.
+    def _activity(self, spec, w: float, jac: bool):
+        """The prestress elasticity ``e = ∂ln G/∂ln P = P·yᵀKp x / J`` per group at ω = ``w`` (rad/s), complex.
 
-        ``share = P·yᵀKp x / yᵀK0 x`` with ``x = K0⁻¹(−H0)``, ``y = K0⁻ᵀD0ᵀ``
-        (the ω → 0 limit of ∂ln G/∂ln P). Its derivatives follow from
-        ``∂x = −K0⁻¹(∂K0)x`` and its transpose.
+        With ``x = Z⁻¹(−H0)``, ``y = Z⁻ᵀD0ᵀ``, ``Z = K0 + iωC0`` and
+        ``J = D0·x``. Returns ``(e, J, d ln e/d phi, d ln J/d phi)``, the
+        derivatives (groups, n_params) from ``∂x = −Z⁻¹(∂Z)x`` and its
+        transpose (None without ``jac``). At ``w = 0``, ``e`` is real: the
+        prestress share of the static stiffness.
         """
-        lam, P = spec.lam, spec.P
-        xs, ys = spec.beta / lam, spec.alpha / lam  # x, y in modal coordinates
-        J0 = np.sum(spec.alpha * xs, axis=1)
+        P = spec.P
+        r = 1.0 / (spec.lam + 1j * w)
+        xs, ys = spec.beta * r, spec.alpha * r  # x, y in modal coordinates
+        J = np.sum(spec.alpha * xs, axis=1)
         AV, M = self._modal(spec)
         Mx, My = np.einsum("gkl,gl->gk", M, xs), np.einsum("gkl,gl->gk", M, ys)
         Q = np.sum(ys * Mx, axis=1)  # yᵀ Kp x
-        share = P * Q / J0
+        e = P * Q / J
         if not jac:
-            return share, None
+            return e, J, None, None
         ax, ay = np.einsum("gmk,gk->gm", AV, xs), np.einsum("gmk,gk->gm", AV, ys)
-        au, av = np.einsum("gmk,gk->gm", AV, Mx / lam), np.einsum("gmk,gk->gm", AV, My / lam)
-        # by ln EA_j (∂K0 = dk_j a_j a_jᵀ): Q and J0 both move
-        dQ = -spec.dk * (ay * au + av * ax)
-        dJ0 = -spec.dk * ay * ax
-        d_EA = dQ / Q[:, None] - dJ0 / J0[:, None]
-        # by the group's own ln P (∂K0 = P Kp; the Voigt law's ∂k/∂T does not depend on T or EA)
-        R = np.sum(My * Mx / lam, axis=1)  # yᵀ Kp K0⁻¹ Kp x
-        d_P = np.diag(1.0 - 2.0 * P * R / Q + P * Q / J0)
-        return share, self._to_params(d_EA, np.zeros_like(d_EA), d_P)
+        au, av = np.einsum("gmk,gk->gm", AV, Mx * r), np.einsum("gmk,gk->gm", AV, My * r)
+        # by ln EA_j (∂Z = dk_j a_j a_jᵀ) and ln c_j (∂Z = iω dη_j a_j a_jᵀ): Q and J both move
+        both, single = ay * au + av * ax, ay * ax
+        sc = 1j * w * spec.deta
+        d_EA = -spec.dk * (both / Q[:, None] - single / J[:, None])
+        d_c = -sc * (both / Q[:, None] - single / J[:, None])
+        # by the group's own ln P (∂Z = P Kp; the Voigt law's ∂k/∂T depends on neither T nor EA)
+        R = np.sum(My * Mx * r, axis=1)  # yᵀ Kp Z⁻¹ Kp x
+        d_P = np.diag(1.0 - 2.0 * P * R / Q + P * Q / J)
+        dlnJ = self._to_params(-spec.dk * single / J[:, None], -sc * single / J[:, None], np.diag(-P * Q / J))
+        return e, J, self._to_params(d_EA, d_c, d_P), dlnJ
+
+    def _share(self, spec, jac: bool):
+        """Prestress share of the static stiffness per group (real), and d ln share / d phi."""
+        e, _, de, _ = self._activity(spec, 0.0, jac)
+        return e.real, (None if de is None else de.real)
+
+    def _storage_elasticity(self, spec, jac: bool):
+        """``∂ln G'/∂ln P`` per group at :attr:`elasticity_omega`, and its d ln / d phi.
+
+        ``E' = Re(G·e)/Re(G)`` with ``G ∝ 1/J``.
+        """
+        e, J, de, dJ = self._activity(spec, self.elasticity_omega, jac)
+        G = 1.0 / J
+        E = (G * e).real / G.real
+        if not jac:
+            return E, None
+        dG = -dJ * G[:, None]  # dG = G·d ln G
+        dA = (G * e)[:, None] * (de - dJ)
+        dE = (dA.real * G.real[:, None] - (G * e).real[:, None] * dG.real) / (G.real**2)[:, None]
+        return E, dE / E[:, None]
 
     # -- residuals ------------------------------------------------------------------
     def moduli(self, theta) -> tuple[np.ndarray, np.ndarray]:
@@ -410,6 +488,11 @@ class FitProblem:
             nan = np.full(self.omega.size, np.nan)
             return nan, nan.copy()
         return out.G.real, out.G.imag
+
+    def creep(self, theta) -> np.ndarray:
+        """Model creep compliance (1/Pa) at the creep points, shape (n_creep,); NaN where the model is unstable."""
+        out = self._evaluate(self.full(theta), jac=False)
+        return np.full(self.n_creep, np.nan) if out is None or out.Jc is None else out.Jc
 
     def residuals(self, theta) -> np.ndarray:
         """Weighted data residuals ``w·(log10 G_model − log10 G_data)``, shape (2N,) (G' block, then G'')."""
@@ -421,8 +504,12 @@ class FitProblem:
         G = out.G
         if not (np.all(G.real > 0) and np.all(G.imag > 0)):
             return np.full(self.y_obs.size, _PENALTY)
-        model = np.concatenate([np.log10(G.real), np.log10(G.imag)])
-        return self.weights * (model - self.y_obs)
+        parts = [np.log10(G.real), np.log10(G.imag)]
+        if self.n_creep:
+            if not np.all(out.Jc > 0):
+                return np.full(self.y_obs.size, _PENALTY)
+            parts.append(np.log10(out.Jc))
+        return self.weights * (np.concatenate(parts) - self.y_obs)
 
     def jacobian(self, theta) -> np.ndarray:
         """Analytic Jacobian of :meth:`residuals` with respect to ``theta``, shape (2N, n_free)."""
@@ -434,8 +521,10 @@ class FitProblem:
         G = out.G
         dG = G[:, None] * out.dlogG[:, self.free]
         with np.errstate(divide="ignore", invalid="ignore"):
-            rows = np.vstack([dG.real / (G.real[:, None] * _LN10), dG.imag / (G.imag[:, None] * _LN10)])
-        return self.weights[:, None] * np.nan_to_num(rows)
+            blocks = [dG.real / (G.real[:, None] * _LN10), dG.imag / (G.imag[:, None] * _LN10)]
+        if self.n_creep:
+            blocks.append(out.dlogJc[:, self.free] / _LN10)
+        return self.weights[:, None] * np.nan_to_num(np.vstack(blocks))
 
     def jacobian_fd(self, theta, step: float = 1e-5) -> np.ndarray:
         """Central finite-difference Jacobian of :meth:`residuals` (the slow reference), shape (2N, n_free)."""
@@ -459,43 +548,65 @@ class FitProblem:
             return np.full(self.n_groups, np.nan)
         return out.share
 
+    def prestress_elasticity(self, theta) -> np.ndarray:
+        """``∂ln G'/∂ln P`` at :attr:`elasticity_omega` at each prestress group, shape (groups,); NaN if unstable."""
+        out = self._evaluate(self.full(theta), jac=False, elasticity=True)
+        if out is None or out.elasticity is None:  # elasticity=True always computes it when the model is stable
+            return np.full(self.n_groups, np.nan)
+        return out.elasticity
+
+    def _constraints(self) -> list:
+        """The active activity constraints: [(lower bound, field of _Evaluation, its d ln field)]."""
+        out = []
+        if self.min_prestress_share is not None:
+            out.append((self.min_prestress_share, "share", "dshare"))
+        if self.min_prestress_elasticity is not None:
+            out.append((self.min_prestress_elasticity, "elasticity", "delasticity"))
+        return out
+
     @property
     def n_penalties(self) -> int:
-        """Penalty residuals the search adds to the data residuals (one per group with ``min_prestress_share``)."""
-        return 0 if self.min_prestress_share is None else self.n_groups
+        """Penalty residuals the search adds to the data residuals (one per group and activity constraint)."""
+        return self.n_groups * len(self._constraints())
+
+    def _evaluate_constrained(self, phi, jac: bool):
+        return self._evaluate(phi, jac=jac, share=self.min_prestress_share is not None,
+                              elasticity=self.min_prestress_elasticity is not None)
 
     def _penalty_from(self, out, jac: bool):
-        """Penalty residuals ``ρ·ln(S_min/share)`` where the share falls short (else 0) and their Jacobian."""
-        n = self.n_penalties
-        r = np.zeros(n)
-        Jr = np.zeros((n, self.n_free)) if jac else None
-        if n == 0:
-            return r, Jr
-        if out is None:
-            return np.full(n, _PENALTY), Jr
-        s = out.share
-        short = s < self.min_prestress_share
-        ok = short & (s > 0)
-        r[ok] = _SHARE_WEIGHT * np.log(self.min_prestress_share / s[ok])
-        r[short & ~(s > 0)] = _SHARE_WEIGHT * 50.0  # no positive share: a flat wall
-        if jac and ok.any():
-            assert Jr is not None and out.dshare is not None  # asked for with jac=True
-            Jr[ok] = -_SHARE_WEIGHT * out.dshare[ok][:, self.free]
-        return r, Jr
+        """Penalty residuals ``ρ·ln(bound/value)`` where a constrained value falls short (else 0), and their Jacobian."""
+        rows, jrows = [], []
+        for bound, name, dname in self._constraints():
+            r = np.zeros(self.n_groups)
+            Jr = np.zeros((self.n_groups, self.n_free)) if jac else None
+            if out is None:
+                r[:] = _PENALTY
+            else:
+                v = getattr(out, name)
+                short = v < bound
+                ok = short & (v > 0)
+                r[ok] = _SHARE_WEIGHT * np.log(bound / v[ok])
+                r[short & ~(v > 0)] = _SHARE_WEIGHT * 50.0  # no positive value: a flat wall
+                if Jr is not None and ok.any():
+                    Jr[ok] = -_SHARE_WEIGHT * getattr(out, dname)[ok][:, self.free]
+            rows.append(r)
+            if Jr is not None:
+                jrows.append(Jr)
+        if not rows:
+            return np.zeros(0), (np.zeros((0, self.n_free)) if jac else None)
+        return np.concatenate(rows), (np.vstack(jrows) if jac else None)
 
     def penalty(self, theta) -> np.ndarray:
-        """The penalty residuals the search adds (empty without ``min_prestress_share``), shape (n_penalties,)."""
+        """The penalty residuals the search adds (empty without a constraint), shape (n_penalties,)."""
         if self.n_penalties == 0:
             return np.zeros(0)
-        out = self._evaluate(self.full(theta), jac=False, share=True)
-        return self._penalty_from(out, jac=False)[0]
+        return self._penalty_from(self._evaluate_constrained(self.full(theta), jac=False), jac=False)[0]
 
     def penalty_jacobian(self, theta) -> np.ndarray:
         """Analytic Jacobian of :meth:`penalty`, shape (n_penalties, n_free)."""
         if self.n_penalties == 0:
             return np.zeros((0, self.n_free))
-        out = self._evaluate(self.full(theta), jac=True, share=True)
-        return self._penalty_from(out, jac=True)[1]
+        return self._penalty_from(self._evaluate_constrained(self.full(theta), jac=True), jac=True)[1]
 
     # -- search coordinates (max_decades) ---------------------------------------------
     @property
@@ -625,12 +736,20 @@ def _family_groups(cell: Cell) -> tuple[np.ndarray, list[str]]:
     return groups, fams
 
 
+def _is_creep(d) -> bool:
+    return getattr(d, "kind", None) == "creep"
+
+
 def as_datasets(data) -> tuple:
-    """One data set or a sequence of them as a tuple of :class:`RheologyData` (ValueError otherwise)."""
-    items = (data,) if isinstance(data, RheologyData) else tuple(data) if isinstance(data, (list, tuple)) else None
-    if not items or not all(isinstance(d, RheologyData) for d in items):
-        raise ValueError("data must be a tenscell.io.data.RheologyData or a non-empty list of them, got "
-                         f"{type(data).__name__}")
+    """One data set or a sequence of them as a tuple of :class:`RheologyData` or
+    :class:`~tenscell.io.creep_data.CreepData` (ValueError otherwise)."""
+    from ..io.creep_data import CreepData
+
+    kinds = (RheologyData, CreepData)
+    items = (data,) if isinstance(data, kinds) else tuple(data) if isinstance(data, (list, tuple)) else None
+    if not items or not all(isinstance(d, kinds) for d in items):
+        raise ValueError("data must be a tenscell.io.data.RheologyData or CreepData, or a non-empty list of them, "
+                         f"got {type(data).__name__}")
     return items
 
 
@@ -693,13 +812,16 @@ def _prestress_layout(datasets):
                 links[0] = 1.0
             groups.append((k, math.nan, 0.0, links))
             point_group.append(np.full(d.n, len(groups) - 1))
-    return names, units, descs, kinds, groups, np.concatenate(point_group)
+    return names, units, descs, kinds, groups, point_group
 
 
 def _default_bounds(datasets, L_ref):
-    """Default bounds per parameter kind and the scales used by the initial guess."""
-    Gs = np.concatenate([d.G_storage for d in datasets])
-    omega = 2 * np.pi * np.concatenate([d.frequency_hz for d in datasets])
+    """Default bounds per parameter kind and the scales used by the initial guess.
+
+    A creep point at time t counts as a modulus 1/J at the angular frequency 1/t.
+    """
+    Gs = np.concatenate([1.0 / d.compliance if _is_creep(d) else d.G_storage for d in datasets])
+    omega = np.concatenate([1.0 / d.time_s if _is_creep(d) else 2 * np.pi * d.frequency_hz for d in datasets])
     S = float(np.median(Gs)) * L_ref**2
     w_m = float(np.exp(np.mean(np.log(omega))))
     known = [d.prestress for d in datasets if d.prestress is not None]
@@ -774,7 +896,10 @@ def _cell_matrices(cell: Cell):
     return A, 0.5 * (H + H.T), np.linalg.cholesky(AAt)
 
 
-def _check_options(min_prestress_share, max_decades):
+def _check_options(min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz):
+    if min_prestress_elasticity is not None:
+        min_prestress_elasticity = positive_scalar("min_prestress_elasticity", min_prestress_elasticity)
+    elasticity_frequency_hz = positive_scalar("elasticity_frequency_hz", elasticity_frequency_hz, "Hz")
     if min_prestress_share is not None:
         min_prestress_share = positive_scalar("min_prestress_share", min_prestress_share)
         if min_prestress_share >= 1.0:
@@ -782,7 +907,7 @@ def _check_options(min_prestress_share, max_decades):
                              f"got {min_prestress_share!r}")
     if max_decades is not None:
         max_decades = positive_scalar("max_decades", max_decades, "decades")
-    return min_prestress_share, max_decades
+    return min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz
 
 
 def make_problem(
@@ -795,6 +920,8 @@ def make_problem(
     fixed: dict | None = None,
     min_prestress_share: float | None = None,
     max_decades: float | None = None,
+    min_prestress_elasticity: float | None = None,
+    elasticity_frequency_hz: float = 0.1,
 ) -> FitProblem:
     """Set up the fit of ``cell``'s linear model to one or several data sets.
 
@@ -832,6 +959,11 @@ def make_problem(
         prestress of the data (module docstring).
     max_decades : float, optional
         Upper bound on the spread log10(max EA / min EA) of the stiffnesses.
+    min_prestress_elasticity : float, optional
+        Lower bound on ``∂ln G'/∂ln P`` at ``elasticity_frequency_hz`` at
+        every prestress of the data (adherent cells: about 0.7 at 0.1 Hz).
+    elasticity_frequency_hz : float
+        Frequency (Hz) of that bound (default 0.1 Hz).
 
     Returns
     -------
@@ -848,7 +980,8 @@ def make_problem(
     datasets = as_datasets(data)
     _choice("tendons", tendons, TENDON_MODES)
     _choice("damping", damping, DAMPING_MODES)
-    min_prestress_share, max_decades = _check_options(min_prestress_share, max_decades)
+    min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz = _check_options(
+        min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz)
     cell = paper_cell() if cell is None else cell
     if not isinstance(cell, Cell):
         raise ValueError(f"cell must be a tenscell Cell, got {type(cell).__name__}")
@@ -883,6 +1016,15 @@ def make_problem(
     measured = [d.prestress for d in datasets if d.prestress is not None]
     varies = bool(measured) and np.unique(np.concatenate(measured)).size > 1
     load, probe = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
+    moduli = [k for k, d in enumerate(datasets) if not _is_creep(d)]
+    creep = [k for k, d in enumerate(datasets) if _is_creep(d)]
+    mod = [datasets[k] for k in moduli]
+
+    def cat(parts, dtype=float):
+        return np.concatenate(parts) if parts else np.zeros(0, dtype=dtype)
+
+    y_mod = [np.log10(cat([d.G_storage for d in mod])), np.log10(cat([d.G_loss for d in mod]))]
+    w_mod = [cat([d.weights_storage for d in mod]), cat([d.weights_loss for d in mod])]
     return FitProblem(
         names=names, units=units, descriptions=descs, kinds=kinds, lower=lower, upper=upper, free=free,
         fixed_log=fixed_log, tendons=tendons, damping=damping, n_ea=len(ea_names), n_c=len(c_names),
@@ -890,16 +1032,18 @@ def make_problem(
         A=A, lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float), H=H, load=load,
         probe=probe, L_ref=L_ref, white_unit=_whiten(chol, A, H, load, probe),
         sources=tuple(d.source for d in datasets),
-        omega=2 * np.pi * np.concatenate([d.frequency_hz for d in datasets]),
-        dataset_index=np.concatenate([np.full(d.n, k) for k, d in enumerate(datasets)]),
-        group_index=point_group,
+        omega=2 * np.pi * cat([d.frequency_hz for d in mod]),
+        dataset_index=cat([np.full(datasets[k].n, k) for k in moduli], int),
+        group_index=cat([point_group[k] for k in moduli], int),
         group_log_offset=np.array([g[2] for g in groups]), group_map=group_map,
         group_measured=np.array([g[1] for g in groups]), group_dataset=np.array([g[0] for g in groups]),
-        y_obs=np.concatenate([np.log10(np.concatenate([d.G_storage for d in datasets])),
-                              np.log10(np.concatenate([d.G_loss for d in datasets]))]),
-        weights=np.concatenate([np.concatenate([d.weights_storage for d in datasets]),
-                                np.concatenate([d.weights_loss for d in datasets])]),
+        y_obs=np.concatenate(y_mod + [np.log10(datasets[k].compliance) for k in creep]),
+        weights=np.concatenate(w_mod + [datasets[k].weights for k in creep]),
         scale_stiffness=S, scale_damping=S / w_m,
-        prestress_matters=bool(varies or min_prestress_share is not None),
+        prestress_matters=bool(varies or min_prestress_share is not None or min_prestress_elasticity is not None),
         min_prestress_share=min_prestress_share, max_decades=max_decades,
+        min_prestress_elasticity=min_prestress_elasticity, elasticity_omega=2 * math.pi * elasticity_frequency_hz,
+        creep_t=cat([datasets[k].time_s for k in creep]),
+        creep_dataset=cat([np.full(datasets[k].n, k) for k in creep], int),
+        creep_group=cat([point_group[k] for k in creep], int),
     )

@@ -16,10 +16,11 @@ from ..model.equilibrium import Cell
 from ..response import compliance, log_slope
 
 if TYPE_CHECKING:
+    from ..io.creep_data import CreepData
     from .prestress import PrestressActivity
     from .problem import FitProblem
 
-__all__ = ["FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "FitResult", "model_curve",
+__all__ = ["FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "CreepFit", "FitResult", "model_curve",
            "frequency_slopes", "prestress_slopes", "data_axis"]
 
 _MODEL_LABEL = {"uniform": "homogeneous", "per-family": "per family", "per-tendon": "heterogeneous"}
@@ -216,6 +217,65 @@ class DatasetFit:
         return dataframe(cols, {"source": d.source, "rms_log10_error": self.rms_log10_error})
 
 
+@dataclass(frozen=True, eq=False, repr=False)
+class CreepFit:
+    """How the fitted model meets one creep data set of a fit (the counterpart of :class:`DatasetFit`).
+
+    Attributes
+    ----------
+    index : int
+    data : CreepData
+    axis : str
+        ``"time"``.
+    prestress_pa, prestress_fitted_pa : float or None
+        As in :class:`DatasetFit`.
+    prestress_model_N : ndarray, shape (n,)
+        Model prestress (N) at each point.
+    J_model : ndarray, shape (n,)
+        Model creep compliance at the data's times (1/Pa).
+    residuals : ndarray, shape (n,)
+        Unweighted ``log10 J_model − log10 J_data``.
+    """
+
+    index: int
+    data: CreepData
+    axis: str
+    prestress_pa: float | None
+    prestress_fitted_pa: float | None
+    prestress_model_N: np.ndarray
+    J_model: np.ndarray
+    residuals: np.ndarray
+
+    rms_storage = None  # no moduli: the report prints n/a
+    rms_loss = None
+
+    @property
+    def rms_log10_error(self) -> float:
+        """RMS of :attr:`residuals` (decades)."""
+        return float(np.sqrt(np.mean(self.residuals**2)))
+
+    @property
+    def x(self) -> np.ndarray:
+        """Times (s)."""
+        return self.data.time_s
+
+    def __repr__(self) -> str:
+        return format_repr(f"CreepFit {self.index}: {self.data.source}",
+                           f"{self.data.n} points, creep; rms log10 error {self.rms_log10_error:.4g}")
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary."""
+        return {"index": self.index, "data": self.data.source, "n_points": self.data.n, "axis": self.axis,
+                "prestress_Pa": self.prestress_pa, "prestress_fitted_Pa": self.prestress_fitted_pa,
+                "rms_log10_error": self.rms_log10_error, "residuals_log10": {"creep_compliance": self.residuals.tolist()}}
+
+    def to_dataframe(self):
+        """Data, model and log10 error at each time (columns with units)."""
+        return dataframe({"time_s": self.data.time_s, "prestress_model_N": self.prestress_model_N,
+                          "creep_compliance_per_Pa": self.data.compliance, "creep_compliance_model_per_Pa": self.J_model,
+                          "log10_error": self.residuals}, {"source": self.data.source})
+
+
 # ---------------------------------------------------------------------------------
 # the result
 # ---------------------------------------------------------------------------------
@@ -362,10 +422,19 @@ class FitResult:
         Gs, Gl = pr.moduli(self.theta)
         P_pts = self.group_prestress()[pr.group_index]
         vals = dict(zip(pr.names, pr.values(self.theta)))
-        out = []
+        out: list[DatasetFit | CreepFit] = []
+        Jc = pr.creep(self.theta) if pr.n_creep else None
         for k, d in enumerate(self.datasets):
             pts = np.flatnonzero(pr.dataset_index == k)
             stated = float(d.prestress[0]) if d.prestress is not None and np.unique(d.prestress).size == 1 else None
+            if getattr(d, "kind", None) == "creep":
+                assert Jc is not None  # a creep data set makes pr.n_creep > 0
+                sel = np.flatnonzero(pr.creep_dataset == k)
+                out.append(CreepFit(index=k, data=d, axis="time", prestress_pa=stated,
+                                    prestress_fitted_pa=vals.get(f"P_data[{k}]"),
+                                    prestress_model_N=self.group_prestress()[pr.creep_group[sel]],
+                                    J_model=Jc[sel], residuals=self.residuals[pr.rows(k)]))
+                continue
             out.append(DatasetFit(
                 index=k, data=d, axis=data_axis(d), prestress_pa=stated,
                 prestress_fitted_pa=vals.get(f"P_data[{k}]"), prestress_model_N=P_pts[pts],
@@ -468,7 +537,7 @@ class FitResult:
         """Rank, standard errors, correlations and determined combinations (:mod:`tenscell.fitting.identifiability`)."""
         from .identifiability import identifiability
 
-        known = all(d.G_storage_sd is not None and d.G_loss_sd is not None for d in self.datasets)
+        known = all(d.has_sd for d in self.datasets)
         return identifiability(self.problem, self.theta, sigma_known=known, rtol=rtol)
 
     def predicted_creep(self, t_min: float = 0.1, t_max: float = 10.0, n: int = 41):
@@ -484,7 +553,8 @@ class FitResult:
         share = self.problem.prestress_share(self.theta)
         return format_repr(
             f"FitResult: {self.label} fit ({self.tendons} stiffness, {self.damping} damping), "
-            f"{len(self.datasets)} data set(s), {self.problem.n_points} points, {self.problem.n_free} free parameters",
+            f"{len(self.datasets)} data set(s), {sum(d.n for d in self.datasets)} points, "
+            f"{self.problem.n_free} free parameters",
             f"rms log10 error {self.rms_log10_error:.4g} (tolerance {self.tolerance:g}): "
             f"{'converged' if self.converged else 'NOT converged'}; per data set: {sets}",
             f"stiffness spread {dec:.1f} decades; prestress share of the static stiffness "
@@ -537,8 +607,8 @@ class FitResult:
             "tendons": self.tendons,
             "damping": self.damping,
             "rms_log10_error": self.rms_log10_error,
-            "rms_log10_error_storage": float(np.sqrt(np.mean(self.residuals[: self.problem.n_points] ** 2))),
-            "rms_log10_error_loss": float(np.sqrt(np.mean(self.residuals[self.problem.n_points:] ** 2))),
+            "rms_log10_error_storage": _rms(self.residuals[: self.problem.n_points]),
+            "rms_log10_error_loss": _rms(self.residuals[self.problem.n_points: 2 * self.problem.n_points]),
             "datasets": [f.to_dict() for f in self.fits],
             "tolerance": self.tolerance,
             "converged": self.converged,
@@ -551,6 +621,8 @@ class FitResult:
             "n_free_parameters": self.problem.n_free,
             "n_residuals": self.problem.n_residuals,
             "constraints": {"min_prestress_share": self.problem.min_prestress_share,
+                            "min_prestress_elasticity": self.problem.min_prestress_elasticity,
+                            "elasticity_frequency_Hz": float(self.problem.elasticity_omega / (2 * math.pi)),
                             "max_decades": self.problem.max_decades},
             "parameters": [p.to_dict() for p in self.parameters],
             "tendon_stiffness_spread": {"min_N": lo, "max_N": hi, "decades": dec},
@@ -614,6 +686,11 @@ class FitResult:
         return "\n".join(lines) + "\n"
 
 
+def _rms(r) -> float | None:
+    """RMS (decades), None for no residuals (a fit to creep data only has no G', G'')."""
+    return float(np.sqrt(np.mean(r**2))) if r.size else None
+
+
 def _short(source: str) -> str:
     return source.replace("\\", "/").rsplit("/", 1)[-1]
 
@@ -655,6 +732,8 @@ def frequency_slopes(result: FitResult, f_lo: float = 0.01, f_hi: float = 100.0,
                     int(n))
     if dataset is None:
         dataset = next((x.index for x in result.fits if x.axis == "frequency"), None)
+    if dataset is None:  # no frequency sweep: a data set at one prestress (creep), if any
+        dataset = next((x.index for x in result.fits if np.unique(x.prestress_model_N).size == 1), None)
     if dataset is None or np.unique(result.fits[dataset].prestress_model_N).size > 1:
         d = result.datasets[dataset or 0]
         Gs, Gl = result.moduli(f, prestress_pa=float(np.median(d.prestress)))

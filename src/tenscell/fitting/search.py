@@ -51,7 +51,7 @@ class _Objective:
     def __init__(self, problem: FitProblem):
         self.problem = problem
         self.T = problem.coordinate_map()
-        self.share = problem.n_penalties > 0
+        self.constrained = problem.n_penalties > 0
         self._key = None
         self._out = None
         self.nfev = 0
@@ -59,7 +59,7 @@ class _Objective:
     def _eval(self, u):
         key = u.tobytes()
         if key != self._key:
-            self._out = self.problem._evaluate(self.problem.full(self.T @ u), jac=True, share=self.share)
+            self._out = self.problem._evaluate_constrained(self.problem.full(self.T @ u), jac=True)
             self._key = key
             self.nfev += 1
         return self._out
@@ -67,12 +67,12 @@ class _Objective:
     def fun(self, u):
         out = self._eval(u)
         r = self.problem._residuals_from(out)
-        return np.concatenate([r, self.problem._penalty_from(out, jac=False)[0]]) if self.share else r
+        return np.concatenate([r, self.problem._penalty_from(out, jac=False)[0]]) if self.constrained else r
 
     def jac(self, u):
         out = self._eval(u)
         J = self.problem._jacobian_from(out)
-        if self.share:
+        if self.constrained:
             J = np.vstack([J, self.problem._penalty_from(out, jac=True)[1]])
         return J @ self.T
 
@@ -336,6 +336,8 @@ def fit(
     fixed: dict | None = None,
     min_prestress_share: float | None = None,
     max_decades: float | None = None,
+    min_prestress_elasticity: float | None = None,
+    elasticity_frequency_hz: float = 0.1,
     initial=None,
     progress: bool | None = None,
 ) -> FitResult:
@@ -377,7 +379,7 @@ def fit(
         Once the tolerance is met, polishing towards ``polish × tolerance``
         may use at most this multiple of the model evaluations spent so far;
         0 stops at the tolerance.
-    bounds, fixed, min_prestress_share, max_decades :
+    bounds, fixed, min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz :
         See :func:`tenscell.fitting.make_problem`.
     initial : FitResult or array_like, optional
         A warm start: start 0 begins here instead of at a drawn guess (a
@@ -403,7 +405,9 @@ def fit(
     datasets = as_datasets(data)
     cell = paper_cell() if cell is None else cell
     problem = make_problem(datasets, cell, tendons=tendons, damping=damping, bounds=bounds, fixed=fixed,
-                           min_prestress_share=min_prestress_share, max_decades=max_decades)
+                           min_prestress_share=min_prestress_share, max_decades=max_decades,
+                           min_prestress_elasticity=min_prestress_elasticity,
+                           elasticity_frequency_hz=elasticity_frequency_hz)
     starts = _count("starts", starts, 1)
     jobs = _count("jobs", jobs, 1)
     hops = _count("hops", hops, 0)

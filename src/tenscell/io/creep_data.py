@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._results import dataframe, format_repr
-from .data import RheologyData, _csv_lines, _error, _parse_float, read_csv
+from .data import RheologyData, _csv_lines, _error, _parse_float, _stated_prestress, read_csv
 from .outputs import atomic_path
 
 __all__ = ["CreepData", "read_creep_csv", "write_creep_csv", "is_creep_header", "read_measurements"]
@@ -98,11 +98,22 @@ class CreepData:
         return int(self.time_s.size)
 
     @property
+    def has_sd(self) -> bool:
+        """True when J carries standard deviations."""
+        return self.compliance_sd is not None
+
+    @property
     def weights(self) -> np.ndarray:
         """Weights of the log10 J residuals: ``J ln10/sd(J)`` (1/sd(log10 J) to first order), or ones."""
         if self.compliance_sd is None:
             return np.ones(self.n)
         return self.compliance * math.log(10.0) / self.compliance_sd
+
+    def with_prestress(self, prestress_pa: float) -> "CreepData":
+        """A copy that states the prestress (Pa) at which the creep was measured (links it in a joint fit)."""
+        p = _stated_prestress(self, prestress_pa)
+        return CreepData(time_s=self.time_s, compliance=self.compliance, compliance_sd=self.compliance_sd,
+                         prestress=np.full(self.n, p), source=self.source, comments=self.comments)
 
     def __repr__(self) -> str:
         t, J = self.time_s, self.compliance

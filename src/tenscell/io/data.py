@@ -233,17 +233,15 @@ class RheologyData:
         (:func:`tenscell.fitting.fit`). Raises DataError if the data already
         state prestresses, or for a non-positive value.
         """
-        if self.prestress is not None:
-            raise _error(self.source, "the data already state their prestress (a prestress column)")
-        try:
-            p = float(prestress_pa)
-        except (TypeError, ValueError):
-            raise _error(self.source, f"prestress {prestress_pa!r} is not a number (Pa)") from None
-        if not (math.isfinite(p) and p > 0):
-            raise _error(self.source, f"prestress {prestress_pa!r} Pa must be a finite number > 0")
+        p = _stated_prestress(self, prestress_pa)
         return RheologyData(frequency_hz=self.frequency_hz, G_storage=self.G_storage, G_loss=self.G_loss,
                             prestress=np.full(self.n, p), G_storage_sd=self.G_storage_sd,
                             G_loss_sd=self.G_loss_sd, source=self.source, comments=self.comments)
+
+    @property
+    def has_sd(self) -> bool:
+        """True when both G' and G'' carry standard deviations (the fit's residuals are then in their units)."""
+        return self.G_storage_sd is not None and self.G_loss_sd is not None
 
     @property
     def weights_storage(self) -> np.ndarray:
@@ -305,6 +303,19 @@ class RheologyData:
         from ..plotting import measured
 
         return measured(self, ax=ax, **kw)
+
+
+def _stated_prestress(data, prestress_pa) -> float:
+    """The prestress (Pa) a data set is said to be measured at, checked (DataError naming the source)."""
+    if data.prestress is not None:
+        raise _error(data.source, "the data already state their prestress (a prestress column)")
+    try:
+        p = float(prestress_pa)
+    except (TypeError, ValueError):
+        raise _error(data.source, f"prestress {prestress_pa!r} is not a number (Pa)") from None
+    if not (math.isfinite(p) and p > 0):
+        raise _error(data.source, f"prestress {prestress_pa!r} Pa must be a finite number > 0")
+    return p
 
 
 def _log_weights(G: np.ndarray, sd: np.ndarray | None, n: int) -> np.ndarray:

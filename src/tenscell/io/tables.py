@@ -31,15 +31,28 @@ def fit_table(result, baseline):
     header = ["dataset", "source", "prestress_Pa", "frequency_Hz", "G_storage_Pa", "G_loss_Pa",
               "G_storage_model_Pa", "G_loss_model_Pa", "log10_error_storage", "log10_error_loss",
               "G_storage_baseline_Pa", "G_loss_baseline_Pa"]
+    creep = any(f.axis == "time" for f in result.fits)
+    if creep:  # creep data sets fill these columns (and leave the moduli ones empty), moduli rows the others
+        header += ["time_s", "creep_compliance_per_Pa", "creep_compliance_model_per_Pa", "log10_error_creep",
+                   "creep_compliance_baseline_per_Pa"]
     rows = []
     for f, b in zip(result.fits, baseline.fits):
         d, n = f.data, f.data.n
+        if f.axis == "time":
+            for i in range(n):
+                P = float(d.prestress[i]) if d.prestress is not None else (
+                    "" if f.prestress_fitted_pa is None else f.prestress_fitted_pa)
+                rows.append([f.index, d.source, P] + [""] * 9 + [
+                    float(d.time_s[i]), float(d.compliance[i]), float(f.J_model[i]), float(f.residuals[i]),
+                    float(b.J_model[i])])
+            continue
         for i in range(n):
             P = float(d.prestress[i]) if d.prestress is not None else (
                 "" if f.prestress_fitted_pa is None else f.prestress_fitted_pa)
             rows.append([f.index, d.source, P, float(d.frequency_hz[i]), float(d.G_storage[i]), float(d.G_loss[i]),
                          float(f.G_storage_model[i]), float(f.G_loss_model[i]), float(f.residuals[i]),
-                         float(f.residuals[n + i]), float(b.G_storage_model[i]), float(b.G_loss_model[i])])
+                         float(f.residuals[n + i]), float(b.G_storage_model[i]), float(b.G_loss_model[i])]
+                        + ([""] * 5 if creep else []))
     return header, rows
 
 

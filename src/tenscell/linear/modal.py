@@ -75,6 +75,7 @@ __all__ = [
     "relaxation_spectrum",
     "modal_compliance",
     "prestress_grid_compliance",
+    "prestress_grid_modes",
     "ZERO_TIME",
 ]
 
@@ -530,6 +531,29 @@ def relaxation_spectrum(lin) -> RelaxationSpectrum:
 
 
 # ---- grids of prestresses ---------------------------------------------------------------------------
+def prestress_grid_modes(Kpt: np.ndarray, Kmt: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Relaxation rates and modes of ``P·K̃p + K̃m`` for many prestresses, in the basis where C0 = I.
+
+    Parameters
+    ----------
+    Kpt : ndarray, shape (n, n) or (nP, n, n)
+        ``L⁻¹ Kp L⁻ᵀ`` with ``C0 = L Lᵀ`` (symmetric).
+    Kmt : ndarray, shape (n, n) or (nP, n, n)
+        The whitened material stiffness (one for every P, or one per P).
+    P : ndarray, shape (nP,)
+        Prestresses (N).
+
+    Returns
+    -------
+    lam : ndarray, shape (nP, n)
+        Rates λ (1/s), ascending; every λ > 0 exactly when that K0 is positive definite.
+    U : ndarray, shape (nP, n, n)
+        Orthonormal modes (columns); ``v = L⁻ᵀu`` are C0-orthonormal.
+    """
+    P = np.asarray(P, dtype=float)
+    return np.linalg.eigh(P[:, None, None] * np.asarray(Kpt) + np.asarray(Kmt))
+
+
 @hot_path
 def prestress_grid_compliance(Kp, K_material, C0, load, probe, P: np.ndarray, w: np.ndarray,
                               describe: str = "the model") -> np.ndarray | None:
@@ -556,7 +580,7 @@ def prestress_grid_compliance(Kp, K_material, C0, load, probe, P: np.ndarray, w:
     Kpt, Kmt = _whiten(Lc, np.asarray(Kp)), _whiten(Lc, np.asarray(K_material))
     bt = _tri(Lc, np.asarray(load, dtype=float))
     dt = _tri(Lc, np.asarray(probe, dtype=float))
-    lam, U = np.linalg.eigh(P[:, None, None] * Kpt + Kmt)
+    lam, U = prestress_grid_modes(Kpt, Kmt, P)
     bad = np.flatnonzero(lam[:, 0] <= 0)
     if bad.size:
         raise NotPositiveDefiniteError(

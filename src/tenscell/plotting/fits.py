@@ -119,6 +119,8 @@ def plot_fit(result, ax: Axes | None = None, *, dataset: int | None = None, base
     ax = new_axes(ax, (4.4, 3.6))
     k = 0 if dataset is None else int(dataset)
     fit = result.fits[k]
+    if fit.axis == "time":
+        return _plot_creep_fit(result, fit, ax, baseline)
     cv = model_curve(result, n=n, dataset=k)
     data_points(fit.data, ax)
     ax.plot(cv.x, cv.G_storage, "-", color="C0", label=f"G′ {cv.label}")
@@ -132,6 +134,24 @@ def plot_fit(result, ax: Axes | None = None, *, dataset: int | None = None, base
     at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else
           f" at {fit.prestress_fitted_pa:.4g} Pa (fitted)" if fit.prestress_fitted_pa is not None else "")
     ax.set_title(f"{_short(fit.data.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}")
+    return ax
+
+
+def _plot_creep_fit(result, fit, ax, baseline=None):
+    """Creep data (circles) and the fitted model's J(t) (line) on log-log axes."""
+    from ..io.data import generated_note
+
+    d = fit.data
+    what = "J data (published law, not raw)" if generated_note(d) else "J data"
+    ax.loglog(d.time_s, d.compliance, "o", color="C2", label=what)
+    ax.loglog(d.time_s, fit.J_model, "-", color="C2", label=f"J {result.label}")
+    if baseline is not None:
+        ax.loglog(d.time_s, baseline.fits[fit.index].J_model, ":", color="C2", label="J homogeneous")
+    ax.set_xlabel("time after the step (s)")
+    ax.set_ylabel("creep compliance (1/Pa)")
+    at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else
+          f" at {fit.prestress_fitted_pa:.4g} Pa (fitted)" if fit.prestress_fitted_pa is not None else "")
+    ax.set_title(f"{_short(d.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}")
     return ax
 
 

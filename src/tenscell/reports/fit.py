@@ -39,12 +39,13 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
     pr = result.problem
     verdict = "**converged**" if result.converged else "**NOT converged**"
     each = " on every data set" if result.joint else ""
-    lines = [f"- Data: {len(result.datasets)} data set(s), {pr.n_points} points:"]
+    lines = [f"- Data: {len(result.datasets)} data set(s), {sum(d.n for d in result.datasets)} points:"]
     for f in result.fits:
         at = (f", measured at {num(f.prestress_pa)} Pa (stated)" if f.prestress_pa is not None else
               f", prestress not stated: fitted {num(f.prestress_fitted_pa)} Pa" if f.prestress_fitted_pa is not None
               else "")
-        lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {f.axis} sweep{at}.")
+        what = "creep compliance J(t)" if f.axis == "time" else f"{f.axis} sweep"
+        lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {what}{at}.")
         lines += [f"     Thinned: {note}." for note in binning_notes(f.data)]
     lines += [
         f"- Model: {result.cell.describe()}; stiffness {result.tendons}, damping {result.damping}; "
@@ -103,6 +104,10 @@ def section_shape(result: FitResult, baseline=None) -> list[str]:
                 _, b1, _ = frequency_slopes(baseline, f_lo, f_hi, 1000)
                 line += f" Homogeneous baseline: G' slope {b1.min():.3f} to {b1.max():.3f}."
             out.append(line)
+        elif f.axis == "time":
+            expo = np.gradient(np.log(f.J_model), np.log(d.time_s)) if d.n > 1 else np.zeros(1)
+            out.append(f"{head}local log-log slope of the fitted creep compliance at the data's times "
+                       f"{num(d.time_s.min())}–{num(d.time_s.max())} s: {expo.min():.3f} to {expo.max():.3f}.")
         else:
             a1, b1, a2, b2 = prestress_slopes(result, dataset=f.index)
             da1, db1, da2, db2 = _data_slopes(d)
@@ -123,6 +128,10 @@ def section_prestress(result: FitResult, baseline=None) -> list[str]:
     if pa.min_share_bound is not None:
         out += [f"This fit was required to keep the prestress share of the static stiffness at or above "
                 f"{num(pa.min_share_bound)} (a one-sided penalty; the values below are the ones reached).", ""]
+    if pa.min_elasticity_bound is not None:
+        out += [f"This fit was required to keep ∂lnG'/∂lnP at {num(pa.elasticity_bound_frequency_hz)} Hz at or "
+                f"above {num(pa.min_elasticity_bound)} at every prestress of the data (a one-sided penalty; the "
+                "values below are the ones reached).", ""]
     rows = []
     for k, P, a, b, s in zip(pa.reference_dataset, pa.reference_prestress_N, pa.reference_storage,
                              pa.reference_loss, pa.reference_share):
@@ -174,6 +183,13 @@ def section_errors(result: FitResult, baseline=None) -> list[str]:
     base_fits = baseline.fits if baseline is not None and len(baseline.datasets) == len(result.datasets) else None
     for f in result.fits:
         d = f.data
+        if f.axis == "time":
+            if result.joint:
+                out += [f"Data set {f.index} (`{_name(d.source)}`):", ""]
+            out.append(table(["time (s)", "J data (1/Pa)", "J model (1/Pa)", "log10 error"],
+                             [[num(d.time_s[i]), num(d.compliance[i]), num(f.J_model[i]), f"{f.residuals[i]:+.4f}"]
+                              for i in range(d.n)]))
+            continue
         xname = "prestress (Pa)" if f.axis == "prestress" else "frequency (Hz)"
         head = [xname, "G' data (Pa)", "G' model (Pa)", "log10 error", "G'' data (Pa)", "G'' model (Pa)",
                 "log10 error"]

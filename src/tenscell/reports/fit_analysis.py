@@ -43,14 +43,14 @@ def identifiability_section(ident, within: float = 0.1) -> list[str]:
     out = ["## How well the data determine the parameters", ""]
     rel = ", ".join(num(x / s[0], 2) for x in s) if s.size and s[0] > 0 else "none"
     out.append(
-        f"Linearized at the optimum, the {ident.n_residuals} residuals (decades of log10 G, one for G′ and one "
-        f"for G″ of each point) see **{ident.rank} independent parameter combinations** of the "
+        f"Linearized at the optimum, the {ident.n_residuals} residuals (decades: log10 G′ and log10 G″ of each "
+        f"moduli point, log10 J of each creep point) see **{ident.rank} independent parameter combinations** of the "
         f"{ident.n_analysed} analysed parameters (singular values of the Jacobian above {ident.rtol:g} of the "
         f"largest). Singular values relative to the largest: {rel}.")
     out.append("")
     if ident.gauge_removed:
-        out += [f"**The strut length L is not determined by moduli.** The map {GAUGE} leaves G′ and G″ exactly "
-                "unchanged, so the data cannot tell L apart from a rescaling of the others. L is held at its "
+        out += [f"**The strut length L is not determined by moduli.** The map {GAUGE} leaves G′, G″ and the "
+                "creep compliance exactly unchanged, so the data cannot tell L apart from a rescaling of the others. L is held at its "
                 "fitted value and the other parameters stand for the combinations the data do constrain: "
                 "EA/L², c/L and P/L² (s/L² for a prestress scale).", ""]
     bound = [(n, r) for n, r in ident.excluded if r != "gauge"]
