@@ -22,6 +22,7 @@ import ctypes.util
 import datetime as _dt
 import glob
 import json
+import math
 import os
 import shutil
 import tempfile
@@ -30,8 +31,8 @@ from pathlib import Path
 
 from .._parallel import sigint_deferred
 
-__all__ = ["atomic_path", "write_csv_rows", "write_json", "write_text", "OutputSet", "OutputLocationError",
-           "check_output_dir", "check_output_file", "read_manifest", "MANIFEST"]
+__all__ = ["atomic_path", "write_csv_rows", "write_json", "json_ready", "write_text", "OutputSet",
+           "OutputLocationError", "check_output_dir", "check_output_file", "read_manifest", "MANIFEST"]
 
 #: name of the manifest file written into every output set
 MANIFEST = "manifest.json"
@@ -90,19 +91,24 @@ def write_csv_rows(path, header, rows) -> None:
             w.writerow([repr(float(v)) if isinstance(v, float) else v for v in r])
 
 
-def write_json(path, obj) -> None:
-    """Write JSON atomically (indented, NaN written as null)."""
-    def clean(o):
-        if isinstance(o, float) and o != o:
-            return None
-        if isinstance(o, dict):
-            return {k: clean(v) for k, v in o.items()}
-        if isinstance(o, (list, tuple)):
-            return [clean(v) for v in o]
-        return o
+def json_ready(obj, *, infinities: bool = False):
+    """``obj`` with every NaN float (and, with ``infinities``, every ±inf) replaced by None, recursively.
 
+    Dicts, lists and tuples are walked (tuples become lists); anything else is returned as it is.
+    """
+    if isinstance(obj, float) and (obj != obj or (infinities and obj in (math.inf, -math.inf))):
+        return None
+    if isinstance(obj, dict):
+        return {k: json_ready(v, infinities=infinities) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_ready(v, infinities=infinities) for v in obj]
+    return obj
+
+
+def write_json(path, obj) -> None:
+    """Write JSON atomically (indented, NaN written as null; an infinity is an error)."""
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(clean(obj), indent=2, allow_nan=False) + "\n")
+        tmp.write_text(json.dumps(json_ready(obj), indent=2, allow_nan=False) + "\n")
 
 
 def write_text(path, text: str) -> None:

@@ -193,7 +193,7 @@ class PopulationResult:
         """
         from pathlib import Path
 
-        from ..io.outputs import atomic_path, write_csv_rows, write_text
+        from ..io.outputs import atomic_path, json_ready, write_csv_rows, write_text
         from ..plotting import save
         from ..reports.population import population_markdown
 
@@ -202,7 +202,8 @@ class PopulationResult:
         with atomic_path(d / "population.parquet") as tmp:
             self.table.to_parquet(tmp, index=False)
         _write_frame(d / "summary.csv", self.summary(), write_csv_rows)
-        write_text(d / "cells.jsonl", "".join(json.dumps(_clean(r), allow_nan=False) + "\n" for r in self.records))
+        write_text(d / "cells.jsonl", "".join(json.dumps(json_ready(r, infinities=True), allow_nan=False) + "\n"
+                                              for r in self.records))
         rec = None
         if truth is not None:
             rec = recovery(self.table, truth)
@@ -211,16 +212,6 @@ class PopulationResult:
         save(self.plot_moduli(), d / "moduli.png")
         write_text(d / "report.md", population_markdown(self, recovery_table=rec))
         return sorted(p.name for p in d.iterdir())
-
-
-def _clean(o):
-    if isinstance(o, float) and not math.isfinite(o):
-        return None
-    if isinstance(o, dict):
-        return {k: _clean(v) for k, v in o.items()}
-    if isinstance(o, (list, tuple)):
-        return [_clean(v) for v in o]
-    return o
 
 
 def _write_frame(path, df, writer) -> None:
