@@ -41,6 +41,100 @@ def _as_readonly(a, dtype=float) -> np.ndarray:
     return arr
 
 
+def _pairs(members) -> np.ndarray:
+    """Node pairs as an int array of shape (k, 2); anything but an integer array goes through ``int()``."""
+    arr = np.asarray(members)
+    if arr.ndim == 2 and arr.shape[1] == 2 and arr.dtype.kind in "iu":
+        return arr.astype(np.int64)
+    return np.array([(int(a), int(b)) for a, b in members], dtype=np.int64).reshape(-1, 2)
+
+
+def _first_flag(flags: np.ndarray) -> tuple[int, int] | None:
+    """``(row, check)`` of the first True of a (rows, checks) table in row-major order, or None.
+
+    The checks of one member are the columns in the order a member-by-member
+    loop would make them, so this is the error that loop would raise first.
+    """
+    hit = np.flatnonzero(flags.ravel())
+    return None if hit.size == 0 else divmod(int(hit[0]), flags.shape[1])
+
+
+def _first_occurrence(*keys: np.ndarray) -> np.ndarray:
+    """For each row, the index of the first row with the same keys (its own index if it is the first)."""
+    order = np.lexsort(keys[::-1])  # stable: equal keys keep their original (ascending) order
+    new = np.zeros(order.size, dtype=bool)
+    new[:1] = True
+    for key in keys:
+        ks = key[order]
+        new[1:] |= ks[1:] != ks[:-1]
+    start = np.maximum.accumulate(np.where(new, np.arange(order.size), 0))
+    first = np.empty_like(order)
+    first[order] = order[start]
+    return first
+
+
+def _member_flags(nodes: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Per member: tail unknown, head unknown, joins a node to itself, zero length (in this order)."""
+    n = nodes.shape[0]
+    unknown = (pairs < 0) | (pairs >= n)
+    ends = np.clip(pairs, 0, n - 1)  # placeholders where unknown: those rows fail earlier
+    d = nodes[ends[:, 0]] - nodes[ends[:, 1]]
+    return unknown[:, 0], unknown[:, 1], pairs[:, 0] == pairs[:, 1], np.linalg.norm(d, axis=1) <= 0
+
+
+def _unknown_node(what: str, i: int, n: int) -> str:
+    return f"{what} refers to unknown node {i} (there are {n} nodes)"
+
+
+def _member_message(what: str, check: int, a: int, b: int, n: int) -> str:
+    if check < 2:
+        return _unknown_node(what, (a, b)[check], n)
+    return f"{what} joins node {a} to itself" if check == 2 else f"{what} has zero length"
+
+
+def _fixed_ends(n: int, pairs: np.ndarray, fixed: tuple[int, ...]) -> np.ndarray:
+    """Whether each end of each member is a fixed node (False for unknown nodes), shape (k, 2)."""
+    is_fixed = np.zeros(n + 1, dtype=bool)  # the extra slot stands for every unknown node
+    is_fixed[list(fixed)] = True
+    return is_fixed[np.where((pairs >= 0) & (pairs < n), pairs, n)]
+
+
+def _raise_first(what: str, nodes: np.ndarray, pairs: np.ndarray, extra: list, messages: list) -> None:
+    """Raise the first failing check: each member's four checks of :func:`_member_flags`, then its ``extra``
+    columns (bool, one per member), whose message is ``messages[c](i, a, b)`` for member i = (a, b)."""
+    found = _first_flag(np.column_stack([*_member_flags(nodes, pairs), *extra]))
+    if found is None:
+        return
+    i, check = found
+    a, b = (int(v) for v in pairs[i])
+    if check < 4:
+        raise StructureError(_member_message(f"{what} {i}", check, a, b, nodes.shape[0]))
+    raise StructureError(messages[check - 4](i, a, b))
+
+
+def _check_struts(nodes: np.ndarray, S: np.ndarray, fixed: tuple[int, ...]) -> None:
+    """Raise the first error of a strut-by-strut check (ends, length, head not fixed, one strut per node)."""
+    fx = _fixed_ends(nodes.shape[0], S, fixed)
+    ends = S.ravel()  # strut k's tail, then its head: the order the ends are claimed
+    owner = _first_occurrence(ends) // 2
+    shared = ((owner != np.arange(ends.size) // 2) & ~fx.ravel()).reshape(-1, 2)
+    _raise_first("strut", nodes, S, [fx[:, 1], shared[:, 0], shared[:, 1]], [
+        lambda k, a, b: f"strut {k}: its head node {b} is fixed; put the anchored (fixed) node first",
+        lambda k, a, b: f"node {a} belongs to struts {owner[2 * k]} and {k}",
+        lambda k, a, b: f"node {b} belongs to struts {owner[2 * k + 1]} and {k}",
+    ])
+
+
+def _check_tendons(nodes: np.ndarray, T: np.ndarray, fixed: tuple[int, ...]) -> None:
+    """Raise the first error of a tendon-by-tendon check (ends, length, duplicates, not between fixed nodes)."""
+    fx = _fixed_ends(nodes.shape[0], T, fixed)
+    first = _first_occurrence(T.min(axis=1), T.max(axis=1))
+    _raise_first("tendon", nodes, T, [first != np.arange(T.shape[0]), fx[:, 0] & fx[:, 1]], [
+        lambda j, a, b: f"tendon {j} duplicates tendon {first[j]} (nodes {a}-{b})",
+        lambda j, a, b: f"tendon {j} joins two fixed nodes and cannot work; leave it out",
+    ])
+
+
 @dataclass(frozen=True)
 class Point:
     """A point of the structure where a force acts or a displacement is read.
@@ -121,12 +215,11 @@ class Structure:
         nodes.setflags(write=False)
         object.__setattr__(self, "nodes", nodes)
         n = nodes.shape[0]
-        struts = tuple((int(a), int(b)) for a, b in self.struts)
-        tendons = tuple((int(a), int(b)) for a, b in self.tendons)
+        S, Tn = _pairs(self.struts), _pairs(self.tendons)
         families = tuple(str(f) for f in self.families)
         fixed = tuple(sorted({int(i) for i in self.fixed}))
-        object.__setattr__(self, "struts", struts)
-        object.__setattr__(self, "tendons", tendons)
+        object.__setattr__(self, "struts", tuple(map(tuple, S.tolist())))
+        object.__setattr__(self, "tendons", tuple(map(tuple, Tn.tolist())))
         object.__setattr__(self, "families", families)
         object.__setattr__(self, "fixed", fixed)
         object.__setattr__(
@@ -138,44 +231,18 @@ class Structure:
 
         def check_node(i, what):
             if not 0 <= i < n:
-                raise StructureError(f"{what} refers to unknown node {i} (there are {n} nodes)")
-
-        def check_member(what, a, b):
-            check_node(a, what)
-            check_node(b, what)
-            if a == b:
-                raise StructureError(f"{what} joins node {a} to itself")
-            if np.linalg.norm(nodes[a] - nodes[b]) <= 0:
-                raise StructureError(f"{what} has zero length")
+                raise StructureError(_unknown_node(what, i, n))
 
         for i in fixed:
             check_node(i, "fixed list")
         fixed_set = set(fixed)
-        owner: dict[int, int] = {}
-        for k, (a, b) in enumerate(struts):
-            check_member(f"strut {k}", a, b)
-            if b in fixed_set:
-                raise StructureError(
-                    f"strut {k}: its head node {b} is fixed; put the anchored (fixed) node first"
-                )
-            for end in (a, b):
-                if end in owner and end not in fixed_set:
-                    raise StructureError(f"node {end} belongs to struts {owner[end]} and {k}")
-                owner[end] = k
-        if len(families) != len(tendons):
-            raise StructureError(f"{len(families)} families for {len(tendons)} tendons")
-        seen: dict[frozenset, int] = {}
-        for j, (a, b) in enumerate(tendons):
-            check_member(f"tendon {j}", a, b)
-            key = frozenset((a, b))
-            if key in seen:
-                raise StructureError(f"tendon {j} duplicates tendon {seen[key]} (nodes {a}-{b})")
-            seen[key] = j
-            if a in fixed_set and b in fixed_set:
-                raise StructureError(f"tendon {j} joins two fixed nodes and cannot work; leave it out")
+        _check_struts(nodes, S, fixed)
+        if len(families) != len(Tn):
+            raise StructureError(f"{len(families)} families for {len(Tn)} tendons")
+        _check_tendons(nodes, Tn, fixed)
         for g in self.equal_tension_groups:
             for j in g:
-                if not 0 <= j < len(tendons):
+                if not 0 <= j < len(Tn):
                     raise StructureError(f"equal-tension group refers to unknown tendon {j}")
         for what, p in (("load", self.load), ("probe", self.probe)):
             if not isinstance(p, Point):
