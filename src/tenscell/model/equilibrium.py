@@ -11,8 +11,9 @@ The paper's Eq. (6)–(11) at the level of geometry:
 * (rest lengths, Eq. (11), are the tendon law's: :func:`tenscell.laws.rest_lengths`).
 
 A :class:`Cell` bundles a structure with its prestressable reference and the
-per-cell geometry (A, Hessians, ``Kp``) that every later stage reuses, so
-that linearizing at many prestresses costs only a few small matrix products.
+per-cell geometry (A, Hessians; ``Kp`` and ``Σ T0_j ∇²l_j`` assembled on first use)
+that every later stage reuses, so that linearizing at many prestresses costs only
+a few small matrix products.
 """
 from __future__ import annotations
 
@@ -110,10 +111,11 @@ def member_geometry(coords: Coordinates, q: np.ndarray, kin: NodeKinematics | No
     M = np.concatenate([kin.jac[a], -kin.jac[b]], axis=2)  # (m, 3, 10)
     grad = np.einsum("mxk,mx->mk", M, e)
     proj = (np.eye(3)[None] - e[:, :, None] * e[:, None, :]) / l[:, None, None]
-    hess = np.einsum("mxk,mxy,myl->mkl", M, proj, M)
-    w = kin.hess.shape[-1]
-    hess[:, :w, :w] += np.einsum("mx,mxkl->mkl", e, kin.hess[a])
-    hess[:, w:, w:] -= np.einsum("mx,mxkl->mkl", e, kin.hess[b])
+    hess = np.matmul(M.transpose(0, 2, 1), np.matmul(proj, M))  # batched MᵀPM: far faster than a 3-operand einsum
+    if coords.structure.struts:  # node positions are linear in q without rigid struts: no curvature term
+        w = kin.hess.shape[-1]
+        hess[:, :w, :w] += np.einsum("mx,mxkl->mkl", e, kin.hess[a])
+        hess[:, w:, w:] -= np.einsum("mx,mxkl->mkl", e, kin.hess[b])
     return MemberGeometry(lengths=l, grad=grad, hess=hess, index=index, n=coords.n)
 
 
@@ -141,12 +143,19 @@ def equilibrium_matrix(geom: MemberGeometry, sparse: bool | None = None):
 
 def assemble_hessian(geom: MemberGeometry, weights: np.ndarray, sparse: bool | None = None):
     """``Σ_j w_j ∇²l_j`` assembled into an ``(n_q, n_q)`` matrix."""
-    m, w = geom.grad.shape
-    blocks = geom.hess * np.asarray(weights, dtype=float)[:, None, None]
-    r = np.repeat(geom.index, w, axis=1).ravel()
-    c = np.tile(geom.index, (1, w)).ravel()
-    keep = (r >= 0) & (c >= 0)
-    H = sp.csr_matrix((blocks.ravel()[keep], (r[keep], c[keep])), shape=(geom.n, geom.n))
+    index, hess = geom.index, geom.hess
+    used = np.flatnonzero((index >= 0).any(axis=0))
+    if used.size < index.shape[1]:  # block slots no member uses (e.g. a point node's two spare ones): drop them first
+        index, hess = index[:, used], hess[:, used[:, None], used]
+    m, w = index.shape
+    blocks = hess * np.asarray(weights, dtype=float)[:, None, None]
+    r = np.broadcast_to(index[:, :, None], (m, w, w)).ravel()
+    c = np.broadcast_to(index[:, None, :], (m, w, w)).ravel()
+    data = blocks.ravel()
+    if np.any(index < 0):
+        keep = (r >= 0) & (c >= 0)
+        r, c, data = r[keep], c[keep], data[keep]
+    H = sp.csr_matrix((data, (r, c)), shape=(geom.n, geom.n))
     use_sparse = _use_sparse(geom.n) if sparse is None else sparse
     return H if use_sparse else H.toarray()
 
@@ -342,7 +351,7 @@ class Cell:
     T0 : ndarray, shape (m,)
         Self-stress state, ``‖T0‖₂ = 1`` over the cables; tensions are ``P·T0`` (N).
     Kp : ndarray or sparse, shape (n, n)
-        Prestress stiffness ``Σ T0_j (∇²l_j + a_j a_jᵀ/l_j)`` (N/m per N of P).
+        Prestress stiffness ``Σ T0_j (∇²l_j + a_j a_jᵀ/l_j)`` (N/m per N of P), assembled on first use.
     load : ndarray, shape (n,)
         ``−H0``: generalized force of a unit load (1/N·N; m or m/rad).
     probe : ndarray, shape (n,)
@@ -363,7 +372,6 @@ class Cell:
     lengths: np.ndarray
     A: Any  # ndarray or scipy.sparse matrix
     T0: np.ndarray
-    Kp: Any
     load: np.ndarray
     probe: np.ndarray
     self_stress_dim: int
@@ -390,6 +398,14 @@ class Cell:
     def prestress_hessian(self):
         """``Σ_j T0_j ∇²l_j`` (N/m per N of P), dense or sparse like ``A``; ``Kp`` is it plus ``Σ T0_j a_j a_jᵀ/l_j``."""
         return assemble_hessian(self.geometry, self.T0, sparse=self.sparse)
+
+    @cached_property
+    def Kp(self):
+        """Prestress stiffness ``Σ T0_j (∇²l_j + a_j a_jᵀ/l_j)`` (N/m per N of P), dense or sparse like ``A``.
+
+        Computed on first use: linearizing needs only :attr:`prestress_hessian`.
+        """
+        return self.prestress_hessian + weighted_gram(self.A, self.T0 / self.lengths)
 
     @property
     def strut_length(self) -> float:
@@ -490,13 +506,12 @@ def equilibrate(
         T0 = _check_given_self_stress(A, structure.families, T0, label)
         dim = -1 if sp.issparse(A) else self_stress_basis(A)[0].shape[1]
     l = geom.lengths
-    Kp = tangent_stiffness(geom, T0, T0 / l, A)
     load = point_vector(coords, structure.load, kin)
     probe = point_vector(coords, structure.probe, kin)
     for arr in (T0, l, load, probe):
         arr.setflags(write=False)
     return Cell(
-        structure=structure, coords=coords, q0=coords.q0, lengths=l, A=A, T0=T0, Kp=Kp, load=load,
+        structure=structure, coords=coords, q0=coords.q0, lengths=l, A=A, T0=T0, load=load,
         probe=probe, self_stress_dim=dim, geometry=geom,
         parameters=MappingProxyType(dict(parameters or {})), L=_continuum_length(structure, parameters or {}),
     )

@@ -65,7 +65,7 @@ from scipy.spatial import ConvexHull
 from .._checks import positive_scalar
 from .equilibrium import Cell, NotPrestressableError, equilibrate
 from .formfinding import find_form
-from .structure import ACTIN, INTERMEDIATE_FILAMENT, STRUT, Point, Structure
+from .structure import ACTIN, INTERMEDIATE_FILAMENT, STRUT, Point, Structure, first_occurrence
 
 __all__ = [
     "sphere_structure",
@@ -452,51 +452,33 @@ def lattice_structure(nx: int, ny: int, nz: int = 1, L: float = 1.0, offset: flo
     b = _offset(offset)
     t = lattice_module_tensions(b, intermediate_filaments)
     Xm, struts, cables = _module(L, b * L)
-    # node identity by position on the grid: module-node coordinates are multiples of L/2 plus 0 or ±b
-    scale = 1e6 / L
-    index: dict = {}
-    coords: list = []
-
-    def node(p):
-        key = tuple(int(round(v * scale)) for v in p)
-        i = index.get(key)
-        if i is None:
-            i = index[key] = len(coords)
-            coords.append(p)
-        return i
-
-    tendons, families, T0 = [], [], []
-    fixed = []
-    centres = {}
-    for k, j, i in itertools.product(range(nz), range(ny), range(nx)):
-        c = np.array([i * L, j * L, k * L])
-        ids = [node(c + x) for x in Xm]
-        for p, q in cables:
-            tendons.append((ids[p], ids[q]))
-            families.append(ACTIN)
-            T0.append(t[ACTIN])
-        for p, q in struts:
-            tendons.append((ids[p], ids[q]))
-            families.append(STRUT)
-            T0.append(t[STRUT])
-        if intermediate_filaments:
-            cid = node(c)
-            centres[(i, j, k)] = cid
-            for p in range(12):
-                tendons.append((ids[p], cid))
-                families.append(INTERMEDIATE_FILAMENT)
-                T0.append(t[INTERMEDIATE_FILAMENT])
-        if k == 0:
-            fixed += [ids[0], ids[1]]  # the lower ends of the module's z-struts rest on the substrate
-        if (i, j, k) == (nx // 2, ny // 2, nz - 1):
-            load_nodes = (ids[5], ids[7])  # the upper x-strut (z = +b)
+    # every module's nodes in construction order (module by module, x fastest; its 12 nodes, then its centre)
+    grid = np.array([(i, j, k) for k, j, i in itertools.product(range(nz), range(ny), range(nx))], dtype=float) * L
+    local = np.vstack([Xm, np.zeros((1, 3))]) if intermediate_filaments else Xm
+    pos = (grid[:, None, :] + local[None]).reshape(-1, 3)
+    # node identity by position on the grid: module-node coordinates are multiples of L/2 plus 0 or ±b;
+    # a node is numbered when it first appears
+    key = np.rint(pos * (1e6 / L)).astype(np.int64)
+    first = first_occurrence(key[:, 0], key[:, 1], key[:, 2])
+    is_new = first == np.arange(first.size)
+    ids = (np.cumsum(is_new) - 1)[first].reshape(len(grid), len(local))
+    local_members = [(cables, ACTIN), (struts, STRUT)]
+    if intermediate_filaments:
+        local_members.append(([(p, 12) for p in range(12)], INTERMEDIATE_FILAMENT))
+    pairs = np.array([pq for ms, _ in local_members for pq in ms])
+    tendons = ids[:, pairs].reshape(-1, 2)
+    families = tuple(f for ms, f in local_members for _ in ms) * len(grid)
+    T0 = np.tile([t[f] for ms, f in local_members for _ in ms], len(grid))
+    fixed = ids[: nx * ny, :2].ravel()  # the lower ends of the bottom modules' z-struts rest on the substrate
+    top = ((nz - 1) * ny + ny // 2) * nx + nx // 2  # the top module nearest the middle of the top face
+    load_nodes = (int(ids[top, 5]), int(ids[top, 7]))  # its upper x-strut (z = +b)
     load = Point(nodes=load_nodes, weights=(0.5, 0.5), direction=(0.0, 0.0, 1.0))
     kind = "sheet" if nz == 1 else "block"
     st = Structure(
-        nodes=np.array(coords), struts=(), tendons=tuple(tendons), families=tuple(families), fixed=tuple(fixed),
+        nodes=pos[is_new], struts=(), tendons=tendons, families=families, fixed=fixed,
         load=load, probe=load, name=f"{nx}x{ny}x{nz} lattice {kind}",
     )
-    return st, np.array(T0)
+    return st, T0
 
 
 def lattice_cell(nx: int, ny: int, nz: int = 1, L: float = 1.0, offset: float = DEFAULT_OFFSET,

@@ -219,7 +219,7 @@ def paper_cell(
 # imported here rather than at the top so this section merges cleanly with other additions
 from types import MappingProxyType  # noqa: E402
 
-from .equilibrium import point_vector, self_stress_basis, tangent_stiffness, weighted_gram  # noqa: E402
+from .equilibrium import point_vector, self_stress_basis, weighted_gram  # noqa: E402
 from .structure import STRUT  # noqa: E402
 
 __all__ += [
@@ -251,7 +251,6 @@ def _assemble_cell(structure: Structure, parametrization: str, T0: np.ndarray, p
         raise NotPrestressableError(f"the given state is not a self-stress of {structure.name}: |A·T0| = {resid:.3g}")
     l = geom.lengths
     T0 = np.array(T0, dtype=float)
-    Kp = tangent_stiffness(geom, T0, T0 / l, A)
     load = point_vector(coords, structure.load, kin)
     probe = point_vector(coords, structure.probe, kin)
     for arr in (T0, l, load, probe):
@@ -259,7 +258,7 @@ def _assemble_cell(structure: Structure, parametrization: str, T0: np.ndarray, p
     # newer Cells store the continuum length L as a field; older ones derive it from the struts
     extra = {"L": float(structure.strut_lengths.mean())} if "L" in Cell.__dataclass_fields__ else {}
     return Cell(
-        structure=structure, coords=coords, q0=coords.q0, lengths=l, A=A, T0=T0, Kp=Kp, load=load, probe=probe,
+        structure=structure, coords=coords, q0=coords.q0, lengths=l, A=A, T0=T0, load=load, probe=probe,
         self_stress_dim=self_stress_basis(A)[0].shape[1], geometry=geom, parameters=MappingProxyType(dict(parameters)),
         **extra,
     )

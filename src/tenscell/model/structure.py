@@ -59,8 +59,12 @@ def _first_flag(flags: np.ndarray) -> tuple[int, int] | None:
     return None if hit.size == 0 else divmod(int(hit[0]), flags.shape[1])
 
 
-def _first_occurrence(*keys: np.ndarray) -> np.ndarray:
-    """For each row, the index of the first row with the same keys (its own index if it is the first)."""
+def first_occurrence(*keys: np.ndarray) -> np.ndarray:
+    """For each row, the index of the first row with the same keys (its own index if it is the first).
+
+    ``keys``: arrays of shape (k,) compared together (a row is the tuple of its keys). Internal to
+    :mod:`tenscell.model`: duplicate members here, coinciding lattice nodes in :mod:`.lattices`.
+    """
     order = np.lexsort(keys[::-1])  # stable: equal keys keep their original (ascending) order
     new = np.zeros(order.size, dtype=bool)
     new[:1] = True
@@ -116,7 +120,7 @@ def _check_struts(nodes: np.ndarray, S: np.ndarray, fixed: tuple[int, ...]) -> N
     """Raise the first error of a strut-by-strut check (ends, length, head not fixed, one strut per node)."""
     fx = _fixed_ends(nodes.shape[0], S, fixed)
     ends = S.ravel()  # strut k's tail, then its head: the order the ends are claimed
-    owner = _first_occurrence(ends) // 2
+    owner = first_occurrence(ends) // 2
     shared = ((owner != np.arange(ends.size) // 2) & ~fx.ravel()).reshape(-1, 2)
     _raise_first("strut", nodes, S, [fx[:, 1], shared[:, 0], shared[:, 1]], [
         lambda k, a, b: f"strut {k}: its head node {b} is fixed; put the anchored (fixed) node first",
@@ -128,7 +132,7 @@ def _check_struts(nodes: np.ndarray, S: np.ndarray, fixed: tuple[int, ...]) -> N
 def _check_tendons(nodes: np.ndarray, T: np.ndarray, fixed: tuple[int, ...]) -> None:
     """Raise the first error of a tendon-by-tendon check (ends, length, duplicates, not between fixed nodes)."""
     fx = _fixed_ends(nodes.shape[0], T, fixed)
-    first = _first_occurrence(T.min(axis=1), T.max(axis=1))
+    first = first_occurrence(T.min(axis=1), T.max(axis=1))
     _raise_first("tendon", nodes, T, [first != np.arange(T.shape[0]), fx[:, 0] & fx[:, 1]], [
         lambda j, a, b: f"tendon {j} duplicates tendon {first[j]} (nodes {a}-{b})",
         lambda j, a, b: f"tendon {j} joins two fixed nodes and cannot work; leave it out",
