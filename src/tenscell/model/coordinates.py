@@ -153,14 +153,12 @@ def make_coordinates(structure: Structure, kind: str = "angles") -> Coordinates:
             q0 += list(centre) + dirq
             labels += [f"X[{k}]", f"Y[{k}]", f"Z[{k}]"] + dirl
             pos += 5
-    points = s.point_nodes
-    pstart = np.zeros(len(points), dtype=int)
-    for i, p in enumerate(points):
-        pstart[i] = pos
-        node_index[p, :3] = [pos, pos + 1, pos + 2]
-        q0 += list(s.nodes[p])
-        labels += [f"X(node {p})", f"Y(node {p})", f"Z(node {p})"]
-        pos += 3
+    points = np.asarray(s.point_nodes, dtype=int)
+    pstart = pos + 3 * np.arange(points.size)
+    node_index[points, :3] = pstart[:, None] + np.arange(3)
+    q0 += s.nodes[points].ravel().tolist()
+    labels += [f"{x}(node {p})" for p in points.tolist() for x in "XYZ"]
+    pos += 3 * points.size
     q0a = np.array(q0, dtype=float)
     tendon_nodes = np.asarray(s.tendons, dtype=int).reshape(-1, 2)
     for a in (q0a, node_index, starts, anchored, frame, pstart, tendon_nodes):

@@ -282,9 +282,10 @@ class Structure:
     @property
     def point_nodes(self) -> tuple[int, ...]:
         """Nodes that are neither fixed nor on a strut, in index order."""
-        on_strut = {i for s in self.struts for i in s}
-        fixed = set(self.fixed)
-        return tuple(i for i in range(self.n_nodes) if i not in on_strut and i not in fixed)
+        free = np.ones(self.n_nodes, dtype=bool)
+        free[[i for s in self.struts for i in s]] = False
+        free[list(self.fixed)] = False
+        return tuple(np.flatnonzero(free).tolist())
 
     def family_indices(self, family: str) -> np.ndarray:
         """Indices of the tendons of one family."""
