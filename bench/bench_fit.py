@@ -20,7 +20,14 @@
    starts); the whole fit is the call to ``fit``; the whole command is
    ``python -m tenscell fit ... --jobs J`` in a new process (interpreter start,
    imports, the homogeneous baseline, report and figure included). The ratio
-   whole / time to target is what the stopping rules bound (goal: <= 2).
+   whole / time to target is what the stopping rules bound (goal: <= 2):
+   printed on the fit's clock (the call to ``fit``), and on the command's
+   clock (launch to the moment the tolerance was first met, read from
+   fit.json's "timing" plus the measured launch of python and
+   ``import tenscell.cli``, against launch to exit). The command's fixed
+   costs (imports ~0.5-0.7 s, baseline, report, figure) do not shrink with a
+   faster search, so against the fit's own sub-second time to target the
+   whole command is several times longer; that ratio is printed too.
 
 The machine is shared: the load average is printed first, and CPU time of
 this process is shown beside wall time for the in-process runs.
@@ -30,6 +37,7 @@ Run: PYTHONPATH=src python bench/bench_fit.py [--seeds 0,1,2] [--jobs 2] [--star
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import subprocess
@@ -102,22 +110,34 @@ def time_to_target(name, seed, starts, jobs):
     t0, c0 = time.perf_counter(), time.process_time()
     result = fitting.fit(data, seed=seed, starts=starts, jobs=jobs, progress=False, **kw)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
-    hit = None
-    for (t, rms), theta in zip(result.history, result.history_theta):
-        if rms <= 0.01 and result.problem.dataset_rms(theta).max() <= 0.01:
-            hit = t
-            break
-    return hit, wall, cpu, result
+    return result.time_to_tolerance_s, wall, cpu, result
+
+
+def launch_time(repeat: int = 5) -> float:
+    """Median wall time (s) of what precedes the command's own clock: the interpreter and ``import tenscell.cli``."""
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, "-c", "import tenscell.cli"], check=True)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
 
 
 def command_time(name, seed, starts, jobs):
+    """(whole command wall time in s, exit status, fit.json's "timing") of ``python -m tenscell fit`` in a new process."""
     _, _, argv = _cases()[name]
     with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "out")
         cmd = [sys.executable, "-m", "tenscell", "fit", *argv, "--seed", str(seed), "--starts", str(starts),
-               "--jobs", str(jobs), "--out", os.path.join(tmp, "out")]
+               "--jobs", str(jobs), "--out", out]
         t0 = time.perf_counter()
         status = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "MPLBACKEND": "Agg"})
-        return time.perf_counter() - t0, status.returncode
+        wall = time.perf_counter() - t0
+        timing = None
+        if status.returncode in (0, 1):
+            with open(os.path.join(out, "fit.json")) as fh:
+                timing = json.load(fh)["timing"]
+        return wall, status.returncode, timing
 
 
 def _shape(name, r):
@@ -142,9 +162,13 @@ def main():
     seeds = [int(s) for s in args.seeds.split(",")]
     print(f"load average before the run: {', '.join(f'{x:.2f}' for x in os.getloadavg())} on {os.cpu_count()} cores")
     bench_jacobian()
+    launch = None if args.skip_command else launch_time()
     print(f"== time to target from a cold start ({args.starts} starts, {args.jobs} jobs)")
+    if launch is not None:
+        print(f"   (command clock: the command's fit.json 'timing' plus the launch, python + import tenscell.cli = "
+              f"{launch:.3f} s here)")
     for name in args.cases.split(","):
-        hits, ratios_fit, ratios_cmd = [], [], []
+        hits, ratios_fit, ratios_cmd, ratios_mixed = [], [], [], []
         for seed in seeds:
             hit, wall, cpu, r = time_to_target(name, seed, args.starts, args.jobs)
             cmd = None if args.skip_command else command_time(name, seed, args.starts, args.jobs)
@@ -154,20 +178,25 @@ def main():
                     f"{'%.2f s' % hit if hit is not None else 'NEVER'}; whole fit {wall:.1f} s (CPU here {cpu:.1f} s"
                     f"{', workers not counted' if args.jobs > 1 else ''}); stopped: {r.stop_reason}")
             if cmd is not None:
-                line += f"; whole command {cmd[0]:.1f} s (exit {cmd[1]})"
+                line += f"; whole command {cmd[0]:.2f} s (exit {cmd[1]})"
             if hit:
                 ratios_fit.append(wall / hit)
                 line += f"; ratio fit/target {wall / hit:.2f}"
-                if cmd is not None:
-                    ratios_cmd.append(cmd[0] / hit)
-                    line += f", command/target {cmd[0] / hit:.2f}"
+            if cmd is not None and cmd[2] is not None and cmd[2]["tolerance_met_s"] is not None:
+                met = launch + cmd[2]["tolerance_met_s"]
+                ratios_cmd.append(cmd[0] / met)
+                ratios_mixed.append(cmd[0] / (cmd[2]["tolerance_met_s"] - cmd[2]["fit_started_s"]))
+                line += (f"; command: target met {met:.2f} s after launch, ratio whole/target {cmd[0] / met:.2f} "
+                         f"(fit started {launch + cmd[2]['fit_started_s']:.2f} s, outputs "
+                         f"{launch + cmd[2]['outputs_started_s']:.2f} s after launch)")
             print(line, flush=True)
         ok = [h for h in hits if h is not None]
         if ok:
             text = (f"{name:>15}: target reached in {len(ok)}/{len(hits)} seeds; median {statistics.median(ok):.2f} s, "
                     f"max {max(ok):.2f} s; median ratio whole fit / target {statistics.median(ratios_fit):.2f}")
             if ratios_cmd:
-                text += f", whole command / target {statistics.median(ratios_cmd):.2f}"
+                text += (f"; whole command / target on the command's clock {statistics.median(ratios_cmd):.2f} "
+                         f"(against the fit's own time to target: {statistics.median(ratios_mixed):.2f})")
             print(text)
         else:
             print(f"{name:>15}: target never reached")

@@ -156,3 +156,21 @@ def test_report_has_identifiability_comparison_and_creep_sections(small_fits):
     doc = pres.to_dict()
     assert doc["model"]["s_m2"] == pytest.approx(pres.value("s")) and doc["identifiability"]["gauge_removed"]
     assert doc["predicted_creep"]["window_s"] == [0.1, 10.0]
+
+
+def test_moduli_over_many_prestresses_equal_the_per_prestress_pipeline(small_fits):
+    """FitResult.moduli batches a prestress grid (one eigensolve); each point must equal its own linear model."""
+    from tenscell.linear.modal import modulus
+    from tenscell.response import compliance
+
+    result = small_fits[1]  # the prestress sweep: its prestress (Pa) maps to the model's
+    P_pa = np.array([300.0, 700.0, 1500.0, 2500.0])
+    f = np.array([0.05, 0.1, 1.0, 20.0])
+    Gs, Gl = result.moduli(f, prestress_pa=P_pa)
+    for k in range(P_pa.size):
+        lin = result._linear(float(result.prestress_model(P_pa[k])))
+        G = modulus(compliance(lin, [f[k]]), result.problem.L_ref)[0]
+        assert Gs[k] == pytest.approx(G.real, rel=1e-10) and Gl[k] == pytest.approx(G.imag, rel=1e-10)
+    # a grid with one prestress keeps the per-prestress path; broadcasting still pairs f with P
+    Gs1, _ = result.moduli(f, prestress_pa=P_pa[1])
+    assert Gs1[1] == pytest.approx(Gs[1], rel=1e-10)

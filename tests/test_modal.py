@@ -214,3 +214,34 @@ def test_thread_setting_validates(monkeypatch):
     with _threads.threads(2):
         assert _threads.thread_count() == 2
     assert _threads.thread_count() == 3
+
+
+def test_dense_decompositions_and_analyses_run_with_one_blas_thread(monkeypatch):
+    """The pencil's own decompositions and the analyses built on them pin BLAS threads wherever they are called from.
+
+    Small dense factorizations with several OpenBLAS threads ran ~170x slower here (a 24x24 triangular solve:
+    8 ms against 46 µs), so an analysis that forgot the pin paid it on every mode.
+    """
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from tenscell.sensitivity import analytic_elasticities
+
+    def blas_threads():
+        return {i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
+
+    seen = []
+    real = np.linalg.eigh
+
+    def eigh(*a, **kw):
+        seen.append(blas_threads())
+        return real(*a, **kw)
+
+    with threadpool_limits(limits=2, user_api="blas"):
+        if blas_threads() != {2}:
+            pytest.skip("the BLAS library here cannot run two threads")
+        monkeypatch.setattr(np.linalg, "eigh", eigh)
+        lin = tenscell.linearize(tenscell.paper_cell(), P=1000.0, EA=1.0, c=1.0)
+        lin.pencil.modes  # noqa: B018 - called outside any public hot path
+        analytic_elasticities(tenscell.linearize(tenscell.paper_cell(), P=500.0, EA=1.0, c=1.0), [0.1])
+        assert blas_threads() == {2}  # and the caller's setting is back
+    assert len(seen) == 2 and all(s == {1} for s in seen)

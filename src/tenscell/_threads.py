@@ -4,9 +4,12 @@ The matrices of a cell model are small (tens of coordinates) or sparse; their
 factorizations, eigensolves and triangular solves gain nothing from several
 BLAS threads, and on a shared machine they lose a lot (measured here: complex
 sparse solves ran 80–120× slower with several OpenBLAS threads, the fitter's
-evaluations about 10×). So every hot path — linearization and its check,
-compliance and moduli, creep and relaxation, Lanczos runs, fits — runs with
-**one** BLAS thread, and the caller's own setting is restored on return.
+evaluations about 10×, and a 24×24 triangular solve 8 ms against 46 µs). So
+every hot path — linearization and its check, the pencil's own decompositions
+(Cholesky, modes, resolvent, solves), compliance and moduli, creep and
+relaxation, Lanczos runs, fits, elasticities, identifiability, model
+comparison — runs with **one** BLAS thread, and the caller's own setting is
+restored on return.
 
 Override it, for instance for dense models of thousands of coordinates on an
 idle many-core machine:

@@ -39,6 +39,7 @@ import scipy.sparse as sp
 from ._checks import finite_scalar, positive_array, positive_scalar
 from ._progress import progress_bar, stage
 from ._results import dataframe, format_repr
+from ._threads import hot_path
 from .linear.linearize import LinearModel, linearize
 from .linear.modal import modulus
 from .response import compliance
@@ -162,6 +163,7 @@ def _family_tag(family: str) -> str:
     return {"actin": "actin", "intermediate_filament": "IF", STRUT: "strut"}.get(family, family)
 
 
+@hot_path
 def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Elasticities:
     """Exact elasticities of G for every parameter of the tendon law and for P.
 
@@ -265,6 +267,7 @@ def _geometry_derivative(G_of, x0, h, relative):
     raise ValueError("no valid reference on either side of the base point within two steps")
 
 
+@hot_path
 def elasticities(
     *,
     alpha: float = 0.0,
@@ -368,6 +371,7 @@ def _base_parameters(alpha, delta, L, P, EA, c, intermediate_filaments):
     return cell, positive_array("EA", EA, (m,), "N"), positive_array("c", c, (m,), "N·s/m")
 
 
+@hot_path
 def perturbation_table(
     *,
     change: float = 0.10,
@@ -586,6 +590,7 @@ class MonteCarloResult:
         return monte_carlo_figure([self], axes=ax, **kw)
 
 
+@hot_path
 def monte_carlo(
     n: int = 200,
     *,
@@ -774,6 +779,7 @@ class SensitivityStudy:
         return self.elasticities.plot(ax=ax, **kw)
 
 
+@hot_path
 def sensitivity_study(
     draws: int = 200,
     *,

@@ -204,8 +204,11 @@ def read_datasets(paths, prestress_options, min_points: int):
     return datasets
 
 
-def fit_outputs(result, baseline, title, comparison=None):
-    """Everything a fit writes, computed before any file is touched: {extension: writer(path)}."""
+def fit_outputs(result, baseline, title, comparison=None, timing=None):
+    """Everything a fit writes, computed before any file is touched: {extension: writer(path)}.
+
+    ``timing`` (optional): the command's own clock, stored in fit.json as is.
+    """
     from .. import plotting
     from ..io.outputs import write_csv_rows, write_json, write_text
     from ..io.tables import fit_table
@@ -220,6 +223,8 @@ def fit_outputs(result, baseline, title, comparison=None):
 
         comparison = compare_models(result, homogeneous=baseline)
     doc["model_comparison"] = comparison.to_dict()
+    if timing is not None:
+        doc["timing"] = timing
     header, rows = fit_table(result, baseline)
     markdown = fit_markdown(result, baseline, title=title, comparison=comparison)
     fig = fit_panels(result, baseline=baseline, title=title)
@@ -250,6 +255,31 @@ def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_star
     return result, baseline
 
 
+class _Clock:
+    """The command's own clock: seconds since :func:`tenscell.cli.main` began (or since the fit, when run directly)."""
+
+    def __init__(self, started: float | None):
+        import time
+
+        self._mono = time.monotonic
+        self.started = self._mono() if started is None else started
+        self.fit_started = self.now()
+
+    def now(self) -> float:
+        return round(self._mono() - self.started, 4)
+
+    def timing(self, result) -> dict:
+        """fit.json's "timing": when the fit began, first met its tolerance, and ended; then the baseline."""
+        met = result.time_to_tolerance_s
+        return {
+            "clock": "seconds since the tenscell command started (after the interpreter and its first import)",
+            "fit_started_s": self.fit_started,
+            "tolerance_met_s": None if met is None else round(self.fit_started + met, 4),
+            "fit_finished_s": round(self.fit_started + result.elapsed_s, 4),
+            "baseline_finished_s": self.now(),
+        }
+
+
 def run(args) -> int:
     import sys
 
@@ -278,13 +308,17 @@ def run(args) -> int:
     space = search_space(args, datasets)  # bad input: before any fitting
     stage(f"fitting {sum(d.n for d in datasets)} points: {args.starts} start(s), stiffness "
           f"{args.tendons}, damping {args.damping}, {args.jobs} process(es)")
+    clock = _Clock(getattr(args, "started", None))
     result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,
                                args.tolerance, args.baseline_starts, **space)
+    timing = clock.timing(result)
     from ..fitting.models import compare_models
 
     comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
     names = " and ".join(Path(p).name for p in args.data)
-    outputs = fit_outputs(result, baseline, title=f"Tensegrity fit to {names}", comparison=comparison)
+    timing["outputs_started_s"] = clock.now()
+    outputs = fit_outputs(result, baseline, title=f"Tensegrity fit to {names}", comparison=comparison,
+                          timing=timing)
     with out as d:
         for ext, name in FIT_FILES.items():
             outputs[ext](d / name)

@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._results import format_repr
+from .._threads import hot_path
 
 __all__ = ["Identifiability", "Combination", "identifiability", "GAUGE", "NULL_SHARE"]
 
@@ -227,6 +228,7 @@ def _gauge_label(name: str, power: float) -> str:
     return f"{name}/L" if power == 1 else f"{name}/L²"
 
 
+@hot_path
 def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 1e-8) -> Identifiability:
     """Rank, standard errors, correlations and determined combinations of a fit at ``theta``.
 

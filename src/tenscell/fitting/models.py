@@ -40,6 +40,7 @@ import scipy.special
 
 from .._checks import positive_scalar
 from .._results import dataframe, format_repr
+from .._threads import hot_path
 from ..io.data import DataError, RheologyData
 
 __all__ = [
@@ -462,6 +463,7 @@ def _tensegrity_params(result) -> int:
     return p.n_free - (1 if np.all(p.free[g != 0]) else 0)
 
 
+@hot_path
 def compare_models(result, *, homogeneous=None, structural: StructuralDampingFit | bool | None = True,
                    held_out: RheologyData | None = None, holdout: tuple | None = None,
                    name: str | None = None) -> ModelComparison:

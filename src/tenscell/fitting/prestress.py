@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._results import dataframe, format_repr
+from .._threads import hot_path
 
 if TYPE_CHECKING:
     from .result import FitResult
@@ -161,6 +162,7 @@ def _elasticity_P(result: FitResult, P: float, f_hz) -> tuple[np.ndarray, np.nda
     return el.storage[k], el.loss[k]
 
 
+@hot_path
 def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERENCE_FREQUENCY_HZ) -> PrestressActivity:
     """The prestress elasticities and share of a fit, at its data points and at a reference frequency.
 

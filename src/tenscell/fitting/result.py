@@ -14,7 +14,7 @@ from ..io.data import RheologyData
 from ..linear.linearize import linearize
 from ..linear.modal import modulus
 from ..model.equilibrium import Cell
-from ..response import compliance, log_slope
+from ..response import compliance, frequency_response, log_slope
 
 if TYPE_CHECKING:
     from ..io.creep_data import CreepData
@@ -85,6 +85,9 @@ class FitParameter:
             "vary": self.vary, "at_bound": self.at_bound, "description": self.description,
         }
 
+
+#: largest prestress × frequency grid that FitResult.moduli evaluates in one batch (else per prestress)
+_GRID_POINTS = 200_000
 
 @dataclass(frozen=True)
 class FitAlternative:
@@ -349,6 +352,19 @@ class FitResult:
     stop_reason: str = ""
 
     # -- accessors ------------------------------------------------------------------
+    @cached_property
+    def time_to_tolerance_s(self) -> float | None:
+        """Seconds from the start of the fit until some start first had every data set within the tolerance.
+
+        Read from :attr:`history` (the best-so-far record over all starts); None
+        if the tolerance was never met. The search itself runs on after this
+        moment only to polish (see :func:`tenscell.fitting.fit`, ``polish``).
+        """
+        for (t, _), theta in zip(self.history, self.history_theta):
+            if float(self.problem.dataset_rms(theta).max()) <= self.tolerance:
+                return float(t)
+        return None
+
     @property
     def data(self) -> RheologyData:
         """The data set of a single-data-set fit (a joint fit has :attr:`datasets`)."""
@@ -474,9 +490,17 @@ class FitResult:
         else:
             Pm = self.prestress_model(dataset=self._single_prestress_dataset() if dataset is None else dataset)
         f, Pm = np.broadcast_arrays(f, Pm)
+        Pu, at_P = np.unique(Pm, return_inverse=True)
+        fu, at_f = np.unique(f, return_inverse=True)
+        if 1 < Pu.size and Pu.size * fu.size <= _GRID_POINTS:
+            # many prestresses (a prestress sweep's curve): one batched eigensolve over the grid
+            lam = self.L / self.problem.L_ref
+            J = frequency_response(self.cell, fu, Pu / lam**2, EA=self.EA / lam**2, c=self.c / lam).J
+            G = modulus(J[at_P.ravel(), at_f.ravel()].reshape(f.shape), self.problem.L_ref)
+            return G.real, G.imag
         Gs = np.empty(f.shape)
         Gl = np.empty(f.shape)
-        for P in np.unique(Pm):
+        for P in Pu:
             sel = Pm == P
             G = modulus(compliance(self._linear(P), f[sel]), self.problem.L_ref)
             Gs[sel], Gl[sel] = G.real, G.imag
@@ -616,6 +640,7 @@ class FitResult:
             "message": self.message,
             "stop_reason": self.stop_reason,
             "time_s": self.elapsed_s,
+            "time_to_tolerance_s": self.time_to_tolerance_s,
             "starts": self.starts,
             "seed": None if self.seed is None else int(self.seed),
             "n_evaluations": self.n_evaluations,

@@ -227,6 +227,7 @@ class Pencil:
 
     # -- positive definiteness --------------------------------------------------------------------
     @cached_property
+    @hot_path
     def cholesky(self):
         """Cholesky factor of K0: lower-triangular ndarray (dense) or :class:`SparseCholesky`.
 
@@ -254,6 +255,7 @@ class Pencil:
         """Raise :class:`NotPositiveDefiniteError` unless K0 is positive definite (factors K0 once)."""
         self.cholesky  # noqa: B018 - computing the factor is the check
 
+    @hot_path
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """``K0⁻¹ rhs`` with the cached factor; rhs of shape (n,) or (n, k)."""
         L = self.cholesky
@@ -267,6 +269,7 @@ class Pencil:
 
     # -- dense: one eigensolve ---------------------------------------------------------------------
     @cached_property
+    @hot_path
     def modes(self) -> Modes:
         """The dense modal decomposition ``C0 v = τ K0 v``: one Cholesky, one symmetric eigensolve.
 
@@ -287,6 +290,7 @@ class Pencil:
         V = _tri(L, U, trans=1)
         return Modes(tau=tau, vectors=V, weights=(self.probe @ V) * (self.load @ V))
 
+    @hot_path
     def resolvent(self, w, rhs: np.ndarray) -> np.ndarray:
         """``x(ω) = (K0 + iωC0)⁻¹ rhs`` for every ω (rad/s), shape (nf, n), from the modal decomposition (dense).
 

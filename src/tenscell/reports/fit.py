@@ -53,8 +53,10 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
         f"- RMS of the log10 errors: **{num(result.rms_log10_error, 4)}** decades over all points; the tolerance "
         f"{num(result.tolerance)} applies{each}: {verdict}.",
         f"- {result.message}",
-        f"- Starts: {result.starts} (seed {result.seed}); time {result.elapsed_s:.1f} s; "
-        f"{result.n_evaluations} model evaluations.",
+        f"- Starts: {result.starts} (seed {result.seed}); time {result.elapsed_s:.1f} s"
+        + (f" (the tolerance was first met after {result.time_to_tolerance_s:.2f} s)"
+           if result.time_to_tolerance_s is not None else " (the tolerance was never met)")
+        + f"; {result.n_evaluations} model evaluations.",
         "",
     ]
     return lines
