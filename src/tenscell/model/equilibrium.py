@@ -144,6 +144,8 @@ def equilibrium_matrix(geom: MemberGeometry, sparse: bool | None = None):
 def assemble_hessian(geom: MemberGeometry, weights: np.ndarray, sparse: bool | None = None):
     """``Σ_j w_j ∇²l_j`` assembled into an ``(n_q, n_q)`` matrix."""
     index, hess = geom.index, geom.hess
+    if hess is None:
+        raise ValueError("assemble_hessian needs a MemberGeometry with Hessians (member_geometry(..., hessians=True))")
     used = np.flatnonzero((index >= 0).any(axis=0))
     if used.size < index.shape[1]:  # block slots no member uses (e.g. a point node's two spare ones): drop them first
         index, hess = index[:, used], hess[:, used[:, None], used]
