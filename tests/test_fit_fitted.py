@@ -174,3 +174,17 @@ def test_moduli_over_many_prestresses_equal_the_per_prestress_pipeline(small_fit
     # a grid with one prestress keeps the per-prestress path; broadcasting still pairs f with P
     Gs1, _ = result.moduli(f, prestress_pa=P_pa[1])
     assert Gs1[1] == pytest.approx(Gs[1], rel=1e-10)
+
+
+def test_cells_and_fits_pickle_for_worker_processes(small_fits):
+    """A fit's baseline runs in a worker process and comes back pickled: cell and fit survive exactly."""
+    import pickle
+
+    result = small_fits[1]
+    back = pickle.loads(pickle.dumps(result))
+    assert back.cell.describe() == result.cell.describe() and dict(back.cell.parameters) == dict(result.cell.parameters)
+    with pytest.raises(TypeError):  # still read-only after the trip
+        back.cell.parameters["x"] = 1.0
+    np.testing.assert_array_equal(back.theta, result.theta)
+    f = np.array([0.1, 1.0])
+    np.testing.assert_array_equal(back.moduli(f, prestress_pa=[500.0, 900.0]), result.moduli(f, prestress_pa=[500.0, 900.0]))

@@ -224,3 +224,32 @@ def test_output_dir_is_always_a_complete_set(tmp_path_factory, monkeypatch, plan
             assert len(files) == int(tag_found.split("-")[1])
             assert tag_found == last_ok
         assert [x.name for x in base.iterdir() if x.name != "out"] == []
+
+
+def _sleep_and_report(seconds: float, pid_file: str | None = None) -> int:
+    if pid_file:  # written whole, then renamed: the test never reads half a number
+        Path(pid_file + ".tmp").write_text(str(os.getpid()))
+        os.replace(pid_file + ".tmp", pid_file)
+    time.sleep(seconds)
+    return os.getpid()
+
+
+def test_background_task_returns_its_result_and_dies_with_an_error_in_the_block(tmp_path):
+    from tenscell._parallel import background
+
+    with background(_sleep_and_report, 0.0) as task:
+        pid = task.result()
+    assert pid != os.getpid()
+    # an exception in the block (as Ctrl-C would be) stops the worker at once, mid-task
+    pid_file = tmp_path / "worker.pid"
+    with pytest.raises(RuntimeError, match="stop"):
+        with background(_sleep_and_report, 60.0, str(pid_file)):
+            deadline = time.monotonic() + 10
+            while not pid_file.exists() and time.monotonic() < deadline:
+                time.sleep(0.02)
+            worker = int(pid_file.read_text())
+            assert _running(worker)
+            t = time.monotonic()
+            raise RuntimeError("stop")
+    assert time.monotonic() - t < 3.0
+    assert not _running(worker)

@@ -27,7 +27,7 @@ import sys
 import threading
 from typing import Any, Callable, Iterable, Literal, Sequence
 
-__all__ = ["starmap", "Workers", "sigint_deferred", "GRACE_S"]
+__all__ = ["starmap", "Workers", "background", "sigint_deferred", "GRACE_S"]
 
 #: seconds terminated workers get to exit before they are killed
 GRACE_S = 0.5
@@ -171,6 +171,29 @@ class Workers:
             self._pool = None
             _stop_workers(pool)
             raise
+
+
+@contextlib.contextmanager
+def background(fn: Callable[..., Any], *args: Any):
+    """Run ``fn(*args)`` in one worker process while the block runs; the block gets its future.
+
+    ``with background(fit, data) as task: ...; result = task.result()`` — the
+    same guarantees as :func:`starmap`: the worker ignores Ctrl-C and dies
+    with this process; leaving the block by an exception or Ctrl-C stops it at
+    once, leaving it normally waits for it. For independent work that would
+    otherwise wait for an idle core (a fit's homogeneous baseline).
+    """
+    from concurrent.futures import ProcessPoolExecutor
+
+    pool = ProcessPoolExecutor(max_workers=1, initializer=_die_with_parent, initargs=(os.getpid(),))
+    try:
+        with sigint_deferred():  # no Ctrl-C before the worker has set up its own handling
+            future = pool.submit(fn, *args)
+        yield future
+    except BaseException:
+        _stop_workers(pool)
+        raise
+    pool.shutdown(wait=True)
 
 
 @contextlib.contextmanager

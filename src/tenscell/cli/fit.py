@@ -236,22 +236,38 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None):
     }
 
 
-def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, **search):
-    """The fit and its homogeneous baseline (the fit itself when it is homogeneous and unconstrained)."""
+def _baseline_fit(data, starts, seed, tolerance):
+    """The homogeneous baseline: it only shows what a homogeneous cell cannot do, so a short search suffices."""
     from .. import fitting
+
+    return fitting.fit(data, tendons="uniform", starts=starts, seed=seed, jobs=1, tolerance=tolerance, hops=10,
+                       patience=3, progress=False)
+
+
+def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, **search):
+    """The fit and its homogeneous baseline (the fit itself when it is homogeneous and unconstrained).
+
+    The baseline runs in a worker process of its own, beside the fit: it is
+    independent of it and, with the default one job, would otherwise wait for
+    a core that sits idle. Its result does not depend on this (same seed).
+    """
+    from .. import fitting
+    from .._parallel import background
     from .._progress import stage
 
-    result = fitting.fit(data, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
-                         tolerance=tolerance, **search)
+    def main_fit():
+        return fitting.fit(data, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
+                           tolerance=tolerance, **search)
+
     constrained = search.get("min_prestress_share") or search.get("min_prestress_elasticity") or search.get(
         "max_decades")
     if tendons == "uniform" and damping == "uniform" and not constrained:
-        baseline = result
-    else:
-        # the baseline only shows what a homogeneous cell cannot do: a short search suffices
-        stage(f"homogeneous baseline: {baseline_starts} start(s)")
-        baseline = fitting.fit(data, tendons="uniform", starts=baseline_starts, seed=seed, jobs=1,
-                               tolerance=tolerance, hops=10, patience=3)
+        result = main_fit()
+        return result, result
+    stage(f"homogeneous baseline: {baseline_starts} start(s), in a process of its own")
+    with background(_baseline_fit, data, baseline_starts, seed, tolerance) as task:
+        result = main_fit()
+        baseline = task.result()
     return result, baseline
 
 

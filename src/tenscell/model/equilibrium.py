@@ -422,6 +422,13 @@ class Cell:
         """A short description with the cell's parameters."""
         return _label(self.structure.name, self.parameters)
 
+    # a read-only mapping does not pickle: carry it as a dict (cells go to worker processes, fits come back)
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "parameters": dict(self.parameters)}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state, parameters=MappingProxyType(state["parameters"]))
+
     # ---- notebook conventions (tenscell._results) ---------------------------------
     def __repr__(self) -> str:
         from .._results import counts, format_repr, span
