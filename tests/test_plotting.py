@@ -116,3 +116,12 @@ def test_save_takes_what_a_plot_returned(tmp_path, resp):
     assert not plt.fignum_exists(fig.number)  # closed after saving
     with pytest.raises(TypeError, match="save"):
         plotting.save("not a figure", tmp_path / "g.png")
+
+
+def test_png_bytes_are_what_save_writes(resp, tmp_path):
+    """The fit command draws its figure in a worker and writes the bytes: they must be the saved PNG."""
+    data = plotting.png_bytes(resp.plot())
+    plotting.save(resp.plot(), tmp_path / "f.png")
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert data == (tmp_path / "f.png").read_bytes()
+    assert not plt.get_fignums()  # both closed their figure

@@ -80,8 +80,10 @@ def _fit_process(out: Path):
     if not Path(data).exists():
         from tenscell.io.data import write_csv
         write_csv(bundled("fabry2001"), data)
+    # a tolerance out of reach keeps the search going for seconds: the signal lands inside the fit
     return subprocess.Popen([sys.executable, "-m", "tenscell", "fit", data, "--starts", "4", "--jobs", "2",
-                             "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+                             "--tolerance", "1e-5", "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=ENV)
 
 
 def test_ctrl_c_during_a_parallel_fit(tmp_path):
@@ -237,13 +239,16 @@ def _sleep_and_report(seconds: float, pid_file: str | None = None) -> int:
 def test_background_task_returns_its_result_and_dies_with_an_error_in_the_block(tmp_path):
     from tenscell._parallel import background
 
-    with background(_sleep_and_report, 0.0) as task:
-        pid = task.result()
+    with background() as bg:
+        first, second = bg.submit(_sleep_and_report, 0.0), bg.submit(_sleep_and_report, 0.0)
+        pid = first.result()
+        assert second.result() == pid  # one worker, tasks one after another
     assert pid != os.getpid()
     # an exception in the block (as Ctrl-C would be) stops the worker at once, mid-task
     pid_file = tmp_path / "worker.pid"
     with pytest.raises(RuntimeError, match="stop"):
-        with background(_sleep_and_report, 60.0, str(pid_file)):
+        with background() as bg:
+            bg.submit(_sleep_and_report, 60.0, str(pid_file))
             deadline = time.monotonic() + 10
             while not pid_file.exists() and time.monotonic() < deadline:
                 time.sleep(0.02)

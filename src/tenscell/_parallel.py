@@ -174,26 +174,41 @@ class Workers:
 
 
 @contextlib.contextmanager
-def background(fn: Callable[..., Any], *args: Any):
-    """Run ``fn(*args)`` in one worker process while the block runs; the block gets its future.
+def background():
+    """One worker process beside this one for the block: ``bg.submit(fn, *args)`` returns a future.
 
-    ``with background(fit, data) as task: ...; result = task.result()`` — the
-    same guarantees as :func:`starmap`: the worker ignores Ctrl-C and dies
-    with this process; leaving the block by an exception or Ctrl-C stops it at
-    once, leaving it normally waits for it. For independent work that would
-    otherwise wait for an idle core (a fit's homogeneous baseline).
+    ``with background() as bg: task = bg.submit(fit, data); ...; result = task.result()``.
+    Tasks run one after another in the same worker, so a later task finds
+    what an earlier one imported. The same guarantees as :func:`starmap`: the
+    worker ignores Ctrl-C and dies with this process; leaving the block by an
+    exception or Ctrl-C stops it at once, leaving it normally waits for it.
+    For independent work that would otherwise wait for an idle core (a fit's
+    homogeneous baseline and its figure).
     """
-    from concurrent.futures import ProcessPoolExecutor
-
-    pool = ProcessPoolExecutor(max_workers=1, initializer=_die_with_parent, initargs=(os.getpid(),))
+    pool = _BackgroundPool()
     try:
-        with sigint_deferred():  # no Ctrl-C before the worker has set up its own handling
-            future = pool.submit(fn, *args)
-        yield future
+        yield pool
     except BaseException:
-        _stop_workers(pool)
+        pool.stop()
         raise
-    pool.shutdown(wait=True)
+    pool.close()
+
+
+class _BackgroundPool:
+    def __init__(self):
+        from concurrent.futures import ProcessPoolExecutor
+
+        self._pool = ProcessPoolExecutor(max_workers=1, initializer=_die_with_parent, initargs=(os.getpid(),))
+
+    def submit(self, fn: Callable[..., Any], *args: Any):
+        with sigint_deferred():  # no Ctrl-C while the worker is forked, before it has set up its own handling
+            return self._pool.submit(fn, *args)
+
+    def stop(self) -> None:
+        _stop_workers(self._pool)
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True)
 
 
 @contextlib.contextmanager

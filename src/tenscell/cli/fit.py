@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 from pathlib import Path
 
 from ._args import add_out, integer, number
@@ -204,15 +205,16 @@ def read_datasets(paths, prestress_options, min_points: int):
     return datasets
 
 
-def fit_outputs(result, baseline, title, comparison=None, timing=None):
+def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=None):
     """Everything a fit writes, computed before any file is touched: {extension: writer(path)}.
 
     ``timing`` (optional): the command's own clock, stored in fit.json as is.
+    ``figure`` (optional): a future of the figure's PNG bytes (:func:`fit_png`,
+    drawn in a worker process meanwhile); without it the figure is drawn here.
     """
     from .. import plotting
-    from ..io.outputs import write_csv_rows, write_json, write_text
+    from ..io.outputs import write_bytes, write_csv_rows, write_json, write_text
     from ..io.tables import fit_table
-    from ..plotting.fits import fit_panels
     from ..reports.fit import fit_markdown
 
     doc = result.to_dict()
@@ -227,13 +229,33 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None):
         doc["timing"] = timing
     header, rows = fit_table(result, baseline)
     markdown = fit_markdown(result, baseline, title=title, comparison=comparison)
-    fig = fit_panels(result, baseline=baseline, title=title)
+    if figure is None:
+        from ..plotting.fits import fit_panels
+
+        fig = fit_panels(result, baseline=baseline, title=title)
+        png = lambda path: plotting.save(fig, path)  # noqa: E731
+    else:
+        data = figure.result()
+        png = lambda path: write_bytes(path, data)  # noqa: E731
     return {
         "json": lambda path: write_json(path, doc),
         "csv": lambda path: write_csv_rows(path, header, rows),
         "md": lambda path: write_text(path, markdown),
-        "png": lambda path: plotting.save(fig, path),
+        "png": png,
     }
+
+
+def fit_png(result, baseline, title) -> bytes:
+    """The fit's figure as PNG bytes (for a worker process: the image is the same as :func:`fit_outputs` draws)."""
+    from .. import plotting
+    from ..plotting.fits import fit_panels
+
+    return plotting.png_bytes(fit_panels(result, baseline=baseline, title=title))
+
+
+def _warm_plotting() -> None:
+    """Import the plotting stack in the worker while the fit runs, so that drawing the figure starts at once."""
+    from ..plotting import fits  # noqa: F401
 
 
 def _baseline_fit(data, starts, seed, tolerance):
@@ -244,12 +266,13 @@ def _baseline_fit(data, starts, seed, tolerance):
                        patience=3, progress=False)
 
 
-def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, **search):
+def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, *, worker=None, **search):
     """The fit and its homogeneous baseline (the fit itself when it is homogeneous and unconstrained).
 
-    The baseline runs in a worker process of its own, beside the fit: it is
-    independent of it and, with the default one job, would otherwise wait for
-    a core that sits idle. Its result does not depend on this (same seed).
+    The baseline runs in a worker process beside the fit (``worker``, from
+    :func:`tenscell._parallel.background`, or one of its own): it is
+    independent of the fit and, with the default one job, would otherwise wait
+    for a core that sits idle. Its result does not depend on this (same seed).
     """
     from .. import fitting
     from .._parallel import background
@@ -265,7 +288,8 @@ def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_star
         result = main_fit()
         return result, result
     stage(f"homogeneous baseline: {baseline_starts} start(s), in a process of its own")
-    with background(_baseline_fit, data, baseline_starts, seed, tolerance) as task:
+    with background() if worker is None else contextlib.nullcontext(worker) as bg:
+        task = bg.submit(_baseline_fit, data, baseline_starts, seed, tolerance)
         result = main_fit()
         baseline = task.result()
     return result, baseline
@@ -300,6 +324,7 @@ def run(args) -> int:
     import sys
 
     from .. import fitting
+    from .._parallel import background
     from .._progress import stage
     from ..io.outputs import OutputSet
 
@@ -325,16 +350,21 @@ def run(args) -> int:
     stage(f"fitting {sum(d.n for d in datasets)} points: {args.starts} start(s), stiffness "
           f"{args.tendons}, damping {args.damping}, {args.jobs} process(es)")
     clock = _Clock(getattr(args, "started", None))
-    result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,
-                               args.tolerance, args.baseline_starts, **space)
-    timing = clock.timing(result)
-    from ..fitting.models import compare_models
-
-    comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
     names = " and ".join(Path(p).name for p in args.data)
-    timing["outputs_started_s"] = clock.now()
-    outputs = fit_outputs(result, baseline, title=f"Tensegrity fit to {names}", comparison=comparison,
-                          timing=timing)
+    title = f"Tensegrity fit to {names}"
+    with background() as worker:
+        # the worker imports the plotting stack while the fit runs, then fits the baseline and draws the
+        # figure while this process writes the report: the figure is most of the time after the fit
+        worker.submit(_warm_plotting)
+        result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,
+                                   args.tolerance, args.baseline_starts, worker=worker, **space)
+        timing = clock.timing(result)
+        figure = worker.submit(fit_png, result, baseline, title)
+        from ..fitting.models import compare_models
+
+        comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
+        timing["outputs_started_s"] = clock.now()
+        outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure)
     with out as d:
         for ext, name in FIT_FILES.items():
             outputs[ext](d / name)

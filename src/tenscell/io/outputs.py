@@ -31,7 +31,7 @@ from pathlib import Path
 
 from .._parallel import sigint_deferred
 
-__all__ = ["atomic_path", "write_csv_rows", "write_json", "json_ready", "write_text", "OutputSet",
+__all__ = ["atomic_path", "write_csv_rows", "write_json", "json_ready", "write_text", "write_bytes", "OutputSet",
            "OutputLocationError", "check_output_dir", "check_output_file", "read_manifest", "MANIFEST"]
 
 #: name of the manifest file written into every output set
@@ -115,6 +115,12 @@ def write_text(path, text: str) -> None:
     """Write a text file atomically."""
     with atomic_path(path) as tmp:
         tmp.write_text(text)
+
+
+def write_bytes(path, data: bytes) -> None:
+    """Write a binary file atomically."""
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
 
 
 class OutputLocationError(ValueError):

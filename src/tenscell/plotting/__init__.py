@@ -17,7 +17,7 @@ Topics: :mod:`~tenscell.plotting.paper` (Figs. 2–3),
 """
 from __future__ import annotations
 
-from ._style import STYLE, colors, figure_of, moduli_panels, save, style
+from ._style import STYLE, colors, figure_of, moduli_panels, png_bytes, save, style
 from .dynamics import creep_loglog, force_displacement_loop, harmonic_spectrum, time_traces
 from .fits import compactness_front, data_points, fit_figure, fit_panels, measured, plot_fit, stiffness_histogram
 from .spectra import loglog_curve, rates_bar, spectrum_stems
@@ -30,7 +30,7 @@ from .variants import (
 
 __all__ = [
     # style and output
-    "STYLE", "style", "colors", "moduli_panels", "figure_of", "save",
+    "STYLE", "style", "colors", "moduli_panels", "figure_of", "save", "png_bytes",
     # the paper's figures
     "fig2_prestress", "fig3_frequency", "moduli_vs_frequency", "moduli_vs_prestress",
     # variants and sensitivity

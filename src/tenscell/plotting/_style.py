@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 
 from ..io.outputs import atomic_path
 
-__all__ = ["STYLE", "style", "styled", "colors", "new_axes", "new_panels", "moduli_panels", "figure_of", "save",
+__all__ = ["STYLE", "style", "styled", "colors", "new_axes", "new_panels", "moduli_panels", "figure_of", "save", "png_bytes",
            "label_moduli"]
 
 #: rcParams applied (as a context, never globally) to figures tenscell creates
@@ -128,3 +128,19 @@ def save(fig: Any, path) -> None:
             figure.savefig(tmp, format=str(path).rsplit(".", 1)[-1])
     finally:
         plt.close(figure)
+
+
+def png_bytes(fig: Any) -> bytes:
+    """The figure as PNG bytes (what :func:`save` writes to a ``.png``), and close it.
+
+    For figures drawn in a worker process and written by the main one.
+    """
+    import io
+
+    figure = figure_of(fig)
+    buffer = io.BytesIO()
+    try:
+        figure.savefig(buffer, format="png")
+    finally:
+        plt.close(figure)
+    return buffer.getvalue()
