@@ -166,3 +166,21 @@ def test_study_sensitivity_from_fit_takes_the_fitted_paper_cell(fit_json, tmp_pa
     np.testing.assert_array_equal(kw["EA"], result.EA)
     assert cli_main(["study", "no-if", "--from-fit", str(path), "--out", str(tmp_path / "x")]) == 2
     assert "applies to study sensitivity" in capsys.readouterr().err
+
+
+def test_fit_uses_one_process_per_cpu_by_default_and_timing_is_ordered(tmp_path, capsys):
+    from tenscell._parallel import usable_cpus
+
+    out = tmp_path / "fit"
+    code = cli_main(["fit", "bundled:stamenovic2002", "--tendons", "per-family", "--starts", "3", "--out", str(out)])
+    assert code in (0, 1)
+    assert f"3 start(s), stiffness per-family, damping uniform, {min(3, usable_cpus())} process(es)" in \
+        capsys.readouterr().err
+    doc = json.loads((out / "fit.json").read_text())
+    t = doc["timing"]
+    # the command's clock: the fit starts, meets its tolerance, ends; then the baseline; then the outputs
+    assert 0 <= t["fit_started_s"] <= t["fit_finished_s"] <= t["baseline_finished_s"] <= t["outputs_started_s"]
+    if doc["converged"]:
+        assert t["fit_started_s"] <= t["tolerance_met_s"] <= t["fit_finished_s"]
+        assert t["tolerance_met_s"] == pytest.approx(t["fit_started_s"] + doc["time_to_tolerance_s"], abs=1e-3)
+    assert (out / "fit.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"  # drawn in the worker, written here

@@ -27,12 +27,20 @@ import sys
 import threading
 from typing import Any, Callable, Iterable, Literal, Sequence
 
-__all__ = ["starmap", "Workers", "background", "sigint_deferred", "GRACE_S"]
+__all__ = ["starmap", "Workers", "background", "sigint_deferred", "usable_cpus", "GRACE_S"]
 
 #: seconds terminated workers get to exit before they are killed
 GRACE_S = 0.5
 _PR_SET_PDEATHSIG = 1
 _WATCHDOG_PERIOD_S = 0.5
+
+
+def usable_cpus() -> int:
+    """CPUs this process may run on (its affinity mask where the system has one, else the CPU count)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
 
 
 def _die_with_parent(parent_pid: int) -> None:

@@ -53,7 +53,9 @@ def register(sub) -> None:
     p.add_argument("--starts", type=integer(1, 10_000), default=4, help="independent starts")
     p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0,
                    help="random seed; the same seed gives the same fit")
-    p.add_argument("--jobs", type=integer(1, 256), default=1, help="worker processes over the starts")
+    p.add_argument("--jobs", type=integer(1, 256), default=None,
+                   help="worker processes over the starts (default: one per CPU, at most --starts;"
+                        " the result does not depend on it)")
     p.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.01,
                    help="RMS of the log10 errors (decades) every data set must reach")
     p.add_argument("--baseline-starts", type=integer(1, 10_000), default=2,
@@ -324,7 +326,7 @@ def run(args) -> int:
     import sys
 
     from .. import fitting
-    from .._parallel import background
+    from .._parallel import background, usable_cpus
     from .._progress import stage
     from ..io.outputs import OutputSet
 
@@ -347,6 +349,8 @@ def run(args) -> int:
             raise ValueError(f"--holdout {args.holdout[0]:g}:{args.holdout[1]:g}: {err}") from None
         datasets = [train]
     space = search_space(args, datasets)  # bad input: before any fitting
+    if args.jobs is None:
+        args.jobs = min(args.starts, usable_cpus())
     stage(f"fitting {sum(d.n for d in datasets)} points: {args.starts} start(s), stiffness "
           f"{args.tendons}, damping {args.damping}, {args.jobs} process(es)")
     clock = _Clock(getattr(args, "started", None))

@@ -117,11 +117,13 @@ def _study_compactness(out: Path, log, args=None) -> None:
     from ..plotting.fits import stiffness_histogram
     from ..reports.compactness import compactness_markdown
     from ..studies.compactness import compactness_study
+    from .._parallel import usable_cpus
     from .fit import read_datasets
 
     datasets = read_datasets(args.data, args.prestress, 1)
+    jobs = min(args.starts, usable_cpus()) if args.jobs is None else args.jobs
     s = compactness_study(datasets, args.decades, damping=args.damping, starts=args.starts, seed=args.seed,
-                          jobs=args.jobs, tolerance=args.tolerance)
+                          jobs=jobs, tolerance=args.tolerance)
     write_csv_rows(out / "compactness.csv", s.HEADER, s.rows())
     plotting.save(s.plot(title="Best fit against the bound on the stiffness spread"), out / "compactness_front.png")
     written = "compactness.csv, compactness_front.png, compactness.md"
@@ -174,7 +176,9 @@ def register(sub) -> None:
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     g.add_argument("--damping", choices=("uniform", "per-family"), default="uniform", help="damping c")
     g.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per bound")
-    g.add_argument("--jobs", type=integer(1, 256), default=1, help="worker processes over the starts")
+    g.add_argument("--jobs", type=integer(1, 256), default=None,
+                   help="worker processes over the starts (default: one per CPU, at most --starts;"
+                        " the result does not depend on it)")
     g.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.01,
                    help="RMS of the log10 errors (decades) a fit must reach")
     p.set_defaults(func=run)

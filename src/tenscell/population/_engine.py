@@ -24,6 +24,8 @@ import os
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
+from .._parallel import usable_cpus
+
 __all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
            "WorkDirError"]
 
@@ -116,7 +118,7 @@ def cluster(*, client=None, workers: int | None = None, scheduler: str | None = 
         with Client(timeout=timeout, **kw) as c:
             yield c
         return
-    n = (os.cpu_count() or 1) if workers is None else int(workers)
+    n = usable_cpus() if workers is None else int(workers)
     # loopback only, no dashboard: a run on a shared machine opens no port to the network
     with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=None, silence_logs=logging.ERROR) as lc, Client(lc) as c:
