@@ -217,6 +217,7 @@ class Pencil:
         self.describe, self.hint = describe, hint
         self.sparse = sp.issparse(K0)
         self._factors: dict[float, object] = {}
+        self._shifted: dict[float, object] = {}
         self._runs: dict[float, list[LanczosRun]] = {}
         self._retardation: tuple | None = None
 
@@ -310,7 +311,7 @@ class Pencil:
         if shift == 0.0:
             return self.cholesky
         if shift not in self._factors:
-            Ks = (sp.csc_matrix(self.K0) + shift * sp.csc_matrix(self.C0)).tocsc()
+            Ks = self.shifted(shift).tocsc()
             try:
                 self._factors[shift] = factorize_spd(Ks, what=f"K0 + {shift:g}·C0")
             except NotPositiveDefinite as err:
@@ -320,6 +321,14 @@ class Pencil:
                     "stable equilibrium"
                 ) from None
         return self._factors[shift]
+
+    def shifted(self, shift: float):
+        """``K0 + shift·C0`` (sparse CSR, shift in rad/s), formed once per shift for its factor and its Lanczos run."""
+        shift = float(shift)
+        if shift not in self._shifted:
+            self._shifted[shift] = (sp.csr_matrix(self.K0) + shift * sp.csr_matrix(self.C0)).tocsr() if shift \
+                else sp.csr_matrix(self.K0)
+        return self._shifted[shift]
 
     def nearby_shift(self, shift: float) -> float:
         """A shift already in use within :data:`SHIFT_REUSE_FACTOR` of ``shift`` (rad/s), else ``shift``."""
@@ -334,7 +343,7 @@ class Pencil:
         if shift not in self._runs:
             F = self.factor(shift)
             C = sp.csr_matrix(self.C0)
-            Ks = (sp.csr_matrix(self.K0) + shift * C).tocsr() if shift else sp.csr_matrix(self.K0)
+            Ks = self.shifted(shift)
             b, d = self.load, self.probe
             starts = [b] if self.probe_is_load else [b + d, b - d]
             cap = min(self.n, 2000)
