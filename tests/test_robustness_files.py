@@ -219,3 +219,23 @@ def test_binning_keeps_the_objective_and_states_its_rule():
     diffs = [objective(d, a, k) - objective(b, a, k) for a, k in ((100, 0.2), (80, 0.25), (150, 0.1))]
     # equal up to the model's variation across a bin (a decade / 30 bins): far below the objective itself
     assert np.ptp(diffs) < 0.02 * objective(d, 150, 0.1)
+
+
+def test_fit_from_python_bins_dense_data_as_the_command_does():
+    """fitting.fit bins a dense sweep by the same rule as `tenscell fit --max-points` (None: every point)."""
+    from tenscell import fitting
+    from tenscell.io.data import bundled
+    from tenscell.io.thinning import binning_notes
+
+    f = np.logspace(-2, 2, 2000)
+    d = RheologyData(frequency_hz=f, G_storage=300 * f ** 0.2, G_loss=60 * f ** 0.2, source="dense")
+    quick = dict(tendons="uniform", starts=1, hops=0, seed=0, progress=False)
+    r = fitting.fit(d, max_points=40, **quick)
+    assert r.data.n <= 40 and binning_notes(r.data) and r.problem.n_points == r.data.n
+    assert f.min() <= r.data.frequency_hz.min() and r.data.frequency_hz.max() <= f.max()
+    small = fitting.fit(bundled("fabry2001"), **quick)  # default max_points: small data are fitted as they are
+    assert small.data.n == bundled("fabry2001").n and not binning_notes(small.data)
+    part = RheologyData(frequency_hz=f[:200], G_storage=d.G_storage[:200], G_loss=d.G_loss[:200])
+    assert fitting.fit(part, max_points=None, **quick).data.n == 200
+    with pytest.raises(ValueError, match="max_points"):
+        fitting.fit(d, max_points=2, **quick)

@@ -265,7 +265,7 @@ def _baseline_fit(data, starts, seed, tolerance):
     from .. import fitting
 
     return fitting.fit(data, tendons="uniform", starts=starts, seed=seed, jobs=1, tolerance=tolerance, hops=10,
-                       patience=3, progress=False)
+                       patience=3, max_points=None, progress=False)
 
 
 def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, *, worker=None, **search):
@@ -281,8 +281,9 @@ def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_star
     from .._progress import stage
 
     def main_fit():
+        # the command has binned the data already, by its own --max-points
         return fitting.fit(data, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
-                           tolerance=tolerance, **search)
+                           tolerance=tolerance, max_points=None, **search)
 
     constrained = search.get("min_prestress_share") or search.get("min_prestress_elasticity") or search.get(
         "max_decades")

@@ -43,6 +43,7 @@ from ..model.equilibrium import Cell
 from .problem import _LN10, _PENALTY, _SHARE_WEIGHT, FitProblem, as_datasets, make_problem
 from .result import FitAlternative, FitResult
 from .._threads import limited
+from ..io.thinning import DEFAULT_MAX_POINTS
 
 __all__ = ["fit"]
 
@@ -339,6 +340,14 @@ def _warm_start(problem: FitProblem, initial):
     return np.clip(theta, lo, hi)
 
 
+def _binned(datasets, max_points):
+    """The data sets, each moduli sweep longer than ``max_points`` binned in log frequency (creep data as they are)."""
+    if max_points is None:
+        return datasets
+    max_points = _count("max_points", max_points, 4)
+    return tuple(d.binned(max_points) if d.n > max_points and hasattr(d, "binned") else d for d in datasets)
+
+
 def _count(name: str, value, minimum: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
@@ -367,6 +376,7 @@ def fit(
     min_prestress_elasticity: float | None = None,
     elasticity_frequency_hz: float = 0.1,
     initial=None,
+    max_points: int | None = DEFAULT_MAX_POINTS,
     progress: bool | None = None,
 ) -> FitResult:
     """Fit the tensegrity model's G', G'' to measured data (multi-start, analytic Jacobian).
@@ -409,6 +419,12 @@ def fit(
         0 stops at the tolerance.
     bounds, fixed, min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz :
         See :func:`tenscell.fitting.make_problem`.
+    max_points : int or None
+        A moduli data set with more points than this is fitted binned in log
+        frequency per prestress (:func:`tenscell.io.thinning.bin_log_frequency`;
+        the rule and the counts go into the data's comments and the report),
+        as ``tenscell fit --max-points`` does. None fits every point. Creep
+        data are never binned.
     initial : FitResult or array_like, optional
         A warm start: start 0 begins here instead of at a drawn guess (a
         FitResult of the same data and parametrization, or its free
@@ -430,7 +446,7 @@ def fit(
     from ..model.shapes import paper_cell
 
     t_begin = time.monotonic()
-    datasets = as_datasets(data)
+    datasets = _binned(as_datasets(data), max_points)
     cell = paper_cell() if cell is None else cell
     problem = make_problem(datasets, cell, tendons=tendons, damping=damping, bounds=bounds, fixed=fixed,
                            min_prestress_share=min_prestress_share, max_decades=max_decades,
