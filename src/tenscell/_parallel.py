@@ -25,9 +25,9 @@ import os
 import signal
 import sys
 import threading
-from typing import Any, Callable, Iterable, Literal, Sequence
+from typing import Any, Callable, Iterable, Iterator, Literal, Sequence
 
-__all__ = ["starmap", "Workers", "background", "sigint_deferred", "usable_cpus", "GRACE_S"]
+__all__ = ["starmap", "Workers", "background", "sigint_deferred", "usable_cpus", "jobs_for", "GRACE_S"]
 
 #: seconds terminated workers get to exit before they are killed
 GRACE_S = 0.5
@@ -41,6 +41,11 @@ def usable_cpus() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except (AttributeError, OSError):  # pragma: no cover - not Linux
         return max(1, os.cpu_count() or 1)
+
+
+def jobs_for(tasks: int, jobs: int | None = None) -> int:
+    """``jobs`` if given, else one worker process per usable CPU and at most one per task (the commands' default)."""
+    return int(jobs) if jobs is not None else max(1, min(int(tasks), usable_cpus()))
 
 
 def _die_with_parent(parent_pid: int) -> None:
@@ -144,11 +149,27 @@ class Workers:
                                              initargs=(os.getpid(),))
         return self._pool
 
+    def imap(self, fn: Callable[..., Any], arglists: Iterable[Sequence[Any]]) -> Iterator[Any]:
+        """``fn(*args)`` for each task, yielded in task order.
+
+        In this process (``jobs`` 1, or one task) each task runs only when its
+        result is asked for, so a caller that stops reading stops the work; on
+        the workers they all run (:meth:`starmap`) and the unread results are
+        dropped.
+        """
+        tasks = [tuple(a) for a in arglists]
+        if self._in_process(tasks):
+            return (fn(*a) for a in tasks)
+        return iter(self.starmap(fn, tasks))
+
+    def _in_process(self, tasks: list) -> bool:
+        return self.jobs == 1 or len(tasks) <= 1
+
     def starmap(self, fn: Callable[..., Any], arglists: Iterable[Sequence[Any]], *,
                 on_done: Callable[[int, Any], None] | None = None) -> list:
         """``[fn(*args) for args in arglists]`` on these workers (in this process when ``jobs`` is 1)."""
         tasks = [tuple(a) for a in arglists]
-        if self.jobs == 1 or len(tasks) <= 1:
+        if self._in_process(tasks):
             results = []
             for i, a in enumerate(tasks):
                 results.append(fn(*a))

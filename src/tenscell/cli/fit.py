@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import time
 from pathlib import Path
 
 from ._args import add_out, integer, number
@@ -302,14 +303,11 @@ class _Clock:
     """The command's own clock: seconds since :func:`tenscell.cli.main` began (or since the fit, when run directly)."""
 
     def __init__(self, started: float | None):
-        import time
-
-        self._mono = time.monotonic
-        self.started = self._mono() if started is None else started
+        self.started = time.monotonic() if started is None else started
         self.fit_started = self.now()
 
     def now(self) -> float:
-        return round(self._mono() - self.started, 4)
+        return round(time.monotonic() - self.started, 4)
 
     def timing(self, result) -> dict:
         """fit.json's "timing": when the fit began, first met its tolerance, and ended; then the baseline."""
@@ -327,17 +325,19 @@ def run(args) -> int:
     import sys
 
     from .. import fitting
-    from .._parallel import background, usable_cpus
+    from .._parallel import background, jobs_for
     from .._progress import stage
     from ..io.outputs import OutputSet
+    from ..io.thinning import bin_datasets
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
-    for i, data in enumerate(datasets):
-        if data.n > args.max_points and hasattr(data, "binned"):  # moduli only: creep data are kept as they are
-            datasets[i] = data.binned(args.max_points)
-            stage(f"{data.n:,} points of {Path(args.data[i]).name} binned to {datasets[i].n:,} in log frequency "
+    binned = bin_datasets(datasets, args.max_points)  # moduli only: creep data are kept as they are
+    for path, data, thin in zip(args.data, datasets, binned):
+        if thin is not data:
+            stage(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log frequency "
                   f"(--max-points {args.max_points})")
+    datasets = list(binned)
     held = None
     if args.holdout is not None:
         if len(datasets) != 1:
@@ -350,8 +350,7 @@ def run(args) -> int:
             raise ValueError(f"--holdout {args.holdout[0]:g}:{args.holdout[1]:g}: {err}") from None
         datasets = [train]
     space = search_space(args, datasets)  # bad input: before any fitting
-    if args.jobs is None:
-        args.jobs = min(args.starts, usable_cpus())
+    args.jobs = jobs_for(args.starts, args.jobs)
     stage(f"fitting {sum(d.n for d in datasets)} points: {args.starts} start(s), stiffness "
           f"{args.tendons}, damping {args.damping}, {args.jobs} process(es)")
     clock = _Clock(getattr(args, "started", None))

@@ -117,13 +117,12 @@ def _study_compactness(out: Path, log, args=None) -> None:
     from ..plotting.fits import stiffness_histogram
     from ..reports.compactness import compactness_markdown
     from ..studies.compactness import compactness_study
-    from .._parallel import usable_cpus
+    from .._parallel import jobs_for
     from .fit import read_datasets
 
     datasets = read_datasets(args.data, args.prestress, 1)
-    jobs = min(args.starts, usable_cpus()) if args.jobs is None else args.jobs
     s = compactness_study(datasets, args.decades, damping=args.damping, starts=args.starts, seed=args.seed,
-                          jobs=jobs, tolerance=args.tolerance)
+                          jobs=jobs_for(args.starts, args.jobs), tolerance=args.tolerance)
     write_csv_rows(out / "compactness.csv", s.HEADER, s.rows())
     plotting.save(s.plot(title="Best fit against the bound on the stiffness spread"), out / "compactness_front.png")
     written = "compactness.csv, compactness_front.png, compactness.md"

@@ -602,6 +602,14 @@ class FitProblem:
             return np.zeros(0)
         return self._penalty_from(self._evaluate_constrained(self.full(theta), jac=False), jac=False)[0]
 
+    def feasible(self, theta) -> bool:
+        """Whether every activity constraint holds at ``theta`` to within 1 % of its bound (True without one).
+
+        The search counts a state as meeting the tolerance only when it is
+        also feasible (:func:`tenscell.fitting.fit`).
+        """
+        return bool(np.all(self.penalty(theta) <= _SHARE_WEIGHT * 0.01))
+
     def penalty_jacobian(self, theta) -> np.ndarray:
         """Analytic Jacobian of :meth:`penalty`, shape (n_penalties, n_free)."""
         if self.n_penalties == 0:

@@ -356,12 +356,14 @@ class FitResult:
     def time_to_tolerance_s(self) -> float | None:
         """Seconds from the start of the fit until some start first had every data set within the tolerance.
 
-        Read from :attr:`history` (the best-so-far record over all starts); None
-        if the tolerance was never met. The search itself runs on after this
-        moment only to polish (see :func:`tenscell.fitting.fit`, ``polish``).
+        Read from :attr:`history` (the best-so-far record over all starts), by
+        the search's own rule: within the tolerance and feasible (the activity
+        constraints, if any, hold). None if that never happened. The search
+        runs on after this moment only to polish (:func:`tenscell.fitting.fit`,
+        ``polish``).
         """
         for (t, _), theta in zip(self.history, self.history_theta):
-            if float(self.problem.dataset_rms(theta).max()) <= self.tolerance:
+            if float(self.problem.dataset_rms(theta).max()) <= self.tolerance and self.problem.feasible(theta):
                 return float(t)
         return None
 

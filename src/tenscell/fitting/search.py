@@ -40,10 +40,10 @@ from .._checks import positive_scalar
 from .._parallel import Workers
 from .._progress import progress_bar
 from ..model.equilibrium import Cell
-from .problem import _LN10, _PENALTY, _SHARE_WEIGHT, FitProblem, as_datasets, make_problem
+from .problem import _LN10, _PENALTY, FitProblem, as_datasets, make_problem
 from .result import FitAlternative, FitResult
 from .._threads import limited
-from ..io.thinning import DEFAULT_MAX_POINTS
+from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
 
 __all__ = ["fit"]
 
@@ -219,10 +219,7 @@ def _least_squares(problem: FitProblem, theta, max_nfev: int):
 
 def _assess(problem: FitProblem, theta) -> tuple[float, float, bool]:
     """(rms over all data, worst data set's rms, penalties within 1 % of their bound)."""
-    rms = problem.rms(theta)
-    score = float(problem.dataset_rms(theta).max())
-    pen = problem.penalty(theta)
-    return rms, score, bool(np.all(pen <= _SHARE_WEIGHT * 0.01))
+    return problem.rms(theta), float(problem.dataset_rms(theta).max()), problem.feasible(theta)
 
 
 def _step(problem: FitProblem, chain: _Chain, settings: _Settings, max_nfev: int) -> _Chain:
@@ -261,22 +258,6 @@ def _best(chains) -> _Chain:
     return min(met, key=lambda ch: (ch.met_cost, ch.start)) if met else min(chains, key=lambda ch: (ch.cost, ch.start))
 
 
-def _round(workers: Workers, problem, chains, active, settings, cap):
-    """One step of every active start, yielded in start order as ``(k, chain)``.
-
-    In this process the steps run one by one, so a caller that stops reading
-    also stops the search; in worker processes they run together and the
-    steps after the one the caller stopped at are dropped unseen. Either way
-    the starts are advanced in the same order, which keeps the result a
-    function of the seed alone.
-    """
-    if workers.jobs == 1 or len(active) <= 1:
-        for k in active:
-            yield k, _step(problem, chains[k], settings, cap)
-    else:
-        yield from zip(active, workers.starmap(_step, [(problem, chains[k], settings, cap) for k in active]))
-
-
 def _rounds(problem, chains, settings, jobs, polish_effort, bar):
     """Advance the starts round by round until a stopping rule holds (module docstring); returns the stop reason.
 
@@ -293,7 +274,10 @@ def _rounds(problem, chains, settings, jobs, polish_effort, bar):
             if not active:
                 return "every start finished"
             cap = settings.max_nfev if budget is None else max(1, min(settings.max_nfev, budget // len(active)))
-            for k, ch in _round(workers, problem, chains, active, settings, cap):
+            # in start order; reading stops at a stopping rule (Workers.imap: in this process, later steps
+            # never run; on workers, their results are dropped), so the result depends on the seed alone
+            steps = workers.imap(_step, [(problem, chains[k], settings, cap) for k in active])
+            for k, ch in zip(active, steps):
                 chains[k] = ch
                 best = _best(chains)
                 if best.met_score <= settings.target:
@@ -338,14 +322,6 @@ def _warm_start(problem: FitProblem, initial):
                          f"data and parametrization), got {theta.shape[0]} values")
     lo, hi = problem.bounds
     return np.clip(theta, lo, hi)
-
-
-def _binned(datasets, max_points):
-    """The data sets, each moduli sweep longer than ``max_points`` binned in log frequency (creep data as they are)."""
-    if max_points is None:
-        return datasets
-    max_points = _count("max_points", max_points, 4)
-    return tuple(d.binned(max_points) if d.n > max_points and hasattr(d, "binned") else d for d in datasets)
 
 
 def _count(name: str, value, minimum: int) -> int:
@@ -446,7 +422,9 @@ def fit(
     from ..model.shapes import paper_cell
 
     t_begin = time.monotonic()
-    datasets = _binned(as_datasets(data), max_points)
+    datasets = as_datasets(data)
+    if max_points is not None:
+        datasets = bin_datasets(datasets, _count("max_points", max_points, 4))
     cell = paper_cell() if cell is None else cell
     problem = make_problem(datasets, cell, tendons=tendons, damping=damping, bounds=bounds, fixed=fixed,
                            min_prestress_share=min_prestress_share, max_decades=max_decades,

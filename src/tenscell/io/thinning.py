@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-__all__ = ["bin_log_frequency", "binning_notes", "DEFAULT_MAX_POINTS"]
+__all__ = ["bin_log_frequency", "bin_datasets", "binning_notes", "DEFAULT_MAX_POINTS"]
 
 #: points a fit uses at most by default (see :func:`bin_log_frequency`)
 DEFAULT_MAX_POINTS = 100
@@ -120,3 +120,12 @@ def bin_log_frequency(data, max_points: int = DEFAULT_MAX_POINTS):
         G_storage_sd=Gs * math.log(10.0) / w_s, G_loss_sd=Gl * math.log(10.0) / w_l,
         source=data.source, comments=tuple(data.comments) + (rule,),
     )
+
+
+def bin_datasets(datasets, max_points: int = DEFAULT_MAX_POINTS) -> tuple:
+    """Each moduli data set with more than ``max_points`` points binned (:func:`bin_log_frequency`).
+
+    Creep data (which have no frequency axis to bin) and smaller data sets
+    are returned as they are, the same objects.
+    """
+    return tuple(d.binned(max_points) if hasattr(d, "binned") else d for d in datasets)

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import functools
 import inspect
-from contextlib import nullcontext
-from typing import Any, Callable, Iterable, Sequence, TypeVar
+from contextlib import contextmanager, nullcontext
+from typing import Any, Callable, Iterable, Iterator, Sequence, TypeVar
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -19,8 +19,8 @@ from matplotlib.figure import Figure
 
 from ..io.outputs import atomic_path
 
-__all__ = ["STYLE", "style", "styled", "colors", "new_axes", "new_panels", "moduli_panels", "figure_of", "save", "png_bytes",
-           "label_moduli"]
+__all__ = ["STYLE", "style", "styled", "colors", "new_axes", "new_panels", "moduli_panels", "figure_of", "save",
+           "png_bytes", "label_moduli"]
 
 #: rcParams applied (as a context, never globally) to figures tenscell creates
 STYLE: dict[str, Any] = {
@@ -116,18 +116,24 @@ def figure_of(obj: Any) -> Figure:
     raise TypeError(f"save: expected a Figure or Axes, got {type(obj).__name__}")
 
 
+@contextmanager
+def _closing(fig: Any) -> Iterator[Figure]:
+    """The figure behind ``fig`` (see :func:`figure_of`), closed when the block ends, whatever happens."""
+    figure = figure_of(fig)
+    try:
+        yield figure
+    finally:
+        plt.close(figure)
+
+
 def save(fig: Any, path) -> None:
     """Save a figure atomically (PNG, PDF or SVG by extension) and close it.
 
     ``fig`` may be a Figure or what a plot function returned (an Axes or an
     array of Axes).
     """
-    figure = figure_of(fig)
-    try:
-        with atomic_path(path) as tmp:
-            figure.savefig(tmp, format=str(path).rsplit(".", 1)[-1])
-    finally:
-        plt.close(figure)
+    with _closing(fig) as figure, atomic_path(path) as tmp:
+        figure.savefig(tmp, format=str(path).rsplit(".", 1)[-1])
 
 
 def png_bytes(fig: Any) -> bytes:
@@ -137,10 +143,7 @@ def png_bytes(fig: Any) -> bytes:
     """
     import io
 
-    figure = figure_of(fig)
     buffer = io.BytesIO()
-    try:
+    with _closing(fig) as figure:
         figure.savefig(buffer, format="png")
-    finally:
-        plt.close(figure)
     return buffer.getvalue()
