@@ -269,13 +269,16 @@ def _baseline_fit(data, starts, seed, tolerance):
                        patience=3, max_points=None, progress=False)
 
 
-def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, *, worker=None, **search):
+def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, *, worker=None,
+            warm_plotting: bool = False, **search):
     """The fit and its homogeneous baseline (the fit itself when it is homogeneous and unconstrained).
 
     The baseline runs in a worker process beside the fit (``worker``, from
     :func:`tenscell._parallel.background`, or one of its own): it is
     independent of the fit and, with the default one job, would otherwise wait
     for a core that sits idle. Its result does not depend on this (same seed).
+    With ``warm_plotting`` the worker then imports the plotting stack, after
+    the baseline (which is needed first), for a figure drawn there later.
     """
     from .. import fitting
     from .._parallel import background
@@ -288,14 +291,18 @@ def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_star
 
     constrained = search.get("min_prestress_share") or search.get("min_prestress_elasticity") or search.get(
         "max_decades")
-    if tendons == "uniform" and damping == "uniform" and not constrained:
+    homogeneous = tendons == "uniform" and damping == "uniform" and not constrained
+    if homogeneous and not warm_plotting:  # nothing for a worker to do
         result = main_fit()
         return result, result
-    stage(f"homogeneous baseline: {baseline_starts} start(s), in a process of its own")
+    if not homogeneous:
+        stage(f"homogeneous baseline: {baseline_starts} start(s), in a process of its own")
     with background() if worker is None else contextlib.nullcontext(worker) as bg:
-        task = bg.submit(_baseline_fit, data, baseline_starts, seed, tolerance)
+        task = None if homogeneous else bg.submit(_baseline_fit, data, baseline_starts, seed, tolerance)
+        if warm_plotting:
+            bg.submit(_warm_plotting)
         result = main_fit()
-        baseline = task.result()
+        baseline = result if task is None else task.result()
     return result, baseline
 
 
@@ -357,11 +364,10 @@ def run(args) -> int:
     names = " and ".join(Path(p).name for p in args.data)
     title = f"Tensegrity fit to {names}"
     with background() as worker:
-        # the worker imports the plotting stack while the fit runs, then fits the baseline and draws the
+        # while the fit runs, the worker fits the baseline and imports the plotting stack; then it draws the
         # figure while this process writes the report: the figure is most of the time after the fit
-        worker.submit(_warm_plotting)
         result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,
-                                   args.tolerance, args.baseline_starts, worker=worker, **space)
+                                   args.tolerance, args.baseline_starts, worker=worker, warm_plotting=True, **space)
         timing = clock.timing(result)
         figure = worker.submit(fit_png, result, baseline, title)
         from ..fitting.models import compare_models
