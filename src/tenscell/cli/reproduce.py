@@ -8,6 +8,7 @@ from __future__ import annotations
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 from ._args import add_out
 
@@ -51,8 +52,8 @@ def reproduce_fit(out: Path, log) -> None:
 
     # the command's default search on 2 processes, polishing longer so that the figures sit well inside
     # the tolerance; the searches stop at their target, which keeps `make reproduce` fast
-    search = dict(starts=4, seed=0, jobs=2, tolerance=0.01, baseline_starts=1, polish_effort=4.0)
-    active = {"min_prestress_elasticity": 0.7}  # ∂lnG'/∂lnP at 0.1 Hz as in adherent cells
+    search: dict[str, Any] = dict(starts=4, seed=0, jobs=2, tolerance=0.01, baseline_starts=1, polish_effort=4.0)
+    active: dict[str, Any] = {"min_prestress_elasticity": 0.7}  # ∂lnG'/∂lnP at 0.1 Hz as in adherent cells
     for name, stem, title, damping, extra in (
         ("stamenovic2002", "fig4_prestress_fit", "Fig. 4: moduli versus prestress at 0.1 Hz (Stamenović 2002)",
          "uniform", {}),
