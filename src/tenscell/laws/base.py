@@ -1,0 +1,309 @@
+"""The tendon-law protocol: :class:`TendonLaw`, its :class:`Tangent` and :class:`Parameter`.
+
+Every law in :mod:`tenscell.laws` subclasses :class:`TendonLaw`; see the package docstring for the interface.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar, NamedTuple, Self
+
+import numpy as np
+
+from .._checks import positive_array, positive_scalar
+from .._results import dataframe, format_repr
+from ..model.equilibrium import Cell
+
+__all__ = ["TendonLaw", "Parameter", "Tangent", "LinearizationError"]
+
+
+class LinearizationError(ValueError):
+    """The tendon law has no linearization at rest (its rate derivative at l' = 0 is infinite)."""
+
+
+class Parameter(NamedTuple):
+    """A per-tendon parameter of a law: its field name, unit, and whether 0 is allowed (else > 0)."""
+
+    name: str
+    unit: str
+    allow_zero: bool = False
+
+
+# ---- tangents ---------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False, repr=False)
+class Tangent:
+    """Tangent stiffness and damping of each tendon at a reference, with their derivatives.
+
+    Attributes
+    ----------
+    l, T : ndarray, shape (m,)
+        Reference lengths (m) and tensions (N) the tangent was taken at.
+    k : ndarray, shape (m,)
+        Tangent stiffness ``∂T/∂l`` at rest (N/m).
+    c : ndarray, shape (m,)
+        Tangent damping ``∂T/∂l'`` at rest (N·s/m).
+    dk_dT, dc_dT : ndarray, shape (m,)
+        ``∂k_j/∂T_j`` (1/m) and ``∂c_j/∂T_j`` (s/m) at fixed law parameters
+        (the rest length follows the tension).
+    names : tuple of str
+        The law's per-tendon parameters, e.g. ``("EA", "c")``.
+    units : tuple of str
+        Their units.
+    values : ndarray, shape (p, m)
+        Parameter values; NaN where tendon ``j`` has no such parameter (a composite law).
+    dk, dc : ndarray, shape (p, m)
+        ``∂k_j/∂θ_pj`` and ``∂c_j/∂θ_pj`` at fixed tension (0 where absent).
+        A tendon's tangent depends on its own parameters only.
+    """
+
+    l: np.ndarray
+    T: np.ndarray
+    k: np.ndarray
+    c: np.ndarray
+    dk_dT: np.ndarray
+    dc_dT: np.ndarray
+    names: tuple
+    units: tuple
+    values: np.ndarray
+    dk: np.ndarray
+    dc: np.ndarray
+
+    @property
+    def m(self) -> int:
+        """Number of tendons."""
+        return self.k.size
+
+    @property
+    def present(self) -> np.ndarray:
+        """``values`` is defined, shape (p, m)."""
+        return ~np.isnan(self.values)
+
+    def dP(self, T0) -> tuple[np.ndarray, np.ndarray]:
+        """``(∂k/∂P, ∂c/∂P)`` for tensions ``T = P·T0`` (N/m per N, N·s/m per N), shape (m,) each."""
+        T0 = np.asarray(T0, dtype=float)
+        return self.dk_dT * T0, self.dc_dT * T0
+
+    def row(self, name: str) -> int:
+        """Index of a parameter in ``names``."""
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise ValueError(f"the law has no parameter {name!r}; it has {', '.join(self.names)}") from None
+
+    def __repr__(self) -> str:
+        return format_repr(
+            f"Tangent of {self.m} tendons",
+            f"k = {self.k.min():.4g}…{self.k.max():.4g} N/m, c = {self.c.min():.4g}…{self.c.max():.4g} N·s/m",
+            f"parameters: {', '.join(f'{n} ({u})' for n, u in zip(self.names, self.units))}",
+        )
+
+    def to_dataframe(self):
+        """One row per tendon: length, tension, k, c, ∂k/∂T and each parameter with ∂k, ∂c."""
+        cols = {"tendon": np.arange(self.m), "length_m": self.l, "tension_N": self.T,
+                "k_N_per_m": self.k, "c_Ns_per_m": self.c, "dk_dT_per_m": self.dk_dT, "dc_dT_s_per_m": self.dc_dT}
+        for i, (n, u) in enumerate(zip(self.names, self.units)):
+            cols[f"{n}_{_unit_tag(u)}"] = self.values[i]
+            cols[f"dk_d{n}"] = self.dk[i]
+            cols[f"dc_d{n}"] = self.dc[i]
+        return dataframe(cols)
+
+
+def _unit_tag(unit: str) -> str:
+    return {"N": "N", "N·s/m": "Ns_per_m", "N/m": "N_per_m", "": "1", "N·(s/m)^beta": "N_sbeta_per_mbeta"}.get(
+        unit, unit.replace("·", "").replace("/", "_per_") or "1")
+
+
+# ---- the base class -----------------------------------------------------------------------------------
+class TendonLaw:
+    """Base class of every tendon law (see the module docstring for the interface).
+
+    Subclasses are frozen dataclasses whose per-tendon parameter fields are
+    listed in :attr:`parameters`, plus ``l0`` (rest lengths, m, or None
+    until the law is placed at a reference).
+    """
+
+    #: the per-tendon parameters, in order (their fields hold scalars or (m,) arrays)
+    parameters: ClassVar[tuple[Parameter, ...]] = ()
+    rate_linear: ClassVar[bool] = True
+    l0: Any = None
+
+    # -- to implement -----------------------------------------------------------------------------
+    def tension(self, l, ldot):
+        """Tension (N) at lengths ``l`` (m) and rates ``ldot`` (m/s); needs ``l0``."""
+        raise NotImplementedError
+
+    def derivatives(self, l, ldot):
+        """``(T, ∂T/∂l, ∂T/∂l')`` in (N, N/m, N·s/m); needs ``l0``."""
+        raise NotImplementedError
+
+    def rest_lengths(self, l, T):
+        """Rest lengths (m) at which the law carries ``T`` (N) at length ``l`` (m) and ``l' = 0``."""
+        raise NotImplementedError
+
+    # -- validation and placement -----------------------------------------------------------------
+    def _validate(self) -> None:
+        """Check every parameter (finite, > 0 or ≥ 0) and ``l0``; store read-only float arrays."""
+        shape = None
+        specs = list(self.parameters) + ([Parameter("l0", "m")] if self.l0 is not None else [])
+        for p in specs:
+            arr = positive_array(f"{p.name} (rest length)" if p.name == "l0" else p.name, getattr(self, p.name),
+                                 None, p.unit, allow_zero=p.allow_zero)
+            if arr.ndim > 1:
+                raise ValueError(f"{p.name} must be a scalar or a 1-D array (one value per tendon), got shape {arr.shape}")
+            if arr.ndim == 1:
+                if shape is not None and arr.shape != shape:
+                    raise ValueError(f"{p.name} has {arr.shape[0]} entries but another parameter has {shape[0]}")
+                shape = arr.shape
+            arr = np.array(arr, dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, p.name, arr)
+        if shape is not None:  # one value per tendon everywhere, so that m and indexing are unambiguous
+            for p in specs:
+                arr = getattr(self, p.name)
+                if arr.ndim == 0:
+                    arr = np.full(shape, float(arr))
+                    arr.setflags(write=False)
+                    object.__setattr__(self, p.name, arr)
+
+    @property
+    def m(self) -> int | None:
+        """Number of tendons (None while every parameter is a scalar and no rest lengths are set)."""
+        for p in ([Parameter("l0", "m")] if self.l0 is not None else []) + list(self.parameters):
+            a = getattr(self, p.name)
+            if np.ndim(a) == 1:
+                return int(np.shape(a)[0])
+        return None
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of the per-tendon parameters."""
+        return tuple(p.name for p in self.parameters)
+
+    def _l0(self) -> np.ndarray:
+        if self.l0 is None:
+            raise ValueError(
+                f"this {type(self).__name__} law has no rest lengths yet: place it at a reference with "
+                "law.at_prestress(cell, P) or law.at_tension(lengths, tensions)"
+            )
+        return self.l0
+
+    def with_rest_lengths(self, l0) -> Self:
+        """The same law with rest lengths ``l0`` (m)."""
+        return dataclasses.replace(self, l0=l0)  # type: ignore[type-var]  # every law is a dataclass
+
+    def _placed(self, l0) -> Self:
+        """The same law with rest lengths ``l0`` already known to be valid (no re-validation)."""
+        obj = object.__new__(type(self))
+        obj.__dict__.update(self.__dict__)
+        obj.__dict__["l0"] = np.asarray(l0, dtype=float)
+        return obj
+
+    def at_tension(self, l, T) -> Self:
+        """The law with the rest lengths that give tensions ``T`` (N) at lengths ``l`` (m) at rest."""
+        return self.with_rest_lengths(self.rest_lengths(l, T))
+
+    def at_prestress(self, cell: Cell, P: float) -> Self:
+        """The law placed at ``cell``'s reference with tensions ``P·T0`` (rest lengths from the inverse law)."""
+        P = positive_scalar("P (prestress)", P, "N")
+        m = self.m
+        if m is not None and m != cell.m:
+            raise ValueError(f"the tendon law has {m} tendons but the cell has {cell.m}")
+        return self.at_tension(cell.lengths, P * cell.T0)
+
+    # -- in motion: defaults --------------------------------------------------------------------------
+    def elastic(self, l):
+        """``T(l, 0)`` (N): the rate-independent part."""
+        l = np.asarray(l, dtype=float)
+        return self.tension(l, np.zeros_like(l))
+
+    def stiffness_at_rest(self, l):
+        """``∂T/∂l`` at ``l' = 0`` (N/m)."""
+        l = np.asarray(l, dtype=float)
+        return np.asarray(self.derivatives(l, np.zeros_like(l))[1], dtype=float)
+
+    def damping_at_rest(self, l):
+        """``∂T/∂l'`` at ``l' = 0`` of the exact law (N·s/m)."""
+        l = np.asarray(l, dtype=float)
+        return np.asarray(self.derivatives(l, np.zeros_like(l))[2], dtype=float)
+
+    # -- at a reference -----------------------------------------------------------------------------
+    def tangent_at_rest(self, l, T) -> tuple[np.ndarray, np.ndarray]:
+        """``(k, c)``: tangent stiffness (N/m) and damping (N·s/m) at rest, lengths ``l`` (m), tensions ``T`` (N)."""
+        l = np.asarray(l, dtype=float)
+        placed = self.at_tension(l, T)
+        return placed.stiffness_at_rest(l), placed.damping_at_rest(l)
+
+    def _reference(self, l, T) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(l0, k, c)`` at a reference in one pass (what a linearization needs)."""
+        k, c = self.tangent_at_rest(l, T)
+        return self.rest_lengths(l, T), k, c
+
+    def parameter_values(self, m: int) -> np.ndarray:
+        """The parameters as an array of shape ``(p, m)``."""
+        return np.array([np.broadcast_to(np.asarray(getattr(self, n), dtype=float), (m,)) for n in self.names],
+                        dtype=float).reshape(len(self.names), m)
+
+    def tangent(self, l, T) -> Tangent:
+        """:class:`Tangent` with derivatives, here by central differences (built-in laws are exact).
+
+        Steps: ``1e-5·(|T| + k·l)`` in the tension and ``1e-5·|θ|`` in each
+        parameter (second-order one-sided where a parameter is 0).
+        """
+        l = np.asarray(l, dtype=float)
+        T = np.broadcast_to(np.asarray(T, dtype=float), l.shape).copy()
+        k, c = self.tangent_at_rest(l, T)
+        h = 1e-5 * (np.abs(T) + np.abs(k) * l)
+        kp, cp = self.tangent_at_rest(l, T + h)
+        km, cm = self.tangent_at_rest(l, T - h)
+        vals = self.parameter_values(l.size)
+        dk, dc = np.zeros_like(vals), np.zeros_like(vals)
+        for i, name in enumerate(self.names):
+            v = vals[i]
+            hv = 1e-5 * np.where(v != 0, np.abs(v), 1.0)
+
+            def at(s, name=name, v=v, hv=hv):
+                return dataclasses.replace(self, **{name: v + s * hv}).tangent_at_rest(l, T)
+
+            (k1, c1) = at(1)
+            if np.all(v - hv > 0):
+                km1, cm1 = at(-1)
+                dk[i], dc[i] = (k1 - km1) / (2 * hv), (c1 - cm1) / (2 * hv)
+            else:  # a parameter at its lower bound 0: second-order forward difference
+                k2, c2 = at(2)
+                dk[i], dc[i] = (-3 * k + 4 * k1 - k2) / (2 * hv), (-3 * c + 4 * c1 - c2) / (2 * hv)
+        return Tangent(l=l, T=T, k=k, c=c, dk_dT=(kp - km) / (2 * h), dc_dT=(cp - cm) / (2 * h), names=self.names,
+                       units=tuple(p.unit for p in self.parameters), values=vals, dk=dk, dc=dc)
+
+    def _tangent(self, l, T, k, c, dk_dT, dk: dict, dc: dict) -> Tangent:
+        """Assemble an exact :class:`Tangent` from per-parameter derivative arrays (missing = 0)."""
+        m = l.size
+        z = np.zeros(m)
+        vals = self.parameter_values(m)
+        bc = lambda x: np.broadcast_to(np.asarray(x, dtype=float), (m,))  # noqa: E731
+        return Tangent(
+            l=l, T=T, k=bc(k).copy(), c=bc(c).copy(), dk_dT=bc(dk_dT).copy(), dc_dT=z, names=self.names,
+            units=tuple(p.unit for p in self.parameters), values=vals,
+            dk=np.array([bc(dk.get(n, z)) for n in self.names]).reshape(len(self.names), m),
+            dc=np.array([bc(dc.get(n, z)) for n in self.names]).reshape(len(self.names), m),
+        )
+
+    @classmethod
+    def _trusted(cls, **fields):
+        """Build without validation, from arrays already checked by the caller (hot paths)."""
+        obj = object.__new__(cls)
+        for f in dataclasses.fields(cls):
+            object.__setattr__(obj, f.name, fields.get(f.name, f.default))
+        return obj
+
+
+def _refs(l, T) -> tuple[np.ndarray, np.ndarray]:
+    l = np.asarray(l, dtype=float)
+    T = np.asarray(T, dtype=float)
+    return l, (T if T.shape == l.shape else np.broadcast_to(T, l.shape))
+
+
+def _per(x, shape) -> np.ndarray:
+    """A parameter as an array of ``shape`` (no copy when it already is one)."""
+    return x if np.shape(x) == shape else np.broadcast_to(np.asarray(x, dtype=float), shape).copy()
+
+
