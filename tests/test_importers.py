@@ -7,7 +7,8 @@ import pandas as pd
 import pytest
 
 from tenscell.io.data import DataError, RheologyData
-from tenscell.io.importers import ColumnMap, from_dataframe, read_rheocompass, read_table
+from tenscell.io.importers import ColumnMap, from_dataframe, read_table
+from tenscell.io.instruments import read_rheocompass
 
 DATA = Path(__file__).parent / "data"
 ALPHA, G0, ETA = 0.2, 50.0, 0.05  # the law the RheoCompass-style fixture was written from (Pa at 1 rad/s, Pa·s)
@@ -159,9 +160,10 @@ def test_excel_with_a_units_row(tmp_path, reference):
 # ---- an instrument export: Anton Paar RheoCompass text table ---------------------------------
 def test_rheocompass_export():
     path = DATA / "rheocompass_frequency_sweep.txt"
-    with pytest.raises(DataError, match="2 intervals .* choose one with interval="):
-        read_rheocompass(path)
+    # interval 1 is an amplitude sweep at one frequency: not a frequency sweep, so the sweep is read by default
+    auto = read_rheocompass(path)
     data = read_rheocompass(path, interval=2)
+    np.testing.assert_array_equal(auto.frequency_hz, data.frequency_hz)
     assert data.n == 16 and data.kind == "frequency"
     # rad/s -> Hz: the sweep ran from 628 to 0.628 rad/s, i.e. 100 Hz down to 0.1 Hz
     assert data.frequency_hz.max() == pytest.approx(628.0 / (2 * np.pi), rel=1e-3)
@@ -186,5 +188,5 @@ def test_rheocompass_errors_name_the_line(tmp_path):
         read_rheocompass(p, interval=2)
     other = tmp_path / "other.txt"
     other.write_text("Project:\tx\nPoint\tG\n")
-    with pytest.raises(DataError, match="other.txt: no 'Interval data:' line"):
+    with pytest.raises(DataError, match="other.txt: no 'Interval data:' line; expected an Anton Paar RheoCompass"):
         read_rheocompass(other)

@@ -29,7 +29,7 @@ NUMERIC_FLAGS = {
                   "--delta-deg": (), "--EA": (), "--c": (), "--L": ()},
     tuple(FIT): {"--starts": (), "--seed": ("zero",), "--jobs": (), "--tolerance": (), "--baseline-starts": (),
                  "--max-points": (), "--min-prestress-share": (), "--max-decades": (),
-                 "--min-prestress-elasticity": ()},
+                 "--min-prestress-elasticity": (), "--temperature": ("negative", "zero")},
     ("simulate", "--amplitude", "1", "--freq", "1"): {
         "--amplitude": (), "--amplitudes": (), "--freq": (), "--cycles": (), "--samples": (),
         "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),
@@ -39,7 +39,8 @@ NUMERIC_FLAGS = {
                  "--prestress": (), "--P": (), "--beta": (), "--velocity-scale": (), "--rtol": ()},
     ("study", "sensitivity"): {"--draws": (), "--seed": ("zero",)},
     ("study", "compactness", "DATA"): {"--decades": (), "--starts": (), "--jobs": (), "--tolerance": (),
-                                       "--min-prestress-share": (), "--max-decades": ()},
+                                       "--min-prestress-share": (), "--max-decades": (),
+                                       "--temperature": ("negative", "zero")},
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
     ("synth-population", "--out", "OUT"): {"--cells": (), "--noise": ("zero",), "--spread": ("zero",), "--freq": (),

@@ -53,7 +53,9 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
                    "fit_power_law", "local_exponent", "relaxation_modulus", "stress_relaxation"),
     # measured data
     "io.data": ("DataError", "RheologyData", "bundled", "bundled_names", "read_csv"),
-    "io.importers": ("ColumnMap", "read_rheocompass", "read_table"),
+    "io.creep_data": ("CreepData", "read_creep_csv"),
+    "io.importers": ("ColumnMap", "read_table"),
+    "io.instruments": ("read_data", "read_rheocompass", "read_trios"),
     # analyses
     "summary": ("relaxation_modes", "summarize"),
     "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
@@ -107,7 +109,9 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
     from ._threads import set_threads, threads
     from .fitting import FitParameter, FitResult, fit
     from .io.data import DataError, RheologyData, bundled, bundled_names, read_csv
-    from .io.importers import ColumnMap, read_rheocompass, read_table
+    from .io.creep_data import CreepData, read_creep_csv
+    from .io.importers import ColumnMap, read_table
+    from .io.instruments import read_data, read_rheocompass, read_trios
     from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
     from .laws import (
         CompositeLaw, LinearSpring, LinearizationError, PowerDashpot, StiffeningFilament, Tangent, TendonLaw, Voigt,

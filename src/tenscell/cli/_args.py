@@ -21,7 +21,8 @@ import sys
 __all__ = [
     "Parser", "HelpFormatter", "number", "integer", "number_list", "frequencies", "member_values",
     "lattice_size", "grid_cost", "add_model_options", "add_prestress", "add_out", "hidden_alias", "add_from_fit",
-    "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS",
+    "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS", "add_data_options",
+    "data_options_from_args", "DATA_COLUMNS", "DATA_UNITS",
 ]
 
 #: allowed range of each physical quantity (closed interval, in the flag's unit). The model is
@@ -368,3 +369,81 @@ def command_line(argv) -> str:
     """The command as typed (for manifests)."""
     import shlex
     return "tenscell " + shlex.join(str(a) for a in (sys.argv[1:] if argv is None else argv))
+
+
+# ---- a lab's own files: what each column holds, in which unit --------------------------------------------
+#: --columns QUANTITY=NAME: the fields of tenscell.io.importers.ColumnMap that name a column
+DATA_COLUMNS = ("frequency", "storage", "loss", "magnitude", "phase", "loss_tangent", "prestress", "storage_sd",
+                "loss_sd", "time", "compliance", "compliance_sd")
+#: --units QUANTITY=UNIT -> the ColumnMap field holding that unit
+DATA_UNITS = {"frequency": "frequency_unit", "modulus": "modulus_unit", "phase": "phase_unit",
+              "prestress": "prestress_unit", "time": "time_unit", "compliance": "compliance_unit"}
+
+
+def _assignment(keys, flag: str, example: str):
+    """An argparse ``type``: ``KEY=VALUE`` with KEY one of ``keys``."""
+
+    def convert(text):
+        key, sep, value = str(text).partition("=")
+        key = key.strip()
+        if not sep or not value.strip():
+            raise argparse.ArgumentTypeError(f"expected QUANTITY=VALUE (e.g. {example}), got {text!r}")
+        if key not in keys:
+            raise argparse.ArgumentTypeError(f"{key!r} is not one of {', '.join(keys)}")
+        return key, value.strip()
+
+    convert.__name__ = flag
+    return convert
+
+
+def add_data_options(p: argparse.ArgumentParser) -> None:
+    """``--columns``, ``--units``, ``--columns-file``, ``--step``, ``--temperature``: reading a lab's own files.
+
+    The same rules as :func:`tenscell.io.instruments.read_data`: without them a file's layout and units are
+    recognised from its content (tenscell's CSV, TRIOS, RheoCompass, a table with recognised headers)."""
+    g = p.add_argument_group("reading your own files (see docs/importing-data.md)")
+    g.add_argument("--columns", action="append", default=None, metavar="QUANTITY=NAME",
+                   type=_assignment(DATA_COLUMNS, "--columns", "storage=\"G' [Pa]\""),
+                   help=f"which column holds QUANTITY ({', '.join(DATA_COLUMNS)}); repeatable; default "
+                        "recognised from the headers")
+    g.add_argument("--units", action="append", default=None, metavar="QUANTITY=UNIT",
+                   type=_assignment(tuple(DATA_UNITS), "--units", "modulus=kPa"),
+                   help="unit of QUANTITY (frequency Hz|rad/s, modulus Pa|kPa|MPa, phase deg|rad, prestress Pa|kPa, "
+                        "time s|ms|min, compliance 1/Pa|1/kPa|1/MPa) when the file does not state it; repeatable")
+    g.add_argument("--columns-file", default=None, metavar="FILE.json",
+                   help="a JSON object of tenscell.ColumnMap fields (e.g. {\"frequency\": \"omega\", "
+                        "\"frequency_unit\": \"rad/s\", ...}); --columns and --units override it")
+    g.add_argument("--step", default=None, metavar="N|NAME",
+                   help="TRIOS step or RheoCompass interval to read (number or name) when the file holds several")
+    g.add_argument("--temperature", type=number(-273.15, 1e4, "°C"), default=None, metavar="C",
+                   help="read the TRIOS step or RheoCompass interval at this temperature (°C)")
+
+
+def data_options_from_args(args) -> dict:
+    """keyword arguments of :func:`tenscell.io.instruments.read_data` from :func:`add_data_options`' flags
+    (ValueError, naming the flag, for a file that cannot be read or contradictory choices)."""
+    import json
+
+    fields: dict = {}
+    if getattr(args, "columns_file", None):
+        try:
+            with open(args.columns_file, encoding="utf-8") as fh:
+                loaded = json.load(fh)
+        except (OSError, ValueError) as err:
+            raise ValueError(f"--columns-file {args.columns_file}: {err}") from None
+        if not isinstance(loaded, dict):
+            raise ValueError(f"--columns-file {args.columns_file}: expected a JSON object of ColumnMap fields")
+        fields.update(loaded)
+    fields.update(dict(getattr(args, "columns", None) or ()))
+    units = {DATA_UNITS[k]: v for k, v in (getattr(args, "units", None) or ())}
+    if getattr(args, "step", None) is not None and getattr(args, "temperature", None) is not None:
+        raise ValueError("--step and --temperature both choose the step; give one")
+    step = getattr(args, "step", None)
+    out = {"columns": fields or None, "step": int(step) if step is not None and step.strip().isdigit() else step,
+           "temperature": getattr(args, "temperature", None)}
+    if units:
+        if fields:
+            fields.update(units)
+        else:
+            out["units"] = units
+    return out

@@ -6,7 +6,7 @@ import contextlib
 import time
 from pathlib import Path
 
-from ._args import add_out, integer, number
+from ._args import add_data_options, add_out, data_options_from_args, integer, number
 
 #: the fit's parametrizations (the same tuples as tenscell.fitting.TENDON_MODES / DAMPING_MODES,
 #: written out so that building the parser does not import the fitting code; a test checks they agree)
@@ -27,14 +27,16 @@ def register(sub) -> None:
     p = sub.add_parser(
         "fit", help="fit the tensegrity model to measured G', G'' or creep J(t) (CSV; several files: one joint fit)",
         description="Fit tendon stiffnesses, damping, prestress and strut length so that the model's G', G'' "
-                    "match CSV files of measured moduli (frequency sweep, prestress sweep or |G|/phase) or creep "
-                    "compliance (time_s, creep_compliance_per_Pa); see docs/fitting.md. Several files are fitted jointly by one parameter set: a frequency sweep "
+                    "match files of measured moduli (frequency sweep, prestress sweep or |G|/phase) or creep "
+                    "compliance: tenscell's CSV, TA TRIOS and Anton Paar RheoCompass text exports, or CSV/TSV/Excel "
+                    "tables whose headers say what they hold (else --columns/--units; see docs/importing-data.md "
+                    "and docs/fitting.md). Several files are fitted jointly by one parameter set: a frequency sweep "
                     "that states its prestress (a prestress_Pa column, or --prestress FILE=PA) is linked to the "
                     "others by one prestress scale; otherwise its prestress is a fitted, reported parameter. "
                     "bundled:NAME reads a data set shipped with tenscell (fabry2001, stamenovic2002). "
                     "Writes fit.json, fit.csv, fit.png and report.md into --out. Exit status 0 if every data "
                     "set's RMS of the log10 errors reached --tolerance, 1 if not, 2 for bad input.")
-    p.add_argument("data", nargs="+", help="CSV file(s) of measured moduli or creep compliance, or bundled:NAME")
+    p.add_argument("data", nargs="+", help="file(s) of measured moduli or creep compliance, or bundled:NAME")
     p.add_argument("--prestress", action="append", metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     p.add_argument("--tendons", choices=TENDON_MODES, default="per-tendon",
@@ -42,6 +44,7 @@ def register(sub) -> None:
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform",
                    help="damping c: one for all (as in the paper) or per family")
     add_constraints(p)
+    add_data_options(p)
     p.add_argument("--bound", action="append", type=_bound, metavar="KIND=LO:HI", default=None,
                    help="bounds of every parameter of a kind, in SI units (repeatable): EA (N), c (N·s/m), P (N), "
                         "s (m²), P_data (Pa), L (m); e.g. --bound EA=1e-3:1e3")
@@ -171,18 +174,23 @@ def add_constraints(p) -> None:
                    help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
 
 
-def read_data_arg(text: str, min_points: int):
-    """A data file (moduli or creep compliance, by its header), or ``bundled:NAME`` for a data set shipped with tenscell."""
-    from ..io.creep_data import read_measurements
+def read_data_arg(text: str, min_points: int, options: dict | None = None):
+    """A data file (moduli or creep compliance; tenscell's CSV, an instrument export or a table with recognised
+    headers, see :func:`tenscell.io.instruments.read_data`), or ``bundled:NAME`` for a data set shipped with
+    tenscell. ``options``: :func:`~tenscell.cli._args.data_options_from_args` (column map, units, step)."""
     from ..io.data import bundled
+    from ..io.instruments import read_data
 
     if text.lower().startswith("bundled:"):
         return bundled(text.split(":", 1)[1])
-    return read_measurements(text, min_points=min_points)
+    options = dict(options or {})
+    units = options.pop("units", None) or {}
+    return read_data(text, min_points=min_points, **options, **units)
 
 
-def read_datasets(paths, prestress_options, min_points: int):
-    """Read the data files and attach the prestresses stated by ``--prestress FILE=PA``."""
+def read_datasets(paths, prestress_options, min_points: int, options: dict | None = None):
+    """Read the data files (with the column map, units and step of ``options``, see
+    :func:`~tenscell.cli._args.data_options_from_args`) and attach the prestresses stated by ``--prestress FILE=PA``."""
     stated = {}
     for opt in prestress_options or ():
         name, sep, value = opt.rpartition("=")
@@ -198,7 +206,7 @@ def read_datasets(paths, prestress_options, min_points: int):
             raise ValueError(f"--prestress {opt}: {value!r} is not a number (Pa)") from None
     datasets = []
     for k, p in enumerate(paths):
-        d = read_data_arg(p, min_points if len(paths) == 1 else 1)
+        d = read_data_arg(p, min_points if len(paths) == 1 else 1, options)
         if k in stated:
             try:
                 d = d.with_prestress(stated[k])
@@ -338,7 +346,8 @@ def run(args) -> int:
     from ..io.thinning import bin_datasets
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
+    datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping),
+                             data_options_from_args(args))
     binned = bin_datasets(datasets, args.max_points)  # moduli only: creep data are kept as they are
     for path, data, thin in zip(args.data, datasets, binned):
         if thin is not data:

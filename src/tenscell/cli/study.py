@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._args import add_out, integer, number, number_list
+from ._args import add_data_options, add_out, integer, number, number_list
 
 def _study_no_if(out: Path, log, args=None) -> None:
     from .. import plotting
@@ -118,9 +118,10 @@ def _study_compactness(out: Path, log, args=None) -> None:
     from ..reports.compactness import compactness_markdown
     from ..studies.compactness import compactness_study
     from .._parallel import jobs_for
+    from ._args import data_options_from_args
     from .fit import read_datasets
 
-    datasets = read_datasets(args.data, args.prestress, 1)
+    datasets = read_datasets(args.data, args.prestress, 1, data_options_from_args(args))
     s = compactness_study(datasets, args.decades, damping=args.damping, starts=args.starts, seed=args.seed,
                           jobs=jobs_for(args.starts, args.jobs), tolerance=args.tolerance)
     write_csv_rows(out / "compactness.csv", s.HEADER, s.rows())
@@ -161,7 +162,8 @@ def register(sub) -> None:
                                    "distribution of tendon stiffnesses can be and still fit the data: best RMS for "
                                    "each bound on its spread).")
     p.add_argument("name", choices=sorted(STUDIES), help="which study")
-    p.add_argument("data", nargs="*", help="compactness: CSV file(s) of measured moduli, or bundled:NAME")
+    p.add_argument("data", nargs="*", help="compactness: file(s) of measured moduli (as for `tenscell fit`), or "
+                                           "bundled:NAME")
     add_out(p, derived="study-NAME")
     p.add_argument("--draws", type=integer(1, 100_000), default=200, help="Monte Carlo draws per set (sensitivity)")
     p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed (sensitivity, compactness)")
@@ -180,6 +182,7 @@ def register(sub) -> None:
                         " the result does not depend on it)")
     g.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.01,
                    help="RMS of the log10 errors (decades) a fit must reach")
+    add_data_options(p)
     p.set_defaults(func=run)
 
 

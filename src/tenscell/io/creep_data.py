@@ -124,6 +124,23 @@ class CreepData:
                f"{self.prestress.max():.4g} Pa"),
         )
 
+    @classmethod
+    def from_dataframe(cls, df, columns=None, **kwargs) -> "CreepData":
+        """Measured creep compliance from a pandas DataFrame with your own column names and units.
+
+        See :func:`tenscell.io.importers.from_dataframe`: ``columns`` is a
+        :class:`~tenscell.io.importers.ColumnMap` (``time=``, ``compliance=``,
+        ``time_unit=``, ``compliance_unit=``) or a dict of its fields; default
+        recognised from the column names (``time_s``, ``time (s)``, ``J(t) (1/Pa)``...).
+        """
+        from .importers import from_dataframe
+
+        data = from_dataframe(df, columns, **kwargs)
+        if not isinstance(data, CreepData):
+            raise _error(str(kwargs.get("source", "<DataFrame>")), "the columns hold moduli, not creep compliance; "
+                                                                  "use tenscell.RheologyData.from_dataframe")
+        return data
+
     def to_dataframe(self):
         """``time_s``, ``creep_compliance_per_Pa`` (and the SD and prestress columns when present)."""
         cols = {_TIME: self.time_s, _J: self.compliance}

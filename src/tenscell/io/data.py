@@ -268,11 +268,16 @@ class RheologyData:
 
         See :func:`tenscell.io.importers.from_dataframe` (``columns`` is a
         :class:`~tenscell.io.importers.ColumnMap` or a dict of its fields;
-        default ``frequency_Hz, G_storage_Pa, G_loss_Pa``).
+        default recognised from the column names). A map that reads creep
+        compliance is refused here: use ``CreepData.from_dataframe``.
         """
         from .importers import from_dataframe
 
-        return from_dataframe(df, columns, **kwargs)
+        data = from_dataframe(df, columns, **kwargs)
+        if not isinstance(data, RheologyData):
+            raise DataError(f"{kwargs.get('source', '<DataFrame>')}: the columns hold creep compliance, not moduli; "
+                            "use tenscell.CreepData.from_dataframe")
+        return data
 
     def __repr__(self) -> str:
         from .._results import format_repr, span

@@ -24,20 +24,22 @@ loss tangent
     ``tan δ = G''/G'`` (dimensionless), with G' or G'' or |G|.
 prestress
     ``"Pa"`` or ``"kPa"``.
+time (creep)
+    ``"s"``, ``"ms"`` or ``"min"``.
+creep compliance J(t)
+    ``"1/Pa"``, ``"1/kPa"`` or ``"1/MPa"``.
 
 Accepted combinations: G' and G''; G' or G'' with tan δ; |G| with the phase
-or with tan δ. Standard deviations (fit weights) are read with G' and G''.
+or with tan δ; for creep, time with J(t). Standard deviations (fit weights)
+are read with G' and G'' and with J(t).
 
 Errors are :class:`~tenscell.io.data.DataError` naming the file (or
 DataFrame), the line (text files), row (Excel, as the spreadsheet numbers it)
 or index label (DataFrames), and the column.
 
-Instrument exports
-------------------
-:func:`read_rheocompass` reads the tab-separated text export of an Anton
-Paar rheometer (RheoCompass "Interval data" tables: a metadata block, then a
-names row, a row of bracketed units and the data points, decimal point or
-comma). See ``docs/importing-data.md`` for the mapping.
+Instrument exports (TA TRIOS, Anton Paar RheoCompass) are read by
+:mod:`tenscell.io.instruments` through the same maps; see
+``docs/importing-data.md``.
 """
 from __future__ import annotations
 
@@ -51,13 +53,14 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
+from .creep_data import CreepData
 from .data import DataError, RheologyData
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["ColumnMap", "from_dataframe", "read_table", "read_rheocompass", "FREQUENCY_UNITS", "MODULUS_UNITS",
-           "PHASE_UNITS", "PRESTRESS_UNITS"]
+__all__ = ["ColumnMap", "from_dataframe", "read_table", "guess_columns", "FREQUENCY_UNITS", "MODULUS_UNITS",
+           "PHASE_UNITS", "PRESTRESS_UNITS", "TIME_UNITS", "COMPLIANCE_UNITS"]
 
 #: frequency units -> factor to Hz
 FREQUENCY_UNITS = {"Hz": 1.0, "rad/s": 1.0 / (2.0 * math.pi)}
@@ -67,15 +70,22 @@ MODULUS_UNITS = {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "ratio": math.nan}
 PHASE_UNITS = {"deg": math.pi / 180.0, "rad": 1.0}
 #: prestress units -> factor to Pa
 PRESTRESS_UNITS = {"Pa": 1.0, "kPa": 1e3}
+#: time units -> factor to s
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "min": 60.0}
+#: creep compliance units -> factor to 1/Pa
+COMPLIANCE_UNITS = {"1/Pa": 1.0, "1/kPa": 1e-3, "1/MPa": 1e-6}
 
 # spellings found in headers and units rows -> the canonical unit
 _ALIASES = {
-    "hz": "Hz", "1/s": None, "rad/s": "rad/s", "rad s-1": "rad/s", "rad_per_s": "rad/s", "pa": "Pa", "kpa": "kPa",
+    "hz": "Hz", "1/s": None, "rad/s": "rad/s", "rad s-1": "rad/s", "rads-1": "rad/s", "rad_per_s": "rad/s", "pa": "Pa", "kpa": "kPa",
     "mpa": "MPa", "deg": "deg", "°": "deg", "degree": "deg", "degrees": "deg", "rad": "rad", "1": "", "-": "",
-    "": "",
+    "": "", "s": "s", "sec": "s", "ms": "ms", "min": "min", "1/pa": "1/Pa", "pa^-1": "1/Pa", "pa-1": "1/Pa",
+    "1/kpa": "1/kPa", "kpa^-1": "1/kPa", "kpa-1": "1/kPa", "1/mpa": "1/MPa", "mpa^-1": "1/MPa", "mpa-1": "1/MPa",
 }
-_BRACKETED = re.compile(r"^(.*?)\s*[\[(]\s*([^\])]*?)\s*[\])]\s*$")
-_SUFFIX = re.compile(r"_(Hz|rad_per_s|Pa|kPa|MPa|deg|rad)$")
+_CANONICAL_UNITS = ("Hz", "rad/s", "Pa", "kPa", "MPa", "deg", "rad", "s", "ms", "min", "1/Pa", "1/kPa", "1/MPa")
+# "(1/Pa)" holds a bracket pair of its own only in "J(t) (1/Pa)": the unit is the last bracketed group
+_BRACKETED = re.compile(r"^(.*?)\s*[\[(]\s*([^\[\]()]*?)\s*[\])]\s*$")
+_SUFFIX = re.compile(r"_(Hz|rad_per_s|Pa|kPa|MPa|deg|rad|s|ms|min|per_Pa|per_kPa|per_MPa)$")
 
 
 @dataclass(frozen=True)
@@ -87,10 +97,13 @@ class ColumnMap:
     ``"G_storage_kPa"``) or the file's units row; if the file does not say
     either, reading stops with an error asking you to state it.
 
+    A map reads moduli (``frequency`` with G', G'' or an equivalent pair) or
+    creep compliance (``time`` with ``compliance``), never both.
+
     Parameters
     ----------
-    frequency : str
-        Column of the oscillation frequency.
+    frequency : str, optional
+        Column of the oscillation frequency (moduli).
     storage, loss : str, optional
         Columns of G' and G''.
     magnitude, phase : str, optional
@@ -101,10 +114,17 @@ class ColumnMap:
         Column of the cells' prestress (a prestress sweep).
     storage_sd, loss_sd : str, optional
         Standard deviations of G' and G'' (same unit as the moduli).
+    time, compliance : str, optional
+        Columns of the time after the stress step and of the creep
+        compliance J(t) (creep data).
+    compliance_sd : str, optional
+        Standard deviation of J (same unit as J).
     frequency_unit : {"Hz", "rad/s"}, optional
     modulus_unit : {"Pa", "kPa", "MPa", "ratio"}, optional
     phase_unit : {"deg", "rad"}, optional
     prestress_unit : {"Pa", "kPa"}, optional
+    time_unit : {"s", "ms", "min"}, optional
+    compliance_unit : {"1/Pa", "1/kPa", "1/MPa"}, optional
     geometric_factor : float, optional
         Pa per unit of the measured ratio; required with ``modulus_unit="ratio"``
         and refused otherwise.
@@ -113,9 +133,11 @@ class ColumnMap:
     --------
     >>> ColumnMap(frequency="omega", frequency_unit="rad/s", storage="Gp", loss="Gpp", modulus_unit="kPa")
     ... # doctest: +SKIP
+    >>> ColumnMap(time="Time", time_unit="s", compliance="Creep Compliance", compliance_unit="1/Pa")
+    ... # doctest: +SKIP
     """
 
-    frequency: str
+    frequency: str | None = None
     storage: str | None = None
     loss: str | None = None
     magnitude: str | None = None
@@ -124,15 +146,20 @@ class ColumnMap:
     prestress: str | None = None
     storage_sd: str | None = None
     loss_sd: str | None = None
+    time: str | None = None
+    compliance: str | None = None
+    compliance_sd: str | None = None
     frequency_unit: str | None = None
     modulus_unit: str | None = None
     phase_unit: str | None = None
     prestress_unit: str | None = None
+    time_unit: str | None = None
+    compliance_unit: str | None = None
     geometric_factor: float | None = None
 
     def __post_init__(self) -> None:
-        for name, table in (("frequency_unit", FREQUENCY_UNITS), ("modulus_unit", MODULUS_UNITS),
-                            ("phase_unit", PHASE_UNITS), ("prestress_unit", PRESTRESS_UNITS)):
+        for name in _UNIT_FIELDS:
+            table = _units_table(name)
             unit = getattr(self, name)
             if unit is not None and unit not in table:
                 raise ValueError(f"{name}: {unit!r} is not one of {', '.join(table)}")
@@ -147,9 +174,17 @@ class ColumnMap:
 
     @property
     def layout(self) -> str:
-        """Which moduli the map reads: ``"storage+loss"``, ``"storage+tan"``, ``"loss+tan"``, ``"magnitude+phase"``
-        or ``"magnitude+tan"``."""
+        """What the map reads: ``"storage+loss"``, ``"storage+tan"``, ``"loss+tan"``, ``"magnitude+phase"``,
+        ``"magnitude+tan"`` (moduli) or ``"creep"`` (time and J(t))."""
         given = {k for k in ("storage", "loss", "magnitude", "phase", "loss_tangent") if getattr(self, k)}
+        creep = {k for k in ("time", "compliance") if getattr(self, k)}
+        if creep or self.compliance_sd:
+            if given or self.frequency or creep != {"time", "compliance"}:
+                raise ValueError("columns: a creep map gives time and compliance (and no frequency or moduli); "
+                                 f"got {', '.join(sorted(given | creep | ({'frequency'} if self.frequency else set())))}")
+            return "creep"
+        if not self.frequency:
+            raise ValueError("columns: give frequency (with G', G'' or an equivalent pair) or time with compliance")
         for layout, need in _LAYOUTS.items():
             if given == need:
                 return layout
@@ -171,10 +206,13 @@ _LAYOUTS = {
 _QUANTITIES = {
     "frequency": "frequency_unit", "storage": "modulus_unit", "loss": "modulus_unit", "magnitude": "modulus_unit",
     "phase": "phase_unit", "loss_tangent": "", "prestress": "prestress_unit", "storage_sd": "modulus_unit",
-    "loss_sd": "modulus_unit",
+    "loss_sd": "modulus_unit", "time": "time_unit", "compliance": "compliance_unit",
+    "compliance_sd": "compliance_unit",
 }
+_UNIT_FIELDS = ("frequency_unit", "modulus_unit", "phase_unit", "prestress_unit", "time_unit", "compliance_unit")
 _NAMES = {"frequency": "frequency", "storage": "G'", "loss": "G''", "magnitude": "|G|", "phase": "phase",
-          "loss_tangent": "loss tangent", "prestress": "prestress", "storage_sd": "SD of G'", "loss_sd": "SD of G''"}
+          "loss_tangent": "loss tangent", "prestress": "prestress", "storage_sd": "SD of G'", "loss_sd": "SD of G''",
+          "time": "time", "compliance": "creep compliance", "compliance_sd": "SD of J"}
 
 
 # ---- one table, whatever it came from -----------------------------------------------------
@@ -197,22 +235,32 @@ def _error(table: _Table, problem: str, row: int | None = None, column: str | No
 
 
 def _unit_in_name(name: str) -> tuple[str, str | None]:
-    """``("G'", "kPa")`` from ``"G' [kPa]"``, ``"G' (kPa)"`` or ``"G_kPa"``; unit None when the name has none."""
+    """``("G'", "kPa")`` from ``"G' [kPa]"``, ``"G' (kPa)"`` or ``"G_kPa"``; unit None when the name has none.
+
+    A bracket that is part of a quantity's name (``J(t)``, ``tan(delta)``) is not a unit.
+    """
     m = _BRACKETED.match(name)
-    if m:
+    if m and m.group(2).strip().lower() not in _NOT_UNITS:
         return m.group(1).strip(), m.group(2)
     m = _SUFFIX.search(name)
     if m:
-        return name, m.group(1).replace("_per_", "/")
+        unit = m.group(1).replace("_per_", "/")
+        return name, "1/" + unit[4:] if unit.startswith("per_") else unit
     return name, None
+
+
+_ANGULAR = {"angular frequency", "angular_frequency", "ω", "omega"}
+_NOT_UNITS = {"t", "delta", "δ", "ω", "omega", "f", "step", "cmd", "sample"}
 
 
 def _canonical_unit(text: str) -> str | None:
     """A unit as written in a file, in tenscell's spelling; None when not understood."""
     t = text.strip().strip("[]()").strip()
-    if t in ("Hz", "rad/s", "Pa", "kPa", "MPa", "deg", "rad"):
+    if t in _CANONICAL_UNITS:
         return t
-    return _ALIASES.get(t.lower().replace("·", " ").replace("**", "^"), None)
+    if "mPa" in t:  # millipascal: never read as MPa by a case-insensitive match
+        return None
+    return _ALIASES.get(t.lower().replace("·", " ").replace("**", "^").replace(" ", ""), None)
 
 
 def _resolve(table: _Table, cmap: ColumnMap) -> dict[str, tuple[int, str]]:
@@ -250,6 +298,8 @@ def _unit_of(table: _Table, cmap: ColumnMap, quantity: str, j: int) -> str:
         if in_file not in (None, "") and in_file != stated and stated != "ratio":
             raise _error(table, f"the file says {written!r} but the ColumnMap says {field}={stated!r}", column=column)
         return stated
+    if in_file in (None, "") and quantity == "frequency" and _unit_in_name(column)[0].lower() in _ANGULAR:
+        return "rad/s"  # an angular frequency is in rad/s by definition, not by assumption
     if in_file in (None, ""):
         raise _error(table, f"the file does not state the unit of {_NAMES[quantity]}; give {field}= "
                             f"(one of {', '.join(_units_table(field))})", column=column)
@@ -261,7 +311,7 @@ def _unit_of(table: _Table, cmap: ColumnMap, quantity: str, j: int) -> str:
 
 def _units_table(field: str) -> dict[str, float]:
     return {"frequency_unit": FREQUENCY_UNITS, "modulus_unit": MODULUS_UNITS, "phase_unit": PHASE_UNITS,
-            "prestress_unit": PRESTRESS_UNITS}[field]
+            "prestress_unit": PRESTRESS_UNITS, "time_unit": TIME_UNITS, "compliance_unit": COMPLIANCE_UNITS}[field]
 
 
 def _number(table: _Table, value: Any, i: int, column: str) -> float:
@@ -325,23 +375,45 @@ def _moduli(v: Mapping[str, np.ndarray], layout: str) -> tuple[np.ndarray, np.nd
     return v["magnitude"] * np.cos(phase), v["magnitude"] * np.sin(phase)
 
 
-def _data(table: _Table, cmap: ColumnMap, min_points: int) -> RheologyData:
+def _data(table: _Table, cmap: ColumnMap, min_points: int) -> RheologyData | CreepData:
+    """The data set a table holds under a map: moduli (RheologyData) or creep compliance (CreepData)."""
+    resolved = _resolve(table, cmap)
+    notes: tuple[str, ...] = ()
+    if cmap.layout == "creep":
+        table, notes = _without_onset(table, resolved["time"][0])
     if not table.rows:
         raise _error(table, "no data rows")
     if len(table.rows) < min_points:
         raise _error(table, f"{len(table.rows)} data points, fewer than min_points={min_points}")
-    resolved = _resolve(table, cmap)
     v = _columns(table, cmap, resolved)
-    Gs, Gl = _moduli(v, cmap.layout)
     how = "; ".join(f"{_NAMES[q]} = {table.names[j].strip()!r}" + (f" [{u}]" if u else "")
                     for q, (j, u) in resolved.items())
     if cmap.geometric_factor is not None:
         how += f"; moduli = {cmap.geometric_factor:g} Pa × ratio"
+    comments = (*table.comments, *notes, f"imported by tenscell: {how}")
+    if cmap.layout == "creep":
+        return CreepData(time_s=v["time"], compliance=v["compliance"], compliance_sd=v.get("compliance_sd"),
+                         prestress=v.get("prestress"), source=table.source, comments=comments)
+    Gs, Gl = _moduli(v, cmap.layout)
     return RheologyData(
         frequency_hz=v["frequency"], G_storage=Gs, G_loss=Gl, prestress=v.get("prestress"),
         G_storage_sd=v.get("storage_sd"), G_loss_sd=v.get("loss_sd"), source=table.source,
-        comments=(*table.comments, f"imported by tenscell: {how}"),
+        comments=comments,
     )
+
+
+def _without_onset(table: _Table, j: int) -> tuple[_Table, tuple[str, ...]]:
+    """The rows after the stress step: a point at t = 0 (the step's onset, where J is 0 or undefined) is
+    dropped, and the drop recorded; any other t <= 0 is an error later, with its line."""
+    keep = [i for i, row in enumerate(table.rows)
+            if not (j < len(row) and _number(table, row[j], i, table.names[j].strip()) == 0.0)]
+    dropped = len(table.rows) - len(keep)
+    if not dropped:
+        return table, ()
+    kept = set(keep)
+    lines = ", ".join(table.where[i] for i in range(len(table.rows)) if i not in kept)
+    note = f"dropped {dropped} point(s) at t = 0 (the onset of the stress step): {lines}"
+    return replace(table, rows=[table.rows[i] for i in keep], where=[table.where[i] for i in keep]), (note,)
 
 
 def _as_map(columns: ColumnMap | Mapping[str, Any] | None, units: Mapping[str, Any]) -> ColumnMap:
@@ -354,10 +426,61 @@ def _as_map(columns: ColumnMap | Mapping[str, Any] | None, units: Mapping[str, A
         raise ValueError(f"columns: {err}; the fields are {', '.join(f.name for f in fields(ColumnMap))}") from None
 
 
+# ---- headers that say what they hold ----------------------------------------------------------
+#: header names (lower case, units removed) recognised without a map, quantity -> names in order of preference;
+#: the spellings of tenscell's own files, TA TRIOS, Anton Paar RheoCompass (long and short) and common lab tables
+KNOWN_HEADERS: dict[str, tuple[str, ...]] = {
+    "frequency": ("angular frequency", "angular_frequency", "ω", "omega", "frequency", "freq", "f",
+                  "frequency_hz"),
+    "storage": ("storage modulus", "storage_modulus", "g'", "g′", "g_storage", "g_storage_pa", "gp",
+                "g_prime"),
+    "loss": ("loss modulus", "loss_modulus", "g''", "g″", 'g"', "g_loss", "g_loss_pa", "gpp", "g_double_prime"),
+    "loss_tangent": ("tan(delta)", "tan(δ)", "tan δ", "tan delta", "tan_delta", "loss factor", "damping factor"),
+    "magnitude": ("complex modulus", "|g*|", "g*", "|g|", "g_abs", "g_abs_pa"),
+    "phase": ("phase angle", "δ", "phase", "phase_deg"),
+    "time": ("step time", "time", "t", "time_s"),
+    "compliance": ("creep compliance", "creep_compliance", "compliance", "j(t)", "j", "creep_compliance_per_pa"),
+    "prestress": ("prestress", "prestress_pa"),
+}
+
+
+def guess_columns(names: Sequence[str]) -> ColumnMap | None:
+    """A :class:`ColumnMap` from header names alone (:data:`KNOWN_HEADERS`), or None.
+
+    Moduli when a frequency column and a pair the map reads are present
+    (G' and G'', else G' or G'' with tan δ, else |G*| with the phase);
+    creep when there is no frequency column and a time and a compliance
+    column are. Units are not guessed: they come from the headers or a
+    units row as for any map.
+    """
+    bare = [_unit_in_name(str(n).strip())[0].strip().lower() for n in names]
+    stripped = [str(n).strip() for n in names]
+
+    def find(quantity: str) -> str | None:
+        for alias in KNOWN_HEADERS[quantity]:
+            hits = [k for k, b in enumerate(bare) if b == alias]
+            if hits:
+                return stripped[hits[0]]
+        return None
+
+    found = {q: find(q) for q in KNOWN_HEADERS}
+    extra: dict[str, Any] = {"prestress": found["prestress"]} if found["prestress"] else {}
+    if found["frequency"]:
+        for pair in (("storage", "loss"), ("storage", "loss_tangent"), ("loss", "loss_tangent"),
+                     ("magnitude", "phase"), ("magnitude", "loss_tangent")):
+            if all(found[q] for q in pair):
+                named: dict[str, Any] = {q: found[q] for q in pair}
+                return ColumnMap(frequency=found["frequency"], **named, **extra)
+        return None
+    if found["time"] and found["compliance"]:
+        return ColumnMap(time=found["time"], compliance=found["compliance"], **extra)
+    return None
+
+
 # ---- sources ----------------------------------------------------------------------------------
 def from_dataframe(df: pd.DataFrame, columns: ColumnMap | Mapping[str, Any] | None = None, *,
-                   source: str = "<DataFrame>", min_points: int = 1, **units: Any) -> RheologyData:
-    """Measured moduli from a pandas DataFrame.
+                   source: str = "<DataFrame>", min_points: int = 1, **units: Any) -> RheologyData | CreepData:
+    """Measured moduli (or creep compliance) from a pandas DataFrame.
 
     Parameters
     ----------
@@ -365,7 +488,9 @@ def from_dataframe(df: pd.DataFrame, columns: ColumnMap | Mapping[str, Any] | No
         One row per measurement.
     columns : ColumnMap or dict, optional
         Which column holds what (a dict is passed to :class:`ColumnMap`);
-        default tenscell's own names ``frequency_Hz, G_storage_Pa, G_loss_Pa``.
+        default recognised from the column names (:func:`guess_columns`:
+        tenscell's own ``frequency_Hz, G_storage_Pa, G_loss_Pa`` or
+        ``time_s, creep_compliance_per_Pa``, and instruments' spellings).
     source : str
         Name used in error messages and recorded as the data's source.
     min_points : int
@@ -375,27 +500,28 @@ def from_dataframe(df: pd.DataFrame, columns: ColumnMap | Mapping[str, Any] | No
 
     Returns
     -------
-    RheologyData
+    RheologyData or CreepData
+        CreepData when the map reads ``time`` and ``compliance``.
     """
-    cmap = _as_map(columns, units)
     names = [str(c) for c in df.columns]
+    cmap = _as_map(columns if columns is not None else guess_columns(names), units)
     rows = df.to_numpy(dtype=object).tolist()
     where = [f"index {label!r}" for label in df.index]
     return _data(_Table(source, names, rows, where), cmap, min_points)
 
 
-def read_table(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, Any], *, sep: str | None = None,
+def read_table(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, Any] | None, *, sep: str | None = None,
                header_line: int | None = None, units_line: bool = False, decimal: str = ".",
-               sheet: str | int | None = None, min_points: int = 1, **units: Any) -> RheologyData:
-    """Measured moduli from a CSV, TSV or Excel file with your own column names.
+               sheet: str | int | None = None, min_points: int = 1, **units: Any) -> RheologyData | CreepData:
+    """Measured moduli (or creep compliance) from a CSV, TSV or Excel file with your own column names.
 
     Parameters
     ----------
     path : str or PathLike
         ``.xlsx``/``.xlsm`` files are read with openpyxl (``pip install
         tenscell[excel]``); anything else as delimited text.
-    columns : ColumnMap or dict
-        Which column holds what, and units.
+    columns : ColumnMap or dict or None
+        Which column holds what, and units; None: tenscell's own names.
     sep : str, optional
         Field separator of a text file; default sniffed from the header
         among comma, semicolon and tab.
@@ -415,7 +541,7 @@ def read_table(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, A
 
     Returns
     -------
-    RheologyData
+    RheologyData or CreepData
         ``comments`` hold the file's ``#`` lines and a line recording the
         columns and units used.
 
@@ -464,9 +590,19 @@ def _text_table(path: Path, sep: str | None, header_line: int | None, units_line
     units = split[1][1] if units_line and len(split) > 1 else None
     data = split[2:] if units_line else split[1:]
     for k, fields_ in data:
-        if len(fields_) != len(names):
-            raise DataError(f"{source}, line {k}: expected {len(names)} fields, found {len(fields_)}")
+        # instruments end rows with a separator (trailing empty fields); only values beyond the header count
+        if len(_trimmed(fields_)) > len(names) or len(fields_) < len(_trimmed(names)):
+            raise DataError(f"{source}, line {k}: expected {len(_trimmed(names))} fields, found "
+                            f"{len(_trimmed(fields_))}")
     return _Table(source, names, [f for _, f in data], [f"line {k}" for k, _ in data], units, decimal, comments)
+
+
+def _trimmed(fields_: Sequence[Any]) -> list[Any]:
+    """``fields_`` without trailing empty fields."""
+    out = list(fields_)
+    while out and (out[-1] is None or not str(out[-1]).strip()):
+        out.pop()
+    return out
 
 
 def _excel_table(path: Path, sheet: str | int | None, header_row: int | None, units_row: bool) -> _Table:
@@ -501,103 +637,3 @@ def _excel_table(path: Path, sheet: str | int | None, header_row: int | None, un
     units = ["" if c is None else str(c) for c in rows[1][1]] if units_row and len(rows) > 1 else None
     data = rows[2:] if units_row else rows[1:]
     return _Table(source, names, [r for _, r in data], [f"row {k}" for k, _ in data], units)
-
-
-# ---- instrument exports -----------------------------------------------------------------------
-#: RheoCompass column names -> quantity (the first present of each quantity is used)
-RHEOCOMPASS_COLUMNS: dict[str, Sequence[str]] = {
-    "frequency": ("Angular Frequency", "Frequency"),
-    "storage": ("Storage Modulus",),
-    "loss": ("Loss Modulus",),
-    "loss_tangent": ("Loss Factor", "Damping Factor"),
-    "magnitude": ("Complex Modulus",),
-    "phase": ("Phase Angle",),
-}
-_RHEOCOMPASS_MARK = "Interval data:"
-
-
-def read_rheocompass(path: str | os.PathLike[str], *, interval: int | None = None, min_points: int = 1,
-                     **units: Any) -> RheologyData:
-    """Measured moduli from an Anton Paar RheoCompass text export (a frequency sweep).
-
-    The export is tab-separated: a metadata block (``Project:``, ``Test:``,
-    ``Result:``...), then for each interval a line starting ``Interval data:``
-    followed by the column names, a line of bracketed units (``[rad/s]``,
-    ``[Pa]``, ``[1]``, ``[°]``), and one line per data point (first field
-    empty). Numbers may use a decimal comma. Columns used, in order of
-    preference: ``Angular Frequency`` [rad/s] or ``Frequency`` [Hz];
-    ``Storage Modulus`` and ``Loss Modulus``; else ``Loss Factor``/``Damping
-    Factor`` (tan δ) with one of them; else ``Complex Modulus`` with ``Phase
-    Angle``. Units are read from the units line. Other columns (``Point No.``,
-    ``Time``, ``Torque``, ``Deflection Angle``, ``Status``...) are ignored.
-
-    Parameters
-    ----------
-    path : str or PathLike
-    interval : int, optional
-        1-based interval to read when the file holds several; required then.
-    min_points : int
-    **units
-        Unit fields of :class:`ColumnMap`, to override what the file states
-        (e.g. ``modulus_unit="ratio", geometric_factor=...`` for raw ratios).
-
-    Returns
-    -------
-    RheologyData
-        ``comments`` keep the metadata block and record the columns used.
-    """
-    source = str(path)
-    lines = _read_text(Path(path)).splitlines()
-    starts = [k for k, s in enumerate(lines) if s.lstrip().startswith(_RHEOCOMPASS_MARK)]
-    if not starts:
-        raise DataError(f"{source}: no '{_RHEOCOMPASS_MARK}' line; is this a RheoCompass text export?")
-    if interval is None and len(starts) > 1:
-        raise DataError(f"{source}: {len(starts)} intervals (lines {', '.join(str(k + 1) for k in starts)}); "
-                        "choose one with interval=")
-    pick = 1 if interval is None else int(interval)
-    if not 1 <= pick <= len(starts):
-        raise DataError(f"{source}: interval={interval} but the file has {len(starts)} interval(s)")
-    table = _rheocompass_block(source, lines, starts, pick)
-    found = {q: next((n for n in names if n in table.names), None) for q, names in RHEOCOMPASS_COLUMNS.items()}
-    return _data(table, _rheocompass_map(table, found, units), min_points)
-
-
-def _rheocompass_block(source: str, lines: list[str], starts: list[int], pick: int) -> _Table:
-    k0 = starts[pick - 1]
-    end = starts[pick] if pick < len(starts) else len(lines)
-    names = [s.strip() for s in lines[k0].split("\t")]
-    names[0] = names[0].replace(_RHEOCOMPASS_MARK, "").strip()
-    if k0 + 1 >= end:
-        raise DataError(f"{source}, line {k0 + 2}: the units line of the interval is missing")
-    units = [s.strip() for s in lines[k0 + 1].split("\t")]
-    rows, where = [], []
-    for k in range(k0 + 2, end):
-        f = lines[k].split("\t")
-        if not lines[k].strip():
-            continue
-        if f[0].strip():  # a new metadata line (e.g. the next "Result:") ends the table
-            break
-        rows.append([s.strip() for s in f])
-        where.append(f"line {k + 1}")
-    sample = " ".join(" ".join(r) for r in rows[:5])
-    decimal = "," if re.search(r"\d,\d", sample) and not re.search(r"\d\.\d", sample) else "."
-    meta = tuple(s.strip().replace("\t", " ") for s in lines[:starts[0]] if s.strip())
-    return _Table(source, names, rows, where, units, decimal, meta)
-
-
-def _rheocompass_map(table: _Table, found: Mapping[str, str | None], units: Mapping[str, Any]) -> ColumnMap:
-    if found["frequency"] is None:
-        raise _error(table, "no 'Angular Frequency' or 'Frequency' column")
-    f = found["frequency"]
-    cols: dict[str, str | None]
-    if found["storage"] and found["loss"]:
-        cols = {"storage": found["storage"], "loss": found["loss"]}
-    elif found["loss_tangent"] and (found["storage"] or found["loss"]):
-        which = "storage" if found["storage"] else "loss"
-        cols = {which: found[which], "loss_tangent": found["loss_tangent"]}
-    elif found["magnitude"] and found["phase"]:
-        cols = {"magnitude": found["magnitude"], "phase": found["phase"]}
-    else:
-        raise _error(table, "no Storage/Loss Modulus columns (nor Loss Factor with one of them, nor Complex Modulus "
-                            "with Phase Angle)")
-    return ColumnMap(frequency=f, **cols, **units)  # type: ignore[arg-type]
