@@ -18,6 +18,8 @@ A result is a frozen dataclass declared with ``repr=False`` and gives
 """
 from __future__ import annotations
 
+import math
+
 from collections import Counter
 from typing import TYPE_CHECKING, Any, Iterable, Mapping
 
@@ -26,7 +28,8 @@ import numpy as np
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["format_repr", "dataframe", "span", "counts", "UNIT_SUFFIXES", "DIMENSIONLESS", "has_unit"]
+__all__ = ["format_repr", "dataframe", "span", "counts", "UNIT_SUFFIXES", "DIMENSIONLESS", "has_unit", "plus_minus",
+           "CORRELATION_THRESHOLD"]
 
 #: unit suffixes of DataFrame columns (SI, written out without symbols so they are valid identifiers)
 UNIT_SUFFIXES = (
@@ -76,3 +79,24 @@ def counts(labels: Iterable[str]) -> str:
 def has_unit(column: str) -> bool:
     """Whether a float column's name states its unit (or is a known dimensionless quantity)."""
     return column in DIMENSIONLESS or column.endswith(UNIT_SUFFIXES)
+
+
+#: correlations at least this strong (in absolute value) are listed beside the standard errors (lmfit lists 0.1;
+#: a fit with tens of stiffnesses has hundreds of weaker ones, which say little)
+CORRELATION_THRESHOLD = 0.7
+
+
+def plus_minus(value: float, stderr: float | None, unit: str = "", note: str = "", digits: int = 6) -> str:
+    """A value with its standard error in lmfit's convention, ``"0.231 +/- 0.0133 (5.76%)"``, then the unit.
+
+    Without a standard error: ``"0.231 +/- not determined"``; ``note`` (why:
+    at a bound, fixed, not seen by the data; or which combination the error is
+    of) follows, so that no value is shown without what is known of its
+    uncertainty.
+    """
+    u = f" {unit}" if unit else ""
+    shown = f"{value:.{digits}g}"
+    if stderr is None or not math.isfinite(stderr):
+        return f"{shown}{u} +/- not determined" + (f" {note}" if note else "")
+    rel = f" ({100 * stderr / abs(value):.2f}%)" if value else ""
+    return f"{shown} +/- {stderr:.{max(digits - 2, 2)}g}{rel}{u}" + (f" {note}" if note else "")

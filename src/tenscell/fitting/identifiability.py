@@ -167,6 +167,32 @@ class Identifiability:
         """How many independent combinations have a standard error at most ``within`` (ln units)."""
         return sum(c.standard_error is not None and c.standard_error <= within for c in self.combinations)
 
+    def relative_error(self, name: str) -> tuple[float | None, str]:
+        """``(standard error relative to the value, note)`` of the parameter ``name``.
+
+        The relative error is the standard error of its ln (first order: of
+        ``value × (1 ± se)``); None, with the reason in ``note``, when the
+        parameter was fixed, sits at a bound, is the gauge L, lies in a
+        combination the data do not see, or σ is unknown. With the gauge
+        removed the note says which combination the error is of
+        (``"of EA[3]/L²"``).
+        """
+        if name in self.fixed:
+            return None, "(fixed)"
+        for n, reason in self.excluded:
+            if n == name:
+                return None, ("(gauge: the data fix only EA/L², c/L, P/L²)" if reason == "gauge"
+                              else f"(at its {reason}: not an estimate)")
+        if name not in self.names:
+            return None, "(not analysed)"
+        i = self.names.index(name)
+        se = float(self.standard_errors[i])
+        if math.isnan(se):
+            return None, "(σ unknown: as many seen combinations as residuals)"
+        if not math.isfinite(se):
+            return None, "(not determined: in a combination the data do not see)"
+        return se, (f"(of {self.labels[i]})" if self.labels[i] != name else "")
+
     def strong_correlations(self, threshold: float = 0.9) -> list[tuple[str, str, float]]:
         """``(label_a, label_b, ρ)`` for determined pairs with ``|ρ| >= threshold``, strongest first."""
         ok = np.isfinite(self.standard_errors)
@@ -255,7 +281,7 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
     pars = problem.parameters(theta)
     free = np.asarray(problem.free, dtype=bool)
     g = problem.gauge()
-    gauge = bool(np.all(free[g != 0]))  # an exact gauge only if nothing it moves is fixed
+    gauge = bool(np.any(g != 0) and np.all(free[g != 0]))  # exact only if it moves something, nothing fixed
     l_index = problem.n_params - 1
     keep = np.zeros(problem.n_params, dtype=bool)
     excluded = []

@@ -39,7 +39,7 @@ import scipy.optimize
 import scipy.special
 
 from .._checks import positive_scalar
-from .._results import dataframe, format_repr
+from .._results import CORRELATION_THRESHOLD, dataframe, format_repr, plus_minus
 from .._threads import hot_path
 from ..io.data import DataError, RheologyData
 
@@ -167,6 +167,14 @@ class StructuralDampingFit:
     data : RheologyData
     message : str
         The optimizer's message.
+    standard_errors : dict
+        ``{"G0": (se Pa, note), "x": (se, note), "mu": (se Pa·s, note)}``:
+        one standard error linearized at the optimum, by the same computation
+        as a tensegrity fit's (:func:`tenscell.fitting.identifiability.identifiability`,
+        σ from the residuals unless the data carry standard deviations); se
+        None, with the reason in the note, when not determined.
+    correlations : tuple of (str, str, float)
+        Pairs of parameters with ``|ρ| >=`` :data:`~tenscell._results.CORRELATION_THRESHOLD`.
     """
 
     G0: float
@@ -179,6 +187,8 @@ class StructuralDampingFit:
     n_params: int
     data: RheologyData
     message: str
+    standard_errors: dict | None = None
+    correlations: tuple = ()
 
     @property
     def eta(self) -> float:
@@ -191,18 +201,42 @@ class StructuralDampingFit:
                                       self.mu, self.phi0)
         return G.real, G.imag
 
+    def error(self, name: str) -> tuple[float | None, str]:
+        """``(standard error, note)`` of ``"G0"`` (Pa), ``"x"`` or ``"mu"`` (Pa·s)."""
+        if name == "mu" and self.n_params == 2:
+            return None, "(no Newtonian term)"
+        return (self.standard_errors or {}).get(name, (None, "(not computed)"))
+
+    def report(self) -> str:
+        """The fitted law, each value with its standard error (lmfit's convention), and the strong correlations."""
+        lines = [f"[[Structural damping]] {self.data.source}: {self.data.n} points, rms log10 error "
+                 f"{self.rms_log10_error:.5f}; Φ0 = {self.phi0:g} rad/s (fixed)"]
+        for name, value, unit in (("G0", self.G0, "Pa"), ("x", self.x, ""), ("mu", self.mu, "Pa·s")):
+            se, note = self.error(name)
+            lines.append(f"    {name + ':':<4} {plus_minus(value, se, unit, note)}")
+        lines.append(f"[[Correlations]] (unreported correlations are < {CORRELATION_THRESHOLD:.3f})")
+        lines += [f"    C({a}, {b}) = {r:+.4f}" for a, b, r in self.correlations] or ["    none"]
+        return "\n".join(lines) + "\n"
+
     def __repr__(self) -> str:
         return format_repr(
             "StructuralDampingFit",
-            f"G0 = {self.G0:.4g} Pa at Φ0 = {self.phi0:g} rad/s, x = {self.x:.4f} (η = {self.eta:.3f}), "
-            f"μ = {self.mu:.3g} Pa·s",
+            f"G0 = {plus_minus(self.G0, self.error('G0')[0], 'Pa', digits=4)} at Φ0 = {self.phi0:g} rad/s; "
+            f"x = {plus_minus(self.x, self.error('x')[0], digits=4)} (η = {self.eta:.3f}); "
+            f"μ = {plus_minus(self.mu, self.error('mu')[0], 'Pa·s', self.error('mu')[1], digits=4)}",
             f"{self.data.n} points; rms log10 error {self.rms_log10_error:.4g} decades",
         )
 
     def to_dict(self) -> dict:
-        """JSON-ready dict."""
-        return {"G0_Pa": self.G0, "x": self.x, "eta": self.eta, "mu_Pa_s": self.mu, "phi0_rad_per_s": self.phi0,
-                "rms_log10_error": self.rms_log10_error, "n_params": self.n_params, "message": self.message}
+        """JSON-ready dict (standard errors as ``*_stderr``, None when not determined, with ``*_stderr_note``)."""
+        doc = {"G0_Pa": self.G0, "x": self.x, "eta": self.eta, "mu_Pa_s": self.mu, "phi0_rad_per_s": self.phi0,
+               "rms_log10_error": self.rms_log10_error, "n_params": self.n_params, "message": self.message}
+        for name, key in (("G0", "G0_Pa"), ("x", "x"), ("mu", "mu_Pa_s")):
+            se, note = self.error(name)
+            doc[f"{key}_stderr"] = se
+            doc[f"{key}_stderr_note"] = note
+        doc["correlations"] = [{"a": a, "b": b, "rho": r} for a, b, r in self.correlations]
+        return doc
 
     def to_dataframe(self):
         """Data and model at the data's frequencies (``frequency_Hz``, ``G_storage_Pa``, ...)."""
@@ -265,11 +299,88 @@ def fit_structural_damping(data: RheologyData, *, phi0: float = PHI0, newtonian:
     theta = best.x
     r_w = prob.residuals(theta)
     r = r_w / prob.weights
+    errors, corr = _errors(prob, theta, *_bounds(data, omega, newtonian), sigma_known=data.has_sd)
     return StructuralDampingFit(
         G0=math.exp(theta[0]), x=1.0 + float(theta[1]), mu=math.exp(theta[2]) if newtonian else 0.0, phi0=phi0,
         residuals=r, weighted_residuals=r_w, rms_log10_error=float(np.sqrt(np.mean(r**2))),
-        n_params=prob.n_params, data=data, message=str(best.message),
+        n_params=prob.n_params, data=data, message=str(best.message), standard_errors=errors, correlations=corr,
     )
+
+
+@dataclass(frozen=True)
+class _Named:
+    """A parameter as :func:`~tenscell.fitting.identifiability.identifiability` reads it."""
+
+    name: str
+    value: float
+    at_bound: str | None
+
+
+@dataclass(frozen=True, eq=False)
+class _LogParameters:
+    """The structural-damping problem in ln-parameters ``(ln G0, ln(x − 1), ln μ)``, shaped as the problem
+    :func:`~tenscell.fitting.identifiability.identifiability` analyses (no gauge, nothing fixed)."""
+
+    problem: StructuralDampingProblem
+    lower: np.ndarray  # bounds of the problem's own theta
+    upper: np.ndarray
+
+    @property
+    def n_params(self) -> int:
+        return self.problem.n_params
+
+    @property
+    def names(self) -> tuple:
+        return ("G0", "x-1", "mu")[: self.n_params]
+
+    @property
+    def free(self) -> np.ndarray:
+        return np.ones(self.n_params, dtype=bool)
+
+    def gauge(self) -> np.ndarray:
+        return np.zeros(self.n_params)
+
+    def _theta(self, phi) -> np.ndarray:
+        theta = np.array(phi, dtype=float)
+        theta[1] = math.exp(phi[1])
+        return theta
+
+    def residuals(self, phi) -> np.ndarray:
+        return self.problem.residuals(self._theta(phi))
+
+    def jacobian(self, phi) -> np.ndarray:
+        J = self.problem.jacobian(self._theta(phi))
+        J[:, 1] *= math.exp(phi[1])  # d/d ln(x−1) = (x−1) d/d(x−1)
+        return J
+
+    def parameters(self, phi) -> list[_Named]:
+        theta = self._theta(phi)
+        span = self.upper - self.lower
+        out = []
+        for k, name in enumerate(self.names):
+            at = ("lower" if theta[k] - self.lower[k] <= 1e-3 * span[k] else
+                  "upper" if self.upper[k] - theta[k] <= 1e-3 * span[k] else None)
+            out.append(_Named(name, float(math.exp(phi[k])), at))
+        return out
+
+
+def _errors(prob: StructuralDampingProblem, theta, lower, upper, *, sigma_known: bool) -> tuple[dict, tuple]:
+    """Standard errors ``{"G0", "x", "mu"}`` and strong correlations, through the tensegrity fit's computation."""
+    from .identifiability import identifiability
+
+    phi = np.array(theta, dtype=float)
+    phi[1] = math.log(theta[1])
+    ident = identifiability(_LogParameters(prob, lower, upper), phi, sigma_known=sigma_known)
+    values = {"G0": math.exp(theta[0]), "x-1": float(theta[1]), "mu": math.exp(theta[2]) if prob.newtonian else 0.0}
+    out = {}
+    pairs = [("G0", "G0"), ("x-1", "x")] + ([("mu", "mu")] if prob.newtonian else [])
+    for name, key in pairs:
+        rel, note = ident.relative_error(name)
+        out[key] = (None if rel is None else values[name] * rel, note)
+    rename = {"x-1": "x"}
+    corr = tuple((rename.get(a, a), rename.get(b, b), r)
+                 for a, b, r in ident.strong_correlations(CORRELATION_THRESHOLD))
+    return out, corr
 
 
 def _bounds(data, omega, newtonian):
@@ -405,6 +516,8 @@ class ModelComparison:
         Held-out data points.
     convention : str
         How AIC and BIC are computed, in words.
+    structural : StructuralDampingFit or None
+        The structural-damping law's fit (its parameters with standard errors), when it was scored.
     """
 
     scores: tuple
@@ -413,6 +526,7 @@ class ModelComparison:
     holdout: tuple | None
     n_holdout: int
     convention: str
+    structural: StructuralDampingFit | None = None
 
     def score(self, name: str) -> ModelScore:
         """The row of model ``name``."""
@@ -438,7 +552,8 @@ class ModelComparison:
     def to_dict(self) -> dict:
         return {"models": [s.to_dict() for s in self.scores], "n_residuals": self.n_residuals,
                 "sigma_known": self.sigma_known, "holdout_Hz": None if self.holdout is None else list(self.holdout),
-                "n_holdout_points": self.n_holdout, "convention": self.convention}
+                "n_holdout_points": self.n_holdout, "convention": self.convention,
+                "structural_damping": None if self.structural is None else self.structural.to_dict()}
 
     def to_dataframe(self):
         return dataframe({
@@ -522,4 +637,5 @@ def compare_models(result, *, homogeneous=None, structural: StructuralDampingFit
     ) + "; AIC = −2 ln L + 2k, BIC = −2 ln L + k ln n; tensegrity parameters exclude the exact strut-length gauge"
     return ModelComparison(scores=tuple(rows), n_residuals=int(w.size), sigma_known=sigma_known,
                            holdout=None if holdout is None else (float(holdout[0]), float(holdout[1])),
-                           n_holdout=0 if held_out is None else held_out.n, convention=convention)
+                           n_holdout=0 if held_out is None else held_out.n, convention=convention,
+                           structural=structural if isinstance(structural, StructuralDampingFit) else None)

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._checks import positive_scalar
-from .._results import dataframe, format_repr
+from .._results import CORRELATION_THRESHOLD, dataframe, format_repr, plus_minus
 from ..io.data import RheologyData
 from ..linear.linearize import linearize
 from ..linear.modal import modulus
@@ -86,6 +86,15 @@ class FitParameter:
         }
 
 
+def _error_fields(p: FitParameter, error: tuple[float | None, str]) -> dict:
+    """``stderr`` (the parameter's unit, None when not determined), ``stderr_percent`` and ``stderr_note``."""
+    rel, note = error
+    return {"stderr": None if rel is None else abs(p.value) * rel,
+            "stderr_percent": None if rel is None else 100.0 * rel, "stderr_note": note}
+
+
+#: most correlations report() lists (all are in correlations() and fit.json)
+_MAX_CORRELATIONS = 20
 #: largest prestress × frequency grid that FitResult.moduli evaluates in one batch (else per prestress)
 _GRID_POINTS = 200_000
 
@@ -562,10 +571,41 @@ class FitResult:
 
     def identifiability(self, rtol: float = 1e-8):
         """Rank, standard errors, correlations and determined combinations (:mod:`tenscell.fitting.identifiability`)."""
+        if rtol == 1e-8:
+            return self._identifiability
         from .identifiability import identifiability
 
         known = all(d.has_sd for d in self.datasets)
         return identifiability(self.problem, self.theta, sigma_known=known, rtol=rtol)
+
+    @cached_property
+    def _identifiability(self):
+        from .identifiability import identifiability
+
+        known = all(d.has_sd for d in self.datasets)
+        return identifiability(self.problem, self.theta, sigma_known=known, rtol=1e-8)
+
+    @property
+    def standard_errors(self) -> tuple[tuple[float | None, str], ...]:
+        """``(standard error, note)`` of each parameter, in :attr:`parameters` order.
+
+        The standard error is in the parameter's unit (first order in its ln:
+        ``value × se(ln value)``, from :meth:`identifiability`); None when the
+        parameter is fixed, at a bound, the strut-length gauge, or not
+        determined by the data, and the note says which. With the gauge
+        removed the error is that of the gauge-invariant combination the note
+        names (``"of EA[3]/L²"``): the same relative error, at the fitted L.
+        """
+        ident = self.identifiability()
+        out = []
+        for p in self.parameters:
+            rel, note = ident.relative_error(p.name)
+            out.append((None if rel is None else abs(p.value) * rel, note))
+        return tuple(out)
+
+    def correlations(self, threshold: float = CORRELATION_THRESHOLD) -> list[tuple[str, str, float]]:
+        """``(a, b, ρ)`` for pairs of determined parameters with ``|ρ| >= threshold``, strongest first."""
+        return self.identifiability().strong_correlations(threshold)
 
     def predicted_creep(self, t_min: float = 0.1, t_max: float = 10.0, n: int = 41):
         """Creep compliance (1/Pa) of the fitted cell over [t_min, t_max] s and its power-law exponent."""
@@ -608,9 +648,16 @@ class FitResult:
         return out
 
     def parameters_dataframe(self):
-        """The parameters as a DataFrame: name, value, unit, lower, upper, vary, at_bound, description."""
-        rows = [p.to_dict() for p in self.parameters]
-        return dataframe({k: [r[k] for r in rows] for k in rows[0]})
+        """The parameters as a DataFrame: name, value, stderr (both in ``unit``; stderr NaN when not determined),
+        stderr_percent, stderr_note, unit, lower, upper, vary, at_bound, description."""
+        rows = [{**p.to_dict(), **_error_fields(p, (None if e is None else e / abs(p.value) if p.value else None, n))}
+                for p, (e, n) in zip(self.parameters, self.standard_errors)]
+        order = ["name", "value", "stderr", "stderr_percent", "stderr_note", "unit", "lower", "upper", "vary",
+                 "at_bound", "description"]
+        cols = {k: [r[k] for r in rows] for k in order}
+        cols["stderr"] = [math.nan if v is None else v for v in cols["stderr"]]
+        cols["stderr_percent"] = [math.nan if v is None else v for v in cols["stderr_percent"]]
+        return dataframe(cols, {"correlations": self.correlations()})
 
     def plot(self, ax=None, *, dataset: int | None = None, **kw):
         """Data and fitted model of one data set on ``ax`` (or every data set, one panel each, when ``ax`` is None).
@@ -652,7 +699,11 @@ class FitResult:
                             "min_prestress_elasticity": self.problem.min_prestress_elasticity,
                             "elasticity_frequency_Hz": float(self.problem.elasticity_omega / (2 * math.pi)),
                             "max_decades": self.problem.max_decades},
-            "parameters": [p.to_dict() for p in self.parameters],
+            "parameters": [{**p.to_dict(), "stderr": e, "stderr_percent": None if e is None or not p.value
+                            else 100.0 * e / abs(p.value), "stderr_note": n}
+                           for p, (e, n) in zip(self.parameters, self.standard_errors)],
+            "correlations": {"threshold": CORRELATION_THRESHOLD,
+                             "pairs": [{"a": a, "b": b, "rho": r} for a, b, r in self.correlations()]},
             "tendon_stiffness_spread": {"min_N": lo, "max_N": hi, "decades": dec},
             "tendon_stiffness_spread_not_at_bounds": (
                 None if self.stiffness_spread_interior is None else dict(
@@ -691,15 +742,24 @@ class FitResult:
             f"{self.elapsed_s:.1f} s",
             f"    stiffness spread:   {lo:.3g} .. {hi:.3g} N ({dec:.1f} decades)" + self._interior_text(),
             f"    message:            {self.message}",
-            "[[Parameters]]",
+            "[[Parameters]] (value +/- standard error, in the unit shown; see identifiability())",
         ]
         width = max(len(p.name) for p in self.parameters)
-        for p in self.parameters:
-            flag = "" if p.vary else " (fixed)"
-            if p.at_bound:
-                flag += f" at {p.at_bound} bound"
-            lines.append(f"    {p.name:<{width}} = {p.value:<12.6g} {p.unit:<6} "
-                         f"[{p.lower:.3g}, {p.upper:.3g}]{flag}  {p.description}")
+        ident = self.identifiability()
+        if ident.gauge_removed:
+            lines.append("    (L is an exact gauge of the moduli: the errors are those of EA/L², c/L, P/L² at the "
+                         "fitted L)")
+        for p, (se, note) in zip(self.parameters, self.standard_errors):
+            lines.append(f"    {p.name + ':':<{width + 1}} {plus_minus(p.value, se, p.unit, note)}  "
+                         f"[{p.lower:.3g}, {p.upper:.3g}]  {p.description}")
+        strong = self.correlations()
+        lines.append(f"[[Correlations]] (unreported correlations are < {CORRELATION_THRESHOLD:.3f})")
+        for a, b, r in strong[:_MAX_CORRELATIONS]:
+            lines.append(f"    C({a}, {b}) = {r:+.4f}")
+        if len(strong) > _MAX_CORRELATIONS:
+            lines.append(f"    ... and {len(strong) - _MAX_CORRELATIONS} more (FitResult.correlations())")
+        if not strong:
+            lines.append("    none")
         for f in self.fits:
             d = f.data
             lines.append(f"[[Residuals log10(model/data): data {f.index}]]")

@@ -15,6 +15,7 @@ from ..fitting.prestress import CELL_ELASTICITY
 from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
+from .._results import CORRELATION_THRESHOLD, plus_minus
 from ._format import num, table
 from .fit_analysis import section_comparison, section_creep, section_identifiability, section_provenance
 
@@ -163,19 +164,34 @@ def section_stiffness(result: FitResult, baseline=None) -> list[str]:
 
 
 def section_parameters(result: FitResult, baseline=None) -> list[str]:
-    """Every parameter with bounds and whether it sits at one."""
+    """Every parameter with its standard error (lmfit's ``value +/- stderr (percent)``), bounds and whether it sits
+    at one; the strong correlations."""
     rows = []
-    for p in result.parameters:
-        note = ("fixed" if not p.vary else "") + (f"at {p.at_bound} bound" if p.at_bound else "")
-        rows.append((p.name, f"{p.value:.6g}", p.unit, num(p.lower, 3), num(p.upper, 3), note))
-    out = ["## Parameters", "", table(("parameter", "value", "unit", "lower", "upper", "note"), rows)]
+    for p, (se, note) in zip(result.parameters, result.standard_errors):
+        shown = plus_minus(p.value, se)
+        rows.append((p.name, shown, p.unit, num(p.lower, 3), num(p.upper, 3), note.strip("()")))
+    out = ["## Parameters", "",
+           "Each value with its standard error (one σ, linearized at the optimum; see *How well the data determine "
+           "the parameters*), or why it has none.", "",
+           table(("parameter", "value +/- standard error", "unit", "lower", "upper", "note"), rows)]
+    if result.identifiability().gauge_removed:
+        out += ["The strut length L is an exact gauge of the moduli: each error is that of the combination the note "
+                "names (EA/L², c/L, P/L²) at the fitted L.", ""]
+    strong = result.correlations()
+    if strong:
+        shown_pairs = strong[:20]
+        out += [f"Correlations with |ρ| ≥ {CORRELATION_THRESHOLD:g} ({len(strong)}; all in `fit.json`): "
+                + ", ".join(f"C({a}, {b}) = {r:+.3f}" for a, b, r in shown_pairs)
+                + (" …" if len(strong) > len(shown_pairs) else "") + ".", ""]
+    else:
+        out += [f"No correlation between determined parameters reaches |ρ| = {CORRELATION_THRESHOLD:g}.", ""]
     if result.n_at_bound:
         out += [f"{result.n_at_bound} parameter(s) sit at a bound: a stiffness at its lower bound is a tendon "
                 "the fit switched off, one at its upper bound a tendon it made rigid.", ""]
     if baseline is not None:
         out += ["Homogeneous baseline parameters: " + ", ".join(
-            f"{p.name} = {p.value:.4g} {p.unit}" + (f" ({p.at_bound} bound)" if p.at_bound else "")
-            for p in baseline.parameters), ""]
+            f"{p.name} = {plus_minus(p.value, se, p.unit, note, digits=4)}"
+            for p, (se, note) in zip(baseline.parameters, baseline.standard_errors)), ""]
     return out
 
 
