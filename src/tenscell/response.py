@@ -180,12 +180,13 @@ class FrequencyResponse:
             "loss_tangent": self.loss_tangent.ravel(),
         }, {"L_m": self.L})
 
-    def plot(self, axes=None, x: str = "frequency", **kw):
+    def plot(self, ax=None, x: str = "frequency", *, axes=None, **kw):
         """G' and G'' on a pair of axes: against frequency (log-log, one curve per P) or prestress.
 
         Parameters
         ----------
-        axes : pair of Axes, optional
+        ax : pair of Axes, optional
+            Where to draw G' and G'' (``axes=`` is the older spelling); default a new figure.
         x : {"frequency", "prestress"}
         **kw
             Passed to :func:`tenscell.plotting.moduli_vs_frequency` or
@@ -200,7 +201,7 @@ class FrequencyResponse:
         if x not in ("frequency", "prestress"):
             raise ValueError(f"x: expected 'frequency' or 'prestress', got {x!r}")
         draw = plotting.moduli_vs_frequency if x == "frequency" else plotting.moduli_vs_prestress
-        return draw(self, axes, **kw)
+        return draw(self, ax if ax is not None else axes, **kw)
 
 
 @hot_path

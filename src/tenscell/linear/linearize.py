@@ -146,8 +146,9 @@ class LinearModel:
         df.attrs["P_N"] = self.P
         return df
 
-    def plot(self, axes=None, f_hz=None, **kw):
-        """G' and G'' of this model against frequency (log-log), on a pair of axes.
+    def plot(self, ax=None, f_hz=None, *, axes=None, **kw):
+        """G' and G'' of this model against frequency (log-log), on a pair of axes ``ax`` (``axes=`` is the older
+        spelling; default a new figure).
 
         ``f_hz`` defaults to 61 frequencies from 0.01 to 1000 Hz (the paper's
         window). The moduli come from :func:`tenscell.compliance`; for several
@@ -159,7 +160,7 @@ class LinearModel:
         f = np.logspace(-2, 3, 61) if f_hz is None else np.atleast_1d(np.asarray(f_hz, dtype=float))
         resp = FrequencyResponse(frequency_hz=f, prestress=np.array([self.P]), J=compliance(self, f)[None, :],
                                  L=self.L)
-        return resp.plot(axes=axes, **kw)
+        return resp.plot(ax if ax is not None else axes, **kw)
 
 
 @hot_path

@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 from ..io.outputs import atomic_path
 
 __all__ = ["STYLE", "style", "styled", "colors", "new_axes", "new_panels", "moduli_panels", "figure_of", "save",
-           "png_bytes", "label_moduli"]
+           "png_bytes", "label_moduli", "wrap", "legend_outside"]
 
 #: rcParams applied (as a context, never globally) to figures tenscell creates
 STYLE: dict[str, Any] = {
@@ -43,17 +43,33 @@ def style():
 
 
 def styled(func: F) -> F:
-    """Run ``func`` inside :func:`style` when it makes its own figure (its ``ax``/``axes`` argument is None)."""
+    """Run ``func`` inside :func:`style` when it makes its own figure (its ``ax``/``axes`` arguments are None)."""
     sig = inspect.signature(func)
-    name = "ax" if "ax" in sig.parameters else "axes"
+    names = [n for n in ("ax", "axes") if n in sig.parameters]
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
-        given = sig.bind_partial(*args, **kwargs).arguments.get(name)
-        with style() if given is None else nullcontext():
+        bound = sig.bind_partial(*args, **kwargs).arguments
+        given = any(bound.get(n) is not None for n in names)
+        with nullcontext() if given else style():
             return func(*args, **kwargs)
 
     return wrapper  # type: ignore[return-value]
+
+
+def wrap(text: str, width_in: float, fontsize: float = 10.0) -> str:
+    """``text`` broken into lines that fit ``width_in`` inches at ``fontsize`` points (a title stays inside its
+    figure or panel instead of running past the edge)."""
+    import textwrap
+
+    chars = max(12, int(width_in * 72.0 / (0.58 * fontsize)))
+    return "\n".join(textwrap.fill(part, chars) for part in str(text).split("\n"))
+
+
+def legend_outside(ax: Axes, *args: Any, **kw: Any):
+    """A legend to the right of ``ax``, outside the data area (constrained layout makes room for it); ``args``
+    and ``kw`` as for :meth:`~matplotlib.axes.Axes.legend`."""
+    return ax.legend(*args, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kw)
 
 
 def colors(n: int) -> np.ndarray:
@@ -85,7 +101,8 @@ def new_panels(axes: Sequence[Axes] | None, n: int, figsize: tuple[float, float]
     shape = (n, 1) if vertical else (1, n)
     fig, out = plt.subplots(*shape, figsize=figsize, layout="constrained", squeeze=False, **subplots_kw)
     if title:
-        fig.suptitle(title)
+        fig.suptitle(wrap(title, 0.95 * figsize[0], plt.rcParams["figure.titlesize"] if isinstance(
+            plt.rcParams["figure.titlesize"], (int, float)) else 12.0))
     return out.ravel()
 
 

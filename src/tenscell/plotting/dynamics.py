@@ -7,7 +7,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.ticker import MaxNLocator
 
-from ._style import colors, new_axes, new_panels, styled
+from ._style import colors, legend_outside, new_axes, new_panels, styled
 
 if TYPE_CHECKING:
     from ..timedomain import PowerLawFit
@@ -40,7 +40,7 @@ def time_traces(sim, title: str | None = None, axes: Sequence[Axes] | None = Non
                         label="some tendon slack")
     a3.set_ylabel("tension (N)")
     a3.set_xlabel("time t (s)")
-    a3.legend(loc="upper right", ncol=3)
+    legend_outside(a3)
     return ax
 
 
@@ -55,7 +55,7 @@ def force_displacement_loop(z, force, z_linear=None, force_linear=None, title: s
                 ls="--", label="linear model")
     ax.set_xlabel("probe displacement z (mm)")
     ax.set_ylabel("load F (N)")
-    ax.legend(loc="upper left")
+    legend_outside(ax)
     if title:
         ax.set_title(title)
     return ax
@@ -119,7 +119,7 @@ def creep_loglog(t, curves: Mapping[str, np.ndarray], exponent: Mapping[str, np.
         tt = np.logspace(np.log10(fit.t_min), np.log10(fit.t_max), 50)
         a1.loglog(tt, fit(tt), color="C3", lw=2, alpha=0.6, label=f"power law A·t^α, α = {fit.alpha:.3f}")
     a1.set_ylabel("creep compliance J(t) (m/N)")
-    a1.legend(loc="lower right")
+    legend_outside(a1)
     if exponent:
         for (label, e), col in zip(exponent.items(), cols):
             a2.semilogx(t, e, color=col, label=label)
@@ -141,7 +141,7 @@ def simulation_axes(sim, ax=None, **kw):
     if slack.any():
         ax.fill_between(sim.t, 0, 1, where=slack, transform=ax.get_xaxis_transform(), color="0.5", alpha=0.2,
                         label="some tendon slack")
-        ax.legend(loc="best")
+        legend_outside(ax)
     ax.set_xlabel("time t (s)")
     ax.set_ylabel("probe displacement z (mm)")
     return ax
@@ -170,7 +170,7 @@ def amplitude_sweep_axes(sweep, ax=None, **kw):
     ax.set_xlabel("force amplitude (N)")
     ax.set_ylabel("relative size")
     ax.set_title(f"{sweep.frequency_hz:g} Hz")
-    ax.legend(loc="best")
+    legend_outside(ax)
     return ax
 
 
@@ -182,5 +182,5 @@ def creep_axes(creep, ax=None, **kw):
         ax.loglog(creep.t, creep.linear, color="k", lw=0.8, ls="--", label="linear model")
     ax.set_xlabel("time t (s)")
     ax.set_ylabel("J(t) = z/F (m/N)")
-    ax.legend(loc="best")
+    legend_outside(ax)
     return ax

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from matplotlib.axes import Axes
 
-from ._style import new_axes, new_panels, styled
+from ._style import legend_outside, new_axes, new_panels, styled, wrap
 
 if TYPE_CHECKING:
     from ..io.data import RheologyData
@@ -51,14 +51,21 @@ def _axis_labels(ax: Axes, kind: str) -> None:
 @styled
 def measured(data: RheologyData, ax: Axes | None = None, *, title: str | None = None, **kw) -> Axes:
     """Measured G' and G'' on labelled axes: log-log against f (Hz), or linear against prestress (Pa)."""
-    ax = new_axes(ax, (5.0, 3.8))
+    ax = new_axes(ax, (6.2, 3.8))
     data_points(data, ax, **kw)
     _axis_labels(ax, _x_axis(data))
     ax.set_ylabel("modulus (Pa)")
-    ax.legend(loc="best")
+    legend_outside(ax)
     if title:
-        ax.set_title(title)
+        ax.set_title(wrap(title, _width_in(ax)))
     return ax
+
+
+def _width_in(ax: Axes) -> float:
+    """About how wide (inches) a panel is: its figure's width over the columns of its grid."""
+    spec = ax.get_subplotspec()
+    cols = spec.get_gridspec().ncols if spec is not None else 1
+    return 0.9 * ax.get_figure().get_figwidth() / cols
 
 
 @styled
@@ -85,15 +92,15 @@ def fit_figure(data: RheologyData, curves: Sequence, title: str | None = None,
     Frequency sweeps are drawn on log-log axes against f (Hz); prestress
     sweeps on linear axes against prestress (Pa), as in the paper.
     """
-    ax = new_panels(axes, len(curves), (4.2 * len(curves), 3.6), title=title, sharey=True)
+    ax = new_panels(axes, len(curves), (4.2 * len(curves) + 1.8, 3.6), title=title, sharey=True)
     for a, cv in zip(ax, curves):
         data_points(data, a)
         a.plot(cv.x, cv.G_storage, "-", color="C0", label="G′ model")
         a.plot(cv.x, cv.G_loss, "--", color="C3", label="G″ model")
         _axis_labels(a, _x_axis(data))
-        a.set_title(f"{cv.label}: rms log10 error {cv.rms_log10_error:.3g}")
+        a.set_title(wrap(f"{cv.label}: rms log10 error {cv.rms_log10_error:.3g}", 3.8))
     ax[0].set_ylabel("modulus (Pa)")
-    ax[0].legend(loc="best")
+    legend_outside(ax[-1])
     return ax
 
 
@@ -133,7 +140,7 @@ def plot_fit(result, ax: Axes | None = None, *, dataset: int | None = None, base
     ax.set_ylabel("modulus (Pa)")
     at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else
           f" at {fit.prestress_fitted_pa:.4g} Pa (fitted)" if fit.prestress_fitted_pa is not None else "")
-    ax.set_title(f"{_short(fit.data.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}")
+    ax.set_title(wrap(f"{_short(fit.data.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}", _width_in(ax)))
     return ax
 
 
@@ -151,7 +158,7 @@ def _plot_creep_fit(result, fit, ax, baseline=None):
     ax.set_ylabel("creep compliance (1/Pa)")
     at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else
           f" at {fit.prestress_fitted_pa:.4g} Pa (fitted)" if fit.prestress_fitted_pa is not None else "")
-    ax.set_title(f"{_short(d.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}")
+    ax.set_title(wrap(f"{_short(d.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}", _width_in(ax)))
     return ax
 
 
@@ -159,10 +166,11 @@ def _plot_creep_fit(result, fit, ax, baseline=None):
 def fit_panels(result, baseline=None, title: str | None = None, n: int = 200,
                axes: Sequence[Axes] | None = None) -> np.ndarray:
     """One panel per data set of ``result`` (the combined figure of a joint fit); returns the axes."""
-    ax = new_panels(axes, len(result.datasets), (4.4 * len(result.datasets), 3.8), title=title)
+    ax = new_panels(axes, len(result.datasets), (4.4 * len(result.datasets) + 2.0, 3.8), title=title)
     for i, a in enumerate(ax):
         plot_fit(result, ax=a, dataset=i, baseline=baseline, n=n)
-    ax[0].legend(loc="best")
+    for a in ax if len({f.axis for f in result.fits}) > 1 else ax[-1:]:  # creep panels have their own entries
+        legend_outside(a)
     return ax
 
 
@@ -173,7 +181,7 @@ def compactness_front(decades, rms, tolerance: float | None = None, knee: float 
 
     ``knee`` (decades) is marked if given; ``tolerance`` drawn as a line.
     """
-    ax = new_axes(ax, (4.8, 3.6))
+    ax = new_axes(ax, (6.4, 3.6))
     ax.semilogy(decades, rms, "o-", color="C0", label="best RMS reached")
     if tolerance is not None:
         ax.axhline(tolerance, color="0.4", ls="--", lw=1, label=f"tolerance {tolerance:g}")
@@ -181,9 +189,9 @@ def compactness_front(decades, rms, tolerance: float | None = None, knee: float 
         ax.axvline(knee, color="C3", ls=":", lw=1.2, label=f"narrowest within tolerance: {knee:g}")
     ax.set_xlabel("bound on the stiffness spread (decades)")
     ax.set_ylabel("RMS log10 error (decades)")
-    ax.legend(loc="best")
+    legend_outside(ax)
     if title:
-        ax.set_title(title)
+        ax.set_title(wrap(title, _width_in(ax)))
     return ax
 
 
@@ -199,9 +207,9 @@ def stiffness_histogram(EA, ax: Axes | None = None, title: str | None = None, fa
     else:
         fams = list(dict.fromkeys(families))
         ax.hist([x[np.array(families) == f] for f in fams], bins=bins, stacked=True, label=fams)
-        ax.legend(loc="best")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, title="family")
     ax.set_xlabel("log10 EA (EA in N)")
     ax.set_ylabel("tendons")
     if title:
-        ax.set_title(title)
+        ax.set_title(wrap(title, _width_in(ax)))
     return ax

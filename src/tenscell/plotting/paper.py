@@ -1,7 +1,8 @@
 """The paper's figures of the homogeneous cell: moduli against prestress (Fig. 2) and frequency (Fig. 3).
 
-Each function draws on the two axes it is given (``axes=[ax_storage, ax_loss]``)
-or on a new figure's, and returns the axes as an array.
+Each function draws on the two axes it is given (``ax=[ax_storage, ax_loss]``)
+or on a new figure's, and returns the axes as an array. The legend (with its
+unit) sits to the right of the G″ panel, off the curves.
 """
 from __future__ import annotations
 
@@ -10,27 +11,28 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from matplotlib.axes import Axes
 
-from ._style import colors, label_moduli, new_panels, styled
+from ._style import colors, label_moduli, legend_outside, new_panels, styled
 
 if TYPE_CHECKING:
     from ..response import FrequencyResponse
 
 __all__ = ["fig2_prestress", "fig3_frequency", "moduli_vs_frequency", "moduli_vs_prestress"]
 
-_PANELS = (8.0, 3.4)
+_PANELS = (9.0, 3.4)  # two panels and the legend beside them
 
 
 @styled
-def moduli_vs_prestress(resp: FrequencyResponse, axes: Sequence[Axes] | None = None, *, title: str | None = None,
-                        legend: bool = True, **line_kw) -> np.ndarray:
+def moduli_vs_prestress(resp: FrequencyResponse, ax: Sequence[Axes] | None = None, *, title: str | None = None,
+                        legend: bool = True, axes: Sequence[Axes] | None = None, **line_kw) -> np.ndarray:
     """G' (left) and G'' (right) against prestress on linear axes, one curve per frequency.
 
     Parameters
     ----------
     resp : FrequencyResponse
         Prestresses as rows, the curve frequencies as columns.
-    axes : pair of Axes, optional
-        Where to draw G' and G''; default a new figure.
+    ax : pair of Axes, optional
+        Where to draw G' and G''; default a new figure. ``axes=`` is the
+        same (the older spelling).
     title : str, optional
         Figure title (only on a new figure).
     legend : bool
@@ -42,44 +44,44 @@ def moduli_vs_prestress(resp: FrequencyResponse, axes: Sequence[Axes] | None = N
     -------
     ndarray of Axes, shape (2,)
     """
-    a1, a2 = ax = new_panels(axes, 2, _PANELS, title=title)
+    a1, a2 = out = new_panels(ax if ax is not None else axes, 2, _PANELS, title=title)
     cols = colors(len(resp.frequency_hz))
     for k, f in enumerate(resp.frequency_hz):
-        kw = {"color": cols[k], "label": f"{f:g} Hz", **line_kw}
+        kw = {"color": cols[k], "label": f"{f:g}", **line_kw}
         a1.plot(resp.prestress, resp.G_storage[:, k], **kw)
         a2.plot(resp.prestress, resp.G_loss[:, k], **kw)
-    label_moduli(ax, "prestress P (N, the paper's Pa)")
+    label_moduli(out, "prestress P (N, the paper's Pa)")
     if legend:
-        a2.legend(title="frequency", ncol=2, loc="lower right")
-    return ax
+        legend_outside(a2, title="frequency f (Hz)", ncol=1 if len(cols) <= 12 else 2)
+    return out
 
 
 @styled
-def moduli_vs_frequency(resp: FrequencyResponse, axes: Sequence[Axes] | None = None, *, title: str | None = None,
-                        legend: bool = True, **line_kw) -> np.ndarray:
+def moduli_vs_frequency(resp: FrequencyResponse, ax: Sequence[Axes] | None = None, *, title: str | None = None,
+                        legend: bool = True, axes: Sequence[Axes] | None = None, **line_kw) -> np.ndarray:
     """G' (left) and G'' (right) against frequency on log-log axes, one curve per prestress.
 
     Parameters and return as :func:`moduli_vs_prestress`.
     """
-    a1, a2 = ax = new_panels(axes, 2, _PANELS, title=title)
+    a1, a2 = out = new_panels(ax if ax is not None else axes, 2, _PANELS, title=title)
     cols = colors(len(resp.prestress))
     for i, P in enumerate(resp.prestress):
-        kw = {"color": cols[i], "label": f"P = {P:g}", **line_kw}
+        kw = {"color": cols[i], "label": f"{P:g}", **line_kw}
         a1.loglog(resp.frequency_hz, resp.G_storage[i], **kw)
         a2.loglog(resp.frequency_hz, resp.G_loss[i], **kw)
-    label_moduli(ax, "frequency f (Hz)")
+    label_moduli(out, "frequency f (Hz)")
     if legend:
-        a1.legend(title="prestress", ncol=2, loc="upper left")
-    return ax
+        legend_outside(a2, title="prestress P (N)", ncol=1 if len(cols) <= 12 else 2)
+    return out
 
 
 def fig2_prestress(resp: FrequencyResponse, title: str = "Homogeneous cell: moduli versus prestress (paper Fig. 2)",
-                   axes: Sequence[Axes] | None = None) -> np.ndarray:
+                   ax: Sequence[Axes] | None = None, *, axes: Sequence[Axes] | None = None) -> np.ndarray:
     """The paper's Fig. 2: :func:`moduli_vs_prestress` with the paper's title."""
-    return moduli_vs_prestress(resp, axes, title=title)
+    return moduli_vs_prestress(resp, ax if ax is not None else axes, title=title)
 
 
 def fig3_frequency(resp: FrequencyResponse, title: str = "Homogeneous cell: moduli versus frequency (paper Fig. 3)",
-                   axes: Sequence[Axes] | None = None) -> np.ndarray:
+                   ax: Sequence[Axes] | None = None, *, axes: Sequence[Axes] | None = None) -> np.ndarray:
     """The paper's Fig. 3: :func:`moduli_vs_frequency` with the paper's title."""
-    return moduli_vs_frequency(resp, axes, title=title)
+    return moduli_vs_frequency(resp, ax if ax is not None else axes, title=title)

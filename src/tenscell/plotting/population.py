@@ -11,7 +11,7 @@ import warnings
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ._style import colors, label_moduli, new_panels, styled
+from ._style import colors, label_moduli, legend_outside, new_panels, styled
 
 __all__ = ["parameter_distributions", "population_moduli"]
 
@@ -120,5 +120,5 @@ def population_moduli(result, ax=None, title: str | None = "Population moduli: m
             a.errorbar(f[have][::2], dq[1][::2], yerr=[(dq[1] - dq[0])[::2], (dq[2] - dq[1])[::2]], fmt="o",
                        ms=3, color=palette[k], mfc="none", capsize=2, lw=0.8, label=f"{label}: data")
     label_moduli(axes, "f (Hz)")
-    axes[0].legend(loc="best")
+    legend_outside(axes[0])
     return np.asarray(axes)

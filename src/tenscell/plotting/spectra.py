@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.axes import Axes
 
-from ._style import new_axes, styled
+from ._style import legend_outside, new_axes, styled
 
 __all__ = ["spectrum_stems", "loglog_curve", "rates_bar"]
 
@@ -41,7 +41,7 @@ def spectrum_stems(times, weights, ax: Axes | None = None, *, xlabel: str = "tim
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     if label:
-        ax.legend(loc="best")
+        legend_outside(ax)
     return ax
 
 
@@ -54,7 +54,7 @@ def loglog_curve(x, y, ax: Axes | None = None, *, xlabel: str, ylabel: str, labe
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     if label:
-        ax.legend(loc="best")
+        legend_outside(ax)
     if title:
         ax.set_title(title)
     return ax

@@ -7,12 +7,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 
-from ._style import new_axes, styled
+from ._style import new_axes, styled, wrap
 
 if TYPE_CHECKING:
     from ..model.structure import Structure
 
-__all__ = ["MEMBER_STYLE", "structure_3d", "relaxation_modes_3d"]
+__all__ = ["MEMBER_STYLE", "MAX_MEMBERS_DRAWN", "structure_3d", "relaxation_modes_3d"]
 
 #: member colours and widths of the paper's Fig. 1: struts grey and thick, actin black, IFs red
 MEMBER_STYLE: dict[str, dict[str, Any]] = {
@@ -24,12 +24,15 @@ _OTHER_COLORS = ("tab:green", "tab:purple", "tab:orange", "tab:cyan", "tab:brown
 
 
 def _draw_members(ax, structure: Structure, x: np.ndarray, alpha: float = 1.0, legend: bool = True,
-                  width_scale: float = 1.0) -> None:
+                  width_scale: float = 1.0, keep: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+    """Struts and tendons as 3D lines by family; ``keep`` = (strut mask, tendon mask) draws only those."""
     from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
-    groups = {"strut": [tuple(p) for p in structure.struts]}
-    for (a, b), fam in zip(structure.tendons, structure.families):
-        groups.setdefault(fam, []).append((a, b))
+    s_keep, t_keep = keep if keep is not None else (None, None)
+    groups = {"strut": [tuple(p) for k, p in enumerate(structure.struts) if s_keep is None or s_keep[k]]}
+    for k, ((a, b), fam) in enumerate(zip(structure.tendons, structure.families)):
+        if t_keep is None or t_keep[k]:
+            groups.setdefault(fam, []).append((a, b))
     others = iter(_OTHER_COLORS * 10)
     for fam, pairs in groups.items():
         if not pairs:
@@ -45,22 +48,41 @@ def _draw_members(ax, structure: Structure, x: np.ndarray, alpha: float = 1.0, l
                    label="anchors" if legend else None, alpha=alpha)
 
 
-def _frame(ax, x: np.ndarray, pad: float = 0.08) -> None:
+def _frame(ax, x: np.ndarray, pad: float = 0.08, zoom: float = 0.85) -> None:
     lo, hi = x.min(axis=0), x.max(axis=0)
     span = np.maximum(hi - lo, 1e-12 * max(1.0, float(np.abs(x).max())))
     lo, hi = lo - pad * span.max(), hi + pad * span.max()
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
-    ax.set_box_aspect(tuple(hi - lo))
+    # zoom < 1 leaves room inside the panel for the tick and axis labels of the box's far corners
+    ax.set_box_aspect(tuple(hi - lo), zoom=zoom)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_zlabel("z (m)")
 
 
+#: above this many members structure_3d draws a section (a slab through the middle), not every member
+MAX_MEMBERS_DRAWN = 1500
+
+
+def _section(structure: Structure, x: np.ndarray, most: int) -> tuple[tuple[np.ndarray, np.ndarray], str]:
+    """The members whose midpoints lie in the thinnest slab about the middle of the y extent (the axis across the
+    default view) that holds at most ``most`` members: (strut mask, tendon mask) and what the section shows."""
+    mid_s = np.array([(x[a, 1] + x[b, 1]) / 2 for a, b in structure.struts]).reshape(-1)
+    mid_t = np.array([(x[a, 1] + x[b, 1]) / 2 for a, b in structure.tendons]).reshape(-1)
+    centre = 0.5 * (x[:, 1].min() + x[:, 1].max())
+    dist = np.abs(np.concatenate([mid_s, mid_t]) - centre)
+    half = float(np.sort(dist)[most - 1]) if dist.size > most else float(dist.max())
+    inside = dist <= half
+    masks = (inside[: mid_s.size], inside[mid_s.size:])
+    shown = int(inside.sum())
+    return masks, f"section |y − {centre:.3g}| ≤ {half:.3g} m: {shown:,} of {dist.size:,} members"
+
+
 @styled
 def structure_3d(structure: Structure, title: str | None = None, x=None, load: bool = True, elev: float = 18.0,
-                 azim: float = -60.0, ax: Axes | None = None) -> Axes:
+                 azim: float = -60.0, ax: Axes | None = None, max_members: int = MAX_MEMBERS_DRAWN) -> Axes:
     """The structure in 3D, coloured as the paper's Fig. 1.
 
     Struts grey and thick, actin black, intermediate filaments red, other
@@ -80,6 +102,11 @@ def structure_3d(structure: Structure, title: str | None = None, x=None, load: b
         View angles (degrees).
     ax : Axes3D, optional
         A 3D axes (``fig.add_subplot(projection="3d")``); default a new figure.
+    max_members : int
+        A structure with more members is drawn as a section: the members in
+        the thinnest slab through its middle (across y) that holds this many,
+        thinner lines, and the title says so. Every member of a 10⁴-node
+        lattice drawn at once is a solid block.
 
     Returns
     -------
@@ -87,7 +114,10 @@ def structure_3d(structure: Structure, title: str | None = None, x=None, load: b
     """
     x = structure.nodes if x is None else np.asarray(x)
     ax3: Any = new_axes(ax, (6.0, 5.6), projection="3d")
-    _draw_members(ax3, structure, x)
+    n_members = len(structure.struts) + len(structure.tendons)
+    keep, note = (None, "") if n_members <= max_members else _section(structure, x, max_members)
+    shown = n_members if keep is None else int(keep[0].sum() + keep[1].sum())
+    _draw_members(ax3, structure, x, keep=keep, width_scale=float(min(1.0, np.sqrt(300.0 / max(shown, 1)))))
     if load:
         p = structure.load
         at = np.asarray(p.weights) @ x[list(p.nodes)]
@@ -96,7 +126,7 @@ def structure_3d(structure: Structure, title: str | None = None, x=None, load: b
     _frame(ax3, x)
     ax3.view_init(elev=elev, azim=azim)
     ax3.legend(loc="upper left", fontsize=7)
-    ax3.set_title(title or structure.name)
+    ax3.set_title(wrap((title or structure.name) + (f"\n{note}" if note else ""), 5.4))
     return ax3
 
 

@@ -11,14 +11,14 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
 
-from ._style import colors, label_moduli, new_axes, new_panels, styled
+from ._style import colors, label_moduli, legend_outside, new_axes, new_panels, styled
 
 __all__ = [
     "no_if_figure", "no_if_peaks_figure", "elasticities_figure", "monte_carlo_figure", "reference_map_figure",
     "references_figure", "semiflexible_figure", "stiffening_figure",
 ]
 
-_PANELS = (8.0, 3.4)
+_PANELS = (9.6, 3.4)  # two panels and a legend beside them
 
 
 @styled
@@ -33,9 +33,9 @@ def no_if_figure(study, title: str = "Without intermediate filaments: G'' has a 
     a1, a2 = ax = new_panels(axes, 2, _PANELS, title=title)
     cols = colors(len(w.prestress))
     for k, P in enumerate(w.prestress):
-        a1.loglog(w.frequency_hz, w.G_storage[k], color=cols[k], label=f"P = {P:g}")
+        a1.loglog(w.frequency_hz, w.G_storage[k], color=cols[k], label=f"{P:g}")
         a1.loglog(i.frequency_hz, i.G_storage[k], color=cols[k], ls="--", lw=0.8)
-        a2.loglog(w.frequency_hz, w.G_loss[k], color=cols[k], label=f"P = {P:g}")
+        a2.loglog(w.frequency_hz, w.G_loss[k], color=cols[k], label=f"{P:g}")
         a2.loglog(i.frequency_hz, i.G_loss[k], color=cols[k], ls="--", lw=0.8)
         pk = study.peaks[k]
         if w.frequency_hz[0] <= pk.frequency_hz <= w.frequency_hz[-1]:
@@ -43,7 +43,7 @@ def no_if_figure(study, title: str = "Without intermediate filaments: G'' has a 
     label_moduli(ax, "frequency f (Hz)")
     for a in ax:
         a.axvspan(1e-2, 1e3, color="0.9", zorder=0)
-    a1.legend(title="no IFs (solid), IFs (dashed)", ncol=2, loc="upper left")
+    legend_outside(a2, title="prestress P (N)\nno IFs (solid), IFs (dashed)")
     return ax
 
 
@@ -60,7 +60,7 @@ def no_if_peaks_figure(study, title: str = "Peak of G'' without IFs against pres
     a1.axhline(w, color="0.5", ls=":", label=f"upper end of the frequency window ({w:g} Hz)")
     a1.set_xlabel("prestress P (N)")
     a1.set_ylabel("peak frequency of G″ (Hz)")
-    a1.legend(loc="upper left")
+    legend_outside(a1)
     a2.loglog(P, hp, "o-")
     a2.set_xlabel("prestress P (N)")
     a2.set_ylabel("peak height of G″ (Pa)")
@@ -101,7 +101,7 @@ def elasticities_figure(el, title: str = "Local elasticities of G′ and G″",
     for a in ax:
         a.set_xlabel("frequency f (Hz)")
         a.axhspan(-0.8, 0.8, color="0.9", zorder=0, label="|e| ≤ 0.8: 10% in, ≤ 8% out (first order)")
-    a2.legend(loc="best", fontsize=7)
+    legend_outside(a2, fontsize=7)
     return ax
 
 
@@ -120,7 +120,7 @@ def monte_carlo_figure(results, bound: float = 0.08, title: str = "Monte Carlo o
         a.axvline(100 * bound, color="k", ls=":", label=f"{100 * bound:g}%")
         a.set_xlabel(f"largest |Δ{name}/{name}| over frequency (%)")
         a.set_ylabel("draws")
-    a1.legend(fontsize=7)
+    legend_outside(a1, fontsize=7)
     return ax
 
 
@@ -150,7 +150,7 @@ def reference_map_figure(mp, if_free_curve=None, title: str = "Valid references 
     if own:
         ax.figure.legend(handles, labels, loc="outside lower center", ncol=2, fontsize=7)
     else:
-        ax.legend(handles, labels, fontsize=7)
+        legend_outside(ax, handles, labels, fontsize=7)
     return ax
 
 
@@ -165,7 +165,7 @@ def references_figure(responses: Mapping[str, Any], P: float, title: str | None 
         a1.loglog(r.frequency_hz, r.G_storage[i], color=col, label=name)
         a2.loglog(r.frequency_hz, r.G_loss[i], color=col, label=name)
     label_moduli(ax, "frequency f (Hz)")
-    a1.legend(fontsize=7, loc="upper left")
+    legend_outside(a1, fontsize=7)
     return ax
 
 
@@ -182,14 +182,14 @@ def semiflexible_figure(study, title: str = "Semiflexible struts: convergence to
     a1.loglog(e, study.constant_storage / e, "k:", label="∝ 1/EA_s")
     a1.set_xlabel("strut stiffness EA_s (N)")
     a1.set_ylabel("relative difference from rigid struts")
-    a1.legend()
+    legend_outside(a1)
     a2.semilogx(e, study.G[:, k1].real / study.G_rigid[k1].real, "o-", ms=3, label=f"G′({f[k1]:.3g} Hz)")
     a2.semilogx(e, study.G[:, k1].imag / study.G_rigid[k1].imag, "s-", ms=3, label=f"G″({f[k1]:.3g} Hz)")
     a2.axhline(1.0, color="0.5", ls=":")
     a2.axvline(study.strut_compression, color="0.5", ls="--", label="strut compression P·|T0_s|")
     a2.set_xlabel("strut stiffness EA_s (N)")
     a2.set_ylabel("modulus / rigid-strut modulus")
-    a2.legend()
+    legend_outside(a2)
     return ax
 
 
@@ -205,5 +205,5 @@ def stiffening_figure(study, title: str = "Strain-stiffening intermediate filame
         a1.plot(study.prestress, study.G[i, :, k].real, color=cols[i], label=f"b = {b:g}")
         a2.plot(study.prestress, study.G[i, :, k].imag, color=cols[i], label=f"b = {b:g}")
     label_moduli(ax, "prestress P (N, the paper's Pa)")
-    a1.legend(title="IF stiffening", loc="upper left")
+    legend_outside(a1, title="IF stiffening")
     return ax
