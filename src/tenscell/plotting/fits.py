@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from matplotlib.axes import Axes
 
-from ._style import legend_outside, new_axes, new_panels, styled, wrap
+from ._style import figure_of, legend_outside, new_axes, new_panels, styled, wrap
 
 if TYPE_CHECKING:
     from ..io.data import RheologyData
@@ -65,7 +65,7 @@ def _width_in(ax: Axes) -> float:
     """About how wide (inches) a panel is: its figure's width over the columns of its grid."""
     spec = ax.get_subplotspec()
     cols = spec.get_gridspec().ncols if spec is not None else 1
-    return 0.9 * ax.get_figure().get_figwidth() / cols
+    return 0.9 * figure_of(ax).get_figwidth() / cols
 
 
 @styled
