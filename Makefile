@@ -30,8 +30,10 @@ $(DOCS_STAMP): $(STAMP)
 	$(PY) -m pip install --quiet -e '.[docs]'
 	touch $(DOCS_STAMP)
 
+# then every internal link and #anchor of the built pages must resolve (offline: external links are not fetched)
 docs: $(DOCS_STAMP)
 	TENSCELL_PROGRESS=0 $(VENV)/bin/sphinx-build -W --keep-going -b html docs docs/_build/html
+	$(PY) docs/check_links.py docs/_build/html
 
 # static types (mypy, configured in pyproject.toml)
 DEV_STAMP := $(VENV)/.dev-installed

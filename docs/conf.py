@@ -59,7 +59,14 @@ sphinx_gallery_conf = {
     "remove_config_comments": True,
     "abort_on_example_error": True,
     "within_subsection_order": "FileNameSortKey",
+    # "Examples using this" on every API page (the templates in _templates/autosummary add the mini-gallery)
+    "doc_module": ("tenscell",),
+    "backreferences_dir": "api/generated/backreferences",
 }
+
+# [source] links only from the pages of the module that defines an object: following the top-level re-exports
+# (tenscell.X defined in tenscell.sub) wrote back-links to anchors no page has (docs/check_links.py finds them)
+viewcode_follow_imported_members = False
 
 html_theme = "pydata_sphinx_theme"
 html_title = f"tenscell {release}"
@@ -82,6 +89,7 @@ _SECTIONS = {
     "sensitivity": "Sensitivity",
     "studies": "Studies of the paper's discussion",
     "population": "Populations of cells",
+    "_threads": "Threads (BLAS)",
 }
 #: modules documented whole, below the top-level names
 API_MODULES = ["tenscell.plotting", "tenscell.io.importers", "tenscell.io.data", "tenscell.fitting",
@@ -135,6 +143,23 @@ def _absolute_values(app, what, name, obj, options, lines):
     lines[:] = [_ABS.sub(r"\\|\1\\|", line) for line in lines]
 
 
+def _constant_docs(app, what, name, obj, options, lines):
+    """A top-level constant (``tenscell.DEFAULT_DELTA``) shows the ``#:`` comment of its own module, not the
+    docstring of ``float``."""
+    short = name.rsplit(".", 1)[-1]
+    if what not in ("data", "attribute") or short not in tenscell._WHERE:
+        return
+    from sphinx.pycode import ModuleAnalyzer
+
+    try:
+        docs = ModuleAnalyzer.for_module(f"tenscell.{tenscell._WHERE[short]}").find_attr_docs()
+    except Exception:  # a module without source (never in this package)
+        return
+    comment = docs.get(("", short))
+    if comment:
+        lines[:] = [line for line in comment if line is not None]
+
+
 def _skip_top_level_names(app, what, name, obj, skip, options):
     """On a module's page, leave out what has its own page as a top-level name (one description each)."""
     if what == "module" and name in tenscell._WHERE and getattr(tenscell, name, None) is obj:
@@ -143,5 +168,6 @@ def _skip_top_level_names(app, what, name, obj, skip, options):
 
 
 def setup(app):
+    app.connect("autodoc-process-docstring", _constant_docs, priority=50)
     app.connect("autodoc-process-docstring", _absolute_values, priority=100)
     app.connect("autodoc-skip-member", _skip_top_level_names)
