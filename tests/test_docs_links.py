@@ -16,5 +16,5 @@ def test_missing_pages_and_anchors_are_found(tmp_path):
     bad = check_links.broken_links(tmp_path)
     assert bad == ["index.html: api/page.html#gone (no such anchor)", "index.html: nowhere.html (no such page)"]
     assert check_links.main(["check_links", str(tmp_path)]) == 1
-    (tmp_path / "index.html").write_text('<a href="api/page.html#here">ok</a>')
+    (tmp_path / "index.html").write_text('<a href="api/page.html#here">ok</a><div id="top"></div>')
     assert check_links.main(["check_links", str(tmp_path)]) == 0
