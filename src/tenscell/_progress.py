@@ -47,20 +47,29 @@ def wants_progress(progress: bool | None) -> bool:
 
 def progress_bar(iterable: Iterable[Any] | None = None, *, total: int | None = None, desc: str = "",
                  unit: str = "it", progress: bool | None = None, leave: bool = False):
-    """A tqdm bar (the notebook widget in Jupyter, text on stderr elsewhere), or a silent one.
+    """A tqdm bar (the notebook widget in Jupyter when ipywidgets is installed, text on stderr elsewhere), or a
+    silent one.
 
     Returns a tqdm object in every case, so callers use ``update``, ``close``,
     ``set_postfix`` and iteration the same way whether it shows or not.
     """
     show = wants_progress(progress)
-    if show and in_notebook():
-        try:
-            from tqdm.notebook import tqdm as bar
-            return bar(iterable, total=total, desc=desc, unit=unit, leave=leave)
-        except ImportError:  # ipywidgets missing: fall back to text on stderr
-            pass
+    if show and in_notebook() and _widgets():
+        from tqdm.notebook import tqdm as bar
+        return bar(iterable, total=total, desc=desc, unit=unit, leave=leave)
+    # without ipywidgets (not a dependency) the text bar: tqdm.notebook would fail half-built, and the
+    # half-built bar's __del__ printed a traceback into the notebook at every fit
     from tqdm import tqdm as bar
     return bar(iterable, total=total, desc=desc, unit=unit, leave=leave, file=sys.stderr, disable=not show)
+
+
+def _widgets() -> bool:
+    """True when the notebook widget bar can be built: ipywidgets imports (any failure means the text bar)."""
+    try:
+        import ipywidgets  # noqa: F401
+    except Exception:  # ImportError, or a broken or mismatched installation
+        return False
+    return True
 
 
 def stage(message: str, *, progress: bool | None = None, stream=None) -> None:
