@@ -21,6 +21,8 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from .._optional import require
+
 __all__ = ["NotPositiveDefinite", "SparseCholesky", "factorize_spd"]
 
 
@@ -73,7 +75,7 @@ class SparseCholesky:
 
 
 def _to_cvxopt(A):
-    from cvxopt import spmatrix
+    spmatrix = require("cvxopt").spmatrix  # an optional dependency: one line naming the extra
 
     low = sp.tril(sp.coo_matrix(A)).tocoo()
     n = A.shape[0]
@@ -95,7 +97,7 @@ def factorize_spd(A, what: str = "the matrix") -> SparseCholesky:
     NotPositiveDefinite
         If a pivot is not positive (the matrix is indefinite or singular).
     """
-    from cvxopt import cholmod
+    cholmod = require("cvxopt.cholmod")
 
     n = A.shape[0]
     M = _to_cvxopt(A)

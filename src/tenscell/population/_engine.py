@@ -110,6 +110,9 @@ def cluster(*, client=None, workers: int | None = None, scheduler: str | None = 
     if scheduler is None and workers == 0:
         yield None
         return
+    from .._optional import require
+
+    require("distributed")  # an optional dependency: one line naming the extra
     from distributed import Client, LocalCluster
 
     if scheduler is not None:

@@ -201,6 +201,11 @@ def _from_files(base: Path, files) -> list[CellSource]:
 def _from_table(path: Path) -> list[CellSource]:
     import pandas as pd
 
+    if path.suffix.lower() != ".csv":
+        from .._optional import require
+
+        require("pyarrow")  # an optional dependency: one line naming the extra
+
     try:
         if path.suffix.lower() == ".csv":
             df = pd.read_csv(path, comment="#", dtype=str, keep_default_na=False, skipinitialspace=True)

@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .._checks import positive_array, positive_scalar
+from .._optional import require
 from .._results import format_repr
 
 __all__ = ["StudyResult", "monte_carlo_study", "sweep_study", "read_study", "PARTS"]
@@ -103,11 +104,12 @@ def read_study(directory, columns=None):
     parts = sorted((Path(directory) / PARTS).glob("part-*.parquet"))
     if not parts:
         return pd.DataFrame(columns=columns)
+    require("pyarrow")
     return pd.concat([pd.read_parquet(p, columns=columns) for p in parts], ignore_index=True)
 
 
 def _write_part(path: Path, columns: dict) -> None:
-    import pyarrow as pa
+    pa = require("pyarrow")
     import pyarrow.parquet as pq
 
     from ..io.outputs import atomic_path

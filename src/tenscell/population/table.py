@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from .._optional import require
 from .._results import format_repr
 
 __all__ = ["PopulationResult", "condition_summary", "recovery", "FIXED_COLUMNS", "SUMMARY_COLUMNS", "read_table"]
@@ -199,6 +200,7 @@ class PopulationResult:
 
         d = Path(directory)
         _write_frame(d / "population.csv", self.table, write_csv_rows)
+        require("pyarrow")  # before any file: the set is written whole or not at all
         with atomic_path(d / "population.parquet") as tmp:
             self.table.to_parquet(tmp, index=False)
         _write_frame(d / "summary.csv", self.summary(), write_csv_rows)
@@ -226,6 +228,7 @@ def read_table(path):
 
     path = str(path)
     if path.endswith((".parquet", ".pq")):
+        require("pyarrow")
         return pd.read_parquet(path)
     text = [c for c in _TEXT if c != "converged"]
     df = pd.read_csv(path, keep_default_na=False, na_values=[""], dtype={c: "str" for c in text})
