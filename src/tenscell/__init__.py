@@ -56,6 +56,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "io.creep_data": ("CreepData", "read_creep_csv"),
     "io.importers": ("ColumnMap", "read_table"),
     "io.instruments": ("read_data", "read_rheocompass", "read_trios"),
+    "io.exchange": ("from_rheojax", "to_rheojax"),
     # analyses
     "summary": ("relaxation_modes", "summarize"),
     "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
@@ -111,6 +112,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
     from .io.data import DataError, RheologyData, bundled, bundled_names, read_csv
     from .io.creep_data import CreepData, read_creep_csv
     from .io.importers import ColumnMap, read_table
+    from .io.exchange import from_rheojax, to_rheojax
     from .io.instruments import read_data, read_rheocompass, read_trios
     from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
     from .laws import (

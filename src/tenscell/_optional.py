@@ -17,6 +17,8 @@ EXTRAS = {
     "distributed": ("populations", "a Dask cluster for populations and large studies"),
     "dask": ("populations", "a Dask cluster for populations and large studies"),
     "cvxopt": ("large", "the sparse Cholesky factorization of structures above 1500 coordinates"),
+    "xarray": ("exchange", "an xarray Dataset"),
+    "rheojax": ("exchange", "rheojax's RheoData (pip install rheojax; it needs Python >= 3.12)"),
 }
 
 

@@ -165,6 +165,21 @@ class FrequencyResponse:
             f"G' {span(self.G_storage, 'Pa')}; G'' {span(self.G_loss, 'Pa')}",
         )
 
+    def to_xarray(self):
+        """The grid as an ``xarray.Dataset`` (dims ``prestress`` in N, ``frequency`` in Hz; ``J`` in m/N,
+        ``G_storage``, ``G_loss`` in Pa, ``loss_tangent``); xarray is optional (``pip install xarray``).
+        :meth:`from_xarray` reads it back. See :mod:`tenscell.io.exchange`."""
+        from .io.exchange import response_to_xarray
+
+        return response_to_xarray(self)
+
+    @classmethod
+    def from_xarray(cls, ds) -> "FrequencyResponse":
+        """The response a :meth:`to_xarray` dataset holds."""
+        from .io.exchange import response_from_xarray
+
+        return response_from_xarray(ds)
+
     def to_dataframe(self):
         """Long format, one row per (P, f): ``prestress_N, frequency_Hz, G_storage_Pa, G_loss_Pa, loss_tangent``.
 
