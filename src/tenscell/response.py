@@ -56,6 +56,10 @@ def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     ndarray of complex, same shape as ``f_hz``
     """
     f = _frequencies(f_hz)
+    if lin.realization is not None:  # a law with internal dynamics: its exact tangent, not the realization
+        from .linear.dynamic import exact_compliance
+
+        return exact_compliance(lin, f)
     if lin.pencil.sparse:
         return krylov_compliance(lin, f).J
     m = lin.pencil.modes
