@@ -307,6 +307,9 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     """
     if not (isinstance(k, (int, np.integer)) and k >= 1):
         raise ValueError(f"k (number of modes) must be a whole number >= 1, got {k!r}")
+    if lin.realization is not None:
+        raise ValueError(f"relaxation_modes: the {type(lin.law).__name__} tendons' internal variables are part of "
+                         "every mode, which then has no node displacements alone; use creep_spectrum(lin) for its times")
     n = lin.cell.n
     if sp.issparse(lin.K0):
         # ARPACK does not converge in reasonable time on lattices, whose slowest rate is shared by

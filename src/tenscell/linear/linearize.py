@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._checks import positive_array, positive_scalar
-from ..laws import LinearSpring, TendonLaw, Voigt
+from ..laws import DynamicLawError, LinearSpring, TendonLaw, Voigt
 from ..model.equilibrium import Cell, tangent_stiffness
 from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
@@ -317,7 +317,8 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
         from .dynamic import realize
 
         if P is None:
-            raise ValueError(f"a {type(law).__name__} law has internal dynamics: pass the prestress P to linearize_law")
+            raise DynamicLawError(f"a {type(law).__name__} law has internal dynamics: pass the prestress P to "
+                                  "linearize_law (its realization is built at tensions P·T0)")
         return realize(cell, law, P, band_hz=band_hz, tol=tol, viscosity=viscosity, check=check)
     if viscosity:
         from .dynamic import with_cytoplasm
