@@ -400,3 +400,17 @@ def test_cytoplasm_in_the_high_frequency_viscosity_and_creep():
 def test_negative_viscosity_is_refused():
     with pytest.raises(ValueError, match="viscosity"):
         dynamic_moduli(CELL, Voigt(EA=1.0, c=1.0), P0, [1.0], viscosity=-1.0)
+
+
+def test_frequency_response_with_a_law_and_a_cytoplasm():
+    """frequency_response(law=, viscosity=) = the kernel per prestress; Voigt with η = linearize(viscosity=)."""
+    f, Ps = np.logspace(-2, 3, 5), np.array([300.0, 1000.0])
+    law = DYNAMIC["springpot"]
+    r = tenscell.frequency_response(CELL, f, Ps, law=law, viscosity=0.1)
+    for i, p in enumerate(Ps):
+        assert _rel(r.G[i], dynamic_complex_modulus(CELL, law, p, f, viscosity=0.1)) < 1e-12
+    v = tenscell.frequency_response(CELL, f, Ps, EA, C, viscosity=0.1)
+    for i, p in enumerate(Ps):
+        Gs, Gl = tenscell.moduli(tenscell.linearize(CELL, p, EA, C, viscosity=0.1), f)
+        assert _rel(v.G[i], Gs + 1j * Gl) < 1e-10
+    assert v.viscosity == 0.1 and r.to_dataframe().shape[0] == Ps.size * f.size

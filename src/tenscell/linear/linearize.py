@@ -174,7 +174,7 @@ class LinearModel:
 
 
 @hot_path
-def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
+def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True, viscosity: float = 0.0) -> LinearModel:
     """Linearize the cell's equations of motion at prestress ``P`` (Voigt tendons, the paper's model).
 
     The paper-facing convenience for :func:`linearize_law` with
@@ -194,6 +194,9 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     check : bool
         Verify that K0 is positive definite (default). Turn off only in
         inner loops that have already checked.
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), ≥ 0, in parallel with the structure
+        (``G* += iωη``; see :attr:`LinearModel.viscosity`).
 
     Returns
     -------
@@ -211,7 +214,12 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     EA = positive_array("EA", EA, (m,), "N")
     c = positive_array("c", c, (m,), "N·s/m")
     # validated above: skip the law's own checks on this hot path (parameter sweeps, fits)
-    return _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
+    lin = _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
+    if viscosity:
+        from .dynamic import with_cytoplasm
+
+        return with_cytoplasm(lin, viscosity)
+    return lin
 
 
 @hot_path
