@@ -23,7 +23,7 @@ from .model.equilibrium import Cell, NotPrestressableError, equilibrate, equilib
 from .model.formfinding import rigid_body_modes
 from .linear.krylov import load_modes
 from .linear.linearize import LinearModel, NotPositiveDefiniteError, linearize
-from .model.structure import STRUT, Structure
+from .model.structure import Structure, cable_mask
 from ._threads import hot_path
 
 __all__ = ["StructureSummary", "summarize", "relaxation_modes", "RelaxationModes", "node_displacements"]
@@ -188,7 +188,7 @@ def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "
     if cell is None:
         verdict = f"NOT prestressable: {reason}"
     else:
-        cable = np.array([f != STRUT for f in s.families])
+        cable = cable_mask(s.families)
         min_t = float(cell.T0[cable].min())
         try:
             lin = linearize(cell, P=P, EA=EA, c=c, check=rigid == 0)

@@ -43,7 +43,7 @@ import scipy.linalg
 from ..laws import DynamicLawError, TendonLaw
 from ..model.coordinates import kinematics
 from ..model.equilibrium import Cell, equilibrium_matrix, member_geometry, point_vector
-from ..model.structure import STRUT
+from ..model.structure import cable_mask
 from .loads import LOADS
 
 __all__ = ["SimulationError", "SlackEvent", "MotionState", "EquationsOfMotion"]
@@ -175,7 +175,7 @@ class EquationsOfMotion:
         self.coords = cell.coords
         self.q0 = np.asarray(cell.q0, dtype=float)
         self.n, self.m = cell.n, cell.m
-        self.cable = np.array([f != STRUT for f in cell.structure.families], dtype=bool)
+        self.cable = cable_mask(cell.structure.families)
         self.displacement_control = loading.controls == "displacement"
         self.gamma = 10.0 * getattr(loading, "omega") if self.displacement_control else 0.0  # a SineDisplacement
         geom0 = cell.geometry
