@@ -226,6 +226,7 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
     )
 
 
+@hot_path
 def _dynamic_elasticities(lin: LinearModel, f: np.ndarray) -> Elasticities:
     """Exact elasticities for a law with internal dynamics, from its dynamic tangent (not its realization).
 

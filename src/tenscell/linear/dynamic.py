@@ -45,6 +45,7 @@ from .._checks import positive_array, positive_scalar
 from ..laws.base import DEFAULT_REALIZATION_TOL, Realization, TendonLaw, angular_frequencies
 from ..model.equilibrium import Cell
 from .modal import NotPositiveDefiniteError, modulus
+from .._threads import hot_path
 
 __all__ = ["dynamic_stiffness", "dynamic_compliance", "dynamic_moduli", "dynamic_complex_modulus",
            "check_static_stability", "realize", "with_cytoplasm", "exact_compliance"]
@@ -58,6 +59,7 @@ def _kstar(cell: Cell, kstar) -> np.ndarray:
     return k
 
 
+@hot_path
 def dynamic_stiffness(cell: Cell, P: float, kstar) -> np.ndarray:
     """``K(ω) = P·Σ T0_j ∇²l_j + Σ k*_j(ω) a_j a_jᵀ`` (N/m), complex, shape (n_omega, n, n); dense cells.
 
@@ -98,6 +100,7 @@ def _solves(cell: Cell, P: float, k: np.ndarray, both: bool) -> tuple[np.ndarray
     return x, y
 
 
+@hot_path
 def dynamic_compliance(cell: Cell, P: float, kstar, dkstar=None):
     """``J(ω) = D0 K(ω)⁻¹ b`` (m/N), and with ``dkstar`` also its exact derivatives.
 
@@ -133,6 +136,7 @@ def dynamic_compliance(cell: Cell, P: float, kstar, dkstar=None):
     return J, -np.einsum("qwm,wm->qw", dk, prod)
 
 
+@hot_path
 def check_static_stability(cell: Cell, law: TendonLaw, P: float) -> None:
     """Raise :class:`NotPositiveDefiniteError` unless the static stiffness ``K(ω → 0)`` is positive definite.
 
@@ -165,6 +169,7 @@ def dynamic_stiffness_static(cell: Cell, law: TendonLaw, P: float):
     return np.asarray(dynamic_stiffness(cell, P, k0)[0].real)
 
 
+@hot_path
 def dynamic_complex_modulus(cell: Cell, law: TendonLaw, P: float, f_hz, *, viscosity: float = 0.0,
                             check: bool = True) -> np.ndarray:
     """``G* = (0.5/L)/J(ω) + iωη`` (Pa), complex, shape of ``f_hz`` raveled to (nf,).
@@ -190,6 +195,7 @@ def viscosity_value(viscosity) -> float:
     return float(positive_array("viscosity (cytoplasm)", viscosity, (), "Pa·s", allow_zero=True))
 
 
+@hot_path
 def dynamic_moduli(cell: Cell, law: TendonLaw, P: float, f_hz, *, viscosity: float = 0.0,
                    check: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Storage and loss moduli ``G'``, ``G''`` (Pa) of a cell with any tendon law, at frequencies ``f_hz`` (Hz).
@@ -284,6 +290,7 @@ def _augmented(cell: Cell, P: float, R: Realization):
     return K, C
 
 
+@hot_path
 def realize(cell: Cell, law: TendonLaw, P: float, *, band_hz=None, tol: float | None = None, viscosity: float = 0.0,
             check: bool = True):
     """The linear model of a cell whose tendon law has internal dynamics, with internal variables.
@@ -344,6 +351,7 @@ def realize(cell: Cell, law: TendonLaw, P: float, *, band_hz=None, tol: float | 
     return lin
 
 
+@hot_path
 def exact_compliance(lin, f_hz) -> np.ndarray:
     """``J(ω)`` (m/N) of a realized model from its law's exact dynamic tangent (and its cytoplasm), shape of f_hz."""
     f = positive_array("frequency", f_hz, unit="Hz")
