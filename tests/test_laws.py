@@ -363,8 +363,11 @@ def test_dynamic_laws_are_refused_in_one_line_where_they_have_no_meaning(name):
         with pytest.raises(DynamicLawError) as err:
             call()
         assert "\n" not in str(err.value) and ("dynamic" in str(err.value) or "internal" in str(err.value))
+    lin = linearize_law(CELL, law, P0)
     with pytest.raises(ValueError, match="internal variables"):
-        relaxation_modes(linearize_law(CELL, law, P0))
+        relaxation_modes(lin)
+    with pytest.raises(ValueError, match="internal dynamics"):
+        tenscell.viscosity_limit(lin)
 
 
 def test_dynamic_laws_on_a_sparse_lattice():

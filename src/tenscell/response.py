@@ -96,6 +96,10 @@ def viscosity_limit(lin: LinearModel) -> float:
     """
     from .linear.modal import ZERO_TIME
 
+    if lin.realization is not None:
+        raise ValueError(f"the {type(lin.law).__name__} tendons have internal dynamics: G''/ω of the exact law tends to "
+                         f"the cytoplasm's viscosity ({lin.viscosity:g} Pa·s) alone, its realization's C0 is not that law's "
+                         "high-frequency limit; evaluate moduli(lin, f) at the frequencies you need")
     tau, rho, _ = lin.pencil.retardation()
     if tau.size == 0 or tau.min() <= ZERO_TIME * tau.max():
         raise ValueError("C0 is singular: G''/ω has no finite high-frequency limit")
