@@ -66,10 +66,10 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sp
 
 from .._results import format_repr
+from ..linear.whitening import rescaled_basis, unit_damping_basis, whitened_basis
 from ..model.equilibrium import Cell
 from .derivatives import _Evaluation, evaluate
 from .layout import (DAMPING_MODES, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
@@ -88,20 +88,6 @@ _PENALTY = 10.0
 _SHARE_WEIGHT = 30.0
 
 
-def _whiten(Lc, A, H, load, probe):
-    """A, H (symmetric), load, probe in the basis where C0 = Lc Lcᵀ becomes the identity."""
-    solve = scipy.linalg.solve_triangular
-    B = solve(Lc, A, lower=True, check_finite=False)
-    X = solve(Lc, H, lower=True, check_finite=False)
-    Ht = solve(Lc, X.T, lower=True, check_finite=False)
-    bt = solve(Lc, load, lower=True, check_finite=False)
-    Dt = solve(Lc, probe, lower=True, check_finite=False)
-    return B, 0.5 * (Ht + Ht.T), bt, Dt
-
-
-# ---------------------------------------------------------------------------------
-# the problem: model, data, parameter layout
-# ---------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False, repr=False)
 class FitProblem:
     """The linear model of a cell against one or several data sets, with a parameter layout.
@@ -271,16 +257,11 @@ class FitProblem:
         return EA / lam**2, c / lam, P / lam**2
 
     def _whitening(self, eta):
-        """(B, Ht, bt, Dt): A, the prestress Hessian, load and probe in the basis where C0 = I."""
+        """(B, Ht, bt, Dt): A, the prestress Hessian, load and probe in the basis where C0 = I; None if C0 is not
+        positive definite (:mod:`tenscell.linear.whitening`)."""
         if self.n_c == 1:  # C0 = c·A Aᵀ: rescale the precomputed basis
-            s = 1.0 / math.sqrt(eta[0])
-            B0, Ht0, bt0, Dt0 = self.white_unit
-            return B0 * s, Ht0 * (s * s), bt0 * s, Dt0 * s
-        try:
-            Lc = np.linalg.cholesky((self.A * eta) @ self.A.T)
-        except np.linalg.LinAlgError:
-            return None
-        return _whiten(Lc, self.A, self.H, self.load, self.probe)
+            return rescaled_basis(self.white_unit, float(eta[0]))
+        return whitened_basis(self.A, eta, self.H, self.load, self.probe)
 
     def _evaluate(self, phi, jac: bool, share: bool = False, elasticity: bool = False) -> _Evaluation | None:
         """Moduli (and, if asked, their log-derivatives, the prestress share and elasticity); None if unstable."""
@@ -539,19 +520,17 @@ def _cell_arrays(cell: Cell) -> dict:
     dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M, dtype=float)  # noqa: E731
     A, H = dense(cell.A), dense(cell.prestress_hessian)
     H = 0.5 * (H + H.T)
-    AAt = A @ A.T
-    ev = np.linalg.eigvalsh(AAt)
-    # Cholesky alone can pass a singular matrix on rounding noise; compare with its scale
-    if not ev[0] > 1e-10 * ev[-1]:
+    load, probe = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
+    white_unit = unit_damping_basis(A, H, load, probe)
+    if white_unit is None:
         raise ValueError(
             f"{cell.describe()}: the damping matrix C0 = Σ c_j a_j a_jᵀ is singular (the tendons leave a mechanism "
             "undamped, e.g. the cell without intermediate filaments), so its relaxation spectrum, which the fit "
             "uses, does not exist; fit a cell with a positive definite C0"
         )
-    load, probe = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
     return dict(A=A, lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float), H=H,
                 load=load, probe=probe, L_ref=float(cell.strut_length),
-                white_unit=_whiten(np.linalg.cholesky(AAt), A, H, load, probe))
+                white_unit=white_unit)
 
 
 def make_problem(
