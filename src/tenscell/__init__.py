@@ -24,7 +24,7 @@ from importlib import import_module
 # typing.TYPE_CHECKING without importing typing (mypy and pyright treat this name as true)
 TYPE_CHECKING = False
 
-__version__ = "0.1.0"
+from ._version import __version__
 
 # Public name -> the module (relative to this package) that defines it.
 # To export a new name: add it to its module's tuple here AND to the

@@ -195,12 +195,11 @@ class FrequencyResponse:
         -------
         ndarray of two Axes
         """
-        from . import plotting
+        from ._results import plotter
 
         if x not in ("frequency", "prestress"):
             raise ValueError(f"x: expected 'frequency' or 'prestress', got {x!r}")
-        draw = plotting.moduli_vs_frequency if x == "frequency" else plotting.moduli_vs_prestress
-        return draw(self, axes, **kw)
+        return plotter("moduli_vs_frequency" if x == "frequency" else "moduli_vs_prestress")(self, axes, **kw)
 
 
 @hot_path

@@ -282,7 +282,9 @@ class RelaxationModes:
 
     def plot(self, ax=None, **kw):
         """The rates as bars; draw the mode shapes with :func:`tenscell.plotting.relaxation_modes_3d`."""
-        from .plotting import rates_bar
+        from ._results import plotter
+
+        rates_bar = plotter("rates_bar")
 
         return rates_bar(self.rates, ax=ax, **kw)
 

@@ -300,7 +300,9 @@ class RheologyData:
 
     def plot(self, ax=None, **kw):
         """G' (filled) and G'' (open circles) against f (log-log) or prestress (:func:`tenscell.plotting.measured`)."""
-        from ..plotting import measured
+        from .._results import plotter
+
+        measured = plotter("measured")
 
         return measured(self, ax=ax, **kw)
 

@@ -313,7 +313,7 @@ class OutputSet:
         return False
 
     def _write_manifest(self, staging: Path) -> None:
-        from .. import __version__
+        from .._version import __version__
         files = sorted(str(p.relative_to(staging)) for p in staging.rglob("*") if p.is_file())
         write_json(staging / MANIFEST, {
             "command": self.command, "tenscell_version": __version__,

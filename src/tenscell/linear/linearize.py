@@ -154,12 +154,9 @@ class LinearModel:
         prestresses use :func:`tenscell.frequency_response` and its ``plot``.
         Returns the two axes.
         """
-        from ..response import FrequencyResponse, compliance
+        from .._results import plotter
 
-        f = np.logspace(-2, 3, 61) if f_hz is None else np.atleast_1d(np.asarray(f_hz, dtype=float))
-        resp = FrequencyResponse(frequency_hz=f, prestress=np.array([self.P]), J=compliance(self, f)[None, :],
-                                 L=self.L)
-        return resp.plot(axes=axes, **kw)
+        return plotter("linear_model_moduli")(self, axes=axes, f_hz=f_hz, **kw)
 
 
 @hot_path

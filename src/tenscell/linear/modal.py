@@ -581,7 +581,9 @@ class RelaxationSpectrum:
 
     def plot(self, ax=None, **kw):
         """Each mode's compliance weight r/λ (m/N) against its relaxation time 1/λ (s), as stems."""
-        from ..plotting import spectrum_stems
+        from .._results import plotter
+
+        spectrum_stems = plotter("spectrum_stems")
 
         return spectrum_stems(self.times, self.weights, ax=ax, xlabel="relaxation time 1/λ (s)",
                               ylabel="compliance weight r/λ (m/N)", **kw)

@@ -451,7 +451,9 @@ class Cell:
 
     def plot(self, ax=None, **kw):
         """The cell's structure in 3D (:func:`tenscell.plotting.structure_3d`)."""
-        from ..plotting import structure_3d
+        from .._results import plotter
+
+        structure_3d = plotter("structure_3d")
 
         return structure_3d(self.structure, ax=ax, **{"title": self.describe(), **kw})
 

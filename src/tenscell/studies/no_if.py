@@ -146,7 +146,9 @@ class NoIFStudy:
 
     def plot(self, ax=None, **kw):
         """G', G'' against f with and without IFs, peaks marked, on a pair of axes (or a new figure); returns them."""
-        from ..plotting.variants import no_if_figure
+        from .._results import plotter
+
+        no_if_figure = plotter("no_if_figure")
 
         return no_if_figure(self, axes=ax, **kw)
 

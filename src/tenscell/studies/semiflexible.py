@@ -200,7 +200,9 @@ class SemiflexibleStudy:
 
     def plot(self, ax=None, **kw):
         """Convergence to rigid struts against EA_s, and the 1 Hz moduli, on a pair of axes (or a new figure)."""
-        from ..plotting.variants import semiflexible_figure
+        from .._results import plotter
+
+        semiflexible_figure = plotter("semiflexible_figure")
 
         return semiflexible_figure(self, axes=ax, **kw)
 
