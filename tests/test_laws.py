@@ -285,4 +285,4 @@ def test_small_amplitude_simulation_is_the_linear_model(name):
 
 def test_a_law_without_rest_lengths_is_refused_by_simulate_with_advice():
     with pytest.raises(ValueError, match="at_prestress"):
-        tenscell.simulate(CELL, Voigt(EA=1.0, c=1.0), tenscell.SineForce(1.0, 1.0), 1.0)
+        tenscell.dynamics.simulate(CELL, Voigt(EA=1.0, c=1.0), tenscell.dynamics.SineForce(1.0, 1.0), 1.0)

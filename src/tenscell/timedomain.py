@@ -13,7 +13,7 @@ step at t = 0, is exact and closed-form:
 ``J(t) = J_inst + Σ_{τ_k>0} ρ_k (1 − e^{−t/τ_k})``,  ``J_inst = Σ_{τ_k=0} ρ_k``
 
 (``τ_k = 1/λ_k`` and ``ρ_k = r_k/λ_k`` in the notation of
-:class:`tenscell.RelaxationSpectrum`; ``J_inst = 0`` when C0 is positive
+:class:`tenscell.linear.RelaxationSpectrum`; ``J_inst = 0`` when C0 is positive
 definite, as for the paper cell with intermediate filaments).
 
 The **relaxation function**, the force after a unit displacement step, is

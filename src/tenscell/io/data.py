@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import TenscellError
 from .outputs import atomic_path
 
 __all__ = [
@@ -70,7 +71,7 @@ _BUNDLED = (
 )
 
 
-class DataError(ValueError):
+class DataError(TenscellError, ValueError):
     """Invalid or unreadable rheology data.
 
     The message names the file (or data source), the 1-based line number in

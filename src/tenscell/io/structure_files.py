@@ -87,7 +87,7 @@ class StructureFile:
         Tendon damping (N·s/m); 1 N·s/m where the file gives none.
     T0 : ndarray, shape (m,) or None
         A self-stress (dimensionless, any scale) if the file gives one for
-        every tendon; pass it to :func:`tenscell.equilibrate` (``T0=``) to
+        every tendon; pass it to :func:`tenscell.model.equilibrate` (``T0=``) to
         skip the search for one (useful for very large structures).
     description : str
         Free text from the file.

@@ -10,6 +10,7 @@ from typing import Any, ClassVar, NamedTuple, Self
 
 import numpy as np
 
+from .._errors import TenscellError
 from .._checks import positive_array, positive_scalar
 from .._results import dataframe, format_repr
 from ..model.equilibrium import Cell
@@ -17,7 +18,7 @@ from ..model.equilibrium import Cell
 __all__ = ["TendonLaw", "Parameter", "Tangent", "LinearizationError"]
 
 
-class LinearizationError(ValueError):
+class LinearizationError(TenscellError, ValueError):
     """The tendon law has no linearization at rest (its rate derivative at l' = 0 is infinite)."""
 
 

@@ -61,7 +61,8 @@ import scipy.sparse.linalg as spla
 
 from ..model.equilibrium import weighted_gram
 from .krylov import DEFAULT_BAND_HZ, LanczosRun, converge, default_shift
-from .sparse import NotPositiveDefinite, factorize_spd
+from .._errors import NotPositiveDefiniteError
+from .sparse import factorize_spd
 from .._threads import hot_path
 
 __all__ = [
@@ -90,10 +91,6 @@ SPECTRUM_TOL = 1e-10
 SHIFT_REUSE_FACTOR = 4.0
 #: rows of prestresses per block of the grid's modal sum (keeps the block in cache)
 _GRID_BLOCK = 8
-
-
-class NotPositiveDefiniteError(ValueError):
-    """K0 is not positive definite: the reference is not a stable equilibrium."""
 
 
 # ---- the continuum factor ---------------------------------------------------------------------
@@ -220,7 +217,7 @@ def positive_definite_factor(M, *, what: str = "K0", describe: str = "the model"
     if sp.issparse(M):
         try:
             return factorize_spd(M, what=what)
-        except NotPositiveDefinite as err:
+        except NotPositiveDefiniteError as err:
             detail = f"a pivot of its sparse Cholesky factorization is <= 0, at column {err.column}"
     else:
         try:
@@ -384,7 +381,7 @@ class Pencil:
 
         ``(K0 + iωC0)⁻¹ = V diag(1/(1 + iωτ)) Vᵀ``; the pencil is symmetric, so
         this also gives ``(K0 + iωC0)⁻ᵀ rhs``. For elasticities and other
-        derivatives of J (:func:`tenscell.analytic_elasticities`).
+        derivatives of J (:func:`tenscell.sensitivity.analytic_elasticities`).
         """
         m = self.modes
         V = m.vectors
@@ -401,7 +398,7 @@ class Pencil:
             Ks = self.shifted(shift).tocsc()
             try:
                 self._factors[shift] = factorize_spd(Ks, what=f"K0 + {shift:g}·C0")
-            except NotPositiveDefinite as err:
+            except NotPositiveDefiniteError as err:
                 raise NotPositiveDefiniteError(
                     f"K0 + {shift:g}·C0 is not positive definite for {self.describe} (a pivot of its sparse Cholesky "
                     f"factorization is <= 0, at column {err.column}), so neither is K0: the reference is not a "
@@ -541,7 +538,7 @@ class RelaxationSpectrum:
         the Ritz vectors, exact eigenvectors only where a Ritz pair has
         converged: a cluster of (nearly) equal rates, such as a lattice's
         identical local modes, is represented by fewer Ritz pairs carrying its
-        total weight (what J needs; see :func:`tenscell.relaxation_modes` for
+        total weight (what J needs; see :func:`tenscell.summary.relaxation_modes` for
         converged slowest modes).
     error_estimate : float
         Relative accuracy of the spectrum's ``J`` (0 for the dense, exact decomposition).

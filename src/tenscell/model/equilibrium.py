@@ -28,6 +28,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
+from .._errors import TenscellError
 from .coordinates import Coordinates, NodeKinematics, kinematics, make_coordinates
 from .structure import STRUT, Point, Structure
 
@@ -54,7 +55,7 @@ __all__ = [
 SPARSE_THRESHOLD = 1500
 
 
-class NotPrestressableError(ValueError):
+class NotPrestressableError(TenscellError, ValueError):
     """The requested reference admits no self-stress with all tendons in tension."""
 
 

@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._errors import TenscellError
+
 __all__ = ["Point", "Structure", "StructureError", "ACTIN", "INTERMEDIATE_FILAMENT", "STRUT", "member_values"]
 
 ACTIN = "actin"
@@ -31,7 +33,7 @@ INTERMEDIATE_FILAMENT = "intermediate_filament"
 STRUT = "strut"  # an elastic (non-rigid) compression member listed among the members
 
 
-class StructureError(ValueError):
+class StructureError(TenscellError, ValueError):
     """A structure that is not well formed; the message names the element."""
 
 

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._errors import TenscellError
 from .._checks import positive_array, positive_scalar
 from .._results import dataframe, format_repr
 from ..laws import Voigt
@@ -21,7 +22,7 @@ __all__ = ["BucklingError", "euler_critical_prestress", "linearize_semiflexible"
            "semiflexible_study"]
 
 
-class BucklingError(ValueError):
+class BucklingError(TenscellError, ValueError):
     """A strut's compression exceeds its Euler load π²EI/l²: the linear model does not apply."""
 
 
