@@ -97,7 +97,9 @@ def viscosity_limit(lin: LinearModel) -> float:
     from .linear.modal import ZERO_TIME
 
     if lin.realization is not None:
-        raise ValueError(f"the {type(lin.law).__name__} tendons have internal dynamics: G''/ω of the exact law tends to "
+        from .laws import DynamicLawError
+
+        raise DynamicLawError(f"the {type(lin.law).__name__} tendons have internal dynamics: G''/ω of the exact law tends to "
                          f"the cytoplasm's viscosity ({lin.viscosity:g} Pa·s) alone, its realization's C0 is not that law's "
                          "high-frequency limit; evaluate moduli(lin, f) at the frequencies you need")
     tau, rho, _ = lin.pencil.retardation()
@@ -213,12 +215,11 @@ class FrequencyResponse:
         -------
         ndarray of two Axes
         """
-        from . import plotting
+        from ._results import plotter
 
         if x not in ("frequency", "prestress"):
             raise ValueError(f"x: expected 'frequency' or 'prestress', got {x!r}")
-        draw = plotting.moduli_vs_frequency if x == "frequency" else plotting.moduli_vs_prestress
-        return draw(self, axes, **kw)
+        return plotter("moduli_vs_frequency" if x == "frequency" else "moduli_vs_prestress")(self, axes, **kw)
 
 
 @hot_path
