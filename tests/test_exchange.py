@@ -40,7 +40,7 @@ def test_xarray_round_trip():
     back = type(resp).from_xarray(ds)
     np.testing.assert_array_equal(back.J, resp.J)
     np.testing.assert_array_equal(back.G_loss, resp.G_loss)
-    assert back.L == resp.L
+    assert back.L == resp.L and back.viscosity == resp.viscosity
 
 
 def test_rheojax_round_trips_for_moduli_and_creep():

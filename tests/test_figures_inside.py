@@ -112,12 +112,12 @@ def test_fit_figures(fits):
 def test_structures_and_modes():
     cell = tc.paper_cell()
     assert problems(_fig(plotting.structure_3d(cell.structure, title="paper cell (Fig. 1 colours)"))) == []
-    modes = tc.relaxation_modes(tc.linearize(cell), 3)
+    modes = tc.summary.relaxation_modes(tc.linearize(cell), 3)
     assert problems(_fig(plotting.relaxation_modes_3d(cell.structure, modes.rates, modes.displacements))) == []
 
 
 def test_a_large_lattice_is_drawn_as_a_section():
-    block = tc.lattice_cell(4, 4, 4).structure
+    block = tc.model.lattice_cell(4, 4, 4).structure
     n = len(block.struts) + len(block.tendons)
     ax = plotting.structure_3d(block, max_members=n // 4)
     drawn = sum(len(c.get_segments()) for c in ax.collections if hasattr(c, "get_segments"))
@@ -165,5 +165,5 @@ def test_variant_figures():
     assert problems(_fig(plotting.stiffening_figure(st))) == []
     sf = semiflexible_study(EA_strut=np.logspace(6, 9, 4), f_hz=np.logspace(-1, 2, 5))
     assert problems(_fig(plotting.semiflexible_figure(sf))) == []
-    el = tc.elasticities(f_hz=np.logspace(-1, 2, 5))
+    el = tc.sensitivity.elasticities(f_hz=np.logspace(-1, 2, 5))
     assert problems(_fig(plotting.elasticities_figure(el))) == []

@@ -9,6 +9,8 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
+from ._errors import TenscellError
+
 __all__ = ["MissingDependency", "require", "EXTRAS"]
 
 #: import name -> (extra that installs it, what needs it)
@@ -22,7 +24,7 @@ EXTRAS = {
 }
 
 
-class MissingDependency(ImportError, ValueError):
+class MissingDependency(TenscellError, ImportError, ValueError):
     """An optional dependency is not installed (an ImportError; also a ValueError, so that a command reports it
     in one line with the install hint instead of a traceback)."""
 

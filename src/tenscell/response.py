@@ -16,7 +16,7 @@ from ._checks import positive_array
 from .model.equilibrium import Cell, weighted_gram
 from .linear.krylov import krylov_compliance
 from .linear.linearize import LinearModel, linearize
-from .linear.modal import modal_compliance, modulus, prestress_grid_compliance
+from .linear.modal import continuum_factor, modal_compliance, modulus, prestress_grid_compliance
 from ._threads import hot_path
 
 __all__ = [
@@ -29,6 +29,12 @@ __all__ = [
     "loss_tangent",
     "log_slope",
 ]
+
+
+def _voigt(cell: Cell, EA, c):
+    from .laws import Voigt
+
+    return Voigt(EA=positive_array("EA", EA, (cell.m,), "N"), c=positive_array("c", c, (cell.m,), "N·s/m"))
 
 
 def _frequencies(f_hz) -> np.ndarray:
@@ -56,6 +62,10 @@ def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     ndarray of complex, same shape as ``f_hz``
     """
     f = _frequencies(f_hz)
+    if lin.realization is not None:  # a law with internal dynamics: its exact tangent, not the realization
+        from .linear.dynamic import exact_compliance
+
+        return exact_compliance(lin, f)
     if lin.pencil.sparse:
         return krylov_compliance(lin, f).J
     m = lin.pencil.modes
@@ -86,6 +96,12 @@ def viscosity_limit(lin: LinearModel) -> float:
     """
     from .linear.modal import ZERO_TIME
 
+    if lin.realization is not None:
+        from .laws import DynamicLawError
+
+        raise DynamicLawError(f"the {type(lin.law).__name__} tendons have internal dynamics: G''/ω of the exact law tends to "
+                         f"the cytoplasm's viscosity ({lin.viscosity:g} Pa·s) alone, its realization's C0 is not that law's "
+                         "high-frequency limit; evaluate moduli(lin, f) at the frequencies you need")
     tau, rho, _ = lin.pencil.retardation()
     if tau.size == 0 or tau.min() <= ZERO_TIME * tau.max():
         raise ValueError("C0 is singular: G''/ω has no finite high-frequency limit")
@@ -116,16 +132,20 @@ class FrequencyResponse:
         Compliance (m/N).
     L : float
         Strut length of the cell (m).
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s) in parallel with the structure, included in ``J``
+        (``G = (0.5/L)/J = G_structure + iωη``); 0 for none.
     """
 
     frequency_hz: np.ndarray
     prestress: np.ndarray
     J: np.ndarray
     L: float
+    viscosity: float = 0.0
 
     @property
     def G(self) -> np.ndarray:
-        """Complex modulus ``G' + iG''`` (Pa), shape (nP, nf)."""
+        """Complex modulus ``G' + iG''`` (Pa), shape (nP, nf), the cytoplasm included."""
         return modulus(self.J, self.L)
 
     @property
@@ -168,17 +188,13 @@ class FrequencyResponse:
     def to_xarray(self):
         """The grid as an ``xarray.Dataset`` (dims ``prestress`` in N, ``frequency`` in Hz; ``J`` in m/N,
         ``G_storage``, ``G_loss`` in Pa, ``loss_tangent``); xarray is optional (``pip install xarray``).
-        :meth:`from_xarray` reads it back. See :mod:`tenscell.io.exchange`."""
-        from .io.exchange import response_to_xarray
-
-        return response_to_xarray(self)
+        :meth:`from_xarray` reads it back exactly."""
+        return _to_xarray(self)
 
     @classmethod
     def from_xarray(cls, ds) -> "FrequencyResponse":
         """The response a :meth:`to_xarray` dataset holds."""
-        from .io.exchange import response_from_xarray
-
-        return response_from_xarray(ds)
+        return _from_xarray(cls, ds)
 
     def to_dataframe(self):
         """Long format, one row per (P, f): ``prestress_N, frequency_Hz, G_storage_Pa, G_loss_Pa, loss_tangent``.
@@ -211,16 +227,49 @@ class FrequencyResponse:
         -------
         ndarray of two Axes
         """
-        from . import plotting
+        from ._results import plotter
 
         if x not in ("frequency", "prestress"):
             raise ValueError(f"x: expected 'frequency' or 'prestress', got {x!r}")
-        draw = plotting.moduli_vs_frequency if x == "frequency" else plotting.moduli_vs_prestress
-        return draw(self, ax if ax is not None else axes, **kw)
+        return plotter("moduli_vs_frequency" if x == "frequency" else "moduli_vs_prestress")(
+            self, ax if ax is not None else axes, **kw)
+
+
+def _to_xarray(resp):
+    """A :class:`FrequencyResponse` as an ``xarray.Dataset`` (:meth:`FrequencyResponse.to_xarray`)."""
+    from ._optional import require
+
+    xr = require("xarray")
+    dims = ("prestress", "frequency")
+    return xr.Dataset(
+        data_vars={
+            "J": (dims, np.asarray(resp.J), {"units": "m/N", "long_name": "compliance J(ω) of the probe"}),
+            "G_storage": (dims, resp.G_storage, {"units": "Pa", "long_name": "storage modulus G′"}),
+            "G_loss": (dims, resp.G_loss, {"units": "Pa", "long_name": "loss modulus G″"}),
+            "loss_tangent": (dims, resp.loss_tangent, {"units": "1", "long_name": "loss tangent G″/G′"}),
+        },
+        coords={"prestress": ("prestress", np.asarray(resp.prestress), {"units": "N", "long_name": "prestress P"}),
+                "frequency": ("frequency", np.asarray(resp.frequency_hz), {"units": "Hz", "long_name": "frequency f"})},
+        attrs={"L_m": float(resp.L), "viscosity_Pa_s": float(resp.viscosity), "source": "tenscell FrequencyResponse"},
+    )
+
+
+def _from_xarray(cls, ds):
+    """The response a :func:`_to_xarray` dataset holds."""
+    for name in ("J", "prestress", "frequency"):
+        if name not in ds.variables:
+            raise ValueError(f"dataset: no {name!r}; expected what FrequencyResponse.to_xarray() writes")
+    J = ds["J"].transpose("prestress", "frequency")
+    units = {k: ds[k].attrs.get("units") for k in ("J", "prestress", "frequency")}
+    if units != {"J": "m/N", "prestress": "N", "frequency": "Hz"}:
+        raise ValueError(f"dataset: units {units}; expected J m/N, prestress N, frequency Hz")
+    return cls(frequency_hz=np.asarray(ds["frequency"].values, dtype=float),
+               prestress=np.asarray(ds["prestress"].values, dtype=float), J=np.asarray(J.values, dtype=complex),
+               L=float(ds.attrs["L_m"]), viscosity=float(ds.attrs.get("viscosity_Pa_s", 0.0)))
 
 
 @hot_path
-def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0) -> FrequencyResponse:
+def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0, *, law=None, viscosity: float = 0.0) -> FrequencyResponse:
     """Compliance and moduli for arrays of prestresses and frequencies in one call.
 
     Parameters
@@ -231,7 +280,13 @@ def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0) -> FrequencyResponse:
     P : float or array_like, shape (nP,)
         Prestresses (N), > 0.
     EA, c : float or array_like, shape (m,)
-        Tendon stiffness (N) and damping (N·s/m).
+        Tendon stiffness (N) and damping (N·s/m) of Voigt tendons (the paper's model).
+    law : TendonLaw, optional
+        Any tendon law instead of Voigt(EA, c), e.g. :class:`tenscell.laws.Springpot`
+        (its tangent is taken at tensions ``P·T0`` for each P; laws with internal
+        dynamics through :func:`tenscell.linear.dynamic.dynamic_compliance`, exact).
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), ≥ 0, in parallel with the structure: ``G* += iωη``.
 
     Returns
     -------
@@ -239,6 +294,14 @@ def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0) -> FrequencyResponse:
     """
     f = np.atleast_1d(_frequencies(f_hz)).ravel()
     Ps = np.atleast_1d(positive_array("P (prestress)", P, unit="N")).ravel()
+    if law is not None or viscosity:
+        from .linear.dynamic import dynamic_complex_modulus, viscosity_value
+
+        eta = viscosity_value(viscosity)
+        the_law = law if law is not None else _voigt(cell, EA, c)
+        G = np.stack([dynamic_complex_modulus(cell, the_law, p, f, viscosity=eta) for p in Ps])
+        return FrequencyResponse(frequency_hz=f, prestress=Ps, J=continuum_factor(cell.strut_length) / G, L=cell.strut_length,
+                                 viscosity=eta)
     J = None
     if not cell.sparse and Ps.size > 1:
         # K0(P) = P·Kp + Σ EA_j a_j a_jᵀ/l_j is affine in P and C0 does not depend on it: one batched eigensolve

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._results import dataframe, format_repr
+from .columns import parse_frame
 from .data import RheologyData, _csv_lines, _error, _parse_float, _stated_prestress, read_csv
 from .outputs import atomic_path
 
@@ -125,7 +126,8 @@ class CreepData:
         )
 
     @classmethod
-    def from_dataframe(cls, df, columns=None, **kwargs) -> "CreepData":
+    def from_dataframe(cls, df, columns=None, *, source: str = "<DataFrame>", min_points: int = 1,
+                       **units) -> "CreepData":
         """Measured creep compliance from a pandas DataFrame with your own column names and units.
 
         See :func:`tenscell.io.importers.from_dataframe`: ``columns`` is a
@@ -133,13 +135,13 @@ class CreepData:
         ``time_unit=``, ``compliance_unit=``) or a dict of its fields; default
         recognised from the column names (``time_s``, ``time (s)``, ``J(t) (1/Pa)``...).
         """
-        from .importers import from_dataframe
-
-        data = from_dataframe(df, columns, **kwargs)
-        if not isinstance(data, CreepData):
-            raise _error(str(kwargs.get("source", "<DataFrame>")), "the columns hold moduli, not creep compliance; "
-                                                                  "use tenscell.RheologyData.from_dataframe")
-        return data
+        parsed = parse_frame(df, columns, source, min_points, units)
+        if parsed.layout != "creep":
+            raise _error(source, "the columns hold moduli, not creep compliance; use "
+                                 "tenscell.RheologyData.from_dataframe")
+        v = parsed.values
+        return cls(time_s=v["time"], compliance=v["compliance"], compliance_sd=v.get("compliance_sd"),
+                   prestress=v.get("prestress"), source=parsed.source, comments=parsed.comments)
 
     def to_dataframe(self):
         """``time_s``, ``creep_compliance_per_Pa`` (and the SD and prestress columns when present)."""

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .columns import DataError, parse_frame
 from .outputs import atomic_path
 
 __all__ = [
@@ -68,15 +69,6 @@ _BUNDLED = (
     ("fabry2001", "fabry2001_hasm_powerlaw.csv"),
     ("stamenovic2002", "stamenovic2002_hasm_0p1Hz.csv"),
 )
-
-
-class DataError(ValueError):
-    """Invalid or unreadable rheology data.
-
-    The message names the file (or data source), the 1-based line number in
-    the file where one applies (comment and blank lines are counted), and the
-    problem.
-    """
 
 
 def _error(source: str, problem: str, line: int | None = None) -> DataError:
@@ -263,7 +255,8 @@ class RheologyData:
 
     # ---- notebook conventions (tenscell._results) and DataFrames in --------------
     @classmethod
-    def from_dataframe(cls, df, columns=None, **kwargs) -> RheologyData:
+    def from_dataframe(cls, df, columns=None, *, source: str = "<DataFrame>", min_points: int = 1,
+                       **units) -> RheologyData:
         """Measured moduli from a pandas DataFrame with your own column names and units.
 
         See :func:`tenscell.io.importers.from_dataframe` (``columns`` is a
@@ -271,13 +264,14 @@ class RheologyData:
         default recognised from the column names). A map that reads creep
         compliance is refused here: use ``CreepData.from_dataframe``.
         """
-        from .importers import from_dataframe
-
-        data = from_dataframe(df, columns, **kwargs)
-        if not isinstance(data, RheologyData):
-            raise DataError(f"{kwargs.get('source', '<DataFrame>')}: the columns hold creep compliance, not moduli; "
-                            "use tenscell.CreepData.from_dataframe")
-        return data
+        parsed = parse_frame(df, columns, source, min_points, units)
+        if parsed.layout == "creep":
+            raise DataError(f"{source}: the columns hold creep compliance, not moduli; use "
+                            "tenscell.io.CreepData.from_dataframe")
+        v = parsed.values
+        return cls(frequency_hz=v["frequency"], G_storage=v["storage"], G_loss=v["loss"], prestress=v.get("prestress"),
+                   G_storage_sd=v.get("storage_sd"), G_loss_sd=v.get("loss_sd"), source=parsed.source,
+                   comments=parsed.comments)
 
     def __repr__(self) -> str:
         from .._results import format_repr, span
@@ -305,7 +299,9 @@ class RheologyData:
 
     def plot(self, ax=None, **kw):
         """G' (filled) and G'' (open circles) against f (log-log) or prestress (:func:`tenscell.plotting.measured`)."""
-        from ..plotting import measured
+        from .._results import plotter
+
+        measured = plotter("measured")
 
         return measured(self, ax=ax, **kw)
 

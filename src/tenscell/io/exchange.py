@@ -1,12 +1,5 @@
-"""Exchange with the tools labs already use: xarray grids and rheojax's ``RheoData``, both optional.
+"""Exchange with rheojax's ``RheoData``, optional (grids go to xarray by ``FrequencyResponse.to_xarray()``).
 
-xarray
-    :func:`response_to_xarray` (``FrequencyResponse.to_xarray()``) gives the
-    prestress × frequency grid as an ``xarray.Dataset`` with dimensions
-    ``prestress`` (N) and ``frequency`` (Hz), the complex compliance ``J``
-    (m/N) and ``G_storage``, ``G_loss`` (Pa), ``loss_tangent``; units in each
-    variable's ``attrs["units"]``. :func:`response_from_xarray` reads it back
-    exactly. ``pip install xarray`` (or ``tenscell[exchange]``).
 rheojax
     :func:`to_rheojax` and :func:`from_rheojax` convert measured data to and
     from rheojax's ``RheoData`` by duck typing (rheojax needs Python ≥ 3.12
@@ -29,40 +22,7 @@ from .creep_data import CreepData
 from .data import DataError, RheologyData
 from .importers import from_dataframe
 
-__all__ = ["response_to_xarray", "response_from_xarray", "to_rheojax", "from_rheojax"]
-
-
-def response_to_xarray(resp) -> Any:
-    """A :class:`~tenscell.response.FrequencyResponse` as an ``xarray.Dataset`` (module docstring)."""
-    xr = require("xarray")
-    dims = ("prestress", "frequency")
-    return xr.Dataset(
-        data_vars={
-            "J": (dims, np.asarray(resp.J), {"units": "m/N", "long_name": "compliance J(ω) of the probe"}),
-            "G_storage": (dims, resp.G_storage, {"units": "Pa", "long_name": "storage modulus G′"}),
-            "G_loss": (dims, resp.G_loss, {"units": "Pa", "long_name": "loss modulus G″"}),
-            "loss_tangent": (dims, resp.loss_tangent, {"units": "1", "long_name": "loss tangent G″/G′"}),
-        },
-        coords={"prestress": ("prestress", np.asarray(resp.prestress), {"units": "N", "long_name": "prestress P"}),
-                "frequency": ("frequency", np.asarray(resp.frequency_hz), {"units": "Hz", "long_name": "frequency f"})},
-        attrs={"L_m": float(resp.L), "source": "tenscell FrequencyResponse"},
-    )
-
-
-def response_from_xarray(ds) -> Any:
-    """The :class:`~tenscell.response.FrequencyResponse` a :func:`response_to_xarray` dataset holds."""
-    from ..response import FrequencyResponse
-
-    for name in ("J", "prestress", "frequency"):
-        if name not in ds.variables:
-            raise ValueError(f"dataset: no {name!r}; expected what FrequencyResponse.to_xarray() writes")
-    J = ds["J"].transpose("prestress", "frequency")
-    units = {k: ds[k].attrs.get("units") for k in ("J", "prestress", "frequency")}
-    if units != {"J": "m/N", "prestress": "N", "frequency": "Hz"}:
-        raise ValueError(f"dataset: units {units}; expected J m/N, prestress N, frequency Hz")
-    return FrequencyResponse(frequency_hz=np.asarray(ds["frequency"].values, dtype=float),
-                             prestress=np.asarray(ds["prestress"].values, dtype=float),
-                             J=np.asarray(J.values, dtype=complex), L=float(ds.attrs["L_m"]))
+__all__ = ["to_rheojax", "from_rheojax"]
 
 
 def _rheodata_class():

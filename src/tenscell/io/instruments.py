@@ -41,7 +41,8 @@ from typing import Any, Mapping
 
 from .creep_data import CreepData, is_creep_header, read_creep_csv
 from .data import DataError, RheologyData, read_csv
-from .importers import (ColumnMap, _as_map, _data, _read_text, _Table, _trimmed, guess_columns, read_table)
+from .columns import ColumnMap, _as_map, _read_text, _Table, _trimmed, guess_columns
+from .importers import _data, read_table
 
 __all__ = ["read_data", "read_trios", "read_rheocompass", "detect_layout", "TEMPERATURE_TOLERANCE_C"]
 
@@ -441,7 +442,7 @@ def _is_units_row(fields_: list[str]) -> bool:
 def _read_sheet(path: Path, columns, sheet, min_points: int, units: Mapping[str, Any]) -> RheologyData | CreepData:
     """An Excel sheet (a TRIOS Excel export has one per step): the header is the first row whose names say what
     the columns hold (or that ``columns`` names), with a units row under it if the next row is one."""
-    from .importers import _excel_table
+    from .columns import _excel_table
 
     probe = _excel_table(path, sheet, None, False)
     rows = [probe.names] + [["" if c is None else str(c) for c in r] for r in probe.rows]
