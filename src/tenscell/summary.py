@@ -230,6 +230,8 @@ def _complement(lin: LinearModel) -> np.ndarray:
 def _stable_free(lin: LinearModel):
     if sp.issparse(lin.K0):
         return None
+    if lin.basis is not None:  # the model's pencil is already on the complement (tenscell.linear.rigid)
+        return lin.pencil.is_positive_definite()
     return lin.pencil.restricted(_complement(lin)).is_positive_definite()
 
 
@@ -317,8 +319,8 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
         mu, V = lin.pencil.slow_modes(k)
         resid = None
     else:  # free-standing: the pencil on the complement of the rigid-body motions
-        Q = _complement(lin)
-        mu, W = lin.pencil.restricted(Q).slow_modes(k)
+        Q = lin.basis if lin.basis is not None else _complement(lin)
+        mu, W = (lin.pencil if lin.basis is not None else lin.pencil.restricted(Q)).slow_modes(k)
         V = Q @ W
         resid = None
     order = np.argsort(mu)[::-1][:k]

@@ -29,6 +29,7 @@ from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
 )
 from .._threads import hot_path
+from .rigid import deformation_basis, unresisted_share
 
 __all__ = [
     "LinearModel",
@@ -85,6 +86,12 @@ class LinearModel:
         its internal-variable realization; K0, C0, H0, D0 then have
         ``n + realization.r`` rows, the last ``r`` the arms' dashpot
         extensions (:func:`tenscell.linear.linearize.realize`). None otherwise.
+    basis : ndarray, shape (n, n − k), optional
+        For a structure its supports do not hold (free-standing): the
+        orthonormal complement of its ``k`` rigid-body motions; :attr:`pencil`
+        (every compliance, creep, relaxation and mode) then works on it
+        (:mod:`tenscell.linear.rigid`, :attr:`notes`). K0, C0, H0, D0 keep
+        the full size. None when the supports hold the structure.
     """
 
     cell: Cell
@@ -99,6 +106,7 @@ class LinearModel:
     law: Any = None
     viscosity: float = 0.0
     realization: Any = None
+    basis: np.ndarray | None = None
 
     @property
     def tendon_law(self):
@@ -128,9 +136,22 @@ class LinearModel:
 
     @cached_property
     def pencil(self) -> Pencil:
-        """The pencil (K0, C0) with its decompositions, each computed once for this model (:mod:`tenscell.linear.modal`)."""
-        return Pencil(self.K0, self.C0, -np.asarray(self.H0), self.D0,
-                      describe=f"{self.cell.describe()} at P={self.P:.6g}", hint=_STABILITY_HINT)
+        """The pencil (K0, C0) with its decompositions, each computed once for this model (:mod:`tenscell.linear.modal`);
+        for a free-standing structure the pencil on the complement of its rigid-body motions (``basis``)."""
+        pencil = Pencil(self.K0, self.C0, -np.asarray(self.H0), self.D0,
+                        describe=f"{self.cell.describe()} at P={self.P:.6g}", hint=_STABILITY_HINT)
+        return pencil if self.basis is None else pencil.restricted(self.basis)
+
+    @property
+    def notes(self) -> tuple[str, ...]:
+        """What a reader of this model's results must know (rigid-body motions removed, and the share of the load
+        along them that nothing resists)."""
+        if self.basis is None:
+            return ()
+        k = self.cell.n - self.basis.shape[1]
+        return (f"{k} rigid-body motion(s) removed: the supports do not hold {self.cell.describe()}; "
+                f"{100 * unresisted_share(self.H0, self.basis):.3g}% of the load vector is along them (a net force "
+                "or moment nothing resists) and is left out",)
 
     def __getstate__(self):
         state = self.__dict__.copy()
@@ -373,6 +394,7 @@ def _from_law(cell: Cell, P: float, law, *, check: bool, T=None, EA=None, l0=Non
     lin = LinearModel(
         cell=cell, P=P, EA=EA if EA is not None else k * l - T, c=c, K0=K0, C0=assemble_damping(cell, c),
         H0=-np.asarray(cell.load), D0=np.asarray(cell.probe), l0=np.asarray(l0, dtype=float), law=placed,
+        basis=None if sp.issparse(K0) else deformation_basis(cell),  # free-standing: rigid-body motions removed
     )
     if check:
         lin.pencil.check()

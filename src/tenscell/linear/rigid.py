@@ -1,0 +1,52 @@
+"""Free-standing structures: their rigid-body motions removed before linearization.
+
+A structure whose supports do not hold it (no fixed node, or fewer than three
+non-collinear ones) has ``k`` infinitesimal rigid-body motions ``R`` (n × k,
+:func:`tenscell.model.formfinding.rigid_body_modes`): no tendon stretches
+along them, so K0 and C0 are singular there and no compliance exists. As the
+peers' tangent-stiffness analyses do, :func:`~tenscell.linear.linearize.linearize`
+then works on the orthonormal complement ``N`` of ``R``
+(:func:`~tenscell.linear.modal.complement_basis`, ``q = N r``): the model's
+pencil is ``(NᵀK0N, NᵀC0N)`` with load ``NᵀH0`` and probe ``NᵀD0``
+(:meth:`~tenscell.linear.modal.Pencil.restricted`), whose stiffness
+eigenvalues are the non-zero ones of K0. The part of the load along ``R`` —
+the net force and moment of a load on an unsupported body — is resisted by
+nothing and left out; :func:`unresisted_share` says how much of it there is.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .modal import complement_basis
+
+__all__ = ["deformation_basis", "unresisted_share"]
+
+
+def _held_by_supports(structure) -> bool:
+    """Three fixed nodes not on one line hold every rigid-body motion (nothing to remove, nothing to compute)."""
+    fixed = structure.nodes[list(structure.fixed)]
+    if len(fixed) < 3:
+        return False
+    span = fixed - fixed[0]
+    return bool(np.linalg.matrix_rank(span, tol=1e-9 * max(float(np.abs(span).max()), 1e-300)) >= 2)
+
+
+def deformation_basis(cell) -> np.ndarray | None:
+    """Orthonormal basis ``N`` (n, n − k) of the coordinates orthogonal to the cell's ``k`` rigid-body motions,
+    or None when its supports hold it (k = 0)."""
+    if _held_by_supports(cell.structure):
+        return None
+    from ..model.formfinding import rigid_body_modes
+
+    R = rigid_body_modes(cell.coords)
+    return complement_basis(R, cell.n) if R.shape[1] else None
+
+
+def unresisted_share(vector, N: np.ndarray) -> float:
+    """Fraction of ``|v|`` along the rigid-body motions (what the restriction to ``N`` leaves out), in [0, 1]."""
+    v = np.asarray(vector, dtype=float)
+    norm = float(np.linalg.norm(v))
+    if norm == 0.0:
+        return 0.0
+    kept = float(np.linalg.norm(N.T @ v))
+    return float(np.sqrt(max(0.0, 1.0 - (kept / norm) ** 2)))
