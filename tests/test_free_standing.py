@@ -59,3 +59,19 @@ def test_expanded_octahedron():
 def test_anchored_cells_are_unchanged():
     lin = tc.linearize(tc.paper_cell(), P=1000.0)
     assert lin.basis is None and lin.notes == () and lin.pencil.K0.shape == lin.K0.shape
+
+
+def test_members_between_fixed_nodes_are_left_out_with_a_note():
+    from tenscell.model import DEFAULT_DELTA, paper_structure
+
+    s = paper_structure(0.0, DEFAULT_DELTA, 1.0)
+    extra = Structure(nodes=s.nodes, struts=s.struts, tendons=list(s.tendons) + [(0, 2)],
+                      families=list(s.families) + ["actin"], fixed=s.fixed, load=s.load, probe=s.probe,
+                      equal_tension_groups=s.equal_tension_groups + ((len(s.tendons),),), name="extra")
+    assert extra.tendons == s.tendons and extra.families == s.families
+    assert extra.equal_tension_groups == s.equal_tension_groups
+    assert "left out tendon(s) between two fixed nodes" in extra.notes[0] and "(0-2, actin)" in extra.notes[0]
+    assert "note: left out" in repr(extra) and "left out" in tc.summarize(extra)[0].verdict
+    # the same mechanics as without the member
+    np.testing.assert_array_equal(tc.moduli(tc.linearize(equilibrate(extra), P=1000.0), [1.0])[0],
+                                  tc.moduli(tc.linearize(equilibrate(s), P=1000.0), [1.0])[0])

@@ -213,6 +213,8 @@ def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "
                        "positive definite" + (" on the complement of the rigid-body motions" if rigid else ""))
         if rigid:
             verdict += f"; free-standing: {rigid} rigid-body motion(s) excluded"
+    if s.notes:  # members between fixed nodes left out (model.structure)
+        verdict += "; " + "; ".join(s.notes)
     summary = StructureSummary(
         name=s.name, n_nodes=s.n_nodes, n_fixed=len(s.fixed), n_point_nodes=len(s.point_nodes),
         n_struts=len(s.struts), n_anchored=sum(s.is_anchored(k) for k in range(len(s.struts))),

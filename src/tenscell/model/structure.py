@@ -133,7 +133,7 @@ def _check_struts(nodes: np.ndarray, S: np.ndarray, fixed: tuple[int, ...]) -> N
     ends = S.ravel()  # strut k's tail, then its head: the order the ends are claimed
     owner = first_occurrence(ends) // 2
     shared = ((owner != np.arange(ends.size) // 2) & ~fx.ravel()).reshape(-1, 2)
-    _raise_first("strut", nodes, S, [fx[:, 1], shared[:, 0], shared[:, 1]], [
+    _raise_first("strut", nodes, S, [fx[:, 1] & ~fx[:, 0], shared[:, 0], shared[:, 1]], [
         lambda k, a, b: f"strut {k}: its head node {b} is fixed; put the anchored (fixed) node first",
         lambda k, a, b: f"node {a} belongs to struts {owner[2 * k]} and {k}",
         lambda k, a, b: f"node {b} belongs to struts {owner[2 * k + 1]} and {k}",
@@ -141,13 +141,16 @@ def _check_struts(nodes: np.ndarray, S: np.ndarray, fixed: tuple[int, ...]) -> N
 
 
 def _check_tendons(nodes: np.ndarray, T: np.ndarray, fixed: tuple[int, ...]) -> None:
-    """Raise the first error of a tendon-by-tendon check (ends, length, duplicates, not between fixed nodes)."""
-    fx = _fixed_ends(nodes.shape[0], T, fixed)
+    """Raise the first error of a tendon-by-tendon check (ends, length, duplicates)."""
     first = first_occurrence(T.min(axis=1), T.max(axis=1))
-    _raise_first("tendon", nodes, T, [first != np.arange(T.shape[0]), fx[:, 0] & fx[:, 1]], [
+    _raise_first("tendon", nodes, T, [first != np.arange(T.shape[0])], [
         lambda j, a, b: f"tendon {j} duplicates tendon {first[j]} (nodes {a}-{b})",
-        lambda j, a, b: f"tendon {j} joins two fixed nodes and cannot work; leave it out",
     ])
+
+
+def _immovable(n: int, S: np.ndarray, T: np.ndarray, fixed: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Masks of the struts and tendons whose two ends are fixed nodes: they cannot move or work."""
+    return np.asarray(_fixed_ends(n, S, fixed).all(axis=1)), np.asarray(_fixed_ends(n, T, fixed).all(axis=1))
 
 
 @dataclass(frozen=True)
@@ -200,7 +203,10 @@ class Structure:
         member of a nucleus body; both may carry a negative force in the
         self-stress (every other member is a cable).
     fixed : sequence of int
-        Fixed nodes (ball-joint anchors, supports).
+        Fixed nodes (ball-joint anchors, supports). A strut or tendon between
+        two fixed nodes cannot move and carries no load the model sees: it is
+        left out, as the peers' analyses do, and :attr:`notes` says so (the
+        remaining members keep their order, numbered without it).
     load, probe : Point
         Where the input force acts and where the output displacement is read.
     equal_tension_groups : tuple of tuple of int
@@ -220,6 +226,7 @@ class Structure:
     equal_tension_groups: tuple[tuple[int, ...], ...] = ()
     name: str = "structure"
     node_names: tuple[str, ...] = field(default=())
+    notes: tuple[str, ...] = field(default=())
 
     def __post_init__(self):
         nodes = np.array(self.nodes, dtype=float)
@@ -267,6 +274,25 @@ class Structure:
                 check_node(i, what)
             if all(i in fixed_set for i in p.nodes):
                 raise StructureError(f"the {what} acts on fixed node(s) {list(p.nodes)}; it must move")
+        self._leave_out_immovable(*_immovable(n, S, Tn, fixed))
+
+    def _leave_out_immovable(self, strut_out: np.ndarray, tendon_out: np.ndarray) -> None:
+        """Drop the members between two fixed nodes, renumber the equal-tension groups, and say so in ``notes``."""
+        notes = list(self.notes)
+        if strut_out.any():
+            notes.append("left out strut(s) between two fixed nodes (they cannot move): " + ", ".join(
+                f"{k} ({a}-{b})" for k, (a, b) in enumerate(self.struts) if strut_out[k]))
+            object.__setattr__(self, "struts", tuple(p for k, p in enumerate(self.struts) if not strut_out[k]))
+        if tendon_out.any():
+            notes.append("left out tendon(s) between two fixed nodes (they cannot work): " + ", ".join(
+                f"{j} ({a}-{b}, {f})" for j, ((a, b), f) in enumerate(zip(self.tendons, self.families))
+                if tendon_out[j]))
+            new = np.cumsum(~tendon_out) - 1  # old tendon index -> new one
+            object.__setattr__(self, "tendons", tuple(p for j, p in enumerate(self.tendons) if not tendon_out[j]))
+            object.__setattr__(self, "families", tuple(f for j, f in enumerate(self.families) if not tendon_out[j]))
+            groups = (tuple(int(new[j]) for j in g if not tendon_out[j]) for g in self.equal_tension_groups)
+            object.__setattr__(self, "equal_tension_groups", tuple(g for g in groups if g))
+        object.__setattr__(self, "notes", tuple(str(t) for t in notes))
 
     # ---- derived, read-only views -------------------------------------------------
     @property
@@ -316,6 +342,7 @@ class Structure:
             f"{self.n_nodes} nodes ({len(self.fixed)} fixed), {len(self.struts)} rigid struts, "
             f"{self.n_tendons} tendons ({counts(self.families) or 'none'})",
             f"load at {at(self.load)}; probe at {at(self.probe)}",
+            *(f"note: {t}" for t in self.notes),
         )
 
     def to_dataframe(self, members: str = "tendons", **columns):
