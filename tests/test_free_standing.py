@@ -75,3 +75,36 @@ def test_members_between_fixed_nodes_are_left_out_with_a_note():
     # the same mechanics as without the member
     np.testing.assert_array_equal(tc.moduli(tc.linearize(equilibrate(extra), P=1000.0), [1.0])[0],
                                   tc.moduli(tc.linearize(equilibrate(s), P=1000.0), [1.0])[0])
+
+
+def test_rollers_are_the_free_structure_with_the_held_directions_removed():
+    """Per-direction supports on point nodes: K0 is exactly the unsupported K0 without the held coordinates'
+    rows and columns (a held direction is a coordinate removed), and 3 + 2 + 1 supports hold every rigid motion."""
+    import dataclasses
+
+    from tenscell.model import StructureError, pin_jointed
+    from tenscell.model.coordinates import kinematics
+
+    free = pin_jointed(snelson_prism(1.0, 1.0))  # the peers' bar model: every node a point node
+    held = {0: "xyz", 1: "yz", 2: "z"}
+    sup = dataclasses.replace(free, fixed=(0,), supports=((2, "z"), (1, "zy")))
+    assert sup.supports == ((1, "yz"), (2, "z"))
+    EA = np.where(np.array(free.families) == "strut", 100.0, 1.0)
+    cf, cs = equilibrate(free), equilibrate(sup)
+    np.testing.assert_allclose(cs.T0, cf.T0, rtol=1e-12)  # two SVDs of well-conditioned equilibrium matrices
+    lf = tc.linearize(cf, P=1.0, EA=EA, c=1.0, check=False)
+    ls = tc.linearize(cs, P=1.0, EA=EA, c=1.0)
+    assert ls.basis is None  # no rigid-body motion left
+    keep = [3 * i + "xyz".index(a) for i in range(6) for a in "xyz" if a not in held.get(i, "")]
+    Kf, Ks = np.asarray(lf.K0), np.asarray(ls.K0)
+    # the same sums of the same terms, in another order: a few ulps of the largest entry
+    np.testing.assert_allclose(Ks, Kf[np.ix_(keep, keep)], rtol=0, atol=64 * np.finfo(float).eps * np.abs(Kf).max())
+    q = cs.coords.q0 + 0.01 * np.random.default_rng(1).standard_normal(cs.n)
+    x = kinematics(cs.coords, q).x
+    assert x[1, 1] == free.nodes[1, 1] and x[1, 2] == free.nodes[1, 2] and x[2, 2] == free.nodes[2, 2]
+    with pytest.raises(StructureError, match="end of a rigid strut"):
+        dataclasses.replace(snelson_prism(1.0, 1.0), supports=((0, "z"),))
+    with pytest.raises(StructureError, match="held in every direction"):
+        dataclasses.replace(free, supports=((0, "xyz"),))
+    with pytest.raises(StructureError, match="must be some of"):
+        dataclasses.replace(free, supports=((0, "w"),))

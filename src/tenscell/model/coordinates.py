@@ -6,7 +6,9 @@ structure's order, then the point nodes in index order.
 
 * anchored strut: 2 direction coordinates;
 * free strut: its centre ``(X, Y, Z)`` (m) then 2 direction coordinates;
-* point node: ``(X, Y, Z)`` (m).
+* point node: ``(X, Y, Z)`` (m), or the directions a per-direction support
+  (:attr:`Structure.supports <tenscell.model.structure.Structure.supports>`)
+  leaves free, in x-y-z order.
 
 For the paper's cell this is exactly the order of the paper's Eq. (2):
 ``[δ11 α11 δ21 α21 δ31 α31 X1 Y1 Z1 δ12 α12 ... X Y Z]``.
@@ -71,6 +73,7 @@ class Coordinates:
     frame: np.ndarray  # (n_struts, 3, 3): rows u_ref, e1, e2 (used by "local")
     point_start: np.ndarray  # first coordinate of each point node
     tendon_nodes: np.ndarray  # (m, 2) node pairs of the working tendons, as an array once
+    point_axes: np.ndarray | None = None  # (n_points, 3) bool: the free directions of each point node (rollers)
 
     def __repr__(self) -> str:
         return f"<Coordinates: {self.n} {self.kind!r} coordinates of {self.structure.name!r}>"
@@ -154,19 +157,23 @@ def make_coordinates(structure: Structure, kind: str = "angles") -> Coordinates:
             labels += [f"X[{k}]", f"Y[{k}]", f"Z[{k}]"] + dirl
             pos += 5
     points = np.asarray(s.point_nodes, dtype=int)
-    pstart = pos + 3 * np.arange(points.size)
-    node_index[points, :3] = pstart[:, None] + np.arange(3)
-    q0 += s.nodes[points].ravel().tolist()
-    labels += [f"{x}(node {p})" for p in points.tolist() for x in "XYZ"]
-    pos += 3 * points.size
+    held = dict(s.supports)
+    free = np.array([[a not in held.get(int(p), "") for a in "xyz"] for p in points], dtype=bool).reshape(-1, 3)
+    sizes = free.sum(axis=1)
+    pstart = pos + np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int) if points.size else np.zeros(0, int)
+    for i, p in enumerate(points.tolist()):
+        node_index[p, : sizes[i]] = pstart[i] + np.arange(sizes[i])
+        q0 += s.nodes[p][free[i]].tolist()
+        labels += [f"{x}(node {p})" for x, f in zip("XYZ", free[i]) if f]
+    pos += int(sizes.sum())
     q0a = np.array(q0, dtype=float)
     tendon_nodes = np.asarray(s.tendons, dtype=int).reshape(-1, 2)
-    for a in (q0a, node_index, starts, anchored, frame, pstart, tendon_nodes):
+    for a in (q0a, node_index, starts, anchored, frame, pstart, tendon_nodes, free):
         a.setflags(write=False)
     return Coordinates(
         structure=s, kind=kind, n=pos, q0=q0a, node_index=node_index, labels=tuple(labels),
         strut_start=starts, anchored=anchored, lengths=lengths, frame=frame, point_start=pstart,
-        tendon_nodes=tendon_nodes,
+        tendon_nodes=tendon_nodes, point_axes=None if free.all() else free,
     )
 
 
@@ -262,10 +269,16 @@ def kinematics(coords: Coordinates, q: np.ndarray) -> NodeKinematics:
                 jac[nodes, :, 3:] = sign * half[:, None, None] * du[iff]
                 hess[nodes, :, 3:, 3:] = sign * half[:, None, None, None] * d2u[iff]
     pts = np.asarray(s.point_nodes, dtype=int)
-    if pts.size:
+    mask = coords.point_axes
+    if pts.size and mask is None:
         ps = coords.point_start
         x[pts] = np.stack([q[ps], q[ps + 1], q[ps + 2]], axis=1)
         jac[pts, :, :3] = np.eye(3)
+    elif pts.size and mask is not None:  # rollers: a held direction keeps its reference coordinate
+        for i, p in enumerate(pts.tolist()):
+            axes = np.flatnonzero(mask[i])
+            x[p, axes] = q[coords.point_start[i] + np.arange(axes.size)]
+            jac[p, axes, np.arange(axes.size)] = 1.0
     return NodeKinematics(x=x, jac=jac, hess=hess, index=coords.node_index)
 
 

@@ -166,8 +166,10 @@ def rigid_body_modes(coords: Coordinates, q: np.ndarray | None = None, rtol: flo
     V = V.reshape(3 * nn, 6)
     fixed = np.zeros(nn, dtype=bool)
     fixed[list(s.fixed)] = True
-    # motions that leave the fixed nodes still
-    Vf = V.reshape(nn, 3, 6)[fixed].reshape(-1, 6)
+    # motions that leave the fixed nodes still, and the supported directions of rollers
+    Vn = V.reshape(nn, 3, 6)
+    held = [Vn[node, "xyz".index(a)] for node, axes in s.supports for a in axes]
+    Vf = np.vstack([Vn[fixed].reshape(-1, 6), *(np.array(held).reshape(-1, 6) for _ in [0] if held)])
     if Vf.size:
         Z = scipy.linalg.null_space(Vf, rcond=rtol)
         V = V @ Z

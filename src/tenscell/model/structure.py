@@ -153,6 +153,30 @@ def _immovable(n: int, S: np.ndarray, T: np.ndarray, fixed: tuple[int, ...]) -> 
     return np.asarray(_fixed_ends(n, S, fixed).all(axis=1)), np.asarray(_fixed_ends(n, T, fixed).all(axis=1))
 
 
+def _check_supports(supports, n: int, fixed: set, S: np.ndarray) -> tuple[tuple[int, str], ...]:
+    """Per-direction supports as sorted ``(node, axes)`` pairs, axes in x-y-z order; StructureError otherwise."""
+    out: dict[int, str] = {}
+    on_strut = set(S.ravel().tolist())
+    for item in supports:
+        try:
+            node, axes = int(item[0]), str(item[1]).lower()
+        except (TypeError, ValueError, IndexError):
+            raise StructureError(f"supports: expected (node, axes) pairs such as (3, 'z'), got {item!r}") from None
+        if not 0 <= node < n:
+            raise StructureError(_unknown_node("supports", node, n))
+        if not axes or set(axes) - set("xyz") or len(set(axes)) != len(axes):
+            raise StructureError(f"supports: node {node}: axes {axes!r} must be some of 'x', 'y', 'z', each once")
+        if len(axes) == 3 or node in fixed:
+            raise StructureError(f"supports: node {node} is held in every direction; list it among the fixed nodes")
+        if node in on_strut:
+            raise StructureError(f"supports: node {node} is the end of a rigid strut; a strut end is held fully "
+                                 "(fixed) or not at all (use pin_jointed() for elastic struts on rollers)")
+        if node in out:
+            raise StructureError(f"supports: node {node} is listed twice")
+        out[node] = "".join(a for a in "xyz" if a in axes)
+    return tuple(sorted(out.items()))
+
+
 @dataclass(frozen=True)
 class Point:
     """A point of the structure where a force acts or a displacement is read.
@@ -207,6 +231,12 @@ class Structure:
         two fixed nodes cannot move and carries no load the model sees: it is
         left out, as the peers' analyses do, and :attr:`notes` says so (the
         remaining members keep their order, numbered without it).
+    supports : sequence of (int, str), optional
+        Per-direction supports (rollers, sliders) of point nodes: ``(node,
+        axes)`` with ``axes`` the directions held, among ``"x"``, ``"y"``,
+        ``"z"`` (``(3, "z")``: node 3 rolls in the x-y plane). A node held in
+        all three directions is a fixed node. Strut ends are held fully (fixed)
+        or not at all.
     load, probe : Point
         Where the input force acts and where the output displacement is read.
     equal_tension_groups : tuple of tuple of int
@@ -227,6 +257,7 @@ class Structure:
     name: str = "structure"
     node_names: tuple[str, ...] = field(default=())
     notes: tuple[str, ...] = field(default=())
+    supports: tuple[tuple[int, str], ...] = field(default=())
 
     def __post_init__(self):
         nodes = np.array(self.nodes, dtype=float)
@@ -275,6 +306,7 @@ class Structure:
             if all(i in fixed_set for i in p.nodes):
                 raise StructureError(f"the {what} acts on fixed node(s) {list(p.nodes)}; it must move")
         self._leave_out_immovable(*_immovable(n, S, Tn, fixed))
+        object.__setattr__(self, "supports", _check_supports(self.supports, n, fixed_set, S))
 
     def _leave_out_immovable(self, strut_out: np.ndarray, tendon_out: np.ndarray) -> None:
         """Drop the members between two fixed nodes, renumber the equal-tension groups, and say so in ``notes``."""
