@@ -194,3 +194,24 @@ def test_cli_column_flags_and_their_errors(tmp_path, capsys):
     assert status == 2 and "--columns" in err and "'G' is not one of" in err
     status, err = _fit([str(LIMS), "--step", "1", "--temperature", "25"], tmp_path, capsys)
     assert status == 2 and "--step and --temperature" in err
+
+
+def test_fit_population_reads_lab_files_with_a_column_map(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("TENSCELL_PROGRESS", "0")
+    cells = tmp_path / "cells"
+    cells.mkdir()
+    f = np.logspace(-1, 1, 6)
+    for k, scale in enumerate((1.0, 1.5, 2.0)):
+        pd.DataFrame({"w": 2 * np.pi * f, "a": 0.1 * scale * f ** 0.2, "b": 0.03 * scale * f ** 0.2}).to_csv(
+            cells / f"cell{k}.csv", index=False)
+    (cells / "cell3.csv").write_text("w,a,b\n1,0.1,x\n2,0.1,0.03\n", encoding="utf-8")
+    out = tmp_path / "fits"
+    status = main(["fit-population", str(cells), "--out", str(out), "--workers", "0", "--starts", "1", "--hops", "0",
+                   "--columns", "frequency=w", "--columns", "storage=a", "--columns", "loss=b",
+                   "--units", "frequency=rad/s", "--units", "modulus=kPa"])
+    assert status == 0, capsys.readouterr().err
+    table = pd.read_csv(out / "population.csv")
+    ok = table[table["status"] == "ok"]
+    assert len(table) == 4 and len(ok) == 3
+    bad = table[table["status"] != "ok"].iloc[0]
+    assert "not a number: 'x'" in str(bad.get("error", bad.to_dict()))

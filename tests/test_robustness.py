@@ -46,7 +46,8 @@ NUMERIC_FLAGS = {
     ("synth-population", "--out", "OUT"): {"--cells": (), "--noise": ("zero",), "--spread": ("zero",), "--freq": (),
                                            "--seed": ("zero",)},
     ("fit-population", "DATA", "--out", "OUT"): {"--workers": ("zero",), "--seed": ("zero",), "--starts": (),
-                                                 "--hops": ("zero",), "--tolerance": ()},
+                                                 "--hops": ("zero",), "--tolerance": (),
+                                                 "--temperature": ("negative", "zero")},
     ("large-study", "monte-carlo", "--draws", "5", "--out", "OUT"): {
         "--draws": (), "--spread": (), "--chunk": (), "--workers": ("zero",), "--seed": ("zero",)},
     ("large-study", "sweep", "--prestress", "1", "--heterogeneity", "0", "--out", "OUT"): {

@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._args import add_out, frequencies, integer, number, number_list
+from ._args import add_data_options, add_out, data_options_from_args, frequencies, integer, number, number_list
 from .fit import DAMPING_MODES, TENDON_MODES
 #: synthetic population generators (tenscell.population.synth.MODELS)
 MODELS = ("tensegrity", "powerlaw")
@@ -75,6 +75,7 @@ def _register_fit(sub) -> None:
     p.add_argument("--truth", default=None,
                    help="generating parameters to check recovery against (default: INPUT/_generating_parameters.csv "
                         "when present)")
+    add_data_options(p)
     p.set_defaults(func=run_fit)
 
 
@@ -153,7 +154,7 @@ def run_fit(args) -> int:
     truth = _truth(args)
     options = PopulationFitOptions(tendons=args.tendons, damping=args.damping, starts=args.starts, hops=args.hops,
                                    tolerance=args.tolerance)
-    sources = read_sources(args.input)
+    sources = _with_column_map(read_sources(args.input), data_options_from_args(args))
     try:
         result = fit_population(sources, options=options, seed=args.seed, workers=args.workers,
                                 scheduler=args.scheduler, work_dir=work, resume=args.resume)
@@ -169,6 +170,35 @@ def run_fit(args) -> int:
     print(f"tenscell fit-population: {len(t)} cells, {n_ok} fitted ({int(t['converged'].sum())} converged), "
           f"{len(t) - n_ok} failed; {result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0
+
+
+def _with_column_map(sources, options: dict):
+    """With --columns/--units/--step/--temperature, each cell's file read by tenscell.io.read_data in this process
+    (its own headers and units; a file that cannot be read is that cell's failure, as for tenscell's layout)."""
+    units = options.pop("units", None) or {}
+    if not any(v is not None for v in options.values()) and not units:
+        return sources
+    from ..io.data import DataError, RheologyData
+    from ..io.instruments import read_data
+    from ..population.sources import CellSource
+
+    out = []
+    for src in sources:
+        if src.text is None or src.error is not None:
+            out.append(src)
+            continue
+        if not Path(src.source).is_file():
+            raise ValueError(f"--columns/--units apply to one file per cell (a directory or a glob); {src.source} "
+                             "is a cell of a long table, which is read in tenscell's own columns")
+        try:
+            data = read_data(src.source, **options, **units)
+            if not isinstance(data, RheologyData):
+                raise DataError(f"{src.source}: creep data; populations fit moduli")
+            out.append(CellSource(cell=src.cell, condition=src.condition, source=src.source, data=data))
+        except DataError as err:
+            out.append(CellSource(cell=src.cell, condition=src.condition, source=src.source, text=src.text,
+                                  error=str(err).removeprefix(f"{src.source}: ")))
+    return tuple(out)
 
 
 def run_study(args) -> int:
