@@ -88,3 +88,27 @@ def test_fit_json_carries_the_errors(fitted):
     for p, (se, note) in zip(doc["parameters"], fitted.standard_errors):
         assert p["stderr"] == se and p["stderr_note"] == note
     assert doc["correlations"]["threshold"] == CORRELATION_THRESHOLD
+
+
+def test_model_standard_errors_and_fit_csv(fitted, tmp_path):
+    """The fitted curve's standard error at each point: σ·sqrt(h)/w with h the hat matrix's diagonal, whose trace is
+    the number of seen combinations (a projection's trace is its rank); written to fit.csv beside each model value."""
+    import csv
+
+    from tenscell.io.tables import fit_table
+
+    ident = fitted.identifiability()
+    assert np.sum(ident.leverage) == pytest.approx(ident.rank, rel=1e-10)
+    assert np.all((ident.leverage >= -1e-12) & (ident.leverage <= 1 + 1e-12))
+    se = fitted.model_standard_errors()
+    assert se.shape == fitted.residuals.shape and np.all(se >= 0)
+    np.testing.assert_allclose(se, ident.sigma * np.sqrt(np.clip(ident.leverage, 0, None)), rtol=1e-12)  # w = 1
+    header, rows = fit_table(fitted, fitted)
+    i, j = header.index("G_storage_model_Pa"), header.index("G_storage_model_stderr_Pa")
+    n = fitted.datasets[0].n
+    for k, row in enumerate(rows):
+        assert row[j] == pytest.approx(row[i] * math.log(10) * se[k], rel=1e-12)
+    path = tmp_path / "fit.csv"
+    with open(path, "w", newline="") as fh:
+        csv.writer(fh).writerows([header, *rows])
+    assert len(rows) == n

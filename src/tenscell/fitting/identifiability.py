@@ -133,6 +133,11 @@ class Identifiability:
         Correlation matrix of the ln-parameters (NaN rows for undetermined ones).
     combinations : tuple of Combination
         The seen combinations (right singular vectors), best determined first.
+    leverage : ndarray, shape (n_residuals,)
+        Diagonal of the hat matrix ``J (JᵀJ)⁺ Jᵀ`` (the squared row norms of
+        the seen left singular vectors; they sum to the rank): the fitted
+        model at residual i has the standard error ``σ·sqrt(leverage_i)`` in
+        weighted units (:meth:`tenscell.fitting.FitResult.model_standard_errors`).
     """
 
     names: tuple
@@ -153,6 +158,7 @@ class Identifiability:
     null_share: np.ndarray
     correlation: np.ndarray
     combinations: tuple
+    leverage: np.ndarray | None = None
 
     @property
     def n_analysed(self) -> int:
@@ -342,4 +348,5 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
         fixed=tuple(problem.names[i] for i in np.flatnonzero(~free)), n_residuals=n, sigma=sigma,
         sigma_source=source, dof=dof, chi2=chi2, standard_errors=se, null_share=null_share, correlation=corr,
         combinations=tuple(combos),
+        leverage=np.sum(U[:, :rank] ** 2, axis=1) if U is not None else np.zeros(n),
     )

@@ -603,6 +603,20 @@ class FitResult:
             out.append((None if rel is None else abs(p.value) * rel, note))
         return tuple(out)
 
+    def model_standard_errors(self) -> np.ndarray:
+        """Standard error (decades) of the fitted model's log10 G′, log10 G″ or log10 J at each residual, in the
+        order of :attr:`residuals` (``pr.rows(k)`` per data set); NaN when σ is unknown.
+
+        From the identifiability analysis (linearized at the optimum): ``σ·sqrt(h_i)/w_i`` with ``h`` the
+        leverage (diagonal of the hat matrix) and ``w`` the residual weights; constraints (parameters at a
+        bound, fixed, the L gauge) add no uncertainty.
+        """
+        ident = self.identifiability()
+        n = self.residuals.size
+        h = np.asarray(ident.leverage, dtype=float)[:n]
+        sigma = np.nan if ident.sigma is None else ident.sigma
+        return sigma * np.sqrt(np.clip(h, 0.0, None)) / np.asarray(self.problem.weights, dtype=float)[:n]
+
     def correlations(self, threshold: float = CORRELATION_THRESHOLD) -> list[tuple[str, str, float]]:
         """``(a, b, ρ)`` for pairs of determined parameters with ``|ρ| >= threshold``, strongest first."""
         return self.identifiability().strong_correlations(threshold)

@@ -22,38 +22,47 @@ def moduli_table(response):
 
 
 def fit_table(result, baseline):
-    """(header, rows) of fit.csv: data, model and homogeneous baseline at each point of each data set.
+    """(header, rows) of fit.csv: data, model (with its standard error, first order: value × ln10 ×
+    :meth:`~tenscell.fitting.FitResult.model_standard_errors`) and homogeneous baseline at each point of each
+    data set.
 
     ``prestress_Pa`` is the data's own (stated) prestress, or for a data set
     whose prestress was fitted in a joint fit the fitted value; empty for a
     frequency sweep fitted alone.
     """
     header = ["dataset", "source", "prestress_Pa", "frequency_Hz", "G_storage_Pa", "G_loss_Pa",
-              "G_storage_model_Pa", "G_loss_model_Pa", "log10_error_storage", "log10_error_loss",
-              "G_storage_baseline_Pa", "G_loss_baseline_Pa"]
+              "G_storage_model_Pa", "G_storage_model_stderr_Pa", "G_loss_model_Pa", "G_loss_model_stderr_Pa",
+              "log10_error_storage", "log10_error_loss", "G_storage_baseline_Pa", "G_loss_baseline_Pa"]
     creep = any(f.axis == "time" for f in result.fits)
     if creep:  # creep data sets fill these columns (and leave the moduli ones empty), moduli rows the others
-        header += ["time_s", "creep_compliance_per_Pa", "creep_compliance_model_per_Pa", "log10_error_creep",
-                   "creep_compliance_baseline_per_Pa"]
+        header += ["time_s", "creep_compliance_per_Pa", "creep_compliance_model_per_Pa",
+                   "creep_compliance_model_stderr_per_Pa", "log10_error_creep", "creep_compliance_baseline_per_Pa"]
+    se = result.model_standard_errors() * math.log(10.0)  # relative standard error of each model value
     rows = []
     for f, b in zip(result.fits, baseline.fits):
-        d, n = f.data, f.data.n
+        d, n, r = f.data, f.data.n, se[result.problem.rows(f.index)]
         if f.axis == "time":
             for i in range(n):
                 P = float(d.prestress[i]) if d.prestress is not None else (
                     "" if f.prestress_fitted_pa is None else f.prestress_fitted_pa)
-                rows.append([f.index, d.source, P] + [""] * 9 + [
-                    float(d.time_s[i]), float(d.compliance[i]), float(f.J_model[i]), float(f.residuals[i]),
-                    float(b.J_model[i])])
+                rows.append([f.index, d.source, P] + [""] * 11 + [
+                    float(d.time_s[i]), float(d.compliance[i]), float(f.J_model[i]), _se(f.J_model[i], r[i]),
+                    float(f.residuals[i]), float(b.J_model[i])])
             continue
         for i in range(n):
             P = float(d.prestress[i]) if d.prestress is not None else (
                 "" if f.prestress_fitted_pa is None else f.prestress_fitted_pa)
             rows.append([f.index, d.source, P, float(d.frequency_hz[i]), float(d.G_storage[i]), float(d.G_loss[i]),
-                         float(f.G_storage_model[i]), float(f.G_loss_model[i]), float(f.residuals[i]),
-                         float(f.residuals[n + i]), float(b.G_storage_model[i]), float(b.G_loss_model[i])]
-                        + ([""] * 5 if creep else []))
+                         float(f.G_storage_model[i]), _se(f.G_storage_model[i], r[i]), float(f.G_loss_model[i]),
+                         _se(f.G_loss_model[i], r[n + i]), float(f.residuals[i]), float(f.residuals[n + i]),
+                         float(b.G_storage_model[i]), float(b.G_loss_model[i])]
+                        + ([""] * 6 if creep else []))
     return header, rows
+
+
+def _se(value, relative) -> float | str:
+    """A model value's standard error from its relative one; empty when not determined (σ unknown)."""
+    return float(abs(value) * relative) if math.isfinite(relative) else ""
 
 
 def check_finite_rows(rows, what: str, inputs: str = ""):
