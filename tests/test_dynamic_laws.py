@@ -414,3 +414,20 @@ def test_frequency_response_with_a_law_and_a_cytoplasm():
         Gs, Gl = tenscell.moduli(tenscell.linearize(CELL, p, EA, C, viscosity=0.1), f)
         assert _rel(v.G[i], Gs + 1j * Gl) < 1e-10
     assert v.viscosity == 0.1 and r.to_dataframe().shape[0] == Ps.size * f.size
+
+
+def test_cytoplasm_in_the_linear_model_needs_probe_at_the_load():
+    """A dashpot on the probe is 'in parallel' with the measured modulus only when the probe is the load: refused
+    otherwise in one line (dynamic_moduli, which adds iωη to G*, still works)."""
+    import dataclasses
+
+    from tenscell.model.equilibrium import equilibrate
+    from tenscell.model.structure import Point
+
+    st = dataclasses.replace(CELL.structure, probe=Point(nodes=(6,), weights=(1.0,), direction=(0.0, 0.0, 1.0)))
+    cell = equilibrate(st, parameters=dict(CELL.parameters))
+    with pytest.raises(ValueError, match="probe to be the load") as err:
+        linearize_law(cell, Voigt(EA=EA, c=C), P0, viscosity=0.1)
+    assert "\n" not in str(err.value)
+    G = dynamic_complex_modulus(cell, Voigt(EA=EA, c=C), P0, [1.0], viscosity=0.1)
+    assert _rel(G - dynamic_complex_modulus(cell, Voigt(EA=EA, c=C), P0, [1.0]), np.array([2j * np.pi * 0.1])) < 1e-12
