@@ -144,12 +144,19 @@ class LinearModel:
     def __repr__(self) -> str:
         from .._results import format_repr, span
 
+        extra = []
+        if self.realization is not None:
+            R = self.realization
+            acc = "exact" if R.band_hz is None else f"within {R.error:.2g} over {R.band_hz[0]:g}–{R.band_hz[1]:g} Hz"
+            extra.append(f"{type(self.law).__name__} tendons realized with {R.r} internal variables ({acc}); "
+                         "moduli from the exact dynamic tangent")
         return format_repr(
             f"LinearModel of {self.cell.describe()} at P = {self.P:.6g} N",
             f"{self.cell.n} coordinates, {self.cell.m} tendons; {'sparse' if sp.issparse(self.K0) else 'dense'} "
             "K0, C0",
             f"EA {span(self.EA, 'N')}; c {span(self.c, 'N·s/m')}; tensions {span(self.tensions, 'N')}",
-            f"strut length L = {self.L:.4g} m",
+            f"strut length L = {self.L:.4g} m" + (f"; cytoplasm η = {self.viscosity:.4g} Pa·s" if self.viscosity else ""),
+            *extra,
         )
 
     def to_dataframe(self):
