@@ -23,7 +23,7 @@ import scipy.sparse as sp
 from .._checks import positive_array, positive_scalar
 from ..laws import DynamicLawError, LinearSpring, TendonLaw, Voigt
 from ..laws.base import DEFAULT_REALIZATION_TOL, Realization
-from ..model.equilibrium import Cell, tangent_stiffness, weighted_gram
+from ..model.equilibrium import Cell, tangent_stiffness
 from .dynamic import cytoplasm_damping, viscosity_value
 from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
@@ -404,8 +404,8 @@ def with_cytoplasm(lin, viscosity: float):
 def _augmented(cell: Cell, P: float, R: Realization):
     """``(K, C)`` of the realized pencil (:mod:`tenscell.linear.dynamic`), dense or sparse like the cell."""
     A = cell.A
-    Kq = P * cell.prestress_hessian + weighted_gram(A, R.k)
-    Cq = weighted_gram(A, R.c)
+    Kq = assemble_stiffness(cell, P, R.k)
+    Cq = assemble_damping(cell, R.c)
     if cell.sparse:
         B = sp.csr_matrix(A)[:, R.tendon]
         G = sp.diags(R.arm_k)
