@@ -305,7 +305,8 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
         For a law with internal dynamics only (``law.dynamic``): the band (Hz)
         and relative tolerance of its internal-variable realization
         (:func:`tenscell.linear.linearize.realize`; exact for Maxwell and the
-        standard linear solid, a Prony series for the springpot). Needs ``P``.
+        standard linear solid, a Prony series for the springpot). Needs ``P``;
+        ignored for rate-linear laws, whose linearization is exact.
 
     Returns
     -------
@@ -326,7 +327,7 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
         raise ValueError(f"law must be a tenscell.laws.TendonLaw, got {type(law).__name__}")
     if law.m is not None and law.m != cell.m:
         raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
-    if law.dynamic or band_hz is not None or tol is not None:
+    if law.dynamic:
         if P is None:
             raise DynamicLawError(f"a {type(law).__name__} law has internal dynamics: pass the prestress P to "
                                   "linearize_law (its realization is built at tensions P·T0)")
