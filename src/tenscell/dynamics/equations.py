@@ -165,7 +165,7 @@ class EquationsOfMotion:
         if law.dynamic:
             raise DynamicLawError(
                 f"the nonlinear time domain integrates tendon laws T(l, l') without internal state; this "
-                f"{type(law).__name__} law has internal dynamics: use tenscell.linearize_law(cell, law, P) for its "
+                f"{type(law).__name__} law has internal dynamics: use tenscell.linear.linearize_law(cell, law, P) for its "
                 "linear creep and relaxation and tenscell.linear.dynamic.dynamic_moduli for its moduli")
         if law.l0 is None:
             raise ValueError("the tendon law has no rest lengths: place it at the cell's reference with "

@@ -12,7 +12,7 @@ split as :func:`tenscell.linear.modal.assemble_stiffness`,
 ``G' + iG'' = (0.5/L)/J + iωη`` (Pa) with an optional Newtonian cytoplasm of
 viscosity η (Pa·s) in parallel with the structure. For a rate-linear law
 ``k* = k + iωc`` and this is exactly :func:`tenscell.moduli` of
-:func:`tenscell.linearize_law` (tested).
+:func:`tenscell.linear.linearize_law` (tested).
 
 For the time domain (creep, relaxation, the retardation spectrum) such a law
 is *realized* with internal variables (:func:`tenscell.linear.linearize.realize`): each Maxwell arm
