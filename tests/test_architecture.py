@@ -89,7 +89,7 @@ PENDING_BACKWARD: dict[tuple[str, str], str] = {
 
 
 # ---- reading the source -------------------------------------------------------------------------------
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _parse(text: str) -> ast.Module:
     return ast.parse(text)
 

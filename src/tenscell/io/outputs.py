@@ -318,7 +318,7 @@ class OutputSet:
         files = sorted(str(p.relative_to(staging)) for p in staging.rglob("*") if p.is_file())
         write_json(staging / MANIFEST, {
             "command": self.command, "tenscell_version": __version__,
-            "finished_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            "finished_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             "files": files})
 
     def _commit(self, staging: Path) -> None:

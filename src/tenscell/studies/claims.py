@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model.equilibrium import Cell
-from ..linear.linearize import linearize
 from ..response import FrequencyResponse, frequency_response, log_slope
 from ..sensitivity import perturbation_table
 from ..model.shapes import paper_cell
