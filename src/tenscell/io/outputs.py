@@ -259,19 +259,23 @@ class OutputSet:
     flag : str
         The option that named ``target``, for error messages.
 
-    Use::
+    Notes
+    -----
+    Entering may happen long after construction; everything written inside
+    the block goes to the staging directory, and leaving it without an
+    exception moves the set into place. An exception (including
+    KeyboardInterrupt) removes the staging directory and leaves the previous
+    set as it was.
+
+    Examples
+    --------
+    ::
 
         out = OutputSet(args.out, command="tenscell fit ...")   # validate first
         ...                                                        # compute
         with out as d:                                             # d: the staging directory
             write_csv_rows(d / "fit.csv", header, rows)
         # here the complete set is at args.out
-
-    Entering may happen long after construction; everything written inside
-    the block goes to the staging directory, and leaving it without an
-    exception moves the set into place. An exception (including
-    KeyboardInterrupt) removes the staging directory and leaves the previous
-    set as it was.
     """
 
     def __init__(self, target, *, command: str = "", flag: str = "--out"):
