@@ -23,7 +23,8 @@ from .model.formfinding import rigid_body_modes
 from .linear.krylov import load_modes
 from .linear.linearize import LinearModel, NotPositiveDefiniteError, linearize
 from .linear.modal import complement_basis
-from .model.structure import STRUT, Structure
+from .laws import DynamicLawError
+from .model.structure import Structure, cable_mask
 from ._threads import hot_path
 
 __all__ = ["StructureSummary", "summarize", "relaxation_modes", "RelaxationModes", "node_displacements"]
@@ -202,8 +203,7 @@ def _ranks(s: Structure, cell: Cell | None, parametrization: str) -> tuple[int, 
 
 def _stability(cell: Cell, P: float, EA, c, rigid: int):
     """(stable: bool or None, the linear model or None, smallest normalized tension, the verdict's words)."""
-    cable = np.array([f != STRUT for f in cell.structure.families])
-    min_t = float(cell.T0[cable].min())
+    min_t = float(cell.T0[cable_mask(cell.structure.families)].min())
     stable: bool | None
     lin: LinearModel | None
     try:
@@ -308,6 +308,9 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     """
     if not (isinstance(k, (int, np.integer)) and k >= 1):
         raise ValueError(f"k (number of modes) must be a whole number >= 1, got {k!r}")
+    if lin.realization is not None:
+        raise DynamicLawError(f"relaxation_modes: the {type(lin.law).__name__} tendons' internal variables are part of "
+                         "every mode, which then has no node displacements alone; use creep_spectrum(lin) for its times")
     n = lin.cell.n
     if sp.issparse(lin.K0):
         # ARPACK does not converge in reasonable time on lattices, whose slowest rate is shared by
