@@ -21,7 +21,7 @@ import sys
 __all__ = [
     "Parser", "HelpFormatter", "number", "integer", "number_list", "frequencies", "member_values",
     "lattice_size", "grid_cost", "add_model_options", "add_prestress", "add_out", "hidden_alias", "add_from_fit",
-    "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS",
+    "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS", "path",
 ]
 
 #: allowed range of each physical quantity (closed interval, in the flag's unit). The model is
@@ -197,6 +197,20 @@ def _bytes(n: float) -> str:
     return f"{n:.3g} TiB"  # pragma: no cover
 
 
+def path(what: str = "a path"):
+    """An argparse ``type``: a non-empty path (an empty one would silently mean the current directory or a default)."""
+    def convert(text):
+        text = str(text)
+        if not text.strip():
+            raise argparse.ArgumentTypeError(f"empty value; expected {what}")
+        if "\0" in text:
+            raise argparse.ArgumentTypeError(f"{text[:40]!r} holds a NUL byte; expected {what}")
+        return text
+
+    convert.__name__ = "path"
+    return convert
+
+
 def member_values(quantity: str):
     """An argparse ``type``: one value, ``family=value`` pairs, or one value per member (comma list).
 
@@ -273,7 +287,7 @@ def add_prestress(p: argparse.ArgumentParser, *, sweep: bool, default: str = "10
 
 def add_from_fit(p: argparse.ArgumentParser) -> None:
     """``--from-fit FIT_JSON``: the fitted cell of a ``tenscell fit`` run instead of the model options."""
-    p.add_argument("--from-fit", metavar="FIT_JSON", default=None,
+    p.add_argument("--from-fit", metavar="FIT_JSON", default=None, type=path("a fit.json file"),
                    help="use the fitted cell of a `tenscell fit` run (its fit.json): cell, strut length, EA, c and "
                         "prestress; the cell and tendon options are then refused")
 
@@ -322,12 +336,13 @@ def add_out(p: argparse.ArgumentParser, default: str | None = None, *, derived: 
     the command derives from its other arguments (``args.out`` is then None).
     """
     text = "output directory (created, or replaced as a whole by a successful run)"
+    directory = path("a directory")
     if derived is not None:
-        p.add_argument("--out", default=None, help=f"{text} (default: {derived})")
+        p.add_argument("--out", type=directory, default=None, help=f"{text} (default: {derived})")
     elif default is None:
-        p.add_argument("--out", required=True, help=text)
+        p.add_argument("--out", type=directory, required=True, help=text)
     else:
-        p.add_argument("--out", default=default, help=text)
+        p.add_argument("--out", type=directory, default=default, help=text)
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:

@@ -274,9 +274,29 @@ def _jsonable(v):
     return v
 
 
+def creep_times(t_min: float, t_max: float, points: int):
+    """The output times of `tenscell creep` (s): ``points`` log-spaced from ``t_min`` to ``t_max``."""
+    import numpy as np
+
+    return np.logspace(math.log10(t_min), math.log10(t_max), points)
+
+
+def check_window(t, window) -> None:
+    """ValueError unless --window holds at least two of the output times ``t`` (a power law needs two points)."""
+    if window is None:
+        return
+    a, b = window
+    inside = int(((t >= a) & (t <= b)).sum())
+    if inside < 2:
+        raise ValueError(f"--window {a:g}:{b:g} s holds {inside} of the {t.size} output times "
+                         f"({t[0]:g} to {t[-1]:g} s, --t-min/--t-max/--points); a power-law fit needs at least 2")
+
+
 def run_creep(args) -> int:
     if not args.t_min < args.t_max:
         raise ValueError(f"--t-min must be below --t-max, got {args.t_min:g} s and {args.t_max:g} s")
+    t = creep_times(args.t_min, args.t_max, args.points)
+    check_window(t, args.window)
     from ..io.outputs import OutputSet
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
@@ -296,7 +316,6 @@ def run_creep(args) -> int:
     if len(amplitudes):
         check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
     EquationsOfMotion(cell, law, StepForce(1.0))  # refuses a singular damping matrix before any output
-    t = np.logspace(math.log10(args.t_min), math.log10(args.t_max), args.points)
     win = args.window or (float(t[0]), float(t[-1]))
     P0 = args.prestress_N
     try:

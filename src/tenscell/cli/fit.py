@@ -6,7 +6,7 @@ import contextlib
 import time
 from pathlib import Path
 
-from ._args import add_out, integer, number
+from ._args import RANGES, add_out, integer, number
 
 #: the fit's parametrizations (the same tuples as tenscell.fitting.TENDON_MODES / DAMPING_MODES,
 #: written out so that building the parser does not import the fitting code; a test checks they agree)
@@ -153,6 +153,13 @@ def search_space(args, datasets) -> dict:
     return space
 
 
+def check_contradictions(args) -> None:
+    """Refuse flags that contradict each other (before any file is read)."""
+    if getattr(args, "max_decades", None) is not None and args.tendons == "uniform":
+        raise ValueError(f"--max-decades {args.max_decades:g} bounds the spread of the tendon stiffnesses; with "
+                         "--tendons uniform there is one stiffness and no spread (use per-family or per-tendon)")
+
+
 def _names_text(names) -> str:
     per_tendon = [n for n in names if n.startswith("EA[")]
     rest = [n for n in names if not n.startswith("EA[")]
@@ -164,9 +171,12 @@ def add_constraints(p) -> None:
     p.add_argument("--min-prestress-share", type=number(0.0, 1.0, open_lo=True), default=None, metavar="S",
                    help="keep the prestress mechanically active: P·Kp must carry at least this share (0-1) of "
                         "the static stiffness at every prestress of the data")
-    p.add_argument("--min-prestress-elasticity", type=number(0.0, 10.0, open_lo=True), default=None, metavar="E",
+    # at most 1: K0 = Ke + P·Kp with Ke positive semi-definite and C0 independent of P, so G' grows at most in
+    # proportion to P (1 when the prestress carries all the stiffness); a bound above 1 cannot be met
+    p.add_argument("--min-prestress-elasticity", type=number(0.0, 1.0, open_lo=True), default=None, metavar="E",
                    help="keep the prestress mechanically active: dlnG'/dlnP at 0.1 Hz must be at least E at every "
-                        "prestress of the data (adherent cells: about 0.7)")
+                        "prestress of the data (0 < E <= 1, 1 meaning G' proportional to P; adherent cells: about "
+                        "0.7)")
     p.add_argument("--max-decades", type=number(0.0, 100.0, "decades", open_lo=True), default=None, metavar="D",
                    help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
 
@@ -183,6 +193,7 @@ def read_data_arg(text: str, min_points: int):
 
 def read_datasets(paths, prestress_options, min_points: int):
     """Read the data files and attach the prestresses stated by ``--prestress FILE=PA``."""
+    lo, hi, _ = RANGES["prestress"]
     stated = {}
     for opt in prestress_options or ():
         name, sep, value = opt.rpartition("=")
@@ -193,9 +204,9 @@ def read_datasets(paths, prestress_options, min_points: int):
             raise ValueError(f"--prestress {opt}: {name!r} matches {len(match)} of the data files given "
                              f"({', '.join(paths)})")
         try:
-            stated[match[0]] = float(value)
-        except ValueError:
-            raise ValueError(f"--prestress {opt}: {value!r} is not a number (Pa)") from None
+            stated[match[0]] = number(lo, hi, "Pa")(value)  # the flag's prestress range, in the unit typed
+        except argparse.ArgumentTypeError as err:
+            raise ValueError(f"--prestress {opt}: {err}") from None
     datasets = []
     for k, p in enumerate(paths):
         d = read_data_arg(p, min_points if len(paths) == 1 else 1)
@@ -337,6 +348,7 @@ def run(args) -> int:
     from ..io.outputs import OutputSet
     from ..io.thinning import bin_datasets
 
+    check_contradictions(args)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
     binned = bin_datasets(datasets, args.max_points)  # moduli only: creep data are kept as they are
@@ -349,6 +361,9 @@ def run(args) -> int:
     if args.holdout is not None:
         if len(datasets) != 1:
             raise ValueError(f"--holdout applies to one frequency sweep, got {len(datasets)} data sets")
+        if not hasattr(datasets[0], "frequency_hz"):
+            raise ValueError(f"--holdout applies to a frequency sweep of G', G''; {args.data[0]} holds creep "
+                             "compliance J(t)")
         from ..fitting.models import split_holdout
 
         try:

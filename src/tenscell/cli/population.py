@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._args import add_out, frequencies, integer, number, number_list
+from ._args import add_out, frequencies, integer, number, number_list, path
 from .fit import DAMPING_MODES, TENDON_MODES
 #: synthetic population generators (tenscell.population.synth.MODELS)
 MODELS = ("tensegrity", "powerlaw")
@@ -17,7 +17,7 @@ def add_cluster_options(p) -> None:
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=integer(0, 4096), default=None,
                    help="local Dask workers started for this run (default: one per CPU; 0: no Dask, in this process)")
-    g.add_argument("--scheduler", default=None,
+    g.add_argument("--scheduler", type=path("an address or a scheduler file"), default=None,
                    help="an existing Dask scheduler: tcp://HOST:PORT or a scheduler file (dask scheduler "
                         "--scheduler-file F)")
 
@@ -62,7 +62,7 @@ def _register_fit(sub) -> None:
     add_cluster_options(p)
     p.add_argument("--resume", action="store_true",
                    help="continue an interrupted run from its work directory, fitting only the missing cells")
-    p.add_argument("--work-dir", default=None, help=f"where cell records are kept while running "
+    p.add_argument("--work-dir", type=path("a directory"), default=None, help=f"where cell records are kept while running "
                    f"(default: OUT{PARTIAL_SUFFIX}; removed when the output set is written)")
     p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0,
                    help="run seed (each cell's seed derives from it and its id)")
@@ -72,7 +72,7 @@ def _register_fit(sub) -> None:
     p.add_argument("--hops", type=integer(0, 10_000), default=1, help="basin-hopping moves per start")
     p.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.02,
                    help="RMS log10 error (decades) counted as converged")
-    p.add_argument("--truth", default=None,
+    p.add_argument("--truth", type=path("a CSV file"), default=None,
                    help="generating parameters to check recovery against (default: INPUT/_generating_parameters.csv "
                         "when present)")
     p.set_defaults(func=run_fit)
@@ -115,8 +115,11 @@ def run_synth(args) -> int:
     from ..io.outputs import OutputSet
     from ..population.synth import parse_condition, synth_population
 
-    out = OutputSet(args.out, command=args.command_line, flag="--out")
     conds = [parse_condition(c, args.model) for c in args.conditions] if args.conditions else None
+    if conds and len(conds) > args.cells:
+        raise ValueError(f"--cells {args.cells} cannot be split over {len(conds)} --conditions "
+                         f"({', '.join(c.name for c in conds)}): give at least one cell per condition")
+    out = OutputSet(args.out, command=args.command_line, flag="--out")
     pop = synth_population(args.cells, model=args.model, conditions=conds, noise=args.noise,
                            spread_decades=args.spread, frequency_hz=args.freq, seed=args.seed)
     with out as d:

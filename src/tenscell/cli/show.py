@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._args import (add_out, add_prestress, fitted_from_args, integer, lattice_size, member_values, number,
+from ._args import (add_out, add_prestress, fitted_from_args, integer, lattice_size, member_values, number, path,
                     prestress_from_args)
 
 #: built-in structures `tenscell show` knows by name
@@ -34,7 +34,7 @@ def register(sub) -> None:
     p.add_argument("--L", type=number(quantity="L"), default=1.0, help="strut length of a built-in (m)")
     p.add_argument("--size", type=lattice_size(MAX_LATTICE_MODULES), default=None,
                    help="modules of a built-in lattice: NXxNY (sheet) or NXxNYxNZ (block); default 4x4 and 3x3x3")
-    p.add_argument("--save", default=None, help="also write the structure to this JSON file")
+    p.add_argument("--save", type=path("a file name"), default=None, help="also write the structure to this JSON file")
     p.set_defaults(func=run)
 
 
