@@ -125,8 +125,10 @@ def run(args) -> int:
         if T0 is not None:
             try:
                 target = equilibrate(structure, "local", T0=T0)
-            except NotPrestressableError:
-                target = structure
+            except NotPrestressableError as err:
+                # the file states a self-stress: searching for another one would answer a different question
+                raise ValueError(f"{args.target}: {str(err).replace('the given T0', 'its T0')}; correct it or omit "
+                                 "T0 to let tenscell find a self-stress") from None
     else:
         target, structure = obj, obj.structure
     EA = expand(structure, EA, "--EA", "N")
