@@ -128,15 +128,155 @@ def run_synth(args) -> int:
     return 0
 
 
-def _truth(args):
+def _truth(args, sources):
+    """The generating parameters to check recovery against, read and checked before any fit (None if none)."""
     from ..population.synth import GENERATING_FILE
 
     if args.truth is not None:
-        if not Path(args.truth).is_file():
-            raise ValueError(f"--truth {args.truth}: no such file")
-        return args.truth
-    guess = Path(args.input) / GENERATING_FILE
-    return str(guess) if guess.is_file() else None
+        path, name = Path(args.truth), f"--truth {args.truth}"
+    else:
+        path = Path(args.input) / GENERATING_FILE
+        if not path.is_file():
+            return None
+        name = f"{path} (the generating parameters found beside the input; --truth)"
+    if not path.is_file():
+        raise ValueError(f"{name}: {'is a directory' if path.is_dir() else 'no such file'}")
+    import pandas as pd
+
+    try:
+        truth = pd.read_csv(path, keep_default_na=False, na_values=[""], dtype={"cell": "str", "condition": "str"})
+    except (ValueError, OSError, UnicodeDecodeError, pd.errors.ParserError) as err:
+        raise ValueError(f"{name}: not a CSV table ({' '.join(str(err).split())[:200]})") from None
+    if "cell" not in truth.columns:
+        raise ValueError(f"{name}: no 'cell' column (columns: {', '.join(map(str, truth.columns))[:200]})")
+    cells = {s.cell for s in sources}
+    if not set(truth["cell"].astype(str)) & cells:
+        raise ValueError(f"{name}: none of its {len(truth)} cells is among the {len(cells)} cells of {args.input}")
+    return truth.fillna({"condition": ""}) if "condition" in truth.columns else truth
+
+
+def reach_scheduler(address: str, timeout_s: float = 3.0, flag: str = "--scheduler") -> None:
+    """ValueError unless a Dask scheduler answers at ``address`` within ``timeout_s`` (s).
+
+    Checked before anything is created: Dask's own wait for an absent scheduler is 30 s and comes after the
+    work directory exists. A Dask peer writes its handshake as soon as a connection opens (a small message:
+    its size and its number of frames, each 8 bytes little-endian, lead it); a port that accepts connections but does not speak Dask
+    (a proxy, another service) is refused here rather than read as a huge frame later. Only tcp:// is
+    checked this way; tls:// is only connected to, other protocols are left to Dask.
+    """
+    import json
+    import socket
+    import struct
+
+    text = str(address).strip()
+    where = f"{flag} {text}"
+    if Path(text).is_file():
+        try:
+            text = str(json.loads(Path(text).read_text())["address"])
+        except (OSError, ValueError, KeyError, TypeError) as err:
+            raise ValueError(f"{where}: not a Dask scheduler file (JSON with an 'address'; {type(err).__name__})") \
+                from None
+        where += f" (address {text})"
+    scheme, _, body = text.rpartition("://")
+    if scheme not in ("", "tcp", "tls"):
+        return
+    host, _, port = body.rpartition(":")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s) as conn:
+            if scheme == "tls":
+                return
+            head = b""
+            while len(head) < 16:
+                chunk = conn.recv(16 - len(head))
+                if not chunk:
+                    break
+                head += chunk
+    except (OSError, ValueError) as err:
+        reason = "no answer" if isinstance(err, TimeoutError) else (getattr(err, "strerror", None) or str(err))
+        raise ValueError(f"{where}: no Dask scheduler reachable within {timeout_s:g} s ({reason})") from None
+    size, frames = struct.unpack("<QQ", head) if len(head) == 16 else (0, 0)
+    if not (16 <= size <= 1 << 20 and 1 <= frames <= 64):
+        raise ValueError(f"{where}: something answers there, but not a Dask scheduler")
+
+
+def _work_dir(args, out_target: Path) -> tuple[Path, str]:
+    """The work directory of a resumable run and how to name it in messages, checked before anything is created."""
+    from ..io.outputs import OutputLocationError, check_output_file
+
+    if getattr(args, "work_dir", None):
+        work, name = Path(args.work_dir), f"--work-dir {args.work_dir}"
+    else:
+        work = Path(str(out_target).rstrip("/") + PARTIAL_SUFFIX)
+        name = f"{work} (the work directory beside --out)"
+    if work.exists() and not work.is_dir():
+        raise ValueError(f"{name}: exists and is not a directory")
+    probe = work / "run.json"
+    try:
+        check_output_file(probe, name)  # the directory exists or can be created, and is writable
+    except OutputLocationError as err:
+        raise ValueError(f"{name}: {str(err).removeprefix(f'{name} {probe}: ')}") from None
+    return work, name
+
+
+#: settings file and records subdirectory of each kind of work directory (population.run, population.studies)
+_WORK_LAYOUTS = (("run.json", "cells"), ("study.json", "parts"))
+
+
+def _finished(work: Path) -> int:
+    """Records (cells or parts) a run left in its work directory."""
+    return sum(1 for _, sub in _WORK_LAYOUTS for p in (work / sub).glob("*") if p.is_file()
+               and not p.name.startswith(".")) if work.is_dir() else 0
+
+
+def discard_empty_work(work: Path, remove_dir: bool) -> bool:
+    """Remove a work directory in which nothing finished (True if it was cleared or is absent).
+
+    Such a directory (left by a run stopped before its first record) would only make the next run ask for
+    --resume. With ``remove_dir`` False (a directory the user made) it keeps existing; only the run's files go.
+    A directory holding records or anything else is left alone (False).
+    """
+    import shutil
+
+    if not work.is_dir():
+        return True
+    ours = {name for layout in _WORK_LAYOUTS for name in layout}
+    if _finished(work) or any(p.name not in ours for p in work.iterdir()):
+        return False
+    if remove_dir:
+        shutil.rmtree(work, ignore_errors=True)
+    else:
+        for p in work.iterdir():
+            shutil.rmtree(p, ignore_errors=True) if p.is_dir() else p.unlink(missing_ok=True)
+    return True
+
+
+def _run_in(work: Path, own: bool, what: str, run):
+    """``run()`` with its work directory (``own``: the default OUT.partial, not a --work-dir the user chose).
+
+    A leftover of an earlier run that finished nothing is cleared first, and the directory is removed again
+    if this run stops before its first record; otherwise an interrupt says where the finished records are.
+    """
+    if any((work / settings).is_file() for settings, _ in _WORK_LAYOUTS):
+        discard_empty_work(work, remove_dir=own)
+    created = not work.exists()
+    try:
+        return run()
+    except BaseException as err:
+        if discard_empty_work(work, remove_dir=created or own):
+            raise
+        if isinstance(err, KeyboardInterrupt):
+            print(f"{what}: interrupted; finished results are kept in {work}/; run the same command with --resume "
+                  "to continue", file=sys.stderr)
+        raise
+
+
+def _failed_line(table, out_target) -> str:
+    """One line for a population in which no cell was fitted."""
+    counts = table["status"].value_counts()
+    first = table.iloc[0]
+    error = " ".join(str(first.get("error", "")).split())
+    return (f"none of the {len(table)} cells was fitted ({', '.join(f'{k} {v}' for k, v in counts.items())}; "
+            f"first: {first['cell']}: {error[:240]}); nothing written, {out_target}/ left as it was")
 
 
 def run_fit(args) -> int:
@@ -148,27 +288,29 @@ def run_fit(args) -> int:
     from ..population.sources import read_sources
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    work = Path(args.work_dir) if args.work_dir else Path(str(out.target).rstrip("/") + PARTIAL_SUFFIX)
+    work, _ = _work_dir(args, out.target)
     if args.scheduler is not None:
         _engine.check_scheduler(args.scheduler)
+        reach_scheduler(args.scheduler)
     if args.resume and not work.is_dir():
         raise ValueError(f"--resume: no unfinished run in {work}")
-    truth = _truth(args)
     options = PopulationFitOptions(tendons=args.tendons, damping=args.damping, starts=args.starts, hops=args.hops,
                                    tolerance=args.tolerance)
     sources = read_sources(args.input)
-    try:
-        result = fit_population(sources, options=options, seed=args.seed, workers=args.workers,
-                                scheduler=args.scheduler, work_dir=work, resume=args.resume)
-    except KeyboardInterrupt:
-        print(f"tenscell fit-population: interrupted; finished cells are kept in {work}/; "
-              "run the same command with --resume to continue", file=sys.stderr)
-        raise
+    truth = _truth(args, sources)
+    result = _run_in(work, not args.work_dir, "tenscell fit-population", lambda: fit_population(
+        sources, options=options, seed=args.seed, workers=args.workers, scheduler=args.scheduler, work_dir=work,
+        resume=args.resume))
+    t = result.table
+    n_ok = int((t["status"] == "ok").sum())
+    if n_ok == 0:
+        if not (t["status"] == "worker_lost").any():  # nothing a --resume could still fit
+            shutil.rmtree(work, ignore_errors=True)
+        print(f"tenscell fit-population: {_failed_line(t, out.target)}", file=sys.stderr)
+        return 1
     with out as d:
         result.write(d, truth=truth)
     shutil.rmtree(work, ignore_errors=True)
-    t = result.table
-    n_ok = int((t["status"] == "ok").sum())
     print(f"tenscell fit-population: {len(t)} cells, {n_ok} fitted ({int(t['converged'].sum())} converged), "
           f"{len(t) - n_ok} failed; {result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0
@@ -183,23 +325,22 @@ def run_study(args) -> int:
     from ..reports.population import study_markdown
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    work = Path(str(out.target).rstrip("/") + PARTIAL_SUFFIX)
+    work, _ = _work_dir(args, out.target)
     if args.scheduler is not None:
         _engine.check_scheduler(args.scheduler)
+        reach_scheduler(args.scheduler)
     if args.resume and not work.is_dir():
         raise ValueError(f"--resume: no unfinished study in {work}")
     where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed)
-    try:
+
+    def study():
         if args.study == "monte-carlo":
-            result = monte_carlo_study(args.draws, work, spread=args.spread, parameters=args.parameters,
-                                       chunk=args.chunk, keep_factors=not args.no_factors, **where)
-        else:
-            result = sweep_study(args.prestress, args.heterogeneity, work, f_hz=args.freq,
-                                 realizations=args.realizations, **where)
-    except KeyboardInterrupt:
-        print(f"tenscell large-study: interrupted; finished parts are kept in {work}/; "
-              "run the same command with --resume to continue", file=sys.stderr)
-        raise
+            return monte_carlo_study(args.draws, work, spread=args.spread, parameters=args.parameters,
+                                     chunk=args.chunk, keep_factors=not args.no_factors, **where)
+        return sweep_study(args.prestress, args.heterogeneity, work, f_hz=args.freq,
+                           realizations=args.realizations, **where)
+
+    result = _run_in(work, True, "tenscell large-study", study)
     with out as d:
         (work / PARTS).rename(d / PARTS)
         shutil.copy2(work / "study.json", d / "study.json")
