@@ -185,16 +185,10 @@ def frequencies(max_points: int = MAX_GRID_POINTS):
 
 
 def grid_cost(n: int) -> str:
-    """What ``n`` (P, f) points cost: ``"about 37.3 GiB of memory and 2e+03 s"``."""
-    return f"about {_bytes(n * _BYTES_PER_POINT)} of memory and {n * _SECONDS_PER_POINT:.2g} s"
+    """What ``n`` (P, f) points cost: ``"about 37.3 GiB of memory and 2e+03 s"`` (calibrated rates, above)."""
+    from ._cost import duration, size
 
-
-def _bytes(n: float) -> str:
-    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
-        if n < 1024 or unit == "TiB":
-            return f"{n:.3g} {unit}"
-        n /= 1024
-    return f"{n:.3g} TiB"  # pragma: no cover
+    return f"about {size(n * _BYTES_PER_POINT)} of memory and {duration(n * _SECONDS_PER_POINT)}"
 
 
 def path(what: str = "a path"):
@@ -250,11 +244,13 @@ def lattice_size(max_modules: int):
         dims = tuple(integer(1, max_modules, "modules per direction")(p) for p in parts)
         total = math.prod(dims)
         if total > max_modules:
+            from ._cost import size
+
             coords = 24 * total
-            gb = 1.25 * (coords / 1.07e5) ** 1.4
+            factorization = 1.25e9 * (coords / 1.07e5) ** 1.4  # bytes, calibrated (docstring)
             raise argparse.ArgumentTypeError(
                 f"{'x'.join(map(str, dims))} is {total:,} modules: about {coords:,} coordinates and "
-                f"{gb:.3g} GB for the factorization alone; at most {max_modules:,} modules "
+                f"{size(factorization)} for the factorization alone; at most {max_modules:,} modules "
                 f"(about {24 * max_modules:,} coordinates)")
         return dims
 

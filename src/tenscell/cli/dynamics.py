@@ -184,7 +184,9 @@ def check_samples(samples: int, cycles: int | None) -> None:
     n = samples * n_cycles
     if n > MAX_SAMPLES:
         what = f"--cycles {cycles}" if cycles is not None else f"up to {ADAPTIVE_MAX_CYCLES} adaptive cycles"
-        raise ValueError(f"--samples {samples} × {what} is {n:,} samples (about {n * 40 * 8 / 1e9:.2g} GB of "
+        from ._cost import size
+
+        raise ValueError(f"--samples {samples} × {what} is {n:,} samples (about {size(n * 40 * 8)} of "
                          f"traces); at most {MAX_SAMPLES:,}")
 
 

@@ -5,6 +5,7 @@ import sys
 from pathlib import Path
 
 from ._args import add_out, frequencies, integer, number, number_list, path
+from ._cost import Cost, announce, check, measure
 from .fit import DAMPING_MODES, TENDON_MODES
 #: synthetic population generators (tenscell.population.synth.MODELS)
 MODELS = ("tensegrity", "powerlaw")
@@ -316,6 +317,58 @@ def run_fit(args) -> int:
     return 0
 
 
+def parallel_of(args) -> int | None:
+    """Tasks run at once: the local workers (0: this process), None with a --scheduler (its size is its own)."""
+    if getattr(args, "scheduler", None) is not None:
+        return None
+    if args.workers is None:
+        from .._parallel import usable_cpus
+
+        return usable_cpus()
+    return max(1, args.workers)
+
+
+#: bytes per stored value (float64 columns of the Parquet parts and of the frames read back)
+_VALUE_BYTES = 8
+
+
+def _study_cost(args) -> Cost:
+    """The study's cost from one unit timed here: a few Monte Carlo draws, or one cell of the sweep."""
+    import numpy as np
+    from threadpoolctl import threadpool_limits
+
+    from ..model.shapes import paper_cell
+
+    cell, parallel = paper_cell(), parallel_of(args)
+    if args.study == "monte-carlo":
+        from ..sensitivity import monte_carlo_draws, monte_carlo_factors, monte_carlo_names
+
+        names = monte_carlo_names(cell.m, args.parameters)
+        k = min(args.draws, 4)
+        factors = monte_carlo_factors(np.random.default_rng(args.seed), k, len(names), args.spread, 0.0,
+                                      args.parameters)
+        with threadpool_limits(1):  # as the chunks run
+            per = measure(lambda: monte_carlo_draws(factors, parameters=args.parameters), max_calls=3) / k
+        columns = 4 + (0 if args.no_factors else len(names))
+        in_flight = (parallel or 1) * min(args.chunk, args.draws) * columns * _VALUE_BYTES * 3
+        # the summary reads two columns of every draw back and works on a few copies of them
+        return Cost("draw", args.draws, per, parallel, memory_bytes=args.draws * 8 * _VALUE_BYTES + in_flight,
+                    disk_bytes=args.draws * columns * _VALUE_BYTES)
+    from ..linear.linearize import linearize
+    from ..response import moduli
+
+    f = np.asarray(args.freq if args.freq is not None else np.logspace(-2, 3, 51))
+    z = np.random.default_rng(args.seed).standard_normal(cell.m)
+    EA = 10.0 ** (max(args.heterogeneity) * z)
+    with threadpool_limits(1):
+        per = measure(lambda: moduli(linearize(cell, P=args.prestress[0], EA=EA, c=1.0), f), max_calls=5)
+    cells = len(args.prestress) * len(args.heterogeneity) * args.realizations
+    rows = cells * f.size
+    # medians() reads five columns of every row back and groups them (about three copies)
+    return Cost("cell", cells, per, parallel, memory_bytes=rows * 5 * _VALUE_BYTES * 3,
+                disk_bytes=rows * 6 * _VALUE_BYTES, detail=f"of {f.size} frequencies")
+
+
 def run_study(args) -> int:
     import shutil
 
@@ -331,6 +384,10 @@ def run_study(args) -> int:
         reach_scheduler(args.scheduler)
     if args.resume and not work.is_dir():
         raise ValueError(f"--resume: no unfinished study in {work}")
+    cost = _study_cost(args)
+    check(cost, "--draws" if args.study == "monte-carlo" else "--prestress × --heterogeneity × --realizations",
+          disk_at=work)
+    announce(cost)
     where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed)
 
     def study():
@@ -341,14 +398,16 @@ def run_study(args) -> int:
                            realizations=args.realizations, **where)
 
     result = _run_in(work, True, "tenscell large-study", study)
+    # everything read from the parts is read before they move into the output set
+    medians = result.medians() if result.kind == "sweep" else None
+    report = study_markdown(result)
     with out as d:
         (work / PARTS).rename(d / PARTS)
         shutil.copy2(work / "study.json", d / "study.json")
         write_json(d / "summary.json", result.summary)
-        if result.kind == "sweep":
-            med = result.medians()
-            med.to_csv(d / "medians.csv", index=False)
-        write_text(d / "report.md", study_markdown(result))
+        if medians is not None:
+            medians.to_csv(d / "medians.csv", index=False)
+        write_text(d / "report.md", report)
     shutil.rmtree(work, ignore_errors=True)
     print(f"tenscell large-study {args.study}: {result.n_rows} rows in {result.n_parts} parts; "
           f"{result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
