@@ -24,7 +24,7 @@ from typing import Callable
 __all__ = ["Cost", "BUDGET_S", "measure", "check", "announce", "duration", "size", "total_memory"]
 
 #: longest run a command starts (s): a day. Beyond it the command is refused with its estimate; split the
-#: run (fewer draws, cells, amplitudes) or give a --scheduler with more workers
+#: run (fewer draws, cells, amplitudes) or, where the command takes one, give a --scheduler with more workers
 BUDGET_S = 24 * 3600.0
 
 
@@ -48,6 +48,9 @@ class Cost:
         How ``seconds_per_unit`` was obtained ("measured" here, or "calibrated" with its machine).
     detail : str
         What else multiplies the units, for the line (e.g. "× 4 starts").
+    count_max : int or None
+        When the run decides its own length (adaptive cycles): the most units it may do; ``count`` is then
+        the fewest, and the line states both.
     """
 
     unit: str
@@ -58,6 +61,7 @@ class Cost:
     disk_bytes: float = 0.0
     basis: str = "measured"
     detail: str = ""
+    count_max: int | None = None
 
     @property
     def seconds(self) -> float:
@@ -66,14 +70,16 @@ class Cost:
 
     def line(self) -> str:
         """``estimated 2 min (measured 12 ms per draw × 10,000 draws / 2 workers)``."""
-        per = (f"{self.basis} {duration(self.seconds_per_unit)} per {self.unit} × {self.count:,} "
-               f"{self.unit}{'' if self.count == 1 else 's'}{(' ' + self.detail) if self.detail else ''}")
+        upto = f" to {self.count_max:,}" if self.count_max else ""
+        per = (f"{self.basis} {duration(self.seconds_per_unit)} per {self.unit} × {self.count:,}{upto} "
+               f"{self.unit}{'' if self.count == 1 and not upto else 's'}{(' ' + self.detail) if self.detail else ''}")
+        when = duration(self.seconds) + (f" to {duration(self.seconds * self.count_max / self.count)}" if upto else "")
         if self.parallel is None:
-            return f"estimated {duration(self.seconds)} of one core's time ({per}; shared by the cluster's workers)"
+            return f"estimated {when} of one core's time ({per}; shared by the cluster's workers)"
         workers = f" / {self.parallel} workers" if self.parallel > 1 else ""
         extra = "".join(f", {size(b)} of {what}" for b, what in ((self.memory_bytes, "memory"),
                                                                  (self.disk_bytes, "disk")) if b >= 1 << 20)
-        return f"estimated {duration(self.seconds)}{extra} ({per}{workers})"
+        return f"estimated {when}{extra} ({per}{workers})"
 
 
 def measure(fn: Callable[[], object], *, min_time_s: float = 0.05, max_calls: int = 20) -> float:
@@ -87,15 +93,15 @@ def measure(fn: Callable[[], object], *, min_time_s: float = 0.05, max_calls: in
             return elapsed / calls
 
 
-def check(cost: Cost, flag: str, *, disk_at=None, budget_s: float = BUDGET_S) -> Cost:
+def check(cost: Cost, flag: str, *, disk_at=None, budget_s: float = BUDGET_S,
+          hint: str = "split it into smaller runs") -> Cost:
     """``cost`` if the machine can afford it; ValueError naming ``flag`` and the limit otherwise.
 
     Wall time is checked against ``budget_s`` (not with an unknown ``parallel``: a cluster's size is its
     own), memory against the machine's, disk against the free space where ``disk_at`` (a path) would be.
     """
     if cost.parallel is not None and cost.seconds > budget_s:
-        raise ValueError(f"{flag}: {cost.line()}; more than the {duration(budget_s)} one run may take: split it, "
-                         "or run it on a larger cluster (--scheduler)")
+        raise ValueError(f"{flag}: {cost.line()}; more than the {duration(budget_s)} one run may take: {hint}")
     memory = total_memory()
     if memory and cost.memory_bytes > 0.8 * memory:
         raise ValueError(f"{flag}: {cost.line()}; needs about {size(cost.memory_bytes)} of memory, more than 80% of "

@@ -5,6 +5,7 @@ import argparse
 import math
 import sys
 
+from ._cost import Cost, announce, check, measure
 from ._args import (RANGES, add_model_options, add_out, add_prestress, frequencies, hidden_alias, integer, number,
                     number_list)
 
@@ -55,7 +56,8 @@ def register(sub) -> None:
                    help="cycles to simulate (default: adaptive, until two consecutive cycles agree)")
     p.add_argument("--control", choices=("force", "displacement"), default="force",
                    help="prescribe the force or the probe displacement")
-    p.add_argument("--samples", type=integer(8, 100_000), default=128, help="samples per cycle")
+    # the harmonic analysis reads 20 harmonics, which takes more than 40 samples per period (Nyquist)
+    p.add_argument("--samples", type=integer(41, 100_000), default=128, help="samples per cycle")
     add_out(p)
     add_model_options(p)
     _add_law_options(p)
@@ -190,10 +192,35 @@ def check_samples(samples: int, cycles: int | None) -> None:
                          f"traces); at most {MAX_SAMPLES:,}")
 
 
+def simulate_cost(cell, law, f: float, amplitudes, cycles: int | None, kw: dict):
+    """The simulations' cost from one cycle at the largest amplitude, timed here; None for one short simulation.
+
+    Every simulation runs ``cycles`` cycles, or in the adaptive mode 2 to :data:`ADAPTIVE_MAX_CYCLES` (the
+    line states both). The first cycle also carries the setup, so the rate is on the high side for small
+    amplitudes.
+    """
+    from ..dynamics import oscillatory_response
+
+    n_sims = len(amplitudes)
+    if n_sims == 1 and (cycles or 0) <= 10:
+        return None
+    big = max(amplitudes)
+    per = measure(lambda: oscillatory_response(cell, law, big, f, **{**kw, "cycles": 1}), max_calls=1)
+    unit = "N" if kw.get("control", "force") == "force" else "m"
+    timed = f"; one cycle at {big:g} {unit} timed"
+    if cycles:
+        return Cost("cycle", n_sims * cycles, per, 1, detail=f"= {n_sims} simulations × {cycles} cycles{timed}")
+    return Cost("cycle", n_sims * 2, per, 1, count_max=n_sims * ADAPTIVE_MAX_CYCLES,
+                detail=f"= {n_sims} simulations × 2 to {ADAPTIVE_MAX_CYCLES} adaptive cycles{timed}")
+
+
 def run_simulate(args) -> int:
     from ..io.outputs import OutputSet
 
     check_samples(args.samples, args.cycles)
+    sweep_amps = getattr(args, "sweep_amplitudes", None) or (args.amplitude if len(args.amplitude) > 1 else None)
+    if sweep_amps and args.control == "displacement":
+        raise ValueError("--control displacement takes one --amplitude (m): the amplitude sweep prescribes forces (N)")
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     import numpy as np
 
@@ -204,13 +231,15 @@ def run_simulate(args) -> int:
     from ..io.tables import finite
 
     amplitude = args.amplitude[0]
-    sweep_amps = getattr(args, "sweep_amplitudes", None) or (args.amplitude if len(args.amplitude) > 1 else None)
     cell, law, solver = law_from_args(args)
     f = args.freq
     check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
     check_resolvable_frequency(cell, law, f, solver["rtol"])
     EquationsOfMotion(cell, law, SineForce(1.0, f))  # refuses a singular damping matrix before any output
     kw = dict(control=args.control, cycles=args.cycles, samples_per_cycle=args.samples, **solver)
+    cost = simulate_cost(cell, law, f, [amplitude, *(sweep_amps or ())], args.cycles, kw)
+    if cost is not None:
+        announce(check(cost, "--amplitude × --cycles" if args.cycles else "--amplitude"))
     stage(f"simulating {args.cycles or 'until periodic,'} cycles at {f:g} Hz, amplitude {amplitude:g} "
           f"{'N' if args.control == 'force' else 'm'}")
     res = oscillatory_response(cell, law, amplitude, f, **kw)

@@ -121,12 +121,47 @@ def run_synth(args) -> int:
         raise ValueError(f"--cells {args.cells} cannot be split over {len(conds)} --conditions "
                          f"({', '.join(c.name for c in conds)}): give at least one cell per condition")
     out = OutputSet(args.out, command=args.command_line, flag="--out")
+    announce(check(_synth_cost(args, conds), "--cells", disk_at=out.target))
     pop = synth_population(args.cells, model=args.model, conditions=conds, noise=args.noise,
                            spread_decades=args.spread, frequency_hz=args.freq, seed=args.seed)
     with out as d:
         pop.write(d)
     print(f"tenscell synth-population: {len(pop.cells)} {args.model} cells written to {out.target}/", file=sys.stderr)
     return 0
+
+
+#: memory of one synthetic cell held until the population is written: about 1 KiB of record and arrays plus
+#: 80 B per frequency (tracemalloc peak of 2,000 cells at 13 frequencies: 2.1 KiB per cell)
+_SYNTH_CELL_BYTES, _SYNTH_BYTES_PER_FREQUENCY = 1024, 80
+#: disk of one cell file: a file-system block, and about 60 characters per row (three numbers)
+_CELL_FILE_BYTES, _ROW_BYTES = 4096, 60
+
+
+def _synth_cost(args, conds) -> Cost:
+    """Time a few cells of the same population here (after one that loads the model) and scale to --cells."""
+    from ..population.synth import synth_population
+
+    kw = dict(model=args.model, conditions=conds, noise=args.noise, spread_decades=args.spread,
+              frequency_hz=args.freq, seed=args.seed)
+    synth_population(len(conds or ()) or 1, **kw)  # the first call loads the model's code
+    k = min(args.cells, 20)
+    per = measure(lambda: synth_population(max(k, len(conds or ())), **kw), max_calls=1) / max(k, len(conds or ()))
+    n_freq = len(args.freq) if args.freq is not None else 13
+    return Cost("cell", args.cells, per, 1,
+                memory_bytes=args.cells * (_SYNTH_CELL_BYTES + n_freq * _SYNTH_BYTES_PER_FREQUENCY),
+                disk_bytes=args.cells * (_CELL_FILE_BYTES + n_freq * _ROW_BYTES))
+
+
+def _fit_cost(sources, options, args) -> Cost | None:
+    """One cell fitted here (the first with data), scaled to the population; None for a run of one round."""
+    from ..population.run import cell_seed, fit_cell
+
+    parallel = parallel_of(args)
+    if len(sources) <= (parallel or 1):
+        return None
+    first = sources[0]
+    per = measure(lambda: fit_cell(first, cell_seed(args.seed, first.cell), options), max_calls=1)
+    return Cost("cell", len(sources), per, parallel, detail=f"({options.starts} starts each)")
 
 
 def _truth(args, sources):
@@ -299,6 +334,9 @@ def run_fit(args) -> int:
                                    tolerance=args.tolerance)
     sources = read_sources(args.input)
     truth = _truth(args, sources)
+    cost = _fit_cost(sources, options, args)
+    if cost is not None:
+        announce(check(cost, "INPUT", hint=_CLUSTER_HINT))
     result = _run_in(work, not args.work_dir, "tenscell fit-population", lambda: fit_population(
         sources, options=options, seed=args.seed, workers=args.workers, scheduler=args.scheduler, work_dir=work,
         resume=args.resume))
@@ -328,6 +366,8 @@ def parallel_of(args) -> int | None:
     return max(1, args.workers)
 
 
+#: what to do about a run too long for this machine, for the commands that can use a cluster
+_CLUSTER_HINT = "split it, or give a --scheduler with more workers"
 #: bytes per stored value (float64 columns of the Parquet parts and of the frames read back)
 _VALUE_BYTES = 8
 
@@ -386,7 +426,7 @@ def run_study(args) -> int:
         raise ValueError(f"--resume: no unfinished study in {work}")
     cost = _study_cost(args)
     check(cost, "--draws" if args.study == "monte-carlo" else "--prestress × --heterogeneity × --realizations",
-          disk_at=work)
+          disk_at=work, hint=_CLUSTER_HINT)
     announce(cost)
     where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed)
 
