@@ -35,7 +35,7 @@ def register(sub) -> None:
                     "Writes fit.json, fit.csv, fit.png and report.md into --out. Exit status 0 if every data "
                     "set's RMS of the log10 errors reached --tolerance, 1 if not, 2 for bad input.")
     p.add_argument("data", nargs="+", help="CSV file(s) of measured moduli or creep compliance, or bundled:NAME")
-    p.add_argument("--prestress", action="append", metavar="FILE=PA",
+    p.add_argument("--prestress", action="append", type=stated_prestress, metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     p.add_argument("--tendons", choices=TENDON_MODES, default="per-tendon",
                    help="stiffness per tendon (as in the paper), per family, or one for all")
@@ -191,22 +191,36 @@ def read_data_arg(text: str, min_points: int):
     return read_measurements(text, min_points=min_points)
 
 
-def read_datasets(paths, prestress_options, min_points: int):
-    """Read the data files and attach the prestresses stated by ``--prestress FILE=PA``."""
+def stated_prestress(text):
+    """An argparse ``type``: ``FILE=PA``, the prestress (Pa, in the range of --prestress) of a data file."""
+    name, sep, value = str(text).rpartition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected FILE=PA (e.g. freq.csv=1000), got {str(text)[:40]!r}")
     lo, hi, _ = RANGES["prestress"]
-    stated = {}
-    for opt in prestress_options or ():
-        name, sep, value = opt.rpartition("=")
-        if not sep or not name:
-            raise ValueError(f"--prestress: expected FILE=PA (e.g. freq.csv=1000), got {opt!r}")
+    return name.strip(), number(lo, hi, "Pa")(value)
+
+
+stated_prestress.__name__ = "stated prestress"
+
+
+def read_datasets(paths, prestress_options, min_points: int):
+    """Read the data files and attach the prestresses stated by ``--prestress FILE=PA`` ((file, Pa) pairs)."""
+    seen: dict = {}
+    for p in paths:
+        key = p.lower() if p.lower().startswith("bundled:") else Path(p).resolve()
+        if key in seen:
+            raise ValueError(f"{p} is given twice (as {seen[key]} too): a joint fit would count its points twice")
+        seen[key] = p
+    stated: dict[int, float] = {}
+    for name, value in prestress_options or ():
         match = [k for k, p in enumerate(paths) if name in (p, Path(p).name)]
         if len(match) != 1:
-            raise ValueError(f"--prestress {opt}: {name!r} matches {len(match)} of the data files given "
+            raise ValueError(f"--prestress {name}={value:g}: {name!r} matches {len(match)} of the data files given "
                              f"({', '.join(paths)})")
-        try:
-            stated[match[0]] = number(lo, hi, "Pa")(value)  # the flag's prestress range, in the unit typed
-        except argparse.ArgumentTypeError as err:
-            raise ValueError(f"--prestress {opt}: {err}") from None
+        if match[0] in stated:
+            raise ValueError(f"--prestress {name}={value:g}: {name} already has --prestress "
+                             f"{name}={stated[match[0]]:g}; one prestress per file")
+        stated[match[0]] = value
     datasets = []
     for k, p in enumerate(paths):
         d = read_data_arg(p, min_points if len(paths) == 1 else 1)

@@ -5,6 +5,7 @@ import math
 from pathlib import Path
 
 from ._args import add_out, integer, number, number_list, path
+from .fit import stated_prestress
 
 def _study_no_if(out: Path, log, args=None) -> None:
     from .. import plotting
@@ -181,7 +182,7 @@ def register(sub) -> None:
     g = p.add_argument_group("compactness (fits with the stiffness spread bounded to each of --decades)")
     g.add_argument("--decades", type=number_list(0.0, 100.0, "decades", open_lo=True),
                    default=_STUDY_OPTIONS["decades"][0], help="bounds on the spread (comma list)")
-    g.add_argument("--prestress", action="append", metavar="FILE=PA",
+    g.add_argument("--prestress", action="append", type=stated_prestress, metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     g.add_argument("--damping", choices=("uniform", "per-family"), default="uniform", help="damping c")
     g.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per bound")
