@@ -161,7 +161,7 @@ def _fit_cost(sources, options, args) -> Cost | None:
         return None
     first = sources[0]
     per = measure(lambda: fit_cell(first, cell_seed(args.seed, first.cell), options), max_calls=1)
-    return Cost("cell", len(sources), per, parallel, detail=f"({options.starts} starts each)")
+    return Cost("cell", len(sources), per, parallel, detail=f"({options.starts} start{'s' if options.starts > 1 else ''} each)")
 
 
 def _truth(args, sources):
