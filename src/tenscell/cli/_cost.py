@@ -73,7 +73,9 @@ class Cost:
         upto = f" to {self.count_max:,}" if self.count_max else ""
         per = (f"{self.basis} {duration(self.seconds_per_unit)} per {self.unit} × {self.count:,}{upto} "
                f"{self.unit}{'' if self.count == 1 and not upto else 's'}{(' ' + self.detail) if self.detail else ''}")
-        when = duration(self.seconds) + (f" to {duration(self.seconds * self.count_max / self.count)}" if upto else "")
+        when = duration(self.seconds)
+        if self.count_max:
+            when += f" to {duration(self.seconds * self.count_max / self.count)}"
         if self.parallel is None:
             return f"estimated {when} of one core's time ({per}; shared by the cluster's workers)"
         workers = f" / {self.parallel} workers" if self.parallel > 1 else ""
