@@ -99,6 +99,7 @@ def test_the_default_work_directory_is_named_when_it_is_a_file(capsys, here):
     (["simulate", "--amplitude", "1,2", "--control", "displacement", "--freq", "1", "--out", "o"],
      ["--control displacement"]),
     (["simulate", "--amplitude", "1", "--freq", "1", "--samples", "8", "--out", "o"], ["--samples"]),
+    (["creep", "--velocity-scale", "1", "--out", "o"], ["--velocity-scale", "--beta"]),
     (["study", "no-if", "--starts", "3", "--out", "o"], ["--starts", "compactness"]),
     (["study", "references", "--draws", "3", "--out", "o"], ["--draws", "sensitivity"]),
     (["study", "compactness", "missing.csv", "--out", "o"], ["missing.csv"]),
@@ -161,6 +162,13 @@ def test_an_absurd_stiffness_in_a_structure_file_names_the_tendon(capsys, here, 
     paper_file["tendons"][2]["EA"] = 1e300
     refused(["show", _write(here, paper_file, "stiff.json"), "--out", "o"], capsys, here, "stiff.json", "tendon 2",
             "EA")
+
+
+@pytest.mark.parametrize("flags, words", [(["--L", "2"], ["--L 2", "built-in"]),
+                                          (["--size", "2x2"], ["--size", "built-in"])])
+def test_built_in_options_with_a_file_are_refused(flags, words, capsys, here, paper_file):
+    """They were ignored: the file gives its own geometry."""
+    refused(["show", _write(here, paper_file, "p.json"), *flags, "--out", "o"], capsys, here, *words)
 
 
 def test_a_struts_compression_in_t0_is_allowed():

@@ -98,6 +98,9 @@ def law_from_args(args):
     from ._args import fitted_from_args, model_from_args, prestress_from_args
     from ..laws import power_dashpot_law, voigt_law
 
+    if args.velocity_scale is not None and args.beta == 1.0:
+        raise ValueError(f"--velocity-scale {args.velocity_scale:g} m/s smooths the power-law dashpot; with --beta 1 "
+                         "(the Voigt law) there is none (give --beta too)")
     fitted = fitted_from_args(args)
     if fitted is None:
         cell, EA, c = model_from_args(args)

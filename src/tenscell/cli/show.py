@@ -61,6 +61,9 @@ def _check_target(args) -> None:
         return
     if not Path(t).is_file():
         raise ValueError(f"{t!r} is neither a file nor a built-in ({', '.join(SHOW_BUILTINS)})")
+    for typed, flag in ((args.L != 1.0, f"--L {args.L:g}"), (args.size is not None, "--size")):
+        if typed:
+            raise ValueError(f"{flag} applies to the built-in structures; the file {t} gives its own geometry")
 
 
 def show_target(args):
