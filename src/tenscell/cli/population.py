@@ -152,16 +152,18 @@ def _synth_cost(args, conds) -> Cost:
                 disk_bytes=args.cells * (_CELL_FILE_BYTES + n_freq * _ROW_BYTES))
 
 
-def _fit_cost(sources, options, args) -> Cost | None:
-    """One cell fitted here (the first with data), scaled to the population; None for a run of one round."""
+def _fit_cost(sources, options, args, work: Path) -> Cost | None:
+    """One cell fitted here (the first), scaled to the cells still to fit; None for a run of one round."""
     from ..population.run import cell_seed, fit_cell
 
     parallel = parallel_of(args)
-    if len(sources) <= (parallel or 1):
+    todo = len(sources) - (_finished(work) if args.resume else 0)  # a resumed run fits only the rest
+    if todo <= (parallel or 1):
         return None
     first = sources[0]
     per = measure(lambda: fit_cell(first, cell_seed(args.seed, first.cell), options), max_calls=1)
-    return Cost("cell", len(sources), per, parallel, detail=f"({options.starts} start{'s' if options.starts > 1 else ''} each)")
+    starts = f"({options.starts} start{'s' if options.starts > 1 else ''} each)"
+    return Cost("cell", todo, per, parallel, detail=starts)
 
 
 def _truth(args, sources):
@@ -334,7 +336,7 @@ def run_fit(args) -> int:
                                    tolerance=args.tolerance)
     sources = read_sources(args.input)
     truth = _truth(args, sources)
-    cost = _fit_cost(sources, options, args)
+    cost = _fit_cost(sources, options, args, work)
     if cost is not None:
         announce(check(cost, "INPUT", hint=_CLUSTER_HINT))
     result = _run_in(work, not args.work_dir, "tenscell fit-population", lambda: fit_population(
@@ -372,8 +374,14 @@ _CLUSTER_HINT = "split it, or give a --scheduler with more workers"
 _VALUE_BYTES = 8
 
 
-def _study_cost(args) -> Cost:
-    """The study's cost from one unit timed here: a few Monte Carlo draws, or one cell of the sweep."""
+def _study_cost(args, work: Path) -> Cost:
+    """The study's cost from one unit timed here: a few Monte Carlo draws, or one cell of the sweep.
+
+    A resumed study computes only its missing parts: the time and the disk count those, the memory of the
+    summary every row.
+    """
+    import math
+
     import numpy as np
     from threadpoolctl import threadpool_limits
 
@@ -391,9 +399,10 @@ def _study_cost(args) -> Cost:
             per = measure(lambda: monte_carlo_draws(factors, parameters=args.parameters), max_calls=3) / k
         columns = 4 + (0 if args.no_factors else len(names))
         in_flight = (parallel or 1) * min(args.chunk, args.draws) * columns * _VALUE_BYTES * 3
+        todo = _still_to_do(args.draws, math.ceil(args.draws / args.chunk), work, args.resume)
         # the summary reads two columns of every draw back and works on a few copies of them
-        return Cost("draw", args.draws, per, parallel, memory_bytes=args.draws * 8 * _VALUE_BYTES + in_flight,
-                    disk_bytes=args.draws * columns * _VALUE_BYTES)
+        return Cost("draw", todo, per, parallel, memory_bytes=args.draws * 8 * _VALUE_BYTES + in_flight,
+                    disk_bytes=todo * columns * _VALUE_BYTES)
     from ..linear.linearize import linearize
     from ..response import moduli
 
@@ -402,11 +411,17 @@ def _study_cost(args) -> Cost:
     EA = 10.0 ** (max(args.heterogeneity) * z)
     with threadpool_limits(1):
         per = measure(lambda: moduli(linearize(cell, P=args.prestress[0], EA=EA, c=1.0), f), max_calls=5)
-    cells = len(args.prestress) * len(args.heterogeneity) * args.realizations
-    rows = cells * f.size
+    pairs = len(args.prestress) * len(args.heterogeneity)
+    cells = pairs * args.realizations
+    todo = _still_to_do(cells, pairs, work, args.resume)
     # medians() reads five columns of every row back and groups them (about three copies)
-    return Cost("cell", cells, per, parallel, memory_bytes=rows * 5 * _VALUE_BYTES * 3,
-                disk_bytes=rows * 6 * _VALUE_BYTES, detail=f"of {f.size} frequencies")
+    return Cost("cell", todo, per, parallel, memory_bytes=cells * f.size * 5 * _VALUE_BYTES * 3,
+                disk_bytes=todo * f.size * 6 * _VALUE_BYTES, detail=f"of {f.size} frequencies")
+
+
+def _still_to_do(units: int, parts: int, work: Path, resume: bool) -> int:
+    """Units of a study of ``parts`` equal parts still to compute (all of them unless resuming)."""
+    return units if not resume else max(0, units - units * min(_finished(work), parts) // parts)
 
 
 def run_study(args) -> int:
@@ -424,7 +439,7 @@ def run_study(args) -> int:
         reach_scheduler(args.scheduler)
     if args.resume and not work.is_dir():
         raise ValueError(f"--resume: no unfinished study in {work}")
-    cost = _study_cost(args)
+    cost = _study_cost(args, work)
     check(cost, "--draws" if args.study == "monte-carlo" else "--prestress × --heterogeneity × --realizations",
           disk_at=work, hint=_CLUSTER_HINT)
     announce(cost)
