@@ -374,6 +374,20 @@ _CLUSTER_HINT = "split it, or give a --scheduler with more workers"
 _VALUE_BYTES = 8
 
 
+def monte_carlo_rate(parameters: str, spread: float, seed: int, k: int = 4) -> float:
+    """Seconds per Monte Carlo draw of the paper cell on one thread, from ``k`` draws timed here."""
+    import numpy as np
+    from threadpoolctl import threadpool_limits
+
+    from ..model.shapes import paper_cell
+    from ..sensitivity import monte_carlo_draws, monte_carlo_factors, monte_carlo_names
+
+    n = len(monte_carlo_names(paper_cell().m, parameters))
+    factors = monte_carlo_factors(np.random.default_rng(seed), k, n, spread, 0.0, parameters)
+    with threadpool_limits(1):  # as the chunks run
+        return measure(lambda: monte_carlo_draws(factors, parameters=parameters), max_calls=3) / k
+
+
 def _study_cost(args, work: Path) -> Cost:
     """The study's cost from one unit timed here: a few Monte Carlo draws, or one cell of the sweep.
 
@@ -389,14 +403,10 @@ def _study_cost(args, work: Path) -> Cost:
 
     cell, parallel = paper_cell(), parallel_of(args)
     if args.study == "monte-carlo":
-        from ..sensitivity import monte_carlo_draws, monte_carlo_factors, monte_carlo_names
+        from ..sensitivity import monte_carlo_names
 
         names = monte_carlo_names(cell.m, args.parameters)
-        k = min(args.draws, 4)
-        factors = monte_carlo_factors(np.random.default_rng(args.seed), k, len(names), args.spread, 0.0,
-                                      args.parameters)
-        with threadpool_limits(1):  # as the chunks run
-            per = measure(lambda: monte_carlo_draws(factors, parameters=args.parameters), max_calls=3) / k
+        per = monte_carlo_rate(args.parameters, args.spread, args.seed, min(args.draws, 4))
         columns = 4 + (0 if args.no_factors else len(names))
         in_flight = (parallel or 1) * min(args.chunk, args.draws) * columns * _VALUE_BYTES * 3
         todo = _still_to_do(args.draws, math.ceil(args.draws / args.chunk), work, args.resume)

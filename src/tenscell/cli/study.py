@@ -150,6 +150,9 @@ STUDIES = {
 }
 
 
+#: Monte Carlo draws of the sensitivity study run without an estimate (200, the default, take about 2 s)
+_QUICK_DRAWS = 1000
+
 #: options that apply to some studies only: dest -> (default, flag, studies); any other value elsewhere is refused
 _STUDY_OPTIONS = {
     "draws": (200, "--draws", ("sensitivity",)),
@@ -230,6 +233,12 @@ def run(args) -> int:
         from .fit import read_datasets
 
         args.datasets = read_datasets(args.data, args.prestress, 1)
+    if args.name == "sensitivity" and args.draws > _QUICK_DRAWS:
+        from ._cost import Cost, announce, check
+        from .population import monte_carlo_rate
+
+        per = monte_carlo_rate("all", 0.1, args.seed)
+        announce(check(Cost("draw", 2 * args.draws, per, 1, detail="(two Monte Carlo sets of --draws)"), "--draws"))
     t = time.perf_counter()
     stage(f"study {args.name} ...")
     with out as d:
