@@ -237,8 +237,8 @@ def reach_scheduler(address: str, timeout_s: float = 3.0, flag: str = "--schedul
         raise ValueError(f"{where}: something answers there, but not a Dask scheduler")
 
 
-def _work_dir(args, out_target: Path) -> tuple[Path, str]:
-    """The work directory of a resumable run and how to name it in messages, checked before anything is created."""
+def _work_dir(args, out_target: Path) -> Path:
+    """The work directory of a resumable run, checked before anything is created (errors name it as typed)."""
     from ..io.outputs import OutputLocationError, check_output_file
 
     if getattr(args, "work_dir", None):
@@ -253,7 +253,7 @@ def _work_dir(args, out_target: Path) -> tuple[Path, str]:
         check_output_file(probe, name)  # the directory exists or can be created, and is writable
     except OutputLocationError as err:
         raise ValueError(f"{name}: {str(err).removeprefix(f'{name} {probe}: ')}") from None
-    return work, name
+    return work
 
 
 #: settings file and records subdirectory of each kind of work directory (population.run, population.studies)
@@ -326,7 +326,7 @@ def run_fit(args) -> int:
     from ..population.sources import read_sources
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    work, _ = _work_dir(args, out.target)
+    work = _work_dir(args, out.target)
     if args.scheduler is not None:
         _engine.check_scheduler(args.scheduler)
         reach_scheduler(args.scheduler)
@@ -443,7 +443,7 @@ def run_study(args) -> int:
     from ..reports.population import study_markdown
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    work, _ = _work_dir(args, out.target)
+    work = _work_dir(args, out.target)
     if args.scheduler is not None:
         _engine.check_scheduler(args.scheduler)
         reach_scheduler(args.scheduler)
