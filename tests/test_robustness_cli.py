@@ -14,6 +14,8 @@ import threading
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from tenscell.cli import main
 
@@ -376,3 +378,51 @@ def test_cost_lines_and_limits(tmp_path, monkeypatch):
     monkeypatch.setattr(_cost, "_free_bytes", lambda path: 1e6)
     with pytest.raises(ValueError, match="free where"):
         check(Cost("cell", 1, 1.0, disk_bytes=2e6), "--cells", disk_at=tmp_path / "o")
+
+
+# ---- structure files with extreme values (hypothesis) -------------------------------------------
+def _paper_doc():
+    import tenscell
+    from tenscell.io.structure_files import structure_to_dict
+
+    cell = tenscell.paper_cell()
+    return structure_to_dict(cell.structure, EA=1.0, c=1.0, T0=cell.T0)
+
+
+_extreme = st.one_of(st.floats(allow_nan=False, allow_infinity=False, width=64),
+                     st.sampled_from([1e308, -1e308, 1e-308, 5e-324, 1e100, 1e-100, 1e6, 1e7, 0.0, -0.0]))
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")  # an overflow on the way is a value that escaped the checks
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(node=st.integers(0, 9), axis=st.integers(0, 2), xyz=_extreme, tendon=st.integers(0, 32),
+       key=st.sampled_from(["EA", "c", "T0"]), value=_extreme)
+def test_extreme_values_in_a_structure_file_are_read_and_used_or_refused_naming_the_file(
+        tmp_path, node, axis, xyz, tendon, key, value):
+    """Every value either passes the reader's checks and gives a finite summary, or is refused by the reader with
+    the file named (one line), or the stated T0 is not a self-stress (show refuses that naming the file); a
+    value that reached numpy unchecked ("array must not contain infs or NaNs") fails here."""
+    import math
+
+    from tenscell.io.structure_files import load_structure_file
+    from tenscell.model.equilibrium import NotPrestressableError, equilibrate
+    from tenscell.model.structure import StructureError
+    from tenscell.summary import summarize
+
+    doc = _paper_doc()
+    doc["nodes"][node]["xyz"][axis] = xyz
+    doc["tendons"][tendon][key] = value
+    path = tmp_path / "x.json"
+    path.write_text(json.dumps(doc))
+    try:
+        sf = load_structure_file(path)
+    except StructureError as err:
+        assert str(err).startswith("x.json: ") and "\n" not in str(err), err
+        return
+    try:
+        target = equilibrate(sf.structure, "local", T0=sf.T0)
+    except NotPrestressableError:
+        return  # show refuses it, naming the file (test_a_stated_t0_that_is_not_a_self_stress_...)
+    summary, cell, lin = summarize(target, EA=sf.EA, c=sf.c)
+    if lin is not None:
+        assert all(math.isfinite(v) for v in cell.T0)

@@ -279,6 +279,7 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
     if raw_t and all(have_T0):
         T0a = np.array([_finite(v, f"tendon {j}: T0") for j, v in enumerate(T0)])
         _check_tensions(T0a, families)
+        T0a = T0a / np.abs(T0a).max()  # any scale: to the largest 1, so that no norm of it overflows (1e300)
 
     groups = []
     for g, grp in enumerate(_list(obj.get("equal_tension_groups", []), "'equal_tension_groups'")):
