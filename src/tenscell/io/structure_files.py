@@ -277,9 +277,11 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         raise StructureError(f"tendon {missing} has no 'T0' although other tendons do; give all or none")
     T0a = None
     if raw_t and all(have_T0):
+        # any scale, but inside the library's window: the norm of a T0 of 1e300 overflows (and reads as zero)
         T0a = np.array([_finite(v, f"tendon {j}: T0") for j, v in enumerate(T0)])
+        for j in np.flatnonzero(T0a):
+            _in_window(abs(float(T0a[j])), f"tendon {j}: |T0|", "")
         _check_tensions(T0a, families)
-        T0a = T0a / np.abs(T0a).max()  # any scale: to the largest 1, so that no norm of it overflows (1e300)
 
     groups = []
     for g, grp in enumerate(_list(obj.get("equal_tension_groups", []), "'equal_tension_groups'")):
