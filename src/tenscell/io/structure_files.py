@@ -279,8 +279,9 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
     if raw_t and all(have_T0):
         # any scale, but inside the library's window: the norm of a T0 of 1e300 overflows (and reads as zero)
         T0a = np.array([_finite(v, f"tendon {j}: T0") for j, v in enumerate(T0)])
-        for j in np.flatnonzero(T0a):
-            _in_window(abs(float(T0a[j])), f"tendon {j}: |T0|", "")
+        for k, v in enumerate(T0a.tolist()):
+            if v:
+                _in_window(abs(v), f"tendon {k}: |T0|", "")
         _check_tensions(T0a, families)
 
     groups = []
