@@ -96,6 +96,8 @@ def test_the_default_work_directory_is_named_when_it_is_a_file(capsys, here):
     (["fit", "m.csv", "./m.csv", "--out", "o"], ["m.csv", "twice"]),
     (["fit", "m.csv", "--prestress", "m.csv=1e300", "--out", "o"], ["--prestress", "Pa"]),
     (["fit", "m.csv", "--prestress", "m.csv=1", "--prestress", "m.csv=2", "--out", "o"], ["--prestress", "one"]),
+    (["fit", "m.csv", "--bound", "EA=1e-300:1", "--out", "o"], ["--bound", "EA: 1e-300 N"]),
+    (["fit", "m.csv", "--bound", "L=1e-3:1e20", "--out", "o"], ["--bound", "L: 1e+20 m"]),
     (["synth-population", "--cells", "1", "--conditions", "a", "b", "c", "--out", "o"], ["--cells 1", "a, b, c"]),
     (["creep", "--window", "10:100", "--out", "o"], ["--window 10:100", "0 of the 61"]),
     (["simulate", "--amplitude", "1,2", "--control", "displacement", "--freq", "1", "--out", "o"],

@@ -70,6 +70,10 @@ def register(sub) -> None:
 
 #: parameter kinds that --bound takes, with their units
 BOUND_UNITS = {"EA": "N", "c": "N·s/m", "P": "N", "s": "m²", "P_data": "Pa", "L": "m"}
+#: allowed bounds of each kind: the ranges of the matching flags (s = P / P_data spans their ratio)
+BOUND_RANGES = {"EA": RANGES["EA"][:2], "c": RANGES["c"][:2], "P": RANGES["prestress"][:2],
+                "P_data": RANGES["prestress"][:2], "L": RANGES["L"][:2],
+                "s": (RANGES["prestress"][0] / RANGES["prestress"][1], RANGES["prestress"][1] / RANGES["prestress"][0])}
 
 
 def _pair(text: str, flag: str, example: str) -> tuple[str, str]:
@@ -87,7 +91,10 @@ def _bound(text):
     parts = value.split(":")
     if len(parts) != 2:
         raise argparse.ArgumentTypeError(f"{kind}: expected LO:HI in {unit}, got {value[:40]!r}")
-    lo, hi = (number(0.0, None, unit, open_lo=True)(x) for x in parts)
+    try:
+        lo, hi = (number(*BOUND_RANGES[kind], unit)(x) for x in parts)
+    except argparse.ArgumentTypeError as err:
+        raise argparse.ArgumentTypeError(f"{kind}: {err}") from None
     if not lo < hi:
         raise argparse.ArgumentTypeError(f"{kind}: the lower bound {lo:g} {unit} must be below the upper bound "
                                          f"{hi:g} {unit}")
