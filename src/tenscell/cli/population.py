@@ -153,17 +153,22 @@ def _synth_cost(args, conds) -> Cost:
 
 
 def _fit_cost(sources, options, args, work: Path) -> Cost | None:
-    """One cell fitted here (the first), scaled to the cells still to fit; None for a run of one round."""
+    """One start of the first cell fitted here, scaled to the starts and to the cells still to fit.
+
+    An upper bound: a cell's search stops once a start reaches the tolerance. None for a run of one round.
+    """
+    import dataclasses
+
     from ..population.run import cell_seed, fit_cell
 
     parallel = parallel_of(args)
     todo = len(sources) - (_finished(work) if args.resume else 0)  # a resumed run fits only the rest
     if todo <= (parallel or 1):
         return None
-    first = sources[0]
-    per = measure(lambda: fit_cell(first, cell_seed(args.seed, first.cell), options), max_calls=1)
-    starts = f"({options.starts} start{'s' if options.starts > 1 else ''} each)"
-    return Cost("cell", todo, per, parallel, detail=starts)
+    first, one = sources[0], dataclasses.replace(options, starts=1)
+    per = options.starts * measure(lambda: fit_cell(first, cell_seed(args.seed, first.cell), one), max_calls=1)
+    return Cost("cell", todo, per, parallel, detail=f"(one start timed × {options.starts} starts; fewer when a "
+                                                    "start reaches the tolerance)")
 
 
 def _truth(args, sources):
