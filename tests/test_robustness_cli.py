@@ -125,7 +125,7 @@ def paper_file(here):
 
     cell = tenscell.paper_cell()
     path = here / "paper.json"
-    tenscell.save_structure(path, cell.structure, EA=1.0, c=1.0, T0=cell.T0)
+    tenscell.io.save_structure(path, cell.structure, EA=1.0, c=1.0, T0=cell.T0)
     return json.loads(path.read_text())
 
 

@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .outputs import write_text
-from ..model.structure import Point, Structure, StructureError
+from ..model.structure import Point, Structure, StructureError, member_values
 
 __all__ = [
     "StructureFile",
@@ -87,7 +87,7 @@ class StructureFile:
         Tendon damping (N·s/m); 1 N·s/m where the file gives none.
     T0 : ndarray, shape (m,) or None
         A self-stress (dimensionless, any scale) if the file gives one for
-        every tendon; pass it to :func:`tenscell.equilibrate` (``T0=``) to
+        every tendon; pass it to :func:`tenscell.model.equilibrate` (``T0=``) to
         skip the search for one (useful for very large structures).
     description : str
         Free text from the file.
@@ -335,14 +335,15 @@ def _in_window(v: float, what: str, unit: str) -> float:
 
 
 def _check_tensions(T0: np.ndarray, families: list) -> None:
-    """A self-stress puts every tendon in tension (T0 > 0); only elastic struts (family "strut") may push."""
-    from ..model.structure import STRUT
+    """A self-stress puts every cable in tension (T0 > 0); only compressible families (struts, nucleus) may push."""
+    from ..model.structure import cable_mask
 
-    bad = [j for j, (t, fam) in enumerate(zip(T0, families)) if fam != STRUT and t <= 0]
+    cable = cable_mask(families)
+    bad = [j for j in np.flatnonzero(cable).tolist() if T0[j] <= 0]
     if not bad:
         return
     j = bad[0]
-    n_cables = sum(fam != STRUT for fam in families)
+    n_cables = int(cable.sum())
     hint = (" (every tendon's T0 is <= 0: if the file counts tension as negative, flip the signs)"
             if len(bad) == n_cables else "")
     raise StructureError(f"tendon {j}: T0 = {float(T0[j])!r}, but tendons carry tension only (T0 > 0; "
@@ -499,40 +500,3 @@ def _dumps(obj: dict) -> str:
             lines.append(f"  {json.dumps(key)}: {json.dumps(v, allow_nan=False)}{comma}")
     lines.append("}")
     return "\n".join(lines) + "\n"
-
-
-# ---- per-member values --------------------------------------------------------------
-def member_values(structure: Structure, values, name: str = "value", unit: str = "") -> np.ndarray:
-    """Expand a per-member property to an array over the structure's tendons.
-
-    Parameters
-    ----------
-    structure : Structure
-    values : float, dict or array_like
-        One value for all members; a dict ``{family: value}`` (every family
-        present must be given; key ``"default"`` covers the rest); or one
-        value per member, shape (m,).
-    name, unit : str
-        For error messages, e.g. ``"EA"``, ``"N"``.
-
-    Returns
-    -------
-    ndarray, shape (m,)
-    """
-    m = structure.n_tendons
-    if isinstance(values, dict):
-        out = np.empty(m)
-        for j, fam in enumerate(structure.families):
-            if fam in values:
-                out[j] = values[fam]
-            elif "default" in values:
-                out[j] = values["default"]
-            else:
-                raise ValueError(f"{name}: no value for family {fam!r} (tendon {j}); give it or a 'default'")
-        return out
-    arr = np.asarray(values, dtype=float)
-    if arr.ndim == 0:
-        return np.full(m, float(arr))
-    if arr.shape != (m,):
-        raise ValueError(f"{name} must be a scalar, a {{family: value}} dict or have shape ({m},){' (' + unit + ')' if unit else ''}, got shape {arr.shape}")
-    return arr.copy()
