@@ -182,6 +182,13 @@ def _check_parent(path: Path, flag: str) -> None:
         raise OutputLocationError(f"{flag} {path}: {probe} is not a directory")
     if not os.access(probe, os.W_OK | os.X_OK):
         raise OutputLocationError(f"{flag} {path}: {probe} is not writable")
+    # os.access trusts the permission bits; a read-only mount, /proc or a full quota refuse only an actual
+    # write, which would otherwise come after the computation: try one (an empty directory, removed at once)
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=_TEMP, dir=probe))
+    except OSError as err:
+        raise OutputLocationError(f"{flag} {path}: cannot create anything in {probe} "
+                                  f"({err.strerror or type(err).__name__})") from None
 
 
 def check_output_file(path, flag: str) -> Path:
