@@ -61,7 +61,7 @@ EXCEPTIONS: dict[tuple[str, str], str] = {
                                                 "states and mechanisms (the equilibrium stage)",
     ("model.lattices", "lattice_module_tensions"): "geometry: self-stress of a lattice module (null space of A·G)",
     ("summary", "_rigid_dof"): "geometry: rank of the support constraints",
-    ("summary", "summarize"): "geometry: rank of the equilibrium matrix A of a structure that has no cell",
+    ("summary", "_ranks"): "geometry: rank of the equilibrium matrix A of a structure that has no cell",
     ("dynamics.equations", "_factor"): "the nonlinear equations of motion at the current state q (implicit steps), "
                                        "not the reference pencil",
     ("dynamics.equations", "_apply"): "solves with the factors of _factor (the same matrices at a state q)",
@@ -89,7 +89,7 @@ PENDING_BACKWARD: dict[tuple[str, str], str] = {
 
 
 # ---- reading the source -------------------------------------------------------------------------------
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _parse(text: str) -> ast.Module:
     return ast.parse(text)
 

@@ -178,7 +178,7 @@ class EquationsOfMotion:
         self.n, self.m = cell.n, cell.m
         self.cable = cable_mask(cell.structure.families)
         self.displacement_control = loading.controls == "displacement"
-        self.gamma = 10.0 * getattr(loading, "omega") if self.displacement_control else 0.0  # a SineDisplacement
+        self.gamma = 10.0 * getattr(loading, "omega") if self.displacement_control else 0.0  # noqa: B009 - a SineDisplacement (mypy sees the union)
         geom0 = cell.geometry
         idx = np.where(geom0.index < 0, self.n, geom0.index)
         self._idx = idx

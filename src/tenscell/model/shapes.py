@@ -448,6 +448,24 @@ def _turn_orbits(structure: Structure) -> np.ndarray:
     return orbit
 
 
+def _cylindrical_residual(base: Structure, orbit: np.ndarray):
+    """``z -> (A(q)·T, ‖T‖ − 1)`` for z = (5 shape parameters, class tensions): equilibrium of the cylindrical cell."""
+
+    def residual(z):
+        try:
+            nodes = cylindrical_nodes(z[:5], 1.0)
+        except ValueError:
+            return np.full(25, 1e3)
+        st = Structure(nodes=nodes, struts=base.struts, tendons=base.tendons, families=base.families,
+                       fixed=base.fixed, load=base.load, probe=base.probe)
+        co = make_coordinates(st, "angles")
+        A = equilibrium_matrix(member_geometry(co, co.q0), sparse=False)
+        T = z[5:][orbit]
+        return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
+
+    return residual
+
+
 def find_cylindrical_reference(
     start=None, *, min_tension: float = 0.02, stiffness_check=(1000.0, 1.0), n_starts: int = 10, seed: int = 0
 ) -> tuple[float, ...]:
@@ -500,18 +518,7 @@ def find_cylindrical_reference(
     if p0.shape != (5,):
         raise ValueError(f"start must have 5 entries (θ_C1, θ_B1, θ_D1, z_B1/L, z_N/L), got {p0.size}")
     P, EA = stiffness_check
-
-    def residual(z):
-        try:
-            nodes = cylindrical_nodes(z[:5], 1.0)
-        except ValueError:
-            return np.full(25, 1e3)
-        st = Structure(nodes=nodes, struts=base.struts, tendons=base.tendons, families=base.families,
-                       fixed=base.fixed, load=base.load, probe=base.probe)
-        co = make_coordinates(st, "angles")
-        A = equilibrium_matrix(member_geometry(co, co.q0), sparse=False)
-        T = z[5:][orbit]
-        return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
+    residual = _cylindrical_residual(base, orbit)
 
     from scipy.optimize import least_squares  # here, not at import (see if_free_delta)
 
