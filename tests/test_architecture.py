@@ -57,6 +57,8 @@ EXCEPTIONS: dict[tuple[str, str], str] = {
     ("model.shapes", "find_cylindrical_reference"): "form-finding of the cylindrical reference: stability of trial "
                                                     "geometries, before any linear model exists (model/ precedes "
                                                     "linear/)",
+    ("model.shapes", "nucleated_cell"): "equilibrium: the prestressed nucleus shell's member forces (its equilibrium "
+                                        "matrix block is statically determinate), before any linear model exists",
     ("model.equilibrium", "self_stress_basis"): "geometry: the SVD of the equilibrium matrix A gives the self-stress "
                                                 "states and mechanisms (the equilibrium stage)",
     ("model.lattices", "lattice_module_tensions"): "geometry: self-stress of a lattice module (null space of A·G)",
