@@ -237,7 +237,7 @@ def _canonical_unit(text: str) -> str | None:
         return t
     if "mPa" in t:  # millipascal: never read as MPa by a case-insensitive match
         return None
-    return _ALIASES.get(t.lower().replace("·", " ").replace("**", "^").replace(" ", ""), None)
+    return _ALIASES.get(t.lower().replace("·", " ").replace("**", "^").replace(" ", ""))
 
 
 def _resolve(table: _Table, cmap: ColumnMap) -> dict[str, tuple[int, str]]:
