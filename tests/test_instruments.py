@@ -6,7 +6,6 @@ checks are consistency between columns the instrument computes independently (|G
 the Hz column against the rad/s one; J against strain/stress), so a wrong unit or a wrong column fails them.
 """
 import json
-import math
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +14,7 @@ import pytest
 
 from tenscell.cli import main
 from tenscell.io.creep_data import CreepData
-from tenscell.io.data import DataError, RheologyData
+from tenscell.io.data import DataError
 from tenscell.io.importers import ColumnMap, from_dataframe, guess_columns
 from tenscell.io.instruments import read_data, read_rheocompass, read_trios
 
