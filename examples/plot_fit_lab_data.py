@@ -34,6 +34,16 @@ print(data)
 print(data.comments[-1])
 
 # %%
+# Headers that say what they hold need no map at all: ``tc.read_data`` recognises
+# ``Angular Frequency``, ``Storage Modulus``, ``G'``, ``time (s)``, ``J(t) (1/Pa)``... and
+# instrument exports (TA TRIOS, Anton Paar RheoCompass); units still come from the file.
+lab = export.rename(columns={"omega [rad/s]": "Angular Frequency [rad/s]", "G' [kPa]": "Storage Modulus [kPa]",
+                             "G'' [kPa]": "Loss Modulus [kPa]"})
+lab.to_csv(path.with_name("lab_sweep.tsv"), sep="\t", index=False)
+same = tc.read_data(path.with_name("lab_sweep.tsv"))
+print(np.allclose(same.G_storage, data.G_storage))
+
+# %%
 # Fit, one stiffness per tendon as in the paper (one start keeps the example short; use several for a real fit).
 result = tc.fit(data, tendons="per-tendon", starts=1, seed=0, progress=False)
 print(f"rms log10 error {result.rms_log10_error:.4f} decades; converged: {result.converged}")
@@ -46,5 +56,5 @@ ax = result.plot()
 ax.set_title("paper cell fitted to HASM data")
 
 # %%
-# The fitted parameters as a table.
-result.parameters_dataframe()[["name", "value", "unit"]]
+# The fitted parameters as a table, each with its standard error (or why it has none).
+result.parameters_dataframe()[["name", "value", "stderr", "stderr_percent", "unit", "stderr_note"]]
