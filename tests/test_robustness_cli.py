@@ -262,12 +262,13 @@ def test_the_truth_file_is_read_and_checked_before_any_fit(content, words, capsy
 FAST = ["--workers", "0", "--starts", "1", "--hops", "0"]
 
 
-def test_a_leftover_work_directory_without_records_does_not_break_the_next_run(capsys, here, population):
-    """An earlier run stopped before its first record left OUT.partial/ with its settings only."""
+def test_a_leftover_work_directory_is_named_and_kept(capsys, here, population):
+    """A killed run (SIGKILL) left OUT.partial/ with its settings only; it may as well belong to a run still under
+    way, so a new run is refused naming it (and how to go on) and leaves it as it was."""
     (here / "o.partial" / "cells").mkdir(parents=True)
-    (here / "o.partial" / "run.json").write_text('{"seed": 99}')
-    assert main(["fit-population", str(population), "--out", "o", *FAST]) == 0
-    assert (here / "o" / "manifest.json").is_file() and not (here / "o.partial").exists()
+    (here / "o.partial" / "run.json").write_text("{}")
+    refused(["fit-population", population, "--out", "o", *FAST], capsys, here, "o.partial", "--resume")
+    assert (here / "o.partial" / "run.json").read_text() == "{}"
 
 
 def test_a_run_stopped_before_its_first_record_leaves_no_work_directory(capsys, here, population, monkeypatch):
