@@ -429,3 +429,15 @@ def test_extreme_values_in_a_structure_file_are_read_and_used_or_refused_naming_
     summary, cell, lin = summarize(target, EA=sf.EA, c=sf.c)
     if lin is not None:
         assert all(math.isfinite(v) for v in cell.T0)
+
+
+def test_a_live_dask_scheduler_passes_the_preflight(tmp_path):
+    """The handshake check accepts a real scheduler, by address and by scheduler file (and never waits for it)."""
+    distributed = pytest.importorskip("distributed")
+    from tenscell.cli.population import reach_scheduler
+
+    with distributed.LocalCluster(n_workers=0, protocol="tcp", host="127.0.0.1", dashboard_address=None,
+                                  scheduler_port=0) as cluster:
+        reach_scheduler(cluster.scheduler_address)
+        (tmp_path / "sched.json").write_text(json.dumps({"address": cluster.scheduler_address}))
+        reach_scheduler(str(tmp_path / "sched.json"))
