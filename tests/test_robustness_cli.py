@@ -441,3 +441,12 @@ def test_a_live_dask_scheduler_passes_the_preflight(tmp_path):
         reach_scheduler(cluster.scheduler_address)
         (tmp_path / "sched.json").write_text(json.dumps({"address": cluster.scheduler_address}))
         reach_scheduler(str(tmp_path / "sched.json"))
+
+
+def test_creep_with_many_output_times_announces_a_lower_bound(capsys, here, monkeypatch):
+    """The rate (replaced here: nothing is timed) is that of the state at one output time, without the integration."""
+    import tenscell.cli.dynamics as dyn
+
+    monkeypatch.setattr(dyn, "measure", lambda fn, **kw: 1.0)
+    refused(["creep", "--amplitude", "0.1,1", "--points", "50000", "--out", "o"], capsys, here, "--amplitude × --points",
+            "estimated 28 h", "100,000 output times", "at least")

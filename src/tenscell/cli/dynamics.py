@@ -326,6 +326,32 @@ def check_window(t, window) -> None:
                          f"({t[0]:g} to {t[-1]:g} s, --t-min/--t-max/--points); a power-law fit needs at least 2")
 
 
+#: output times × steps below which creep runs without an estimate (the default 61 × 2 take a few seconds)
+_QUICK_CREEP_POINTS = 1000
+
+
+def creep_cost(eq, cell, force: float, steps: int, points: int):
+    """A lower bound on the nonlinear steps' cost: the state at each output time, timed here once.
+
+    Every output time of every step costs one solve of the state (tensions, velocities, slack set; about
+    1.6 ms for the paper cell), on top of the integration itself, which is not counted. None for short runs.
+    """
+    import numpy as np
+
+    from ..dynamics import EquationsOfMotion, StepForce
+
+    if steps * points <= _QUICK_CREEP_POINTS:
+        return None
+    loaded = EquationsOfMotion(cell, eq.law, StepForce(force)) if force else eq
+    # a new state each call, as along a trajectory (the solver warm-starts from the last one: a repeated state
+    # would take 21 µs instead of the 1.6 ms of a new one)
+    rng = np.random.default_rng(0)
+    scale = 1e-3 * float(np.max(cell.lengths))
+    per = measure(lambda: loaded.state(1.0, rng.normal(scale=scale, size=cell.n)), max_calls=20)
+    return Cost("output time", steps * points, per, 1,
+                detail=f"= {steps} steps × {points} --points; at least: the integration adds to it")
+
+
 def run_creep(args) -> int:
     if not args.t_min < args.t_max:
         raise ValueError(f"--t-min must be below --t-max, got {args.t_min:g} s and {args.t_max:g} s")
@@ -349,7 +375,10 @@ def run_creep(args) -> int:
     amplitudes = args.amplitude if args.amplitude is not None else (() if args.from_fit else (0.1, 30.0))
     if len(amplitudes):
         check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
-    EquationsOfMotion(cell, law, StepForce(1.0))  # refuses a singular damping matrix before any output
+    eq = EquationsOfMotion(cell, law, StepForce(1.0))  # refuses a singular damping matrix before any output
+    cost = creep_cost(eq, cell, max(amplitudes, default=0.0), len(amplitudes), t.size)
+    if cost is not None:
+        announce(check(cost, "--amplitude × --points"))
     win = args.window or (float(t[0]), float(t[-1]))
     P0 = args.prestress_N
     try:
