@@ -459,8 +459,9 @@ def run_study(args) -> int:
     if args.resume and not work.is_dir():
         raise ValueError(f"--resume: no unfinished study in {work}")
     cost = _study_cost(args, work)
-    check(cost, "--draws" if args.study == "monte-carlo" else "--prestress × --heterogeneity × --realizations",
-          disk_at=work, hint=_CLUSTER_HINT)
+    flags = ("--prestress × --heterogeneity × --realizations" if args.study == "sweep" else
+             "--draws, --chunk" if args.chunk > 10**5 else "--draws")  # a large chunk is held whole by each worker
+    check(cost, flags, disk_at=work, hint=_CLUSTER_HINT)
     announce(cost)
     where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed)
 
