@@ -99,6 +99,8 @@ def test_the_default_work_directory_is_named_when_it_is_a_file(capsys, here):
     (["fit", "m.csv", "--bound", "EA=1e-300:1", "--out", "o"], ["--bound", "EA: 1e-300 N"]),
     (["fit", "m.csv", "--bound", "L=1e-3:1e20", "--out", "o"], ["--bound", "L: 1e+20 m"]),
     (["synth-population", "--cells", "1", "--conditions", "a", "b", "c", "--out", "o"], ["--cells 1", "a, b, c"]),
+    (["synth-population", "--cells", "4", "--conditions", "a", "a", "--out", "o"], ["--conditions", "a given twice"]),
+    (["synth-population", "--cells", "4", "--conditions", "a:Q=2", "--out", "o"], ["--conditions", "a:Q=2"]),
     (["creep", "--window", "10:100", "--out", "o"], ["--window 10:100", "0 of the 61"]),
     (["simulate", "--amplitude", "1,2", "--control", "displacement", "--freq", "1", "--out", "o"],
      ["--control displacement"]),

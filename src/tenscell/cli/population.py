@@ -116,7 +116,14 @@ def run_synth(args) -> int:
     from ..io.outputs import OutputSet
     from ..population.synth import parse_condition, synth_population
 
-    conds = [parse_condition(c, args.model) for c in args.conditions] if args.conditions else None
+    try:
+        conds = [parse_condition(c, args.model) for c in args.conditions] if args.conditions else None
+    except ValueError as err:
+        raise ValueError(f"--conditions: {err}") from None
+    names = [c.name for c in conds or ()]
+    if len(set(names)) < len(names):
+        raise ValueError(f"--conditions: {', '.join(sorted({n for n in names if names.count(n) > 1}))} given twice; "
+                         "names must be distinct")
     if conds and len(conds) > args.cells:
         raise ValueError(f"--cells {args.cells} cannot be split over {len(conds)} --conditions "
                          f"({', '.join(c.name for c in conds)}): give at least one cell per condition")
