@@ -414,3 +414,32 @@ def test_frequency_response_with_a_law_and_a_cytoplasm():
         Gs, Gl = tenscell.moduli(tenscell.linearize(CELL, p, EA, C, viscosity=0.1), f)
         assert _rel(v.G[i], Gs + 1j * Gl) < 1e-10
     assert v.viscosity == 0.1 and r.to_dataframe().shape[0] == Ps.size * f.size
+
+
+def test_cytoplasm_in_the_linear_model_needs_probe_at_the_load():
+    """A dashpot on the probe is 'in parallel' with the measured modulus only when the probe is the load: refused
+    otherwise in one line (dynamic_moduli, which adds iωη to G*, still works)."""
+    import dataclasses
+
+    from tenscell.model.equilibrium import equilibrate
+    from tenscell.model.structure import Point
+
+    st = dataclasses.replace(CELL.structure, probe=Point(nodes=(6,), weights=(1.0,), direction=(0.0, 0.0, 1.0)))
+    cell = equilibrate(st, parameters=dict(CELL.parameters))
+    with pytest.raises(ValueError, match="probe to be the load") as err:
+        linearize_law(cell, Voigt(EA=EA, c=C), P0, viscosity=0.1)
+    assert "\n" not in str(err.value)
+    G = dynamic_complex_modulus(cell, Voigt(EA=EA, c=C), P0, [1.0], viscosity=0.1)
+    assert _rel(G - dynamic_complex_modulus(cell, Voigt(EA=EA, c=C), P0, [1.0]), np.array([2j * np.pi * 0.1])) < 1e-12
+
+
+@pytest.mark.parametrize("alpha", [0.2, 0.5])
+def test_springpot_creep_within_tolerance_inside_the_band_time_window(alpha):
+    """The realization's tolerance is stated in frequency; its creep J(t) for 1/(2π f_high) ≤ t ≤ 1/(2π f_low)
+    stays within it too, against a realization of 10× finer tolerance over a band 2 decades wider each side
+    (measured 2.1e-4 at α = 0.2 and 7.5e-4 at α = 0.5 for tol = 1e-3)."""
+    law = Springpot(EA=1.0, kappa=5.0, alpha=alpha)
+    t = np.logspace(np.log10(1 / (2 * np.pi * 1e3)), np.log10(1 / (2 * np.pi * 1e-2)), 41)
+    J = creep_spectrum(linearize_law(CELL, law, P0, band_hz=(1e-2, 1e3), tol=1e-3)).compliance(t)
+    ref = creep_spectrum(linearize_law(CELL, law, P0, band_hz=(1e-4, 1e5), tol=1e-4)).compliance(t)
+    assert np.max(np.abs(J / ref - 1)) <= 1e-3

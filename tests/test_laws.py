@@ -392,6 +392,12 @@ def test_dynamic_laws_on_a_sparse_lattice():
     tau, rho, err = lin.pencil.retardation()
     J = tenscell.compliance(lin, f)
     assert _rel(modal_compliance(tau, rho, 2 * np.pi * f), J) < 1e-8
+    # a cytoplasm on the sparse realized pencil: its retardation spectrum gives G* + iωη of the kernel
+    visc = linearize_law(cell, law, P0, viscosity=0.3)
+    tau, rho, err = visc.pencil.retardation()
+    Gv = (0.5 / cell.strut_length) / modal_compliance(tau, rho, 2 * np.pi * f)
+    G = (0.5 / cell.strut_length) / J + 2j * np.pi * f * 0.3
+    assert _rel(Gv, G) < 1e-8
     # Maxwell tendons everywhere relax the material stiffness the lattice's stability needs: refused in one line
     with pytest.raises(NotPositiveDefiniteError, match="not a stable equilibrium"):
         dynamic_moduli(cell, family_laws(cell, {"strut": Voigt(EA=1e3, c=1.0)}, default=Maxwell(EA=1.0, c=1.0)), P0, f)

@@ -198,7 +198,7 @@ class FrequencyResponse:
             "prestress_N": np.repeat(self.prestress, nf), "frequency_Hz": np.tile(self.frequency_hz, nP),
             "G_storage_Pa": self.G_storage.ravel(), "G_loss_Pa": self.G_loss.ravel(),
             "loss_tangent": self.loss_tangent.ravel(),
-        }, {"L_m": self.L})
+        }, {"L_m": self.L, "viscosity_Pa_s": self.viscosity})
 
     def plot(self, axes=None, x: str = "frequency", **kw):
         """G' and G'' on a pair of axes: against frequency (log-log, one curve per P) or prestress.

@@ -266,19 +266,23 @@ class OutputSet:
     flag : str
         The option that named ``target``, for error messages.
 
-    Use::
+    Notes
+    -----
+    Entering may happen long after construction; everything written inside
+    the block goes to the staging directory, and leaving it without an
+    exception moves the set into place. An exception (including
+    KeyboardInterrupt) removes the staging directory and leaves the previous
+    set as it was.
+
+    Examples
+    --------
+    ::
 
         out = OutputSet(args.out, command="tenscell fit ...")   # validate first
         ...                                                        # compute
         with out as d:                                             # d: the staging directory
             write_csv_rows(d / "fit.csv", header, rows)
         # here the complete set is at args.out
-
-    Entering may happen long after construction; everything written inside
-    the block goes to the staging directory, and leaving it without an
-    exception moves the set into place. An exception (including
-    KeyboardInterrupt) removes the staging directory and leaves the previous
-    set as it was.
     """
 
     def __init__(self, target, *, command: str = "", flag: str = "--out"):
@@ -325,7 +329,7 @@ class OutputSet:
         files = sorted(str(p.relative_to(staging)) for p in staging.rglob("*") if p.is_file())
         write_json(staging / MANIFEST, {
             "command": self.command, "tenscell_version": __version__,
-            "finished_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            "finished_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             "files": files})
 
     def _commit(self, staging: Path) -> None:

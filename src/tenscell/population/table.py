@@ -232,7 +232,7 @@ def read_table(path):
     if path.endswith((".parquet", ".pq")):
         return pd.read_parquet(path)
     text = [c for c in _TEXT if c != "converged"]
-    df = pd.read_csv(path, keep_default_na=False, na_values=[""], dtype={c: "str" for c in text})
+    df = pd.read_csv(path, keep_default_na=False, na_values=[""], dtype=dict.fromkeys(text, "str"))
     return df.fillna({c: "" for c in text if c in df.columns})
 
 
