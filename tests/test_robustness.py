@@ -162,19 +162,19 @@ def test_table_size():
     assert len(TRIED) >= 300
 
 
-def _numeric_options():
-    """(command, option) for every option whose value is converted by a checked type, sub-subcommands included.
+#: the names of the checked numeric converters (tenscell.cli._args and the command modules)
+NUMERIC_TYPES = {"number", "integer", "list", "frequencies", "member values", "size", "window", "frequency",
+                 "bound", "fixed value", "holdout window", "stated prestress"}
 
-    Every ``type=`` of the command line is a checked converter of tenscell.cli._args or a command module;
-    only ``path`` (a non-empty path) takes text, and options with ``choices`` take a word.
-    """
+
+def _numeric_options():
+    """(command, option) for every option converted by a numeric type, sub-subcommands included."""
     def walk(name, parser):
         for action in parser._actions:
             if isinstance(action, argparse._SubParsersAction):
                 for sub_parser in action.choices.values():
                     yield from walk(name, sub_parser)
-            elif action.option_strings and action.type is not None and action.choices is None \
-                    and getattr(action.type, "__name__", "") != "path":
+            elif action.option_strings and getattr(action.type, "__name__", "") in NUMERIC_TYPES:
                 yield from ((name, opt) for opt in action.option_strings)
 
     sub = next(a for a in build_parser()._actions if a.dest == "command")
