@@ -15,6 +15,7 @@ import scipy.integrate
 import scipy.linalg
 
 import tenscell
+from _tolerances import EPS, modal_rtol, solve_rtol
 from tenscell.laws import voigt_law
 from tenscell.dynamics import creep_response
 from tenscell.timedomain import (
@@ -75,33 +76,18 @@ def test_creep_inverse_laplace_without_intermediate_filaments(lin_noif):
         assert spec.compliance(t) == pytest.approx(_inverse_laplace_creep(lin_noif, t), rel=1e-5)
 
 
-#: float64 unit round-off
-_EPS = float(np.finfo(float).eps)
-
-
-def _solve_tol(M) -> float:
-    """Relative accuracy of a backward-stable solve with the symmetric positive definite M (n×n):
-    backward error ~ n·eps, amplified by the condition number κ(M); the quantities checked are
-    quadratic forms D0 M⁻¹ D0ᵀ (probe = load), which have no cancellation to amplify it further.
-    A factor 4 covers the constant of the bound. Different BLAS kernels round differently inside it."""
-    M = np.asarray(M)
-    return 4 * M.shape[0] * _EPS * float(np.linalg.cond(M))
-
-
 def test_creep_limits(lin, lin_noif):
     spec = creep_spectrum(lin)
     K0, C0 = np.asarray(lin.K0), np.asarray(lin.C0)
-    # the modal sums add mode by mode: a retardation time τ_k carries a relative error ~ eps·τ_max/τ_k
-    # (eigenvalues of the K0-whitened C0, whose norm is τ_max), on top of the whitening's κ(K0)
-    spread = float(spec.times.max() / spec.times.min())
-    # J(0) = 0 with positive definite C0; J(∞) = static compliance = (0.5/L)/G'(0)
+    # J(0) = 0 with positive definite C0; J(∞) = static compliance = (0.5/L)/G'(0): Σ ρ_k against a Cholesky
+    # solve, both accurate to κ(K0) (tolerances: tests/_tolerances.py)
     assert spec.instantaneous == 0.0
     assert spec.compliance(0.0) == 0.0
-    assert spec.compliance(1e3) == pytest.approx((0.5 / lin.L) / tenscell.static_modulus(lin), rel=_solve_tol(K0))
+    assert spec.compliance(1e3) == pytest.approx((0.5 / lin.L) / tenscell.static_modulus(lin), rel=solve_rtol(K0))
     # initial creep rate = Σ r_k = D0 C0⁻¹ (−H0) (pure dashpot response), so G''/ω → (0.5/L)/rate;
     # checked against a direct Cholesky solve with C0 (viscosity_limit itself sums the same spectrum)
     direct_rate = float(lin.D0 @ scipy.linalg.cho_solve(scipy.linalg.cho_factor(C0), -lin.H0))
-    rate_tol = _solve_tol(K0) + _solve_tol(C0) + 4 * K0.shape[0] * _EPS * spread
+    rate_tol = modal_rtol(lin) + solve_rtol(C0)  # Σ ρ_k/τ_k: each τ_k to eps·τ_max/τ_k
     assert spec.rate(0.0) == pytest.approx(direct_rate, rel=rate_tol)
     assert (0.5 / lin.L) / tenscell.viscosity_limit(lin) == pytest.approx(direct_rate, rel=rate_tol)
     # monotone creep: weights are non-negative (probe = load)
@@ -123,7 +109,7 @@ def test_instantaneous_compliance_is_the_high_frequency_limit(lin_noif):
     assert 0 < N.shape[1] < C0.shape[0]
     # the null space is well separated: the smallest non-zero eigenvalue of C0 sets how accurately N is known
     gap = float(c[N.shape[1]])
-    assert gap > 1e3 * C0.shape[0] * _EPS * c[-1]
+    assert gap > 1e3 * C0.shape[0] * EPS * c[-1]
     KN = N.T @ K0 @ N
     limit = float(lin_noif.D0 @ N @ np.linalg.solve(KN, N.T @ -lin_noif.H0))
     n = K0.shape[0]
@@ -131,8 +117,8 @@ def test_instantaneous_compliance_is_the_high_frequency_limit(lin_noif):
     # spectral side: the undamped subspace of the whitened pencil is known to eps·(κ(K0) + τ_max/τ_min); its
     # error leaks a share of the whole static compliance into J(0+), hence the factor J(∞)/J(0+) (here ~30).
     # reference side: N to eps·‖C0‖/gap, and the solve with NᵀK0N.
-    tol = (4 * n * _EPS * (np.linalg.cond(K0) + spread) * spec.static / spec.instantaneous
-           + 4 * n * _EPS * c[-1] / gap + _solve_tol(KN))
+    tol = (4 * n * EPS * (np.linalg.cond(K0) + spread) * spec.static / spec.instantaneous
+           + 4 * n * EPS * c[-1] / gap + solve_rtol(KN))
     assert spec.instantaneous > 0
     assert spec.instantaneous == pytest.approx(limit, rel=tol)
 

@@ -15,6 +15,7 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 import tenscell
+from _tolerances import modal_rtol
 from tenscell import fitting
 from tenscell.fitting.search import _initial_guess
 from tenscell.reports.fit import fit_markdown
@@ -90,11 +91,15 @@ def test_problem_moduli_match_core_frequency(cell, tendons, damping):
     lin = tenscell.linearize(tenscell.paper_cell(L=2.3), P=vals[-2], EA=EA, c=c)
     Gs, Gl = tenscell.moduli(lin, data.frequency_hz)
     ms, ml = pr.moduli(theta)
-    np.testing.assert_allclose(ms, Gs, rtol=1e-9)
-    np.testing.assert_allclose(ml, Gl, rtol=1e-9)
+    # two modal decompositions of the same pencil: they agree to its conditioning; the per-tendon draw
+    # spreads EA over 8.8 decades (κ(K0) 1.7e8, τ over 7.5 decades: rtol 4e-6; 1.2e-9 seen on Prescott),
+    # the other parametrizations get ~1e-12
+    rtol = modal_rtol(lin)
+    np.testing.assert_allclose(ms, Gs, rtol=rtol)
+    np.testing.assert_allclose(ml, Gl, rtol=rtol)
     r = pr.residuals(theta)
-    np.testing.assert_allclose(r[: data.n], np.log10(Gs / data.G_storage), atol=1e-12)
-    np.testing.assert_allclose(r[data.n:], np.log10(Gl / data.G_loss), atol=1e-12)
+    np.testing.assert_allclose(r[: data.n], np.log10(Gs / data.G_storage), atol=rtol / math.log(10))
+    np.testing.assert_allclose(r[data.n:], np.log10(Gl / data.G_loss), atol=rtol / math.log(10))
 
 
 def test_problem_moduli_match_core_prestress(cell):
