@@ -55,6 +55,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="tenscell",
         description="Tensegrity models of the cytoskeleton: moduli G'(f, P), G''(f, P), fits and studies.",
+        epilog="Exit status: 0 success; 1 a fit that did not reach its tolerance; 2 bad input (one line naming the "
+               f"flag or the file and line, nothing computed or written); {EXIT_INTERNAL} an internal error (a bug, "
+               "not your input: one line naming a log file); 130 interrupted (Ctrl-C).",
     )
     parser.add_argument("--version", action="version", version=f"tenscell {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
