@@ -166,7 +166,7 @@ class _Transcript(io.TextIOBase):
         return self.stream.fileno()
 
     @property
-    def encoding(self):  # type: ignore[override]
+    def encoding(self):
         return getattr(self.stream, "encoding", "utf-8")
 
     def text(self) -> str:
