@@ -16,14 +16,11 @@ pipe closed.
 from __future__ import annotations
 
 import argparse
-import datetime
 import importlib
 import io
 import os
 import sys
-import tempfile
 import time
-import traceback
 import warnings
 
 from ._args import Parser, command_line
@@ -175,6 +172,10 @@ class _Transcript(io.TextIOBase):
 
 def _write_log(args, argv, err: BaseException, printed: str) -> str | None:
     """Write what an internal error needs for a report into a file of its own: its path (None if it could not)."""
+    import datetime
+    import tempfile
+    import traceback
+
     from .. import __version__
 
     stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
