@@ -83,13 +83,13 @@ def test_creep_limits(lin, lin_noif):
     # solve, both accurate to κ(K0) (tolerances: tests/_tolerances.py)
     assert spec.instantaneous == 0.0
     assert spec.compliance(0.0) == 0.0
-    assert spec.compliance(1e3) == pytest.approx((0.5 / lin.L) / tenscell.static_modulus(lin), rel=solve_rtol(K0))
+    assert spec.compliance(1e3) == pytest.approx((0.5 / lin.L) / tenscell.response.static_modulus(lin), rel=solve_rtol(K0))
     # initial creep rate = Σ r_k = D0 C0⁻¹ (−H0) (pure dashpot response), so G''/ω → (0.5/L)/rate;
     # checked against a direct Cholesky solve with C0 (viscosity_limit itself sums the same spectrum)
     direct_rate = float(lin.D0 @ scipy.linalg.cho_solve(scipy.linalg.cho_factor(C0), -lin.H0))
     rate_tol = modal_rtol(lin) + solve_rtol(C0)  # Σ ρ_k/τ_k: each τ_k to eps·τ_max/τ_k
     assert spec.rate(0.0) == pytest.approx(direct_rate, rel=rate_tol)
-    assert (0.5 / lin.L) / tenscell.viscosity_limit(lin) == pytest.approx(direct_rate, rel=rate_tol)
+    assert (0.5 / lin.L) / tenscell.response.viscosity_limit(lin) == pytest.approx(direct_rate, rel=rate_tol)
     # monotone creep: weights are non-negative (probe = load)
     assert np.all(spec.weights >= -1e-15 * spec.static)
     J = spec.compliance(np.logspace(-6, 1, 200))
@@ -125,7 +125,7 @@ def test_instantaneous_compliance_is_the_high_frequency_limit(lin_noif):
 
 def test_spectrum_matches_linear_relaxation_spectrum(lin):
     spec = creep_spectrum(lin)
-    rel = tenscell.relaxation_spectrum(lin)
+    rel = tenscell.linear.relaxation_spectrum(lin)
     assert np.allclose(np.sort(spec.times), np.sort(rel.times), rtol=1e-9)
     assert spec.static == pytest.approx(rel.weights.sum(), rel=1e-10)
     times, weights = spec.significant(rtol=1e-3)
@@ -151,9 +151,9 @@ def test_relaxation_is_the_laplace_inverse_of_creep(which, lin, lin_noif):
 
 def test_relaxation_limits(lin, lin_noif):
     rel = stress_relaxation(lin)
-    assert rel.modulus(1e3) == pytest.approx(tenscell.static_modulus(lin), rel=1e-10)
-    assert rel.viscosity == pytest.approx(tenscell.viscosity_limit(lin), rel=1e-10)
-    assert relaxation_modulus(lin, 1e3) == pytest.approx(tenscell.static_modulus(lin), rel=1e-10)
+    assert rel.modulus(1e3) == pytest.approx(tenscell.response.static_modulus(lin), rel=1e-10)
+    assert rel.viscosity == pytest.approx(tenscell.response.viscosity_limit(lin), rel=1e-10)
+    assert relaxation_modulus(lin, 1e3) == pytest.approx(tenscell.response.static_modulus(lin), rel=1e-10)
     # relaxation modulus decreases monotonically to G'(0)
     G = rel.modulus(np.logspace(-6, 0, 100))
     assert np.all(np.diff(G) <= 1e-12 * G[0])

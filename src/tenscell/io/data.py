@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import TenscellError
 from .._ranges import RANGES, range_problem
 from .outputs import atomic_path
 
@@ -81,7 +82,7 @@ _BUNDLED = (
 )
 
 
-class DataError(ValueError):
+class DataError(TenscellError, ValueError):
     """Invalid or unreadable rheology data.
 
     The message names the file (or data source), the 1-based line number in
@@ -354,7 +355,9 @@ class RheologyData:
 
     def plot(self, ax=None, **kw):
         """G' (filled) and G'' (open circles) against f (log-log) or prestress (:func:`tenscell.plotting.measured`)."""
-        from ..plotting import measured
+        from .._results import plotter
+
+        measured = plotter("measured")
 
         return measured(self, ax=ax, **kw)
 
