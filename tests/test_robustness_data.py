@@ -208,6 +208,13 @@ def test_holdout_on_a_creep_file_is_refused_in_one_line(tmp_path, capsys, quiet)
              names=["--holdout", "creep.csv", "creep compliance"])
 
 
+def test_a_stated_prestress_has_the_range_of_a_prestress_column(tmp_path):
+    d = read_csv(_moduli_file(tmp_path / "sweep.csv", GOOD))
+    with pytest.raises(DataError, match=r"sweep\.csv: stated prestress: 1e\+300 Pa is outside \[1e-30, 1e\+30\] Pa"):
+        d.with_prestress(1e300)
+    assert d.with_prestress(RANGES["prestress"][1]).prestress[0] == 1e30
+
+
 def test_files_and_flags_share_one_table(tmp_path):
     """The same value is accepted, or refused, as a flag and as a data file's value: the ranges are one table."""
     assert _args.RANGES is RANGES

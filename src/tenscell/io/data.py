@@ -372,6 +372,9 @@ def _stated_prestress(data, prestress_pa) -> float:
         raise _error(data.source, f"prestress {prestress_pa!r} is not a number (Pa)") from None
     if not (math.isfinite(p) and p > 0):
         raise _error(data.source, f"prestress {prestress_pa!r} Pa must be a finite number > 0")
+    problem = range_problem("prestress", p, "Pa")  # the range of a prestress_Pa column
+    if problem is not None:
+        raise _error(data.source, f"stated prestress: {problem}")
     return p
 
 
