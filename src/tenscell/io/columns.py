@@ -356,12 +356,14 @@ def _moduli(v: Mapping[str, np.ndarray], layout: str) -> tuple[np.ndarray, np.nd
 class Parsed:
     """What a table holds under a map: ``layout`` (:attr:`ColumnMap.layout`), each quantity's values in SI
     units (``values``: frequency Hz, storage/loss Pa, prestress Pa, time s, compliance 1/Pa...; G', G'' already
-    formed from the layout's columns), and the comments recording the columns and units used."""
+    formed from the layout's columns), the comments recording the columns and units used, and where each row
+    sits in its source (``where``: for the range checks' messages)."""
 
     layout: str
     values: dict
     source: str
     comments: tuple
+    where: tuple = ()  # each value row's place in its source ("line 12", "row 3", "index 'a'"), for range errors
 
 
 def parse(table: _Table, cmap: ColumnMap, min_points: int) -> Parsed:
@@ -381,7 +383,8 @@ def parse(table: _Table, cmap: ColumnMap, min_points: int) -> Parsed:
         how += f"; moduli = {cmap.geometric_factor:g} Pa × ratio"
     if cmap.layout != "creep":
         v["storage"], v["loss"] = _moduli(v, cmap.layout)
-    return Parsed(cmap.layout, v, table.source, (*table.comments, *notes, f"imported by tenscell: {how}"))
+    return Parsed(cmap.layout, v, table.source, (*table.comments, *notes, f"imported by tenscell: {how}"),
+                  tuple(table.where))
 
 
 def frame_table(df: pd.DataFrame, source: str) -> _Table:

@@ -65,10 +65,11 @@ def build(parsed: Parsed) -> RheologyData | CreepData:
     v = parsed.values
     if parsed.layout == "creep":
         return CreepData(time_s=v["time"], compliance=v["compliance"], compliance_sd=v.get("compliance_sd"),
-                         prestress=v.get("prestress"), source=parsed.source, comments=parsed.comments)
+                         prestress=v.get("prestress"), source=parsed.source, comments=parsed.comments,
+                         locations=parsed.where)
     return RheologyData(frequency_hz=v["frequency"], G_storage=v["storage"], G_loss=v["loss"],
                         prestress=v.get("prestress"), G_storage_sd=v.get("storage_sd"), G_loss_sd=v.get("loss_sd"),
-                        source=parsed.source, comments=parsed.comments)
+                        source=parsed.source, comments=parsed.comments, locations=parsed.where)
 
 
 def _data(table: _Table, cmap: ColumnMap, min_points: int) -> RheologyData | CreepData:
