@@ -31,7 +31,7 @@ NUMERIC_FLAGS = {
     tuple(FIT): {"--starts": (), "--seed": ("zero",), "--jobs": (), "--tolerance": (), "--baseline-starts": (),
                  "--max-points": (), "--min-prestress-share": (), "--max-decades": (),
                  "--min-prestress-elasticity": (), "--bound": (), "--fix": (), "--holdout": (), "--prestress": (),
-                 "--temperature": ("negative", "zero"), "--columns": (), "--units": ()},
+                 "--temperature": ("negative", "zero")},
     ("simulate", "--amplitude", "1", "--freq", "1"): {
         "--amplitude": (), "--amplitudes": (), "--freq": (), "--cycles": (), "--samples": (),
         "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),
@@ -41,16 +41,14 @@ NUMERIC_FLAGS = {
                  "--prestress": (), "--P": (), "--beta": (), "--velocity-scale": (), "--rtol": ()},
     ("study", "sensitivity"): {"--draws": (), "--seed": ("zero",)},
     ("study", "compactness", "DATA"): {"--decades": (), "--starts": (), "--jobs": (), "--tolerance": (),
-                                       "--prestress": (), "--temperature": ("negative", "zero"), "--columns": (),
-                                       "--units": ()},
+                                       "--prestress": (), "--temperature": ("negative", "zero")},
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
     ("synth-population", "--out", "OUT"): {"--cells": (), "--noise": ("zero",), "--spread": ("zero",), "--freq": (),
                                            "--seed": ("zero",)},
     ("fit-population", "DATA", "--out", "OUT"): {"--workers": ("zero",), "--seed": ("zero",), "--starts": (),
                                                  "--hops": ("zero",), "--tolerance": (),
-                                                 "--temperature": ("negative", "zero"), "--columns": (),
-                                                 "--units": ()},
+                                                 "--temperature": ("negative", "zero")},
     ("large-study", "monte-carlo", "--draws", "5", "--out", "OUT"): {
         "--draws": (), "--spread": (), "--chunk": (), "--workers": ("zero",), "--seed": ("zero",)},
     ("large-study", "sweep", "--prestress", "1", "--heterogeneity", "0", "--out", "OUT"): {
