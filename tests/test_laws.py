@@ -30,8 +30,11 @@ from tenscell.dynamics import oscillatory_response
 from tenscell.laws import (
     CompositeLaw,
     LinearSpring,
+    Maxwell,
     Parameter,
     PowerDashpot,
+    Springpot,
+    StandardLinearSolid,
     StiffeningFilament,
     TendonLaw,
     Voigt,
@@ -103,13 +106,24 @@ LAWS = {
 }
 
 
+#: laws with a frequency-dependent tangent (no constant (k, c)): the consumers below either realize them
+#: with internal variables or refuse them in one line (tests at the end of this file)
+DYNAMIC_LAWS = {
+    "maxwell": Maxwell(EA=EA, c=C),
+    "sls": StandardLinearSolid(EA=EA, EA_arm=RNG.uniform(0.5, 5.0, CELL.m), c=C),
+    "springpot": Springpot(EA=EA, kappa=RNG.uniform(0.1, 2.0, CELL.m), alpha=RNG.uniform(0.1, 0.9, CELL.m)),
+    "dynamic-by-family": family_laws(CELL, {"actin": Maxwell(EA=1.5, c=0.3)},
+                                     default=Springpot(EA=0.8, kappa=0.5, alpha=0.25)),
+}
+
+
 def test_every_law_class_is_run_through_every_consumer():
-    """A new law class in tenscell.laws must join LAWS (and so every test below)."""
+    """A new law class in tenscell.laws must join LAWS or DYNAMIC_LAWS (and so every test below)."""
     classes = {obj for obj in vars(laws).values()
                if isinstance(obj, type) and issubclass(obj, TendonLaw) and obj is not TendonLaw
                and not obj.__name__.startswith("_")}
     covered = set()
-    for law in LAWS.values():
+    for law in list(LAWS.values()) + list(DYNAMIC_LAWS.values()):
         covered.add(type(law))
         if isinstance(law, CompositeLaw):
             covered |= {type(part) for part in law.laws}

@@ -14,11 +14,23 @@ from .._checks import positive_array, positive_scalar
 from .._results import dataframe, format_repr
 from ..model.equilibrium import Cell
 
-__all__ = ["TendonLaw", "Parameter", "Tangent", "LinearizationError"]
+__all__ = ["TendonLaw", "Parameter", "Tangent", "LinearizationError", "DynamicLawError", "angular_frequencies"]
 
 
 class LinearizationError(ValueError):
     """The tendon law has no linearization at rest (its rate derivative at l' = 0 is infinite)."""
+
+
+class DynamicLawError(LinearizationError):
+    """The tendon law's tangent depends on frequency: it has no constant pair (k, c), or no state-free motion."""
+
+
+def angular_frequencies(omega) -> np.ndarray:
+    """``omega`` (rad/s) as a finite, non-negative 1-D float array (a scalar becomes shape (1,))."""
+    w = np.atleast_1d(np.asarray(omega, dtype=float)).ravel()
+    if not (np.all(np.isfinite(w)) and np.all(w >= 0)):
+        raise ValueError(f"omega (angular frequency) must be finite numbers >= 0 (rad/s), got {omega!r}")
+    return w
 
 
 class Parameter(NamedTuple):
@@ -125,6 +137,9 @@ class TendonLaw:
     #: the per-tendon parameters, in order (their fields hold scalars or (m,) arrays)
     parameters: ClassVar[tuple[Parameter, ...]] = ()
     rate_linear: ClassVar[bool] = True
+    #: True for laws whose tangent depends on frequency (internal dynamics: Maxwell, standard linear solid,
+    #: springpot); they define :meth:`complex_stiffness` and have no constant (k, c)
+    dynamic: ClassVar[bool] = False
     l0: Any = None
 
     # -- to implement -----------------------------------------------------------------------------
@@ -286,6 +301,31 @@ class TendonLaw:
             dk=np.array([bc(dk.get(n, z)) for n in self.names]).reshape(len(self.names), m),
             dc=np.array([bc(dc.get(n, z)) for n in self.names]).reshape(len(self.names), m),
         )
+
+    # -- the dynamic tangent (frequency domain) ---------------------------------------------------------
+    def complex_stiffness(self, l, T, omega) -> np.ndarray:
+        """Dynamic tangent ``k*_j(ω) = ∂T_j/∂l_j`` (N/m, complex) about tensions ``T`` (N) at lengths ``l`` (m).
+
+        Shape ``(n_omega, m)`` for ``omega`` (rad/s, ≥ 0). For a rate-linear law
+        it is ``k + iω·c`` from :meth:`tangent_at_rest`; laws with internal
+        dynamics (``dynamic = True``) override it with their exact form.
+        """
+        w = angular_frequencies(omega)
+        k, c = self.tangent_at_rest(l, T)
+        return np.asarray(k, dtype=float)[None, :] + 1j * np.multiply.outer(w, np.asarray(c, dtype=float))
+
+    def complex_stiffness_derivatives(self, l, T, omega) -> tuple[np.ndarray, np.ndarray]:
+        """``(∂k*/∂T, ∂k*/∂θ)``: shapes ``(n_omega, m)`` (1/m) and ``(p, n_omega, m)``, θ in :attr:`names` order.
+
+        Derivatives at fixed parameters (the rest length follows the tension)
+        and at fixed tension respectively; 0 where a tendon has no such
+        parameter. Default: from :meth:`tangent`, ``∂k + iω·∂c``.
+        """
+        w = angular_frequencies(omega)
+        t = self.tangent(l, T)
+        dk_dT = t.dk_dT[None, :] + 1j * np.multiply.outer(w, t.dc_dT)
+        dk = t.dk[:, None, :] + 1j * w[None, :, None] * t.dc[:, None, :]
+        return dk_dT, dk
 
     @classmethod
     def _trusted(cls, **fields):

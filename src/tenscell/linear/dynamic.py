@@ -1,0 +1,211 @@
+"""The frequency-dependent response kernel: moduli of a cell whose tendons have dynamics of their own.
+
+A tendon law with internal dynamics (:class:`tenscell.laws.Maxwell`,
+:class:`~tenscell.laws.StandardLinearSolid`, :class:`~tenscell.laws.Springpot`)
+has no constant pair (K0, C0); its dynamic tangent ``k*_j(ω)``
+(:meth:`tenscell.laws.TendonLaw.complex_stiffness`) gives, with the same
+split as :func:`tenscell.linear.modal.assemble_stiffness`,
+
+``K(ω) = P·Σ_j T0_j ∇²l_j + Σ_j k*_j(ω) a_j a_jᵀ``  (N/m, complex symmetric),
+
+``J(ω) = −D0 K(ω)⁻¹ H0 = D0 K(ω)⁻¹ b`` (m/N), and
+``G' + iG'' = (0.5/L)/J + iωη`` (Pa) with an optional Newtonian cytoplasm of
+viscosity η (Pa·s) in parallel with the structure. For a rate-linear law
+``k* = k + iωc`` and this is exactly :func:`tenscell.moduli` of
+:func:`tenscell.linearize_law` (tested).
+
+One LU factorization and solve per frequency: batched LAPACK for dense cells,
+a sparse LU per frequency for sparse ones (no modal decomposition: the
+pencil's eigenvectors do not exist for a frequency-dependent K). The
+derivative ``∂J/∂θ = −Σ_j ∂k*_j/∂θ (yᵀa_j)(a_jᵀx)`` with ``x = K⁻¹b``,
+``y = K⁻ᵀD0 = K⁻¹D0`` (K is complex symmetric) comes from the same solves.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .._checks import positive_array, positive_scalar
+from ..laws.base import TendonLaw, angular_frequencies
+from ..model.equilibrium import Cell
+from .modal import NotPositiveDefiniteError, modulus
+
+__all__ = ["dynamic_stiffness", "dynamic_compliance", "dynamic_moduli", "dynamic_complex_modulus",
+           "check_static_stability"]
+
+
+def _kstar(cell: Cell, kstar) -> np.ndarray:
+    k = np.asarray(kstar)
+    k = k[None, :] if k.ndim == 1 else k
+    if k.ndim != 2 or k.shape[1] != cell.m:
+        raise ValueError(f"kstar must have shape (n_omega, {cell.m}) (one dynamic tangent per tendon), got {np.shape(kstar)}")
+    return k
+
+
+def dynamic_stiffness(cell: Cell, P: float, kstar) -> np.ndarray:
+    """``K(ω) = P·Σ T0_j ∇²l_j + Σ k*_j(ω) a_j a_jᵀ`` (N/m), complex, shape (n_omega, n, n); dense cells.
+
+    Parameters
+    ----------
+    cell : Cell
+    P : float
+        Prestress scale (N): tensions ``P·T0``.
+    kstar : ndarray, shape (n_omega, m) or (m,)
+        Dynamic tangent of each tendon (N/m), e.g. ``law.complex_stiffness(cell.lengths, P*cell.T0, ω)``.
+    """
+    k = _kstar(cell, kstar)
+    if cell.sparse:
+        raise ValueError(f"{cell.describe()} is sparse: its K(ω) is not formed as a dense stack; "
+                         "dynamic_compliance solves it frequency by frequency")
+    A = np.asarray(cell.A)
+    H = np.asarray(cell.prestress_hessian, dtype=float)
+    return P * H[None] + (A[None] * k[:, None, :]) @ A.T
+
+
+def _solves(cell: Cell, P: float, k: np.ndarray, both: bool) -> tuple[np.ndarray, np.ndarray | None]:
+    """``x = K⁻¹b`` and (if ``both`` and probe ≠ load) ``y = K⁻¹D0``, shape (n_omega, n) each."""
+    b, d = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
+    same = bool(np.array_equal(b, d))
+    rhs = np.stack([b] if (same or not both) else [b, d], axis=1)  # (n, 1 or 2)
+    if not cell.sparse:
+        K = dynamic_stiffness(cell, P, k)
+        sol = np.linalg.solve(K, np.broadcast_to(rhs, (k.shape[0],) + rhs.shape).astype(complex))
+    else:
+        H = sp.csr_matrix(cell.prestress_hessian) * P
+        A = sp.csr_matrix(cell.A)
+        sol = np.empty((k.shape[0],) + rhs.shape, dtype=complex)
+        for i in range(k.shape[0]):
+            K = (H + A @ sp.diags(k[i]) @ A.T).tocsc().astype(complex)
+            sol[i] = spla.splu(K).solve(rhs.astype(complex))
+    x = sol[:, :, 0]
+    y = x if same else (sol[:, :, 1] if both else None)
+    return x, y
+
+
+def dynamic_compliance(cell: Cell, P: float, kstar, dkstar=None):
+    """``J(ω) = D0 K(ω)⁻¹ b`` (m/N), and with ``dkstar`` also its exact derivatives.
+
+    Parameters
+    ----------
+    cell : Cell
+    P : float
+        Prestress scale (N).
+    kstar : ndarray, shape (n_omega, m)
+        Dynamic tangents (N/m).
+    dkstar : ndarray, shape (q, n_omega, m), optional
+        ``∂k*_j/∂θ_q`` for q quantities θ (e.g. the second output of
+        :meth:`~tenscell.laws.TendonLaw.complex_stiffness_derivatives`).
+
+    Returns
+    -------
+    J : ndarray of complex, shape (n_omega,)
+    dJ : ndarray of complex, shape (q, n_omega)
+        Only with ``dkstar``: ``∂J/∂θ_q = −Σ_j ∂k*_jq (yᵀa_j)(a_jᵀx)`` (m/N per unit of θ_q).
+    """
+    P = positive_scalar("P (prestress)", P, "N")
+    k = _kstar(cell, kstar)
+    x, y = _solves(cell, P, k, both=dkstar is not None)
+    J = x @ np.asarray(cell.probe, dtype=float)
+    if dkstar is None:
+        return J
+    dk = np.asarray(dkstar)
+    if dk.ndim != 3 or dk.shape[1:] != k.shape:
+        raise ValueError(f"dkstar must have shape (q, {k.shape[0]}, {cell.m}), got {dk.shape}")
+    A = cell.A
+    assert y is not None  # both=True above
+    prod = np.asarray((A.T @ y.T).T * (A.T @ x.T).T)  # (n_omega, m): (yᵀa_j)(a_jᵀx)
+    return J, -np.einsum("qwm,wm->qw", dk, prod)
+
+
+def check_static_stability(cell: Cell, law: TendonLaw, P: float) -> None:
+    """Raise :class:`NotPositiveDefiniteError` unless the static stiffness ``K(ω → 0)`` is positive definite.
+
+    With passive tendons (``Re k*`` rising, ``Im k* ≥ 0``) a structure whose
+    static stiffness is positive definite is stable at every frequency.
+    """
+    K0 = dynamic_stiffness_static(cell, law, P)
+    try:
+        if sp.issparse(K0):
+            from .sparse import NotPositiveDefinite, factorize_spd
+
+            try:
+                factorize_spd(K0, what="K(0)")
+            except NotPositiveDefinite:
+                raise np.linalg.LinAlgError from None
+        else:
+            np.linalg.cholesky(K0)
+    except np.linalg.LinAlgError:
+        raise NotPositiveDefiniteError(
+            f"the static stiffness K(ω→0) of {cell.describe()} with {type(law).__name__} tendons at P={P:.6g} N "
+            "is not positive definite: the reference is not a stable equilibrium"
+        ) from None
+
+
+def dynamic_stiffness_static(cell: Cell, law: TendonLaw, P: float):
+    """``K(ω → 0)`` (N/m), real, dense or sparse like the cell."""
+    k0 = np.asarray(law.complex_stiffness(cell.lengths, P * cell.T0, [0.0])[0].real)
+    if cell.sparse:
+        return (sp.csr_matrix(cell.prestress_hessian) * P + sp.csr_matrix(cell.A) @ sp.diags(k0) @ sp.csr_matrix(cell.A).T).tocsc()
+    return np.asarray(dynamic_stiffness(cell, P, k0)[0].real)
+
+
+def dynamic_complex_modulus(cell: Cell, law: TendonLaw, P: float, f_hz, *, viscosity: float = 0.0,
+                            check: bool = True) -> np.ndarray:
+    """``G* = (0.5/L)/J(ω) + iωη`` (Pa), complex, shape of ``f_hz`` raveled to (nf,).
+
+    See :func:`dynamic_moduli`.
+    """
+    if not isinstance(law, TendonLaw):
+        raise ValueError(f"law must be a tenscell.laws.TendonLaw, got {type(law).__name__}")
+    if law.m is not None and law.m != cell.m:
+        raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
+    P = positive_scalar("P (prestress)", P, "N")
+    f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
+    eta = viscosity_value(viscosity)
+    if check:
+        check_static_stability(cell, law, P)
+    w = 2 * np.pi * f
+    J = dynamic_compliance(cell, P, law.complex_stiffness(cell.lengths, P * cell.T0, angular_frequencies(w)))
+    return modulus(J, cell.strut_length) + 1j * w * eta
+
+
+def viscosity_value(viscosity) -> float:
+    """The cytoplasm viscosity η as a float (Pa·s), ≥ 0; ValueError naming it otherwise."""
+    return float(positive_array("viscosity (cytoplasm)", viscosity, (), "Pa·s", allow_zero=True))
+
+
+def dynamic_moduli(cell: Cell, law: TendonLaw, P: float, f_hz, *, viscosity: float = 0.0,
+                   check: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Storage and loss moduli ``G'``, ``G''`` (Pa) of a cell with any tendon law, at frequencies ``f_hz`` (Hz).
+
+    ``G' + iG'' = (0.5/L)/J(ω) + iωη`` with ``J(ω) = D0 K(ω)⁻¹ b`` from the
+    law's exact dynamic tangent at tensions ``P·T0`` (no realization, no
+    approximation) and a Newtonian cytoplasm of viscosity η in parallel.
+
+    Parameters
+    ----------
+    cell : Cell
+    law : TendonLaw
+        Any law (need not be placed: its tangent is taken at tensions ``P·T0``).
+    P : float
+        Prestress scale (N), > 0.
+    f_hz : float or array_like
+        Frequencies (Hz), > 0.
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), ≥ 0; adds ``iωη`` to G* (G'' only).
+    check : bool
+        Verify that the static stiffness ``K(ω→0)`` is positive definite (one Cholesky).
+
+    Returns
+    -------
+    G_storage, G_loss : ndarray, shape (nf,)
+        In Pa.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        If ``K(ω → 0)`` is not positive definite.
+    """
+    G = dynamic_complex_modulus(cell, law, P, f_hz, viscosity=viscosity, check=check)
+    return G.real, G.imag
