@@ -31,10 +31,11 @@ __all__ = ["Field", "Mechanism", "MECHANISMS", "mechanism", "KINDS", "PER_TENDON
 KINDS = {
     "stiffness": ("N", True),
     "damping": ("N·s/m", True),
-    "coefficient": ("N·s^α/m", True),
+    "coefficient": ("N (at 1 rad/s)", True),
     "time": ("s", False),
     "exponent": ("", False),
     "decades": ("decades", False),
+    "tail": ("", False),
     "viscosity": ("Pa·s", True),
 }
 #: the layouts of a law parameter over the tendons
@@ -146,6 +147,23 @@ def _builtin() -> dict[str, Mechanism]:
                desc="Voigt tendons, log-normal spread of stiffness, one damping"),
         _voigt("voigt-trap-damping+visc", c="shared", c_dist="powerlaw", visc=True,
                desc="Voigt tendons per family, trap-model (power-law) damping, cytoplasm viscosity"),
+        Mechanism("maxwell", "Maxwell", (Field("EA", "stiffness"), Field("c", "damping")),
+                  description="Maxwell tendons (filament turnover) per family"),
+        Mechanism("maxwell+visc", "Maxwell", (Field("EA", "stiffness"), Field("c", "damping")), viscosity=True,
+                  description="Maxwell tendons per family, cytoplasm viscosity"),
+        Mechanism("sls", "StandardLinearSolid",
+                  (Field("EA", "stiffness"), Field("EA_arm", "stiffness", "shared"), Field("c", "damping", "shared")),
+                  description="standard linear solid tendons: spring per family, one arm"),
+        Mechanism("sls-trap+visc", "StandardLinearSolid",
+                  (Field("EA", "stiffness"), Field("EA_arm", "stiffness", "shared"),
+                   Field("c", "damping", "shared", "powerlaw")), viscosity=True,
+                  description="standard linear solid tendons, trap-model (power-law) arm damping, cytoplasm viscosity"),
+        Mechanism("springpot", "Springpot",
+                  (Field("EA", "stiffness"), Field("kappa", "coefficient"), Field("alpha", "exponent", "shared")),
+                  description="springpot tendons per family, one exponent"),
+        Mechanism("springpot+visc", "Springpot",
+                  (Field("EA", "stiffness"), Field("kappa", "coefficient"), Field("alpha", "exponent", "shared")),
+                  viscosity=True, description="springpot tendons per family, one exponent, cytoplasm viscosity"),
     ]
     return {m.name: m for m in mechs}
 

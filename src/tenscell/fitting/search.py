@@ -45,7 +45,7 @@ from .result import FitAlternative, FitResult
 from .._threads import limited
 from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
 
-__all__ = ["fit"]
+__all__ = ["fit", "run_search"]
 
 
 class _Objective:
@@ -228,10 +228,14 @@ def _step(problem: FitProblem, chain: _Chain, settings: _Settings, max_nfev: int
     # shared machine they make each evaluation ~10x slower.
     with limited():  # one place for BLAS threads (tenscell._threads), overridable by the user
         first = chain.theta is None
+        # a problem with starts and moves of its own (a fitted mechanism) brings them: the hook by which a new
+        # fitted model plugs into this search
         if first:
-            x0 = _initial_guess(problem, chain.rng) if chain.initial is None else chain.initial
+            guess = getattr(problem, "initial_guess", None) or (lambda rng: _initial_guess(problem, rng))
+            x0 = guess(chain.rng) if chain.initial is None else chain.initial
         else:
-            x0 = _perturb(problem, chain.theta, chain.rng)
+            move = getattr(problem, "perturb", None) or (lambda th, rng: _perturb(problem, th, rng))
+            x0 = move(chain.theta, chain.rng)
         theta, res, nfev = _least_squares(problem, x0, max_nfev)
         chain.nfev += nfev
         chain.last_nfev = nfev
@@ -354,7 +358,8 @@ def fit(
     initial=None,
     max_points: int | None = DEFAULT_MAX_POINTS,
     progress: bool | None = None,
-) -> FitResult:
+    model=None,
+):
     """Fit the tensegrity model's G', G'' to measured data (multi-start, analytic Jacobian).
 
     Parameters
@@ -409,10 +414,18 @@ def fit(
     progress : bool or None
         A progress bar: None shows one when someone watches (a terminal or a
         notebook), True always, False never (see :mod:`tenscell._progress`).
+    model : str or Mechanism, optional
+        Fit a mechanism instead of the per-tendon Voigt cell (a name of
+        :data:`tenscell.fitting.mechanisms.MECHANISMS` or a spec): delegates to
+        :func:`tenscell.fitting.mechanism_fit.fit_mechanism` with the same
+        search options and returns a
+        :class:`~tenscell.fitting.mechanism_fit.MechanismFit`; ``tendons``,
+        ``damping`` and the activity constraints do not apply. The name
+        ``"voigt-per-tendon"`` is this function's own fit.
 
     Returns
     -------
-    FitResult
+    FitResult (or MechanismFit with ``model``)
 
     Raises
     ------
@@ -421,6 +434,12 @@ def fit(
     """
     from ..model.shapes import paper_cell
 
+    if model is not None and model != "voigt-per-tendon":
+        from .mechanism_fit import fit_mechanism
+
+        return fit_mechanism(data, model, cell, starts=starts, seed=seed, jobs=jobs, tolerance=tolerance, hops=hops,
+                             patience=patience, max_nfev=max_nfev, polish=polish, polish_effort=polish_effort,
+                             bounds=bounds, fixed=fixed, max_points=max_points, progress=progress)
     t_begin = time.monotonic()
     datasets = as_datasets(data)
     if max_points is not None:
@@ -430,6 +449,25 @@ def fit(
                            min_prestress_share=min_prestress_share, max_decades=max_decades,
                            min_prestress_elasticity=min_prestress_elasticity,
                            elasticity_frequency_hz=elasticity_frequency_hz)
+    chains, stop = run_search(problem, starts=starts, seed=seed, jobs=jobs, tolerance=tolerance, hops=hops,
+                              patience=patience, max_nfev=max_nfev, polish=polish, polish_effort=polish_effort,
+                              initial=initial, progress=progress, desc=f"fit ({tendons})",
+                              t_begin=t_begin)
+    return _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin)
+
+
+def run_search(problem, *, starts: int = 4, seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01,
+               hops: int = 30, patience: int = 6, max_nfev: int = 100, polish: float = 0.2,
+               polish_effort: float = 0.5, initial=None, progress: bool | None = None, desc: str = "fit",
+               t_begin: float | None = None):
+    """The multi-start search on any problem; returns ``(chains, stop reason)`` (options as for :func:`fit`).
+
+    ``problem`` is a :class:`FitProblem`, or any object with its residual and
+    Jacobian interface that brings its own ``initial_guess(rng)`` and
+    ``perturb(theta, rng)`` (:class:`tenscell.fitting.mechanism_problem.MechanismProblem`).
+    ``t_begin`` (``time.monotonic()``) is the moment the history's times count from (default: now).
+    """
+    t_begin = time.monotonic() if t_begin is None else t_begin
     starts = _count("starts", starts, 1)
     jobs = _count("jobs", jobs, 1)
     hops = _count("hops", hops, 0)
@@ -446,9 +484,9 @@ def fit(
     chains[0].initial = _warm_start(problem, initial)
     settings = _Settings(hops=hops, patience=patience, max_nfev=max_nfev, tolerance=tolerance,
                          target=polish * tolerance, t_begin=t_begin)
-    with progress_bar(total=hops + 1, desc=f"fit ({tendons})", unit="round", progress=progress) as bar:
+    with progress_bar(total=hops + 1, desc=desc, unit="round", progress=progress) as bar:
         stop = _rounds(problem, chains, settings, jobs, float(polish_effort), bar)
-    return _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin)
+    return chains, stop
 
 
 def _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin) -> FitResult:
