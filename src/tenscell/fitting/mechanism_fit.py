@@ -385,6 +385,7 @@ def fit_mechanism(data, model, cell: Cell | None = None, *, starts: int = 4, see
                               progress=progress, desc=f"fit ({problem.mechanism.name})", t_begin=t_begin)
     best = _best(chains)
     theta = best.theta if best.met_theta is None else best.met_theta
+    assert theta is not None  # every chain that ran holds a point
     per_set = tuple(float(x) for x in problem.dataset_rms(theta))
     noise = tuple(noise_rms(datasets))
     rms = problem.rms(theta)

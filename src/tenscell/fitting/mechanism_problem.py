@@ -415,7 +415,8 @@ def _layout(mech: Mechanism, cell: Cell, law_cls):
     if given != set(law_names):
         raise ValueError(f"mechanism {mech.name!r}: law {mech.law} has parameters {', '.join(law_names)}; the fields "
                          f"lay out {', '.join(sorted(given)) or 'none'}")
-    rows, per_field = [], []
+    rows: list[tuple[str, str, str, str]] = []
+    per_field: list[tuple[Field, int]] = []
     for f in mech.fields:
         start = len(rows)
         rows += _field_params(f, fams)
