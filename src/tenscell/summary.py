@@ -23,7 +23,7 @@ from .model.equilibrium import Cell, NotPrestressableError, equilibrate, equilib
 from .model.formfinding import rigid_body_modes
 from .linear.krylov import load_modes
 from .linear.linearize import LinearModel, NotPositiveDefiniteError, linearize
-from .model.structure import STRUT, Structure
+from .model.structure import Structure, cable_mask
 from ._threads import hot_path
 
 __all__ = ["StructureSummary", "summarize", "relaxation_modes", "RelaxationModes", "node_displacements"]
@@ -188,7 +188,7 @@ def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "
     if cell is None:
         verdict = f"NOT prestressable: {reason}"
     else:
-        cable = np.array([f != STRUT for f in s.families])
+        cable = cable_mask(s.families)
         min_t = float(cell.T0[cable].min())
         try:
             lin = linearize(cell, P=P, EA=EA, c=c, check=rigid == 0)
@@ -307,6 +307,9 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     """
     if not (isinstance(k, (int, np.integer)) and k >= 1):
         raise ValueError(f"k (number of modes) must be a whole number >= 1, got {k!r}")
+    if lin.realization is not None:
+        raise ValueError(f"relaxation_modes: the {type(lin.law).__name__} tendons' internal variables are part of "
+                         "every mode, which then has no node displacements alone; use creep_spectrum(lin) for its times")
     n = lin.cell.n
     if sp.issparse(lin.K0):
         # ARPACK does not converge in reasonable time on lattices, whose slowest rate is shared by

@@ -8,7 +8,7 @@ import numpy as np
 
 from .._checks import positive_array
 from ..model.equilibrium import Cell
-from .base import Tangent, TendonLaw, _refs, angular_frequencies
+from .base import DEFAULT_REALIZATION_TOL, Realization, Tangent, TendonLaw, _refs, angular_frequencies
 
 __all__ = ["CompositeLaw", "family_laws"]
 
@@ -158,6 +158,21 @@ class CompositeLaw(TendonLaw):
         return Tangent(l=l, T=np.array(T, dtype=float), k=k, c=c, dk_dT=dkT, dc_dT=dcT, names=names,
                        units=tuple(units[n] for n in names), values=self.parameter_values(m), dk=dk, dc=dc)
 
+
+    def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
+        """Each part's realization on its tendons (error: the largest of the parts')."""
+        l, T = _refs(l, T)
+        k, c = np.empty(self.m), np.empty(self.m)
+        tendon, ak, ac, err, band = [], [], [], 0.0, None
+        for law, i in zip(self.laws, self.indices):
+            r = law.realization(l[i], T[i], band_hz, tol)
+            k[i], c[i] = r.k, r.c
+            tendon.append(i[r.tendon])
+            ak.append(r.arm_k)
+            ac.append(r.arm_c)
+            err, band = max(err, r.error), (r.band_hz or band)
+        return Realization(k=k, c=c, tendon=np.concatenate(tendon).astype(int), arm_k=np.concatenate(ak),
+                           arm_c=np.concatenate(ac), error=err, band_hz=band)
 
     def complex_stiffness(self, l, T, omega) -> np.ndarray:
         """Each part's dynamic tangent on its tendons (N/m), shape ``(n_omega, m)``."""

@@ -38,17 +38,26 @@ Eq. 11), so :meth:`at_prestress` works as for Voigt.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any, ClassVar
 
 import numpy as np
+import scipy.optimize
 
-from .base import DynamicLawError, Parameter, _refs, angular_frequencies
+from .base import DEFAULT_REALIZATION_TOL, DynamicLawError, Parameter, Realization, _refs, angular_frequencies
 from .springs import _SpringEA
 
-__all__ = ["Maxwell", "StandardLinearSolid", "Springpot", "SPRINGPOT_TIME"]
+__all__ = ["Maxwell", "StandardLinearSolid", "Springpot", "SPRINGPOT_TIME", "DEFAULT_REALIZATION_BAND_HZ",
+           "springpot_prony"]
 
 #: the reference time t1 of :class:`Springpot` (s): kappa is the springpot's axial modulus at ω = 1/t1 = 1 rad/s
 SPRINGPOT_TIME = 1.0
+#: default band (Hz) over which an approximate realization is accurate: the paper's 10⁻² to 10³ Hz
+DEFAULT_REALIZATION_BAND_HZ = (1e-2, 1e3)
+#: (arms per decade, decades of margin beyond the band) tried in turn until the Prony series meets its tolerance
+_PRONY_SCHEDULE = ((2, 2), (3, 2), (3, 3), (4, 3), (4, 4), (6, 5), (8, 6))
+#: points per decade on which the Prony error is measured (5× the densest fitting grid's arms)
+_PRONY_CHECK_PER_DECADE = 50
 
 
 class _DynamicSpring(_SpringEA):
@@ -89,6 +98,74 @@ class _DynamicSpring(_SpringEA):
         l, T = _refs(l, T)
         self.rest_lengths(l, T)  # a tension the spring cannot carry fails here, as for Voigt
         return l, T
+
+
+def _band(band_hz) -> tuple[float, float]:
+    lo, hi = DEFAULT_REALIZATION_BAND_HZ if band_hz is None else (float(band_hz[0]), float(band_hz[1]))
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+        raise ValueError(f"band_hz must be two frequencies 0 < low < high (Hz), got {band_hz!r}")
+    return lo, hi
+
+
+def _one_arm_per_tendon(k, c, arm_k, arm_c) -> Realization:
+    m = np.size(k)
+    return Realization(k=np.asarray(k, dtype=float), c=np.broadcast_to(np.asarray(c, dtype=float), (m,)).copy(),
+                       tendon=np.arange(m), arm_k=np.asarray(arm_k, dtype=float),
+                       arm_c=np.broadcast_to(np.asarray(arm_c, dtype=float), (m,)).copy())
+
+
+@lru_cache(maxsize=64)
+def springpot_prony(alpha: float, band_hz: tuple[float, float] = DEFAULT_REALIZATION_BAND_HZ,
+                    tol: float = DEFAULT_REALIZATION_TOL) -> tuple[float, np.ndarray, np.ndarray, float]:
+    """A passive Prony series for ``(iω·t1)^α`` over a band: ``g_d·iω + Σ g_i·iωτ_i/(1 + iωτ_i)``.
+
+    Retardation times τ_i log-spaced over the band (ω = 2πf) widened by a
+    margin; non-negative weights (so every element is a passive spring,
+    dashpot or Maxwell arm) from non-negative least squares on the relative
+    error at 4 points per arm; more arms per decade and a wider margin until
+    the largest relative error ``|series − (iω·t1)^α|/|(iω·t1)^α|``, measured
+    on 50 points per decade across the band, is at most ``tol``. No parallel
+    spring: the static limit is exact (0).
+
+    Returns
+    -------
+    g_d : float
+        Dashpot weight (s): the term ``g_d·iω``.
+    tau : ndarray, shape (r,)
+        Retardation times (s).
+    g : ndarray, shape (r,)
+        Arm weights (dimensionless), ≥ 0.
+    error : float
+        The measured largest relative error over the band.
+
+    Raises
+    ------
+    ValueError
+        If no series of the schedule (up to 8 arms per decade) reaches ``tol``.
+    """
+    lo, hi = np.log10(2 * np.pi * band_hz[0]), np.log10(2 * np.pi * band_hz[1])
+    wc = np.logspace(lo, hi, int(np.ceil((hi - lo) * _PRONY_CHECK_PER_DECADE)) + 1)
+    err = np.inf
+    for per_decade, margin in _PRONY_SCHEDULE:
+        n = int(np.ceil((hi - lo + 2 * margin) * per_decade)) + 1
+        tau = np.logspace(-(hi + margin), -(lo - margin), n)
+        wf = np.logspace(lo, hi, int(np.ceil((hi - lo) * 4 * per_decade)) + 1)
+        B, phi = _prony_basis(wf, tau, wf[-1]), (1j * wf * SPRINGPOT_TIME) ** alpha
+        Bn, y = B / np.abs(phi)[:, None], phi / np.abs(phi)
+        g, _ = scipy.optimize.nnls(np.vstack([Bn.real, Bn.imag]), np.concatenate([y.real, y.imag]), maxiter=50 * n)
+        target = (1j * wc * SPRINGPOT_TIME) ** alpha
+        err = float(np.max(np.abs(_prony_basis(wc, tau, wf[-1]) @ g - target) / np.abs(target)))
+        if err <= tol:
+            keep = g[1:] > 0
+            return float(g[0]) / wf[-1], tau[keep], g[1:][keep], err
+    raise ValueError(f"no Prony series of up to 8 arms per decade represents the springpot (alpha={alpha:g}) within "
+                     f"tol={tol:g} over {band_hz[0]:g}–{band_hz[1]:g} Hz (best {err:.2g}); ask for a larger tol")
+
+
+def _prony_basis(w, tau, w_top) -> np.ndarray:
+    """Columns: the dashpot ``iω/w_top`` (scaled to order 1 in the band) and the arms ``iωτ/(1 + iωτ)``."""
+    z = 1j * np.multiply.outer(w, tau)
+    return np.concatenate([(1j * w / w_top)[:, None], z / (1 + z)], axis=1)
 
 
 def _arm(k, c, w):
@@ -156,6 +233,11 @@ class Maxwell(_DynamicSpring):
         dT = np.broadcast_to((1.0 / l).astype(complex), (w.size, l.size)).copy()
         return dT, np.stack([dk / l, dc])
 
+    def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
+        """Exact: the spring ``T/l`` in parallel with one arm ``(EA/l, c)`` per tendon (``band_hz``, ``tol`` unused)."""
+        l, T = self._check(l, T)
+        return _one_arm_per_tendon(T / l, 0.0, self.EA / l, self.c)
+
 
 @dataclass(frozen=True, eq=False)
 class StandardLinearSolid(_DynamicSpring):
@@ -203,6 +285,11 @@ class StandardLinearSolid(_DynamicSpring):
         _, dk, dc = _arm(self.EA_arm / l, np.broadcast_to(self.c, l.shape), w)
         inv = np.broadcast_to((1.0 / l).astype(complex), (w.size, l.size)).copy()
         return inv, np.stack([inv, dk / l, dc])
+
+    def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
+        """Exact: the spring ``(EA + T)/l`` in parallel with one arm ``(EA_arm/l, c)`` per tendon."""
+        l, T = self._check(l, T)
+        return _one_arm_per_tendon(self._spring_tangent(l, T), 0.0, self.EA_arm / l, self.c)
 
 
 @dataclass(frozen=True, eq=False)
@@ -265,3 +352,31 @@ class Springpot(_DynamicSpring):
         inv = np.broadcast_to((1.0 / l).astype(complex), (w.size, l.size)).copy()
         # at ω = 0, (iω)^α·log(iω) → 0: pw is 0 there, so the product is 0
         return inv, np.stack([inv, pw / l, (self.kappa / l) * pw * log_iw[:, None]])
+
+    def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
+        """The spring ``(EA + T)/l`` with the springpot as a Prony series (:func:`springpot_prony`) per exponent.
+
+        Accurate to ``tol`` (relative, in the springpot's part of k*; so at
+        least as accurate in k*) over ``band_hz`` (Hz, default the paper's
+        10⁻² to 10³ Hz); exact at ω → 0. Outside the band the series is a
+        dashpot above it and relaxes below it.
+        """
+        l, T = self._check(l, T)
+        lo_hi = _band(band_hz)
+        alpha = np.broadcast_to(self.alpha, l.shape)
+        kappa_l = np.broadcast_to(self.kappa, l.shape) / l
+        c = np.zeros(l.size)
+        tendon, arm_k, arm_c = [], [], []
+        err = 0.0
+        for a in np.unique(alpha):
+            js = np.flatnonzero(alpha == a)
+            g_d, tau, g, e = springpot_prony(float(a), lo_hi, float(tol))
+            err = max(err, e)
+            c[js] = g_d * kappa_l[js]
+            tendon.append(np.repeat(js, tau.size))
+            arm_k.append(np.outer(kappa_l[js], g).ravel())
+            arm_c.append(np.outer(kappa_l[js], g * tau).ravel())
+        keep = np.concatenate(arm_k) > 0  # kappa = 0 tendons have no arms
+        return Realization(k=self._spring_tangent(l, T), c=c, tendon=np.concatenate(tendon)[keep],
+                           arm_k=np.concatenate(arm_k)[keep], arm_c=np.concatenate(arm_c)[keep], error=err,
+                           band_hz=lo_hi)

@@ -14,6 +14,21 @@ viscosity η (Pa·s) in parallel with the structure. For a rate-linear law
 ``k* = k + iωc`` and this is exactly :func:`tenscell.moduli` of
 :func:`tenscell.linearize_law` (tested).
 
+For the time domain (creep, relaxation, the retardation spectrum) such a law
+is *realized* with internal variables (:func:`realize`): each Maxwell arm
+(spring ``g`` in series with a dashpot ``η_a``) of the law's
+:class:`~tenscell.laws.Realization` adds its dashpot extension ``d_a`` to the
+coordinates, and with ``B = [a_j(a)]`` (n × r), ``G = diag(g)``:
+
+``K = [[P·Σ T0∇²l + A diag(k) Aᵀ + B G Bᵀ, −B G], [−G Bᵀ, G]]``,
+``C = [[A diag(c) Aᵀ, 0], [0, diag(η_a)]]``,
+
+load ``[b; 0]`` and probe ``[D0; 0]``: a symmetric pencil whose transfer
+function is exactly ``D0 K(ω)⁻¹ b`` with the realization's ``k*``
+(eliminate ``d``: ``(g + iωη_a) d_a = g a_jᵀq``). K is positive definite
+exactly when the relaxed static stiffness is. Every consumer of a
+:class:`~tenscell.linear.linearize.LinearModel` then works unchanged.
+
 One LU factorization and solve per frequency: batched LAPACK for dense cells,
 a sparse LU per frequency for sparse ones (no modal decomposition: the
 pencil's eigenvectors do not exist for a frequency-dependent K). The
@@ -27,12 +42,13 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .._checks import positive_array, positive_scalar
-from ..laws.base import TendonLaw, angular_frequencies
+from ..laws.base import DEFAULT_REALIZATION_TOL, Realization, TendonLaw, angular_frequencies
 from ..model.equilibrium import Cell
 from .modal import NotPositiveDefiniteError, modulus
+from .._threads import hot_path
 
 __all__ = ["dynamic_stiffness", "dynamic_compliance", "dynamic_moduli", "dynamic_complex_modulus",
-           "check_static_stability"]
+           "check_static_stability", "realize", "with_cytoplasm", "exact_compliance"]
 
 
 def _kstar(cell: Cell, kstar) -> np.ndarray:
@@ -43,6 +59,7 @@ def _kstar(cell: Cell, kstar) -> np.ndarray:
     return k
 
 
+@hot_path
 def dynamic_stiffness(cell: Cell, P: float, kstar) -> np.ndarray:
     """``K(ω) = P·Σ T0_j ∇²l_j + Σ k*_j(ω) a_j a_jᵀ`` (N/m), complex, shape (n_omega, n, n); dense cells.
 
@@ -83,6 +100,7 @@ def _solves(cell: Cell, P: float, k: np.ndarray, both: bool) -> tuple[np.ndarray
     return x, y
 
 
+@hot_path
 def dynamic_compliance(cell: Cell, P: float, kstar, dkstar=None):
     """``J(ω) = D0 K(ω)⁻¹ b`` (m/N), and with ``dkstar`` also its exact derivatives.
 
@@ -118,6 +136,7 @@ def dynamic_compliance(cell: Cell, P: float, kstar, dkstar=None):
     return J, -np.einsum("qwm,wm->qw", dk, prod)
 
 
+@hot_path
 def check_static_stability(cell: Cell, law: TendonLaw, P: float) -> None:
     """Raise :class:`NotPositiveDefiniteError` unless the static stiffness ``K(ω → 0)`` is positive definite.
 
@@ -150,6 +169,7 @@ def dynamic_stiffness_static(cell: Cell, law: TendonLaw, P: float):
     return np.asarray(dynamic_stiffness(cell, P, k0)[0].real)
 
 
+@hot_path
 def dynamic_complex_modulus(cell: Cell, law: TendonLaw, P: float, f_hz, *, viscosity: float = 0.0,
                             check: bool = True) -> np.ndarray:
     """``G* = (0.5/L)/J(ω) + iωη`` (Pa), complex, shape of ``f_hz`` raveled to (nf,).
@@ -175,6 +195,7 @@ def viscosity_value(viscosity) -> float:
     return float(positive_array("viscosity (cytoplasm)", viscosity, (), "Pa·s", allow_zero=True))
 
 
+@hot_path
 def dynamic_moduli(cell: Cell, law: TendonLaw, P: float, f_hz, *, viscosity: float = 0.0,
                    check: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """Storage and loss moduli ``G'``, ``G''`` (Pa) of a cell with any tendon law, at frequencies ``f_hz`` (Hz).
@@ -209,3 +230,134 @@ def dynamic_moduli(cell: Cell, law: TendonLaw, P: float, f_hz, *, viscosity: flo
     """
     G = dynamic_complex_modulus(cell, law, P, f_hz, viscosity=viscosity, check=check)
     return G.real, G.imag
+
+
+# ---- the cytoplasm and internal-variable realizations -----------------------------------------------------
+def cytoplasm_damping(cell: Cell, viscosity: float):
+    """``2L·η·D0ᵀD0`` (N·s/m), dense or sparse like the cell: a dashpot on the probe giving ``G* += iωη``.
+
+    Exact for ``probe = load`` (Sherman–Morrison: ``1/J' = 1/J + iω·2Lη``);
+    refused otherwise, where a dashpot on the probe is not "in parallel" with
+    the measured modulus.
+    """
+    eta = viscosity_value(viscosity)
+    b, d = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
+    if not np.allclose(b, d, rtol=0, atol=1e-14 * max(np.abs(b).max(), 1e-300)):
+        raise ValueError(f"a cytoplasm viscosity needs the probe to be the load point, which it is not in "
+                         f"{cell.describe()}; use dynamic_moduli(..., viscosity=η), which adds iωη to G*")
+    cd = 2.0 * cell.strut_length * eta
+    if cell.sparse:
+        nz = np.flatnonzero(d)
+        D = sp.csr_matrix((d[nz], (np.zeros(nz.size, dtype=int), nz)), shape=(1, d.size))
+        return (cd * (D.T @ D)).tocsr()
+    return cd * np.outer(d, d)
+
+
+def with_cytoplasm(lin, viscosity: float):
+    """The linear model with a Newtonian cytoplasm η (Pa·s) in parallel: C0 += 2Lη·D0ᵀD0 (``G* += iωη``)."""
+    import dataclasses
+
+    eta = viscosity_value(viscosity)
+    if eta == 0.0 and lin.viscosity == 0.0:
+        return lin
+    n = lin.cell.n
+    extra = cytoplasm_damping(lin.cell, eta - lin.viscosity)
+    if lin.K0.shape[0] > n:  # a realized model: the cytoplasm acts on the structure's coordinates only
+        extra = sp.block_diag([extra, sp.csr_matrix((lin.K0.shape[0] - n,) * 2)]).tocsr() if sp.issparse(lin.C0) \
+            else np.pad(extra, (0, lin.K0.shape[0] - n))
+    lin2 = dataclasses.replace(lin, C0=lin.C0 + extra, viscosity=eta)
+    lin2.__dict__.pop("pencil", None)
+    return lin2
+
+
+def _augmented(cell: Cell, P: float, R: Realization):
+    """``(K, C)`` of the realized pencil (see the module docstring), dense or sparse like the cell."""
+    from ..model.equilibrium import weighted_gram
+
+    A = cell.A
+    Kq = P * cell.prestress_hessian + weighted_gram(A, R.k)
+    Cq = weighted_gram(A, R.c)
+    if cell.sparse:
+        B = sp.csr_matrix(A)[:, R.tendon]
+        G = sp.diags(R.arm_k)
+        K = sp.bmat([[Kq + B @ G @ B.T, -(B @ G)], [-(G @ B.T), G]]).tocsr()
+        C = sp.bmat([[Cq, None], [None, sp.diags(R.arm_c)]]).tocsr()
+        return K, C
+    B = np.asarray(A)[:, R.tendon]
+    BG = B * R.arm_k
+    K = np.block([[Kq + BG @ B.T, -BG], [-BG.T, np.diag(R.arm_k)]])
+    C = np.block([[Cq, np.zeros((cell.n, R.r))], [np.zeros((R.r, cell.n)), np.diag(R.arm_c)]])
+    return K, C
+
+
+@hot_path
+def realize(cell: Cell, law: TendonLaw, P: float, *, band_hz=None, tol: float | None = None, viscosity: float = 0.0,
+            check: bool = True):
+    """The linear model of a cell whose tendon law has internal dynamics, with internal variables.
+
+    Maxwell and standard-linear-solid tendons are realized exactly (one
+    internal variable per tendon); springpots by a Prony series accurate to
+    ``tol`` (relative, in k*) over ``band_hz``
+    (:meth:`tenscell.laws.Springpot.realization`). The frequency domain of
+    the returned model (``tenscell.compliance``, ``tenscell.moduli``) uses the
+    exact kernel, not the realization; the time domain (creep, relaxation,
+    the retardation spectrum) uses the realized pencil.
+
+    Parameters
+    ----------
+    cell : Cell
+    law : TendonLaw
+    P : float
+        Prestress scale (N).
+    band_hz : (float, float), optional
+        Band (Hz) of an approximate realization; default the paper's 10⁻² to 10³ Hz.
+    tol : float, optional
+        Its relative accuracy (default :data:`tenscell.laws.base.DEFAULT_REALIZATION_TOL` = 1e-3).
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), see :func:`with_cytoplasm`.
+    check : bool
+        Verify that the realized K is positive definite (the relaxed static state is stable).
+
+    Returns
+    -------
+    LinearModel
+        With ``realization`` set; K0, C0 of size ``n + realization.r``.
+    """
+    from .linearize import _STABILITY_HINT, LinearModel  # linearize imports this module lazily
+
+    P = positive_scalar("P (prestress)", P, "N")
+    if law.m is not None and law.m != cell.m:
+        raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
+    l, T = cell.lengths, P * cell.T0
+    R = law.realization(l, T, band_hz, DEFAULT_REALIZATION_TOL if tol is None else positive_scalar("tol", tol))
+    K, C = _augmented(cell, P, R)
+    z = np.zeros(R.r)
+    if "EA" in law.names and not np.isnan(vals := law.parameter_values(cell.m)[law.names.index("EA")]).any():
+        EA = vals
+    else:
+        EA = R.k * l - T
+    placed = law.at_prestress(cell, P)
+    lin = LinearModel(cell=cell, P=P, EA=EA, c=R.c, K0=K, C0=C, H0=np.concatenate([-np.asarray(cell.load), z]),
+                      D0=np.concatenate([np.asarray(cell.probe), z]), l0=np.asarray(placed.l0, dtype=float),
+                      law=placed, realization=R)
+    lin = with_cytoplasm(lin, viscosity)
+    if check:
+        try:
+            lin.pencil.check()
+        except NotPositiveDefiniteError:
+            raise NotPositiveDefiniteError(
+                f"the relaxed static stiffness of {cell.describe()} with {type(law).__name__} tendons at P={P:.6g} N "
+                f"is not positive definite: the reference is not a stable equilibrium. {_STABILITY_HINT}") from None
+    return lin
+
+
+@hot_path
+def exact_compliance(lin, f_hz) -> np.ndarray:
+    """``J(ω)`` (m/N) of a realized model from its law's exact dynamic tangent (and its cytoplasm), shape of f_hz."""
+    f = positive_array("frequency", f_hz, unit="Hz")
+    w = 2 * np.pi * np.atleast_1d(f).ravel()
+    cell = lin.cell
+    J = dynamic_compliance(cell, lin.P, lin.law.complex_stiffness(cell.lengths, lin.P * cell.T0, w))
+    if lin.viscosity:
+        J = J / (1.0 + 1j * w * (2.0 * cell.strut_length * lin.viscosity) * J)
+    return J.reshape(np.shape(f))

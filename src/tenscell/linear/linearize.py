@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._checks import positive_array, positive_scalar
-from ..laws import LinearSpring, TendonLaw, Voigt
+from ..laws import DynamicLawError, LinearSpring, TendonLaw, Voigt
 from ..model.equilibrium import Cell, tangent_stiffness
 from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
@@ -71,6 +71,15 @@ class LinearModel:
         :func:`tenscell.sensitivity.analytic_elasticities` differentiates.
         None only for models built by hand, which are then read as Voigt
         tendons with ``EA`` and ``c``.
+    viscosity : float
+        Newtonian cytoplasm in parallel with the structure (Pa·s): a dashpot
+        ``2L·η`` (N·s/m) on the probe, in C0, so that ``G* = G*_structure + iωη``
+        (probe = load); 0 for none.
+    realization : Realization or None
+        For a law with internal dynamics (:mod:`tenscell.laws.viscoelastic`):
+        its internal-variable realization; K0, C0, H0, D0 then have
+        ``n + realization.r`` rows, the last ``r`` the arms' dashpot
+        extensions (:func:`tenscell.linear.dynamic.realize`). None otherwise.
     """
 
     cell: Cell
@@ -83,6 +92,8 @@ class LinearModel:
     D0: np.ndarray
     l0: np.ndarray
     law: Any = None
+    viscosity: float = 0.0
+    realization: Any = None
 
     @property
     def tendon_law(self):
@@ -163,7 +174,7 @@ class LinearModel:
 
 
 @hot_path
-def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
+def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True, viscosity: float = 0.0) -> LinearModel:
     """Linearize the cell's equations of motion at prestress ``P`` (Voigt tendons, the paper's model).
 
     The paper-facing convenience for :func:`linearize_law` with
@@ -183,6 +194,9 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     check : bool
         Verify that K0 is positive definite (default). Turn off only in
         inner loops that have already checked.
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), ≥ 0, in parallel with the structure
+        (``G* += iωη``; see :attr:`LinearModel.viscosity`).
 
     Returns
     -------
@@ -200,7 +214,12 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     EA = positive_array("EA", EA, (m,), "N")
     c = positive_array("c", c, (m,), "N·s/m")
     # validated above: skip the law's own checks on this hot path (parameter sweeps, fits)
-    return _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
+    lin = _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
+    if viscosity:
+        from .dynamic import with_cytoplasm
+
+        return with_cytoplasm(lin, viscosity)
+    return lin
 
 
 @hot_path
@@ -251,7 +270,8 @@ def linearize_tangent(cell: Cell, P: float, k, c=1.0, *, l0=None, check: bool = 
     return _from_law(cell, P, LinearSpring._trusted(k=k, c=c), check=check, l0=l0)
 
 
-def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True) -> LinearModel:
+def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True, viscosity: float = 0.0,
+                  band_hz=None, tol: float | None = None) -> LinearModel:
     """The linear model of a cell with any tendon law, about its reference at rest.
 
     ``K0 = Σ T_j ∇²l_j + Σ k_j a_j a_jᵀ`` and ``C0 = Σ c_j a_j a_jᵀ`` with the
@@ -273,6 +293,14 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
         projection of those tensions on ``T0``.
     check : bool
         Verify that K0 is positive definite.
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), ≥ 0, in parallel with the structure
+        (see :attr:`LinearModel.viscosity`).
+    band_hz, tol
+        For a law with internal dynamics only (``law.dynamic``): the band (Hz)
+        and relative tolerance of its internal-variable realization
+        (:func:`tenscell.linear.dynamic.realize`; exact for Maxwell and the
+        standard linear solid, a Prony series for the springpot). Needs ``P``.
 
     Returns
     -------
@@ -293,6 +321,17 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
         raise ValueError(f"law must be a tenscell.laws.TendonLaw, got {type(law).__name__}")
     if law.m is not None and law.m != cell.m:
         raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
+    if law.dynamic or band_hz is not None or tol is not None:
+        from .dynamic import realize
+
+        if P is None:
+            raise DynamicLawError(f"a {type(law).__name__} law has internal dynamics: pass the prestress P to "
+                                  "linearize_law (its realization is built at tensions P·T0)")
+        return realize(cell, law, P, band_hz=band_hz, tol=tol, viscosity=viscosity, check=check)
+    if viscosity:
+        from .dynamic import with_cytoplasm
+
+        return with_cytoplasm(linearize_law(cell, law, P, check=check), viscosity)
     if P is not None:
         return _from_law(cell, positive_scalar("P (prestress)", P, "N"), law, check=check)
     T = np.asarray(law.elastic(cell.lengths), dtype=float)

@@ -29,7 +29,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from .coordinates import Coordinates, NodeKinematics, kinematics, make_coordinates
-from .structure import STRUT, Point, Structure
+from .structure import Point, Structure, cable_mask
 
 __all__ = [
     "NotPrestressableError",
@@ -229,7 +229,7 @@ def self_stress(
                 f"{describe} is not prestressable with equal tensions in the requested groups: "
                 f"the {dim}-dimensional self-stress space contains no such state"
             )
-    cable = np.array([f != STRUT for f in families])
+    cable = cable_mask(families)
     if N.shape[1] == 1:
         T = N[:, 0]
         if T[cable].sum() < 0:
@@ -294,7 +294,7 @@ def self_stress_lp(
     """
     A = sp.csr_matrix(A)
     n, m = A.shape
-    cable = np.array([f != STRUT for f in families])
+    cable = cable_mask(families)
     nc = int(cable.sum())
     rows = [sp.hstack([A, sp.csr_matrix((n, 1))])]
     rhs = [np.zeros(n)]
@@ -535,7 +535,7 @@ def _check_given_self_stress(A, families, T0, label) -> np.ndarray:
     T0 = np.array(T0, dtype=float)
     if T0.shape != (len(families),) or not np.all(np.isfinite(T0)):
         raise ValueError(f"T0 must be {len(families)} finite tensions, got shape {T0.shape}")
-    cable = np.array([f != STRUT for f in families])
+    cable = cable_mask(families)
     T0 = T0 / np.linalg.norm(T0[cable])
     resid = np.linalg.norm(A @ T0) / max(np.abs(A).max() if not sp.issparse(A) else abs(A).max(), 1e-300)
     if resid > 1e-8:

@@ -25,11 +25,13 @@ import numpy as np
 from .._checks import finite_scalar, positive_scalar
 from .coordinates import kinematics, make_coordinates
 from .equilibrium import Cell, NotPrestressableError, equilibrate, equilibrium_matrix, member_geometry
-from .structure import ACTIN, INTERMEDIATE_FILAMENT, Point, Structure
+from .structure import ACTIN, INTERMEDIATE_FILAMENT, NUCLEUS, Point, Structure
 
 __all__ = [
     "paper_cell",
     "paper_structure",
+    "nucleated_cell",
+    "nucleated_structure",
     "paper_nodes",
     "if_free_delta",
     "DEFAULT_DELTA",
@@ -536,3 +538,88 @@ def find_cylindrical_reference(
             return params
         reasons.append(f"start {k}: unstable (smallest K0 eigenvalue {lam:.3g})")
     raise NotPrestressableError("no stable cylindrical reference found: " + "; ".join(reasons))
+
+
+# ---- the nucleus ----------------------------------------------------------------------------------------
+def _nucleus_pairs() -> tuple[tuple[int, int], ...]:
+    """The nucleus shell's 30 edges: the strut ends' neighbours (21 actin + 3 base + 6 strut pairs), an icosahedron."""
+    struts = ((_A1, _C1), (_A2, _C2), (_A3, _C3), (_D1, _B1), (_D2, _B2), (_D3, _B3))
+    return tuple(sorted(set(_actin_pairs()) | {(0, 1), (0, 2), (1, 2)} | {(min(p), max(p)) for p in struts}))
+
+
+def nucleated_structure(alpha: float, delta: float, L: float, radius: float = 0.5) -> Structure:
+    """The paper cell with a nucleus: a stiff shell the 12 intermediate filaments pass through.
+
+    Each IF (strut end → centre node N) is split at the fraction ``radius``
+    of its length from N by a nucleus node; the 12 nucleus nodes, on the
+    IFs' lines through the centre, are joined by the 30 edges of an
+    icosahedron (the strut ends' neighbour pattern) of family ``"nucleus"``.
+    Members: 21 actin, 12 outer IF segments (strut end → nucleus node),
+    12 inner IF segments (nucleus node → N), 30 nucleus edges, in this
+    order; nodes: the paper cell's 13, then the nucleus nodes K1…K12.
+    """
+    paper = paper_structure(alpha, delta, L, intermediate_filaments=True)
+    x = paper.nodes
+    O = x[_N]
+    nuc = O + radius * (x[:12] - O)  # on each IF's line, radius·|IF| from the centre
+    nodes = np.vstack([x, nuc])
+    k = lambda i: 13 + i  # noqa: E731  the nucleus node on strut end i's IF
+    actin = list(_actin_pairs())
+    outer = [(i, k(i)) for i in range(12)]
+    inner = [(k(i), _N) for i in range(12)]
+    shell = [(k(a), k(b)) for a, b in _nucleus_pairs()]
+    tendons = actin + outer + inner + shell
+    families = [ACTIN] * 21 + [INTERMEDIATE_FILAMENT] * 24 + [NUCLEUS] * len(shell)
+    return Structure(
+        nodes=nodes, struts=paper.struts, tendons=tuple(tendons), families=tuple(families), fixed=paper.fixed,
+        load=paper.load, probe=paper.probe, name="nucleated paper cell",
+        node_names=PAPER_NODE_NAMES + tuple(f"K{i + 1}" for i in range(12)),
+    )
+
+
+def nucleated_cell(alpha: float = 0.0, delta: float | None = None, L: float = 1.0, radius: float = 0.5,
+                   parametrization: str = "angles") -> Cell:
+    """The paper cell with a nucleus tied to its intermediate filaments (:func:`nucleated_structure`).
+
+    The self-stress is the paper cell's: actin and IFs carry the paper's
+    ``T0`` (each IF's two segments its tension), the nucleus edges carry no
+    force at the reference (the IFs pass straight through the nucleus nodes,
+    so each is balanced without them). The nucleus is then stress-free and
+    acts through its material stiffness only: give its edges (family
+    ``"nucleus"``) a stiffness with :func:`tenscell.laws.family_laws` or
+    per-member arrays. Limits that hold exactly: with nucleus edges of
+    vanishing stiffness and IF segments whose Voigt time ``c/k`` equals the
+    whole IF's (``c_segment = c·l_IF/l_segment``), the moduli are the paper
+    cell's at every frequency (a tensioned, undamped kink node condenses
+    exactly; two Voigt springs of one time constant in series are one); the
+    static modulus rises monotonically with the nucleus stiffness (probe =
+    load, K grows in the positive-semidefinite order).
+
+    The self-stress is normalized over the 45 cables (each IF counted twice),
+    so the tensions ``P·T0`` equal the paper cell's at the prestress
+    ``P·T0[0]/paper_cell().T0[0]`` (the actin tendons' ratio, 0.922 at the
+    default reference).
+
+    Parameters
+    ----------
+    alpha, delta, L
+        As :func:`paper_cell` (rad, rad, m); δ defaults to 50°.
+    radius : float
+        Where the nucleus nodes sit on the IFs, as a fraction of the IF length
+        from the centre, 0 < radius < 1 (the nucleus's size relative to the cell).
+    parametrization : {"angles", "local"}
+
+    Returns
+    -------
+    Cell
+        75 members (21 actin, 24 IF segments, 30 nucleus edges), 60 coordinates.
+    """
+    radius = finite_scalar("radius (nucleus)", radius, "a number strictly between 0 and 1 (fraction of the IF length)")
+    if not 0.0 < radius < 1.0:
+        raise ValueError(f"radius (nucleus) must lie strictly between 0 and 1 (fraction of the IF length), got {radius!r}")
+    paper = paper_cell(alpha, delta, L, parametrization=parametrization)
+    p = dict(paper.parameters)
+    st = nucleated_structure(p["alpha"], p["delta"], p["L"], radius)
+    ifs = paper.T0[21:]
+    T0 = np.concatenate([paper.T0[:21], ifs, ifs, np.zeros(len(st.tendons) - 45)])
+    return equilibrate(st, parametrization, T0=T0, parameters={**p, "nucleus_radius": radius})

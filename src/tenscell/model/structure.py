@@ -24,11 +24,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Point", "Structure", "StructureError", "ACTIN", "INTERMEDIATE_FILAMENT", "STRUT"]
+__all__ = ["Point", "Structure", "StructureError", "ACTIN", "INTERMEDIATE_FILAMENT", "STRUT", "NUCLEUS",
+           "COMPRESSIBLE_FAMILIES", "cable_mask"]
 
 ACTIN = "actin"
 INTERMEDIATE_FILAMENT = "intermediate_filament"
 STRUT = "strut"  # an elastic (non-rigid) compression member listed among the members
+NUCLEUS = "nucleus"  # a member of the nucleus body: elastic, may carry either sign of force (not a cable)
+#: families whose members may carry compression in the self-stress (every other member is a cable: tension only)
+COMPRESSIBLE_FAMILIES = frozenset({STRUT, NUCLEUS})
+
+
+def cable_mask(families) -> np.ndarray:
+    """Whether each member is a cable (tension only), shape (m,): its family is not in :data:`COMPRESSIBLE_FAMILIES`."""
+    return np.array([f not in COMPRESSIBLE_FAMILIES for f in families], dtype=bool)
 
 
 class StructureError(ValueError):
@@ -185,8 +194,9 @@ class Structure:
         Working tendons (members whose tension enters the equations) as node pairs.
     families : sequence of str
         One family per tendon, e.g. ``"actin"``, ``"intermediate_filament"``;
-        ``"strut"`` marks an elastic compression member, which may carry a
-        negative force in the self-stress.
+        ``"strut"`` marks an elastic compression member and ``"nucleus"`` a
+        member of a nucleus body; both may carry a negative force in the
+        self-stress (every other member is a cable).
     fixed : sequence of int
         Fixed nodes (ball-joint anchors, supports).
     load, probe : Point
