@@ -199,3 +199,18 @@ def test_study_mechanisms_cli(tmp_path):
     assert "## The answer" in md and "## The goals" in md and (out / "mechanisms.png").stat().st_size > 0
     assert cli_main(["study", "mechanisms", "bundled:fabry2001", "--mechanisms", "nope",
                      "--out", str(tmp_path / "n")]) == 2
+
+
+def test_per_tendon_report_judges_against_the_stated_noise():
+    from tenscell.fitting import fit
+    from tenscell.reports.fit import fit_markdown
+
+    d = bundled("fabry2001")
+    # sd = G: about 0.43 decades in log10 G, far above what any per-family fit of these data leaves
+    noisy = RheologyData(frequency_hz=d.frequency_hz, G_storage=d.G_storage, G_loss=d.G_loss,
+                         G_storage_sd=d.G_storage, G_loss_sd=d.G_loss, source="with sd")
+    r = fit(noisy, tendons="per-family", damping="per-family", starts=1, hops=1, tolerance=1e-6, progress=False)
+    md = fit_markdown(r)
+    assert not r.converged and max(f.rms_log10_error for f in r.fits) < 1 / math.log(10)
+    assert "inside the data's noise" in md and "NOT converged" not in md
+    assert "below the data's own noise" in md
