@@ -24,7 +24,7 @@ from tenscell.linear.dynamic import (
     dynamic_complex_modulus, dynamic_compliance, dynamic_moduli, dynamic_stiffness_static,
 )
 from tenscell.linear.linearize import linearize_law
-from tenscell.linear.modal import modal_compliance, modulus
+from tenscell.linear.modal import NotPositiveDefiniteError, modal_compliance, modulus
 from tenscell.timedomain import creep_spectrum
 
 CELL = tenscell.paper_cell()
@@ -136,7 +136,7 @@ def test_passivity_for_random_draws(kind):
         assert np.all(np.diff(k.real, axis=0) >= -1e-12 * np.abs(k[1:]))
         try:
             G = dynamic_complex_modulus(CELL, law, P0, w / (2 * np.pi))
-        except tenscell.NotPositiveDefiniteError:
+        except NotPositiveDefiniteError:
             continue  # a draw whose relaxed static state is unstable has no moduli (refused, not negative)
         assert np.all(G.imag >= -1e-12 * np.abs(G))
 
@@ -390,7 +390,7 @@ def test_cytoplasm_in_the_high_frequency_viscosity_and_creep():
     """Voigt cell: G''/ω → η_structure + η; creep with the cytoplasm starts slower (J(t) smaller at every t)."""
     lin0 = linearize_law(CELL, Voigt(EA=EA, c=C), P0)
     lin = linearize_law(CELL, Voigt(EA=EA, c=C), P0, viscosity=0.5)
-    assert tenscell.viscosity_limit(lin) == pytest.approx(tenscell.viscosity_limit(lin0) + 0.5, rel=1e-10)
+    assert tenscell.response.viscosity_limit(lin) == pytest.approx(tenscell.response.viscosity_limit(lin0) + 0.5, rel=1e-10)
     t = np.logspace(-3, 1, 9)
     Jv, J0 = creep_spectrum(lin).compliance(t), creep_spectrum(lin0).compliance(t)
     assert np.all(Jv <= J0 * (1 + 1e-10)) and Jv[0] < 0.9 * J0[0]  # equal (round-off) once both have crept
@@ -414,3 +414,20 @@ def test_frequency_response_with_a_law_and_a_cytoplasm():
         Gs, Gl = tenscell.moduli(tenscell.linearize(CELL, p, EA, C, viscosity=0.1), f)
         assert _rel(v.G[i], Gs + 1j * Gl) < 1e-10
     assert v.viscosity == 0.1 and r.to_dataframe().shape[0] == Ps.size * f.size
+
+
+def test_cytoplasm_in_the_linear_model_needs_probe_at_the_load():
+    """A dashpot on the probe is 'in parallel' with the measured modulus only when the probe is the load: refused
+    otherwise in one line (dynamic_moduli, which adds iωη to G*, still works)."""
+    import dataclasses
+
+    from tenscell.model.equilibrium import equilibrate
+    from tenscell.model.structure import Point
+
+    st = dataclasses.replace(CELL.structure, probe=Point(nodes=(6,), weights=(1.0,), direction=(0.0, 0.0, 1.0)))
+    cell = equilibrate(st, parameters=dict(CELL.parameters))
+    with pytest.raises(ValueError, match="probe to be the load") as err:
+        linearize_law(cell, Voigt(EA=EA, c=C), P0, viscosity=0.1)
+    assert "\n" not in str(err.value)
+    G = dynamic_complex_modulus(cell, Voigt(EA=EA, c=C), P0, [1.0], viscosity=0.1)
+    assert _rel(G - dynamic_complex_modulus(cell, Voigt(EA=EA, c=C), P0, [1.0]), np.array([2j * np.pi * 0.1])) < 1e-12

@@ -65,7 +65,7 @@ def test_soft_nucleus_is_the_paper_cell():
 
 def test_static_modulus_rises_with_nucleus_stiffness_and_stays_positive_definite():
     """K0 grows in the PSD order with the nucleus EA and probe = load, so J(0) falls: G'(0) is non-decreasing."""
-    G = [tenscell.static_modulus(linearize_law(NUC, _voigt(e), P_EQ)) for e in 10.0 ** np.arange(-4, 5)]
+    G = [tenscell.response.static_modulus(linearize_law(NUC, _voigt(e), P_EQ)) for e in 10.0 ** np.arange(-4, 5)]
     assert np.all(np.diff(G) > 0)
     assert G[-1] > 2 * G[0]  # a stiff nucleus matters (691.9 against 306.5 Pa measured at EA_nucleus = 1e4 N)
 

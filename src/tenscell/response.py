@@ -97,7 +97,9 @@ def viscosity_limit(lin: LinearModel) -> float:
     from .linear.modal import ZERO_TIME
 
     if lin.realization is not None:
-        raise ValueError(f"the {type(lin.law).__name__} tendons have internal dynamics: G''/ω of the exact law tends to "
+        from .laws import DynamicLawError
+
+        raise DynamicLawError(f"the {type(lin.law).__name__} tendons have internal dynamics: G''/ω of the exact law tends to "
                          f"the cytoplasm's viscosity ({lin.viscosity:g} Pa·s) alone, its realization's C0 is not that law's "
                          "high-frequency limit; evaluate moduli(lin, f) at the frequencies you need")
     tau, rho, _ = lin.pencil.retardation()
@@ -196,7 +198,7 @@ class FrequencyResponse:
             "prestress_N": np.repeat(self.prestress, nf), "frequency_Hz": np.tile(self.frequency_hz, nP),
             "G_storage_Pa": self.G_storage.ravel(), "G_loss_Pa": self.G_loss.ravel(),
             "loss_tangent": self.loss_tangent.ravel(),
-        }, {"L_m": self.L})
+        }, {"L_m": self.L, "viscosity_Pa_s": self.viscosity})
 
     def plot(self, axes=None, x: str = "frequency", **kw):
         """G' and G'' on a pair of axes: against frequency (log-log, one curve per P) or prestress.
@@ -213,12 +215,11 @@ class FrequencyResponse:
         -------
         ndarray of two Axes
         """
-        from . import plotting
+        from ._results import plotter
 
         if x not in ("frequency", "prestress"):
             raise ValueError(f"x: expected 'frequency' or 'prestress', got {x!r}")
-        draw = plotting.moduli_vs_frequency if x == "frequency" else plotting.moduli_vs_prestress
-        return draw(self, axes, **kw)
+        return plotter("moduli_vs_frequency" if x == "frequency" else "moduli_vs_prestress")(self, axes, **kw)
 
 
 @hot_path

@@ -154,7 +154,9 @@ class Elasticities:
 
     def plot(self, ax=None, **kw):
         """Elasticities of G' and G'' against f (groups, largest members) on a pair of axes (or a new figure)."""
-        from .plotting.variants import elasticities_figure
+        from ._results import plotter
+
+        elasticities_figure = plotter("elasticities_figure")
 
         return elasticities_figure(self, axes=ax, **kw)
 
@@ -622,7 +624,9 @@ class MonteCarloResult:
 
     def plot(self, ax=None, **kw):
         """Histograms of the largest change of G' and G'' per valid draw, on a pair of axes (or a new figure)."""
-        from .plotting.variants import monte_carlo_figure
+        from ._results import plotter
+
+        monte_carlo_figure = plotter("monte_carlo_figure")
 
         return monte_carlo_figure([self], axes=ax, **kw)
 

@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sp
 
 from .model.coordinates import Coordinates, kinematics, make_coordinates
@@ -23,6 +22,8 @@ from .model.equilibrium import Cell, NotPrestressableError, equilibrate, equilib
 from .model.formfinding import rigid_body_modes
 from .linear.krylov import load_modes
 from .linear.linearize import LinearModel, NotPositiveDefiniteError, linearize
+from .linear.modal import complement_basis
+from .laws import DynamicLawError
 from .model.structure import Structure, cable_mask
 from ._threads import hot_path
 
@@ -223,20 +224,13 @@ def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "
 
 
 def _complement(lin: LinearModel) -> np.ndarray:
-    R = rigid_body_modes(lin.cell.coords)
-    return scipy.linalg.null_space(R.T) if R.shape[1] else np.eye(lin.cell.n)
+    return complement_basis(rigid_body_modes(lin.cell.coords), lin.cell.n)
 
 
 def _stable_free(lin: LinearModel):
     if sp.issparse(lin.K0):
         return None
-    Q = _complement(lin)
-    K = Q.T @ lin.K0 @ Q
-    try:
-        np.linalg.cholesky(0.5 * (K + K.T))
-        return True
-    except np.linalg.LinAlgError:
-        return False
+    return lin.pencil.restricted(_complement(lin)).is_positive_definite()
 
 
 def node_displacements(coords: Coordinates, v: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
@@ -289,7 +283,9 @@ class RelaxationModes:
 
     def plot(self, ax=None, **kw):
         """The rates as bars; draw the mode shapes with :func:`tenscell.plotting.relaxation_modes_3d`."""
-        from .plotting import rates_bar
+        from ._results import plotter
+
+        rates_bar = plotter("rates_bar")
 
         return rates_bar(self.rates, ax=ax, **kw)
 
@@ -301,14 +297,14 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     Solves ``C0 v = μ K0 v`` (K0 positive definite; μ = 1/λ, μ = 0 for an
     undamped mechanism) and keeps the largest μ. Free-standing structures
     are treated on the complement of their rigid-body motions. Dense models
-    use a generalized eigensolver; sparse ones (more than 1500 coordinates)
-    return the slowest modes *that the load excites*
+    use the pencil's modal decomposition (:meth:`~tenscell.linear.modal.Pencil.slow_modes`);
+    sparse ones (more than 1500 coordinates) return the slowest modes *that the load excites*
     (:func:`tenscell.linear.krylov.load_modes`).
     """
     if not (isinstance(k, (int, np.integer)) and k >= 1):
         raise ValueError(f"k (number of modes) must be a whole number >= 1, got {k!r}")
     if lin.realization is not None:
-        raise ValueError(f"relaxation_modes: the {type(lin.law).__name__} tendons' internal variables are part of "
+        raise DynamicLawError(f"relaxation_modes: the {type(lin.law).__name__} tendons' internal variables are part of "
                          "every mode, which then has no node displacements alone; use creep_spectrum(lin) for its times")
     n = lin.cell.n
     if sp.issparse(lin.K0):
@@ -318,17 +314,11 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
         mu = 1.0 / rates
     elif rigid_body_modes(lin.cell.coords).shape[1] == 0:
         # anchored structures: the model's one modal decomposition (C0 v = τ K0 v, τ = μ ascending)
-        modes = lin.pencil.modes
-        k = min(k, n)
-        mu, V = modes.tau[n - k:], modes.vectors[:, n - k:]
+        mu, V = lin.pencil.slow_modes(k)
         resid = None
-    else:
+    else:  # free-standing: the pencil on the complement of the rigid-body motions
         Q = _complement(lin)
-        K = Q.T @ lin.K0 @ Q
-        C = Q.T @ lin.C0 @ Q
-        m = K.shape[0]
-        k = min(k, m)
-        mu, W = scipy.linalg.eigh(0.5 * (C + C.T), 0.5 * (K + K.T), subset_by_index=[m - k, m - 1])
+        mu, W = lin.pencil.restricted(Q).slow_modes(k)
         V = Q @ W
         resid = None
     order = np.argsort(mu)[::-1][:k]

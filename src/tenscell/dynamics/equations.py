@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from .._errors import TenscellError
 from ..laws import DynamicLawError, TendonLaw
 from ..model.coordinates import kinematics
 from ..model.equilibrium import Cell, equilibrium_matrix, member_geometry, point_vector
@@ -49,7 +50,7 @@ from .loads import LOADS
 __all__ = ["SimulationError", "SlackEvent", "MotionState", "EquationsOfMotion"]
 
 
-class SimulationError(ValueError):
+class SimulationError(TenscellError, ValueError):
     """The time integration cannot proceed (singular damping, no convergence, forbidden slack)."""
 
 

@@ -34,8 +34,7 @@ def linear_steady_state(lin: LinearModel, loading) -> np.ndarray:
     if not isinstance(loading, (SineForce, SineDisplacement)):
         raise ValueError("a periodic steady state needs a SineForce or SineDisplacement loading")
     w = loading.omega
-    Z = lin.K0 + 1j * w * lin.C0
-    x = np.linalg.solve(Z, (-lin.H0).astype(complex))
+    x = lin.pencil.solve_at(1j * w, -lin.H0)
     Fhat = loading.phasor if loading.controls == "force" else loading.phasor / (lin.D0 @ x)
     return np.asarray(lin.cell.q0) + (x * Fhat).real
 

@@ -29,6 +29,7 @@ import tempfile
 from typing import Literal
 from pathlib import Path
 
+from .._errors import TenscellError
 from .._parallel import sigint_deferred
 
 __all__ = ["atomic_path", "write_csv_rows", "write_json", "json_ready", "write_text", "write_bytes", "OutputSet",
@@ -123,7 +124,7 @@ def write_bytes(path, data: bytes) -> None:
         tmp.write_bytes(data)
 
 
-class OutputLocationError(ValueError):
+class OutputLocationError(TenscellError, ValueError):
     """The output location cannot receive a run's files (message names the flag)."""
 
 
@@ -313,7 +314,7 @@ class OutputSet:
         return False
 
     def _write_manifest(self, staging: Path) -> None:
-        from .. import __version__
+        from .._version import __version__
         files = sorted(str(p.relative_to(staging)) for p in staging.rglob("*") if p.is_file())
         write_json(staging / MANIFEST, {
             "command": self.command, "tenscell_version": __version__,

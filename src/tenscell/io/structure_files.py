@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .outputs import write_text
-from ..model.structure import Point, Structure, StructureError
+from ..model.structure import Point, Structure, StructureError, member_values
 
 __all__ = [
     "StructureFile",
@@ -87,7 +87,7 @@ class StructureFile:
         Tendon damping (N·s/m); 1 N·s/m where the file gives none.
     T0 : ndarray, shape (m,) or None
         A self-stress (dimensionless, any scale) if the file gives one for
-        every tendon; pass it to :func:`tenscell.equilibrate` (``T0=``) to
+        every tendon; pass it to :func:`tenscell.model.equilibrate` (``T0=``) to
         skip the search for one (useful for very large structures).
     description : str
         Free text from the file.
@@ -451,40 +451,3 @@ def _dumps(obj: dict) -> str:
             lines.append(f"  {json.dumps(key)}: {json.dumps(v, allow_nan=False)}{comma}")
     lines.append("}")
     return "\n".join(lines) + "\n"
-
-
-# ---- per-member values --------------------------------------------------------------
-def member_values(structure: Structure, values, name: str = "value", unit: str = "") -> np.ndarray:
-    """Expand a per-member property to an array over the structure's tendons.
-
-    Parameters
-    ----------
-    structure : Structure
-    values : float, dict or array_like
-        One value for all members; a dict ``{family: value}`` (every family
-        present must be given; key ``"default"`` covers the rest); or one
-        value per member, shape (m,).
-    name, unit : str
-        For error messages, e.g. ``"EA"``, ``"N"``.
-
-    Returns
-    -------
-    ndarray, shape (m,)
-    """
-    m = structure.n_tendons
-    if isinstance(values, dict):
-        out = np.empty(m)
-        for j, fam in enumerate(structure.families):
-            if fam in values:
-                out[j] = values[fam]
-            elif "default" in values:
-                out[j] = values["default"]
-            else:
-                raise ValueError(f"{name}: no value for family {fam!r} (tendon {j}); give it or a 'default'")
-        return out
-    arr = np.asarray(values, dtype=float)
-    if arr.ndim == 0:
-        return np.full(m, float(arr))
-    if arr.shape != (m,):
-        raise ValueError(f"{name} must be a scalar, a {{family: value}} dict or have shape ({m},){' (' + unit + ')' if unit else ''}, got shape {arr.shape}")
-    return arr.copy()

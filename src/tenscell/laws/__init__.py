@@ -83,12 +83,12 @@ a prestress). A new law is one new module here, re-exported below.
 """
 from __future__ import annotations
 
-from .base import DynamicLawError, LinearizationError, Parameter, Tangent, TendonLaw
+from .base import DEFAULT_REALIZATION_TOL, DynamicLawError, LinearizationError, Parameter, Realization, Tangent, TendonLaw
 from .composite import CompositeLaw, family_laws
 from .constructors import power_dashpot_law, rest_lengths, stiffening_law, voigt_law
 from .filaments import StiffeningFilament
 from .springs import DEFAULT_VELOCITY_SCALE, LinearSpring, PowerDashpot, Voigt
-from .viscoelastic import SPRINGPOT_TIME, Maxwell, Springpot, StandardLinearSolid
+from .viscoelastic import DEFAULT_REALIZATION_BAND_HZ, SPRINGPOT_TIME, Maxwell, Springpot, StandardLinearSolid, springpot_prony
 
 
 __all__ = [
@@ -103,6 +103,10 @@ __all__ = [
     "StandardLinearSolid",
     "Springpot",
     "SPRINGPOT_TIME",
+    "Realization",
+    "springpot_prony",
+    "DEFAULT_REALIZATION_TOL",
+    "DEFAULT_REALIZATION_BAND_HZ",
     "DynamicLawError",
     "CompositeLaw",
     "family_laws",

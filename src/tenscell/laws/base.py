@@ -10,6 +10,7 @@ from typing import Any, ClassVar, NamedTuple, Self
 
 import numpy as np
 
+from .._errors import TenscellError
 from .._checks import positive_array, positive_scalar
 from .._results import dataframe, format_repr
 from ..model.equilibrium import Cell
@@ -21,7 +22,7 @@ __all__ = ["TendonLaw", "Parameter", "Tangent", "Realization", "LinearizationErr
 DEFAULT_REALIZATION_TOL = 1e-3
 
 
-class LinearizationError(ValueError):
+class LinearizationError(TenscellError, ValueError):
     """The tendon law has no linearization at rest (its rate derivative at l' = 0 is infinite)."""
 
 

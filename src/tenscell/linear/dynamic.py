@@ -15,7 +15,7 @@ viscosity η (Pa·s) in parallel with the structure. For a rate-linear law
 :func:`tenscell.linearize_law` (tested).
 
 For the time domain (creep, relaxation, the retardation spectrum) such a law
-is *realized* with internal variables (:func:`realize`): each Maxwell arm
+is *realized* with internal variables (:func:`tenscell.linear.linearize.realize`): each Maxwell arm
 (spring ``g`` in series with a dashpot ``η_a``) of the law's
 :class:`~tenscell.laws.Realization` adds its dashpot extension ``d_a`` to the
 coordinates, and with ``B = [a_j(a)]`` (n × r), ``G = diag(g)``:
@@ -42,13 +42,13 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .._checks import positive_array, positive_scalar
-from ..laws.base import DEFAULT_REALIZATION_TOL, Realization, TendonLaw, angular_frequencies
+from ..laws.base import TendonLaw, angular_frequencies
 from ..model.equilibrium import Cell
-from .modal import NotPositiveDefiniteError, modulus
+from .modal import NotPositiveDefiniteError, modulus, positive_definite_factor
 from .._threads import hot_path
 
 __all__ = ["dynamic_stiffness", "dynamic_compliance", "dynamic_moduli", "dynamic_complex_modulus",
-           "check_static_stability", "realize", "with_cytoplasm", "exact_compliance"]
+           "check_static_stability", "cytoplasm_damping", "exact_compliance"]
 
 
 def _kstar(cell: Cell, kstar) -> np.ndarray:
@@ -143,22 +143,8 @@ def check_static_stability(cell: Cell, law: TendonLaw, P: float) -> None:
     With passive tendons (``Re k*`` rising, ``Im k* ≥ 0``) a structure whose
     static stiffness is positive definite is stable at every frequency.
     """
-    K0 = dynamic_stiffness_static(cell, law, P)
-    try:
-        if sp.issparse(K0):
-            from .sparse import NotPositiveDefinite, factorize_spd
-
-            try:
-                factorize_spd(K0, what="K(0)")
-            except NotPositiveDefinite:
-                raise np.linalg.LinAlgError from None
-        else:
-            np.linalg.cholesky(K0)
-    except np.linalg.LinAlgError:
-        raise NotPositiveDefiniteError(
-            f"the static stiffness K(ω→0) of {cell.describe()} with {type(law).__name__} tendons at P={P:.6g} N "
-            "is not positive definite: the reference is not a stable equilibrium"
-        ) from None
+    positive_definite_factor(dynamic_stiffness_static(cell, law, P), what="the static stiffness K(ω→0)",
+                             describe=f"{cell.describe()} with {type(law).__name__} tendons at P={P:.6g} N")
 
 
 def dynamic_stiffness_static(cell: Cell, law: TendonLaw, P: float):
@@ -251,104 +237,6 @@ def cytoplasm_damping(cell: Cell, viscosity: float):
         D = sp.csr_matrix((d[nz], (np.zeros(nz.size, dtype=int), nz)), shape=(1, d.size))
         return (cd * (D.T @ D)).tocsr()
     return cd * np.outer(d, d)
-
-
-def with_cytoplasm(lin, viscosity: float):
-    """The linear model with a Newtonian cytoplasm η (Pa·s) in parallel: C0 += 2Lη·D0ᵀD0 (``G* += iωη``)."""
-    import dataclasses
-
-    eta = viscosity_value(viscosity)
-    if eta == 0.0 and lin.viscosity == 0.0:
-        return lin
-    n = lin.cell.n
-    extra = cytoplasm_damping(lin.cell, eta - lin.viscosity)
-    if lin.K0.shape[0] > n:  # a realized model: the cytoplasm acts on the structure's coordinates only
-        extra = sp.block_diag([extra, sp.csr_matrix((lin.K0.shape[0] - n,) * 2)]).tocsr() if sp.issparse(lin.C0) \
-            else np.pad(extra, (0, lin.K0.shape[0] - n))
-    lin2 = dataclasses.replace(lin, C0=lin.C0 + extra, viscosity=eta)
-    lin2.__dict__.pop("pencil", None)
-    return lin2
-
-
-def _augmented(cell: Cell, P: float, R: Realization):
-    """``(K, C)`` of the realized pencil (see the module docstring), dense or sparse like the cell."""
-    from ..model.equilibrium import weighted_gram
-
-    A = cell.A
-    Kq = P * cell.prestress_hessian + weighted_gram(A, R.k)
-    Cq = weighted_gram(A, R.c)
-    if cell.sparse:
-        B = sp.csr_matrix(A)[:, R.tendon]
-        G = sp.diags(R.arm_k)
-        K = sp.bmat([[Kq + B @ G @ B.T, -(B @ G)], [-(G @ B.T), G]]).tocsr()
-        C = sp.bmat([[Cq, None], [None, sp.diags(R.arm_c)]]).tocsr()
-        return K, C
-    B = np.asarray(A)[:, R.tendon]
-    BG = B * R.arm_k
-    K = np.block([[Kq + BG @ B.T, -BG], [-BG.T, np.diag(R.arm_k)]])
-    C = np.block([[Cq, np.zeros((cell.n, R.r))], [np.zeros((R.r, cell.n)), np.diag(R.arm_c)]])
-    return K, C
-
-
-@hot_path
-def realize(cell: Cell, law: TendonLaw, P: float, *, band_hz=None, tol: float | None = None, viscosity: float = 0.0,
-            check: bool = True):
-    """The linear model of a cell whose tendon law has internal dynamics, with internal variables.
-
-    Maxwell and standard-linear-solid tendons are realized exactly (one
-    internal variable per tendon); springpots by a Prony series accurate to
-    ``tol`` (relative, in k*) over ``band_hz``
-    (:meth:`tenscell.laws.Springpot.realization`). The frequency domain of
-    the returned model (``tenscell.compliance``, ``tenscell.moduli``) uses the
-    exact kernel, not the realization; the time domain (creep, relaxation,
-    the retardation spectrum) uses the realized pencil.
-
-    Parameters
-    ----------
-    cell : Cell
-    law : TendonLaw
-    P : float
-        Prestress scale (N).
-    band_hz : (float, float), optional
-        Band (Hz) of an approximate realization; default the paper's 10⁻² to 10³ Hz.
-    tol : float, optional
-        Its relative accuracy (default :data:`tenscell.laws.base.DEFAULT_REALIZATION_TOL` = 1e-3).
-    viscosity : float
-        Cytoplasm viscosity η (Pa·s), see :func:`with_cytoplasm`.
-    check : bool
-        Verify that the realized K is positive definite (the relaxed static state is stable).
-
-    Returns
-    -------
-    LinearModel
-        With ``realization`` set; K0, C0 of size ``n + realization.r``.
-    """
-    from .linearize import _STABILITY_HINT, LinearModel  # linearize imports this module lazily
-
-    P = positive_scalar("P (prestress)", P, "N")
-    if law.m is not None and law.m != cell.m:
-        raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
-    l, T = cell.lengths, P * cell.T0
-    R = law.realization(l, T, band_hz, DEFAULT_REALIZATION_TOL if tol is None else positive_scalar("tol", tol))
-    K, C = _augmented(cell, P, R)
-    z = np.zeros(R.r)
-    if "EA" in law.names and not np.isnan(vals := law.parameter_values(cell.m)[law.names.index("EA")]).any():
-        EA = vals
-    else:
-        EA = R.k * l - T
-    placed = law.at_prestress(cell, P)
-    lin = LinearModel(cell=cell, P=P, EA=EA, c=R.c, K0=K, C0=C, H0=np.concatenate([-np.asarray(cell.load), z]),
-                      D0=np.concatenate([np.asarray(cell.probe), z]), l0=np.asarray(placed.l0, dtype=float),
-                      law=placed, realization=R)
-    lin = with_cytoplasm(lin, viscosity)
-    if check:
-        try:
-            lin.pencil.check()
-        except NotPositiveDefiniteError:
-            raise NotPositiveDefiniteError(
-                f"the relaxed static stiffness of {cell.describe()} with {type(law).__name__} tendons at P={P:.6g} N "
-                f"is not positive definite: the reference is not a stable equilibrium. {_STABILITY_HINT}") from None
-    return lin
 
 
 @hot_path

@@ -28,6 +28,7 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
+from .._errors import TenscellError
 from .coordinates import Coordinates, NodeKinematics, kinematics, make_coordinates
 from .structure import Point, Structure, cable_mask
 
@@ -54,7 +55,7 @@ __all__ = [
 SPARSE_THRESHOLD = 1500
 
 
-class NotPrestressableError(ValueError):
+class NotPrestressableError(TenscellError, ValueError):
     """The requested reference admits no self-stress with all tendons in tension."""
 
 
@@ -451,7 +452,9 @@ class Cell:
 
     def plot(self, ax=None, **kw):
         """The cell's structure in 3D (:func:`tenscell.plotting.structure_3d`)."""
-        from ..plotting import structure_3d
+        from .._results import plotter
+
+        structure_3d = plotter("structure_3d")
 
         return structure_3d(self.structure, ax=ax, **{"title": self.describe(), **kw})
 

@@ -41,6 +41,8 @@ from pathlib import Path, PurePosixPath
 
 import numpy as np
 
+from .._errors import TenscellError
+
 __all__ = ["CellSource", "SourceError", "read_sources", "CELL_COLUMN", "CONDITION_COLUMN"]
 
 CELL_COLUMN = "cell"
@@ -48,7 +50,7 @@ CONDITION_COLUMN = "condition"
 _TABLE_SUFFIXES = (".csv", ".parquet", ".pq")
 
 
-class SourceError(ValueError):
+class SourceError(TenscellError, ValueError):
     """The population input cannot be listed at all (missing, empty, duplicate ids): one line naming it."""
 
 

@@ -172,13 +172,17 @@ class PopulationResult:
 
     def plot(self, ax=None, **kw):
         """Distributions of the fitted parameters per condition (see :mod:`tenscell.plotting.population`)."""
-        from ..plotting.population import parameter_distributions
+        from .._results import plotter
+
+        parameter_distributions = plotter("parameter_distributions")
 
         return parameter_distributions(self.table, self.parameter_columns, ax=ax, **kw)
 
     def plot_moduli(self, ax=None, **kw):
         """Population G', G'': median and interquartile band, fitted against data (per condition)."""
-        from ..plotting.population import population_moduli
+        from .._results import plotter
+
+        population_moduli = plotter("population_moduli")
 
         return population_moduli(self, ax=ax, **kw)
 
