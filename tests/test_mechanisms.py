@@ -214,3 +214,14 @@ def test_per_tendon_report_judges_against_the_stated_noise():
     assert not r.converged and max(f.rms_log10_error for f in r.fits) < 1 / math.log(10)
     assert "inside the data's noise" in md and "NOT converged" not in md
     assert "below the data's own noise" in md
+
+
+def test_identifiability_of_a_mechanism_has_no_gauge(joint):
+    # a mechanism has no strut-length gauge: every free parameter off its bounds is analysed, the last one too
+    pb = make_mechanism_problem(joint, "voigt-compact")
+    theta = pb.initial_guess(np.random.default_rng(0))
+    from tenscell.fitting.identifiability import identifiability
+
+    ident = identifiability(pb, theta)
+    inside = [p.name for p in pb.parameters(theta) if p.at_bound is None]
+    assert list(ident.names) == inside and not ident.gauge_removed

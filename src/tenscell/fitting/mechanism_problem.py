@@ -31,7 +31,8 @@ from ..linear.modal import modulus
 from ..model.equilibrium import Cell
 from .heterogeneity import DISTRIBUTIONS, assignments
 from .mechanisms import KINDS, Field, Mechanism
-from .problem import _PENALTY, _default_bounds, _family_groups, _is_creep, _prestress_layout, as_datasets
+from .layout import _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
+from .problem import _PENALTY
 from .result import FitParameter
 
 __all__ = ["MechanismProblem", "make_mechanism_problem", "MechanismEvaluation"]
@@ -494,7 +495,7 @@ def make_mechanism_problem(data, model, cell: Cell | None = None, *, bounds: dic
         raise DataError(f"{len(datasets)} data set(s) with {n_points} points give {2 * n_points} residuals, fewer "
                         f"than the {len(names)} parameters of mechanism {mech.name!r}")
     L_ref = float(cell.strut_length)
-    defaults, S, w_m, P_med = _default_bounds(datasets, L_ref)
+    defaults, S, w_m, P_med = default_bounds(datasets, L_ref)
     G_loss = float(np.median(np.concatenate([d.G_loss for d in datasets])))
     lower, upper = _mech_bounds(names, kinds, bounds, defaults, S, w_m, G_loss)
     free, fixed_log = _mech_fixed(names, lower, upper, fixed)
