@@ -7,8 +7,12 @@ from pathlib import Path
 MECHANISM_FILES = ("fit.json", "report.md", "fit.png")
 
 
-def run_mechanism_fit(args) -> int:
-    """The fit command with ``--model``: checks, fit, fit.json + report.md + fit.png; exit 1 if not converged."""
+def run_mechanism_fit(args, read_datasets) -> int:
+    """The fit command with ``--model``: checks, fit, fit.json + report.md + fit.png; exit 1 if not converged.
+
+    ``read_datasets(paths, prestress_options, min_points)`` is the fit command's reader (passed in: this module
+    is the fit command's, not a second command).
+    """
     import sys
 
     from .._parallel import jobs_for
@@ -17,7 +21,7 @@ def run_mechanism_fit(args) -> int:
     from ..fitting.mechanism_problem import make_mechanism_problem
     from ..io.outputs import OutputSet, write_json, write_text
     from ..io.thinning import bin_datasets
-    from .fit import read_datasets
+    from ..reports.mechanisms import mechanism_fit_markdown
 
     for flag, given in (("--tendons", args.tendons != "per-tendon"), ("--damping", args.damping != "uniform"),
                         ("--holdout", args.holdout is not None),
@@ -37,7 +41,7 @@ def run_mechanism_fit(args) -> int:
     result = fit_mechanism(datasets, args.model, starts=args.starts, seed=args.seed, jobs=jobs,
                            tolerance=args.tolerance, bounds=bounds, fixed=fixed, max_points=None)
     doc = result.to_dict()
-    report = result.report()
+    report = mechanism_fit_markdown(result)
     png = _figure_png(result)
     with out as d:
         write_json(d / "fit.json", doc)

@@ -348,7 +348,7 @@ def run(args) -> int:
     if args.model not in (None, "voigt-per-tendon"):
         from ._mechanism import run_mechanism_fit
 
-        return run_mechanism_fit(args)
+        return run_mechanism_fit(args, read_datasets)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
     binned = bin_datasets(datasets, args.max_points)  # moduli only: creep data are kept as they are

@@ -27,7 +27,7 @@ from .prestress import PrestressActivity, prestress_activity
 from .problem import DAMPING_MODES, TENDON_MODES, FitProblem, make_problem, required_points
 from .result import (DatasetFit, FitAlternative, FitCurve, FitParameter, FitResult, data_axis, frequency_slopes,
                      model_curve, prestress_slopes)
-from .search import fit
+from .entry import fit
 from .mechanisms import MECHANISMS, Field, Mechanism, mechanism_names
 from .mechanism_fit import FittedMechanism, MechanismFit, fit_mechanism, load_any_fit
 

@@ -43,9 +43,13 @@ AS_WELL = 1.1
 
 
 def noise_rms(datasets) -> list[float | None]:
-    """Per data set, the RMS of the stated standard deviations of log10 G', G'' (decades), None without them."""
+    """Per data set, the RMS of the stated standard deviations of log10 G', G'' (or of log10 J for creep data),
+    in decades; None for a data set without them."""
     out: list[float | None] = []
     for d in datasets:
+        if getattr(d, "kind", None) == "creep":  # creep data: the sd of log10 J
+            out.append(float(np.sqrt(np.mean(1.0 / d.weights**2))) if d.has_sd else None)
+            continue
         w = np.concatenate([d.weights_storage, d.weights_loss])
         out.append(None if d.G_storage_sd is None or d.G_loss_sd is None else float(np.sqrt(np.mean(1.0 / w**2))))
     return out
@@ -351,12 +355,6 @@ class MechanismFit:
                           "at_bound": [p.at_bound or "" for p in self.parameters],
                           "standard_error_ln": [se.get(p.name, np.nan) for p in self.parameters],
                           "alternatives_spread_decades": [alt.get(p.name, np.nan) for p in self.parameters]})
-
-    def report(self) -> str:
-        """The Markdown report (:func:`tenscell.reports.mechanisms.mechanism_fit_markdown`)."""
-        from ..reports.mechanisms import mechanism_fit_markdown
-
-        return mechanism_fit_markdown(self)
 
 
 def fit_mechanism(data, model, cell: Cell | None = None, *, starts: int = 4, seed: int | None = 0, jobs: int = 1,

@@ -358,8 +358,7 @@ def fit(
     initial=None,
     max_points: int | None = DEFAULT_MAX_POINTS,
     progress: bool | None = None,
-    model=None,
-):
+) -> FitResult:
     """Fit the tensegrity model's G', G'' to measured data (multi-start, analytic Jacobian).
 
     Parameters
@@ -414,18 +413,9 @@ def fit(
     progress : bool or None
         A progress bar: None shows one when someone watches (a terminal or a
         notebook), True always, False never (see :mod:`tenscell._progress`).
-    model : str or Mechanism, optional
-        Fit a mechanism instead of the per-tendon Voigt cell (a name of
-        :data:`tenscell.fitting.mechanisms.MECHANISMS` or a spec): delegates to
-        :func:`tenscell.fitting.mechanism_fit.fit_mechanism` with the same
-        search options and returns a
-        :class:`~tenscell.fitting.mechanism_fit.MechanismFit`; ``tendons``,
-        ``damping`` and the activity constraints do not apply. The name
-        ``"voigt-per-tendon"`` is this function's own fit.
-
     Returns
     -------
-    FitResult (or MechanismFit with ``model``)
+    FitResult
 
     Raises
     ------
@@ -434,12 +424,6 @@ def fit(
     """
     from ..model.shapes import paper_cell
 
-    if model is not None and model != "voigt-per-tendon":
-        from .mechanism_fit import fit_mechanism
-
-        return fit_mechanism(data, model, cell, starts=starts, seed=seed, jobs=jobs, tolerance=tolerance, hops=hops,
-                             patience=patience, max_nfev=max_nfev, polish=polish, polish_effort=polish_effort,
-                             bounds=bounds, fixed=fixed, max_points=max_points, progress=progress)
     t_begin = time.monotonic()
     datasets = as_datasets(data)
     if max_points is not None:
