@@ -40,6 +40,7 @@ NUMERIC_FLAGS = {
     ("study", "sensitivity"): {"--draws": (), "--seed": ("zero",)},
     ("study", "compactness", "DATA"): {"--decades": (), "--starts": (), "--jobs": (), "--tolerance": (),
                                        "--min-prestress-share": (), "--max-decades": ()},
+    ("study", "mechanisms", "DATA"): {"--hops": ("zero",), "--starts": (), "--jobs": (), "--tolerance": ()},
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
     ("synth-population", "--out", "OUT"): {"--cells": (), "--noise": ("zero",), "--spread": ("zero",), "--freq": (),
