@@ -25,10 +25,7 @@ def fit(data, cell=None, *, model=None, **options):
     return fit_mechanism(data, model, cell, **options)
 
 
-fit.__doc__ = (search.fit.__doc__ or "") + """
-    Mechanisms
-    ----------
-    model : str or Mechanism, optional
+_MODEL_DOC = """    model : str or Mechanism, optional
         Fit a mechanism instead of the per-tendon Voigt cell (a name of
         :data:`tenscell.fitting.mechanisms.MECHANISMS` or a spec): delegates to
         :func:`tenscell.fitting.mechanism_fit.fit_mechanism` with the search
@@ -36,4 +33,8 @@ fit.__doc__ = (search.fit.__doc__ or "") + """
         :class:`~tenscell.fitting.mechanism_fit.MechanismFit`; ``tendons``,
         ``damping``, ``initial`` and the activity constraints do not apply.
         ``"voigt-per-tendon"`` is the per-tendon fit itself.
+
 """
+_doc = search.fit.__doc__ or ""
+fit.__doc__ = _doc.replace("    Returns\n    -------\n    FitResult", _MODEL_DOC + "    Returns\n    -------\n"
+                           "    FitResult, or MechanismFit with ``model``", 1)
