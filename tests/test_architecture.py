@@ -26,7 +26,7 @@ SRC = Path(__file__).resolve().parent.parent / "src" / "tenscell"
 #: the pipeline, earliest stage first (docs/architecture.md); a module may import from its own stage or earlier ones
 STAGES: tuple[tuple[str, ...], ...] = (
     # shared plumbing: leaf modules
-    ("_checks", "_errors", "_progress", "_results", "_threads", "_parallel", "_version"),
+    ("_checks", "_errors", "_progress", "_results", "_threads", "_parallel", "_version", "_ranges"),
     ("model",),
     ("laws",),
     ("linear",),
@@ -57,11 +57,13 @@ EXCEPTIONS: dict[tuple[str, str], str] = {
     ("model.shapes", "find_cylindrical_reference"): "form-finding of the cylindrical reference: stability of trial "
                                                     "geometries, before any linear model exists (model/ precedes "
                                                     "linear/)",
+    ("model.shapes", "nucleated_cell"): "equilibrium: the prestressed nucleus shell's member forces (its equilibrium "
+                                        "matrix block is statically determinate), before any linear model exists",
     ("model.equilibrium", "self_stress_basis"): "geometry: the SVD of the equilibrium matrix A gives the self-stress "
                                                 "states and mechanisms (the equilibrium stage)",
     ("model.lattices", "lattice_module_tensions"): "geometry: self-stress of a lattice module (null space of A·G)",
     ("summary", "_rigid_dof"): "geometry: rank of the support constraints",
-    ("summary", "summarize"): "geometry: rank of the equilibrium matrix A of a structure that has no cell",
+    ("summary", "_ranks"): "geometry: rank of the equilibrium matrix A of a structure that has no cell",
     ("dynamics.equations", "_factor"): "the nonlinear equations of motion at the current state q (implicit steps), "
                                        "not the reference pencil",
     ("dynamics.equations", "_apply"): "solves with the factors of _factor (the same matrices at a state q)",
@@ -89,7 +91,7 @@ PENDING_BACKWARD: dict[tuple[str, str], str] = {
 
 
 # ---- reading the source -------------------------------------------------------------------------------
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _parse(text: str) -> ast.Module:
     return ast.parse(text)
 

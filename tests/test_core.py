@@ -13,7 +13,6 @@ from hypothesis import strategies as st
 
 import tenscell
 from tenscell.model.equilibrium import generalized_forces, member_geometry, tangent_stiffness
-from tenscell.model.coordinates import kinematics
 
 F_WIDE = np.logspace(-3, 5, 161)  # Hz
 

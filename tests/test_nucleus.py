@@ -107,3 +107,33 @@ def test_dynamic_laws_on_a_nucleated_cell():
 
     J = tenscell.compliance(lin, F)
     assert np.max(np.abs(modal_compliance(tau, rho, 2 * np.pi * F) - J) / np.abs(J)) <= lin.realization.error * 2
+
+
+def test_prestressed_nucleus():
+    """nucleus_load f: the shell carries f·T_IF at each node (unique: statically determinate), the inner IF segments
+    (1 − f)·T_IF. A prestressed shell needs stiffness (compressed short edges soften it): EA = 1e3 N is unstable at
+    f = 0.6, 1e5 N stable; as the nucleus stiffens its prestress stops mattering (second order in 1/EA: measured
+    ratio 102 per decade from 3e5 to 3e6 N, where round-off, ~1e-9 relative at EA/1 N = 3e6, is 0.3 % of the
+    difference); f → 0 is the stress-free nucleus (first order in f)."""
+    from tenscell.linear.modal import NotPositiveDefiniteError
+    from tenscell.response import static_modulus
+
+    c = nucleated_cell(nucleus_load=0.6)
+    assert np.abs(c.A @ c.T0).max() < 1e-13
+    np.testing.assert_allclose(c.T0[33:45], 0.4 * c.T0[21:33], rtol=1e-12)
+    shell = c.T0[45:]
+    assert shell.min() < 0 < shell.max()  # the shell is prestressed, in both signs
+
+    def G0(cell, e):
+        EAn = np.concatenate([np.ones(45), np.full(30, e)])
+        return static_modulus(linearize_law(cell, Voigt(EA=EAn, c=1.0), P0 * PAPER.T0[0] / cell.T0[0]))
+
+    with pytest.raises(NotPositiveDefiniteError):
+        G0(c, 1e3)
+    assert G0(c, 1e5) > 0
+    free = [G0(NUC, e) for e in (3e5, 3e6)]
+    loaded = [G0(c, e) for e in (3e5, 3e6)]
+    d = [abs(a - b) / b for a, b in zip(loaded, free)]
+    assert d[1] < 1e-6 and d[0] / d[1] == pytest.approx(100, rel=0.1)
+    small = [abs(G0(nucleated_cell(nucleus_load=f), 1e3) / G0(NUC, 1e3) - 1) for f in (1e-3, 1e-4)]
+    assert small[0] / small[1] == pytest.approx(10, rel=0.05)

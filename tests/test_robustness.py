@@ -10,6 +10,7 @@ value is not tried).
 """
 from __future__ import annotations
 
+import argparse
 import ast
 import math
 from pathlib import Path
@@ -29,7 +30,7 @@ NUMERIC_FLAGS = {
                   "--delta-deg": (), "--EA": (), "--c": (), "--L": ()},
     tuple(FIT): {"--starts": (), "--seed": ("zero",), "--jobs": (), "--tolerance": (), "--baseline-starts": (),
                  "--max-points": (), "--min-prestress-share": (), "--max-decades": (),
-                 "--min-prestress-elasticity": ()},
+                 "--min-prestress-elasticity": (), "--bound": (), "--fix": (), "--holdout": (), "--prestress": ()},
     ("simulate", "--amplitude", "1", "--freq", "1"): {
         "--amplitude": (), "--amplitudes": (), "--freq": (), "--cycles": (), "--samples": (),
         "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),
@@ -39,8 +40,9 @@ NUMERIC_FLAGS = {
                  "--prestress": (), "--P": (), "--beta": (), "--velocity-scale": (), "--rtol": ()},
     ("study", "sensitivity"): {"--draws": (), "--seed": ("zero",)},
     ("study", "compactness", "DATA"): {"--decades": (), "--starts": (), "--jobs": (), "--tolerance": (),
-                                       "--min-prestress-share": (), "--max-decades": ()},
-    ("study", "mechanisms", "DATA"): {"--hops": ("zero",), "--starts": (), "--jobs": (), "--tolerance": ()},
+                                       "--prestress": ()},
+    ("study", "mechanisms", "DATA"): {"--hops": ("zero",), "--starts": (), "--jobs": (), "--tolerance": (),
+                                      "--seed": ("zero",), "--prestress": ()},
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
     ("synth-population", "--out", "OUT"): {"--cells": (), "--noise": ("zero",), "--spread": ("zero",), "--freq": (),
@@ -162,19 +164,40 @@ def test_table_size():
     assert len(TRIED) >= 300
 
 
+#: the names of the checked numeric converters (tenscell.cli._args and the command modules)
+NUMERIC_TYPES = {"number", "integer", "list", "frequencies", "member values", "size", "window", "frequency",
+                 "bound", "fixed value", "holdout window", "stated prestress"}
+
+
+def _numeric_options():
+    """(command, option) for every option converted by a numeric type, sub-subcommands included."""
+    def walk(name, parser):
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub_parser in action.choices.values():
+                    yield from walk(name, sub_parser)
+            elif action.option_strings and getattr(action.type, "__name__", "") in NUMERIC_TYPES:
+                yield from ((name, opt) for opt in action.option_strings)
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    for name, parser in sub.choices.items():
+        yield from walk(name, parser)
+
+
 def test_every_numeric_flag_is_in_the_table():
-    """A new numeric flag must join the table: flags with a checked type are listed above."""
+    """A new numeric flag must join the table: every option with a checked type is listed above."""
     listed = {}
     for prefix, flags in NUMERIC_FLAGS.items():
         listed.setdefault(prefix[0], set()).update(flags)
-    sub = next(a for a in build_parser()._actions if a.dest == "command")
-    for name, parser in sub.choices.items():
-        for action in parser._actions:
-            typename = getattr(action.type, "__name__", "")
-            if action.option_strings and typename in ("number", "integer", "list", "frequencies", "member values",
-                                                      "size", "window", "frequency"):
-                for opt in action.option_strings:
-                    assert opt in listed.get(name, set()), f"tenscell {name} {opt} is not in the bad-input table"
+    found = set(_numeric_options())
+    assert len(found) >= 60  # the walk reaches the sub-subcommands (large-study monte-carlo, sweep)
+    for name, opt in found:
+        assert opt in listed.get(name, set()), f"tenscell {name} {opt} is not in the bad-input table"
+    # and the table lists only options that exist (a listed flag that does not exist is refused as unknown,
+    # which would pass its case without testing anything)
+    for name, opts in listed.items():
+        for opt in opts:
+            assert (name, opt) in found, f"tenscell {name} {opt} is listed but is not a numeric option"
 
 
 def test_defaults_are_shown_in_help(capsys):
@@ -189,21 +212,30 @@ def test_defaults_are_shown_in_help(capsys):
                 assert "default" in h.lower(), f"tenscell {name} {action.option_strings[0]}: default not shown"
 
 
+#: modules of tenscell outside cli/ that the parser may import: standard library only themselves
+#: (the one ranges table that flags and data files share)
+PARSER_LEAVES = ("_ranges",)
+
+
 def test_building_the_parser_imports_only_the_standard_library():
-    """`tenscell --help` stays quick: module-level imports of tenscell.cli are stdlib or cli itself."""
+    """`tenscell --help` stays quick: module-level imports of tenscell.cli are stdlib, cli itself, or a stdlib-only leaf."""
     import sys
     cli_dir = Path(main.__code__.co_filename).parent
     stdlib = set(sys.stdlib_module_names)
-    for path in cli_dir.glob("*.py"):
+    leaves = [cli_dir.parent / f"{name}.py" for name in PARSER_LEAVES]
+    for path in [*cli_dir.glob("*.py"), *leaves]:
         for node in ast.parse(path.read_text()).body:
             if isinstance(node, ast.Import):
                 names = [a.name.split(".")[0] for a in node.names]
             elif isinstance(node, ast.ImportFrom):
-                if node.level == 1 and path.name != "__main__.py":
+                if path in leaves:
+                    assert node.level == 0, f"{path.name} imports .{node.module} at module level"
+                elif node.level == 1:
                     continue  # tenscell.cli's own modules
-                names = [] if node.module == "__future__" else [(node.module or "").split(".")[0]]
-                if node.level == 1:
+                elif node.level == 2:
+                    assert node.module in PARSER_LEAVES, f"{path.name} imports tenscell.{node.module} at module level"
                     continue
+                names = [] if node.module == "__future__" else [(node.module or "").split(".")[0]]
             else:
                 continue
             for n in names:

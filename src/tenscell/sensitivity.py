@@ -725,7 +725,6 @@ def monte_carlo_draws(factors, *, parameters: str = "all", alpha: float = 0.0, d
     reasons : list of str
         The error type of each invalid draw, "" for valid ones.
     """
-    from ._progress import progress_bar
 
     factors = np.atleast_2d(np.asarray(factors, dtype=float))
     n = factors.shape[0]

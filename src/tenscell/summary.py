@@ -171,48 +171,13 @@ def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "
     for f in s.families:
         fams[f] = fams.get(f, 0) + 1
     rigid = _rigid_dof(s)
-    if cell is not None:
-        n = cell.n
-        dim = cell.self_stress_dim
-        rank = cell.m - dim if dim >= 0 else -1
-    else:
-        coords = make_coordinates(s, parametrization)
-        A = equilibrium_matrix(member_geometry(coords, coords.q0))
-        n = coords.n
-        if sp.issparse(A):
-            rank = dim = -1
-        else:
-            rank = int(np.linalg.matrix_rank(A, tol=1e-10 * max(np.abs(A).max(), 1e-300)))
-            dim = s.n_tendons - rank
+    n, rank, dim = _ranks(s, cell, parametrization)
     mech = n - rank if rank >= 0 else -1
     stable, lin, min_t = None, None, float("nan")
     if cell is None:
         verdict = f"NOT prestressable: {reason}"
     else:
-        cable = cable_mask(s.families)
-        min_t = float(cell.T0[cable].min())
-        try:
-            lin = linearize(cell, P=P, EA=EA, c=c, check=rigid == 0)
-            if rigid:
-                stable = _stable_free(lin)
-                if stable is False:
-                    lin = None
-            else:
-                stable = True
-        except NotPositiveDefiniteError:
-            stable, lin = False, None
-        where = f"at P={P:g} N"
-        if stable:
-            verdict = (f"prestressable and stable: every tendon in tension (smallest normalized tension "
-                       f"{min_t:.4g}), K0 positive definite {where}")
-        elif stable is None:
-            verdict = (f"prestressable (smallest normalized tension {min_t:.4g}); stability of this free-standing "
-                       "structure not checked at this size")
-        else:
-            verdict = (f"prestressable (smallest normalized tension {min_t:.4g}) but NOT stable {where}: K0 is not "
-                       "positive definite" + (" on the complement of the rigid-body motions" if rigid else ""))
-        if rigid:
-            verdict += f"; free-standing: {rigid} rigid-body motion(s) excluded"
+        stable, lin, min_t, verdict = _stability(cell, P, EA, c, rigid)
     summary = StructureSummary(
         name=s.name, n_nodes=s.n_nodes, n_fixed=len(s.fixed), n_point_nodes=len(s.point_nodes),
         n_struts=len(s.struts), n_anchored=sum(s.is_anchored(k) for k in range(len(s.struts))),
@@ -221,6 +186,46 @@ def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "
         verdict=verdict,
     )
     return summary, cell, lin
+
+
+def _ranks(s: Structure, cell: Cell | None, parametrization: str) -> tuple[int, int, int]:
+    """(coordinates, rank of the equilibrium matrix, self-stress dimension); -1 where not computed (sparse)."""
+    if cell is not None:
+        dim = cell.self_stress_dim
+        return cell.n, (cell.m - dim if dim >= 0 else -1), dim
+    coords = make_coordinates(s, parametrization)
+    A = equilibrium_matrix(member_geometry(coords, coords.q0))
+    if sp.issparse(A):
+        return coords.n, -1, -1
+    rank = int(np.linalg.matrix_rank(A, tol=1e-10 * max(np.abs(A).max(), 1e-300)))
+    return coords.n, rank, s.n_tendons - rank
+
+
+def _stability(cell: Cell, P: float, EA, c, rigid: int):
+    """(stable: bool or None, the linear model or None, smallest normalized tension, the verdict's words)."""
+    min_t = float(cell.T0[cable_mask(cell.structure.families)].min())
+    stable: bool | None
+    lin: LinearModel | None
+    try:
+        lin = linearize(cell, P=P, EA=EA, c=c, check=rigid == 0)
+        stable = _stable_free(lin) if rigid else True
+        if stable is False:
+            lin = None
+    except NotPositiveDefiniteError:
+        stable, lin = False, None
+    where = f"at P={P:g} N"
+    if stable:
+        verdict = (f"prestressable and stable: every tendon in tension (smallest normalized tension "
+                   f"{min_t:.4g}), K0 positive definite {where}")
+    elif stable is None:
+        verdict = (f"prestressable (smallest normalized tension {min_t:.4g}); stability of this free-standing "
+                   "structure not checked at this size")
+    else:
+        verdict = (f"prestressable (smallest normalized tension {min_t:.4g}) but NOT stable {where}: K0 is not "
+                   "positive definite" + (" on the complement of the rigid-body motions" if rigid else ""))
+    if rigid:
+        verdict += f"; free-standing: {rigid} rigid-body motion(s) excluded"
+    return stable, lin, min_t, verdict
 
 
 def _complement(lin: LinearModel) -> np.ndarray:

@@ -165,7 +165,7 @@ class EquationsOfMotion:
         if law.dynamic:
             raise DynamicLawError(
                 f"the nonlinear time domain integrates tendon laws T(l, l') without internal state; this "
-                f"{type(law).__name__} law has internal dynamics: use tenscell.linearize_law(cell, law, P) for its "
+                f"{type(law).__name__} law has internal dynamics: use tenscell.linear.linearize_law(cell, law, P) for its "
                 "linear creep and relaxation and tenscell.linear.dynamic.dynamic_moduli for its moduli")
         if law.l0 is None:
             raise ValueError("the tendon law has no rest lengths: place it at the cell's reference with "
@@ -178,7 +178,7 @@ class EquationsOfMotion:
         self.n, self.m = cell.n, cell.m
         self.cable = cable_mask(cell.structure.families)
         self.displacement_control = loading.controls == "displacement"
-        self.gamma = 10.0 * getattr(loading, "omega") if self.displacement_control else 0.0  # a SineDisplacement
+        self.gamma = 10.0 * getattr(loading, "omega") if self.displacement_control else 0.0  # noqa: B009 - a SineDisplacement (mypy sees the union)
         geom0 = cell.geometry
         idx = np.where(geom0.index < 0, self.n, geom0.index)
         self._idx = idx

@@ -212,7 +212,7 @@ def _canonical_unit(text: str) -> str | None:
     t = text.strip().strip("[]()").strip()
     if t in ("Hz", "rad/s", "Pa", "kPa", "MPa", "deg", "rad"):
         return t
-    return _ALIASES.get(t.lower().replace("·", " ").replace("**", "^"), None)
+    return _ALIASES.get(t.lower().replace("·", " ").replace("**", "^"))
 
 
 def _resolve(table: _Table, cmap: ColumnMap) -> dict[str, tuple[int, str]]:
@@ -340,7 +340,7 @@ def _data(table: _Table, cmap: ColumnMap, min_points: int) -> RheologyData:
     return RheologyData(
         frequency_hz=v["frequency"], G_storage=Gs, G_loss=Gl, prestress=v.get("prestress"),
         G_storage_sd=v.get("storage_sd"), G_loss_sd=v.get("loss_sd"), source=table.source,
-        comments=(*table.comments, f"imported by tenscell: {how}"),
+        comments=(*table.comments, f"imported by tenscell: {how}"), locations=tuple(table.where),
     )
 
 

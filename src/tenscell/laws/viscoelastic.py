@@ -71,7 +71,7 @@ class _DynamicSpring(_SpringEA):
         return DynamicLawError(
             f"the {name} tendon law has an internal state, so {what}: use law.complex_stiffness(l, T, omega) "
             f"or tenscell.linear.dynamic.dynamic_moduli(cell, law, P, f) for moduli, and "
-            f"tenscell.linearize_law(cell, law, P) (its internal-variable realization) for creep and relaxation"
+            f"tenscell.linear.linearize_law(cell, law, P) (its internal-variable realization) for creep and relaxation"
         )
 
     def tension(self, l, ldot):
@@ -119,7 +119,7 @@ def springpot_prony(alpha: float, band_hz: tuple[float, float] = DEFAULT_REALIZA
                     tol: float = DEFAULT_REALIZATION_TOL) -> tuple[float, np.ndarray, np.ndarray, float]:
     """A passive Prony series for ``(iω·t1)^α`` over a band: ``g_d·iω + Σ g_i·iωτ_i/(1 + iωτ_i)``.
 
-    Retardation times τ_i log-spaced over the band (ω = 2πf) widened by a
+    Relaxation times τ_i of the arms log-spaced over the band (ω = 2πf) widened by a
     margin; non-negative weights (so every element is a passive spring,
     dashpot or Maxwell arm) from non-negative least squares on the relative
     error at 4 points per arm; more arms per decade and a wider margin until
@@ -132,9 +132,9 @@ def springpot_prony(alpha: float, band_hz: tuple[float, float] = DEFAULT_REALIZA
     g_d : float
         Dashpot weight (s): the term ``g_d·iω``.
     tau : ndarray, shape (r,)
-        Retardation times (s).
+        The arms' relaxation times (s), read-only (the result is cached).
     g : ndarray, shape (r,)
-        Arm weights (dimensionless), ≥ 0.
+        Arm weights (dimensionless), ≥ 0, read-only.
     error : float
         The measured largest relative error over the band.
 
@@ -157,7 +157,10 @@ def springpot_prony(alpha: float, band_hz: tuple[float, float] = DEFAULT_REALIZA
         err = float(np.max(np.abs(_prony_basis(wc, tau, wf[-1]) @ g - target) / np.abs(target)))
         if err <= tol:
             keep = g[1:] > 0
-            return float(g[0]) / wf[-1], tau[keep], g[1:][keep], err
+            tau_k, g_k = tau[keep], g[1:][keep]
+            tau_k.setflags(write=False)
+            g_k.setflags(write=False)
+            return float(g[0]) / wf[-1], tau_k, g_k, err
     raise ValueError(f"no Prony series of up to 8 arms per decade represents the springpot (alpha={alpha:g}) within "
                      f"tol={tol:g} over {band_hz[0]:g}–{band_hz[1]:g} Hz (best {err:.2g}); ask for a larger tol")
 

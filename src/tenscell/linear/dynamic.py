@@ -12,7 +12,7 @@ split as :func:`tenscell.linear.modal.assemble_stiffness`,
 ``G' + iG'' = (0.5/L)/J + iωη`` (Pa) with an optional Newtonian cytoplasm of
 viscosity η (Pa·s) in parallel with the structure. For a rate-linear law
 ``k* = k + iωc`` and this is exactly :func:`tenscell.moduli` of
-:func:`tenscell.linearize_law` (tested).
+:func:`tenscell.linear.linearize_law` (tested).
 
 For the time domain (creep, relaxation, the retardation spectrum) such a law
 is *realized* with internal variables (:func:`tenscell.linear.linearize.realize`): each Maxwell arm
@@ -44,7 +44,7 @@ import scipy.sparse.linalg as spla
 from .._checks import positive_array, positive_scalar
 from ..laws.base import TendonLaw, angular_frequencies
 from ..model.equilibrium import Cell
-from .modal import NotPositiveDefiniteError, modulus, positive_definite_factor
+from .modal import assemble_stiffness, modulus, positive_definite_factor
 from .._threads import hot_path
 
 __all__ = ["dynamic_stiffness", "dynamic_compliance", "dynamic_moduli", "dynamic_complex_modulus",
@@ -89,12 +89,9 @@ def _solves(cell: Cell, P: float, k: np.ndarray, both: bool) -> tuple[np.ndarray
         K = dynamic_stiffness(cell, P, k)
         sol = np.linalg.solve(K, np.broadcast_to(rhs, (k.shape[0],) + rhs.shape).astype(complex))
     else:
-        H = sp.csr_matrix(cell.prestress_hessian) * P
-        A = sp.csr_matrix(cell.A)
         sol = np.empty((k.shape[0],) + rhs.shape, dtype=complex)
-        for i in range(k.shape[0]):
-            K = (H + A @ sp.diags(k[i]) @ A.T).tocsc().astype(complex)
-            sol[i] = spla.splu(K).solve(rhs.astype(complex))
+        for i in range(k.shape[0]):  # the same assembly as K0, with complex member tangents
+            sol[i] = spla.splu(sp.csc_matrix(assemble_stiffness(cell, P, k[i]), dtype=complex)).solve(rhs.astype(complex))
     x = sol[:, :, 0]
     y = x if same else (sol[:, :, 1] if both else None)
     return x, y
@@ -138,7 +135,7 @@ def dynamic_compliance(cell: Cell, P: float, kstar, dkstar=None):
 
 @hot_path
 def check_static_stability(cell: Cell, law: TendonLaw, P: float) -> None:
-    """Raise :class:`NotPositiveDefiniteError` unless the static stiffness ``K(ω → 0)`` is positive definite.
+    """Raise ``NotPositiveDefiniteError`` unless the static stiffness ``K(ω → 0)`` is positive definite.
 
     With passive tendons (``Re k*`` rising, ``Im k* ≥ 0``) a structure whose
     static stiffness is positive definite is stable at every frequency.
@@ -150,9 +147,7 @@ def check_static_stability(cell: Cell, law: TendonLaw, P: float) -> None:
 def dynamic_stiffness_static(cell: Cell, law: TendonLaw, P: float):
     """``K(ω → 0)`` (N/m), real, dense or sparse like the cell."""
     k0 = np.asarray(law.complex_stiffness(cell.lengths, P * cell.T0, [0.0])[0].real)
-    if cell.sparse:
-        return (sp.csr_matrix(cell.prestress_hessian) * P + sp.csr_matrix(cell.A) @ sp.diags(k0) @ sp.csr_matrix(cell.A).T).tocsc()
-    return np.asarray(dynamic_stiffness(cell, P, k0)[0].real)
+    return assemble_stiffness(cell, P, k0)
 
 
 @hot_path

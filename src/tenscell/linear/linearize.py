@@ -23,7 +23,7 @@ import scipy.sparse as sp
 from .._checks import positive_array, positive_scalar
 from ..laws import DynamicLawError, LinearSpring, TendonLaw, Voigt
 from ..laws.base import DEFAULT_REALIZATION_TOL, Realization
-from ..model.equilibrium import Cell, tangent_stiffness, weighted_gram
+from ..model.equilibrium import Cell, tangent_stiffness
 from .dynamic import cytoplasm_damping, viscosity_value
 from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
@@ -305,7 +305,8 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
         For a law with internal dynamics only (``law.dynamic``): the band (Hz)
         and relative tolerance of its internal-variable realization
         (:func:`tenscell.linear.linearize.realize`; exact for Maxwell and the
-        standard linear solid, a Prony series for the springpot). Needs ``P``.
+        standard linear solid, a Prony series for the springpot). Needs ``P``;
+        ignored for rate-linear laws, whose linearization is exact.
 
     Returns
     -------
@@ -326,7 +327,7 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
         raise ValueError(f"law must be a tenscell.laws.TendonLaw, got {type(law).__name__}")
     if law.m is not None and law.m != cell.m:
         raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
-    if law.dynamic or band_hz is not None or tol is not None:
+    if law.dynamic:
         if P is None:
             raise DynamicLawError(f"a {type(law).__name__} law has internal dynamics: pass the prestress P to "
                                   "linearize_law (its realization is built at tensions P·T0)")
@@ -404,8 +405,8 @@ def with_cytoplasm(lin, viscosity: float):
 def _augmented(cell: Cell, P: float, R: Realization):
     """``(K, C)`` of the realized pencil (:mod:`tenscell.linear.dynamic`), dense or sparse like the cell."""
     A = cell.A
-    Kq = P * cell.prestress_hessian + weighted_gram(A, R.k)
-    Cq = weighted_gram(A, R.c)
+    Kq = assemble_stiffness(cell, P, R.k)
+    Cq = assemble_damping(cell, R.c)
     if cell.sparse:
         B = sp.csr_matrix(A)[:, R.tendon]
         G = sp.diags(R.arm_k)

@@ -448,6 +448,24 @@ def _turn_orbits(structure: Structure) -> np.ndarray:
     return orbit
 
 
+def _cylindrical_residual(base: Structure, orbit: np.ndarray):
+    """``z -> (A(q)·T, ‖T‖ − 1)`` for z = (5 shape parameters, class tensions): equilibrium of the cylindrical cell."""
+
+    def residual(z):
+        try:
+            nodes = cylindrical_nodes(z[:5], 1.0)
+        except ValueError:
+            return np.full(25, 1e3)
+        st = Structure(nodes=nodes, struts=base.struts, tendons=base.tendons, families=base.families,
+                       fixed=base.fixed, load=base.load, probe=base.probe)
+        co = make_coordinates(st, "angles")
+        A = equilibrium_matrix(member_geometry(co, co.q0), sparse=False)
+        T = z[5:][orbit]
+        return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
+
+    return residual
+
+
 def find_cylindrical_reference(
     start=None, *, min_tension: float = 0.02, stiffness_check=(1000.0, 1.0), n_starts: int = 10, seed: int = 0
 ) -> tuple[float, ...]:
@@ -500,18 +518,7 @@ def find_cylindrical_reference(
     if p0.shape != (5,):
         raise ValueError(f"start must have 5 entries (θ_C1, θ_B1, θ_D1, z_B1/L, z_N/L), got {p0.size}")
     P, EA = stiffness_check
-
-    def residual(z):
-        try:
-            nodes = cylindrical_nodes(z[:5], 1.0)
-        except ValueError:
-            return np.full(25, 1e3)
-        st = Structure(nodes=nodes, struts=base.struts, tendons=base.tendons, families=base.families,
-                       fixed=base.fixed, load=base.load, probe=base.probe)
-        co = make_coordinates(st, "angles")
-        A = equilibrium_matrix(member_geometry(co, co.q0), sparse=False)
-        T = z[5:][orbit]
-        return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
+    residual = _cylindrical_residual(base, orbit)
 
     from scipy.optimize import least_squares  # here, not at import (see if_free_delta)
 
@@ -578,7 +585,7 @@ def nucleated_structure(alpha: float, delta: float, L: float, radius: float = 0.
 
 
 def nucleated_cell(alpha: float = 0.0, delta: float | None = None, L: float = 1.0, radius: float = 0.5,
-                   parametrization: str = "angles") -> Cell:
+                   parametrization: str = "angles", nucleus_load: float = 0.0) -> Cell:
     """The paper cell with a nucleus tied to its intermediate filaments (:func:`nucleated_structure`).
 
     The self-stress is the paper cell's: actin and IFs carry the paper's
@@ -608,6 +615,13 @@ def nucleated_cell(alpha: float = 0.0, delta: float | None = None, L: float = 1.
         Where the nucleus nodes sit on the IFs, as a fraction of the IF length
         from the centre, 0 < radius < 1 (the nucleus's size relative to the cell).
     parametrization : {"angles", "local"}
+    nucleus_load : float
+        The fraction of each IF's tension that the nucleus carries, 0 ≤ f < 1
+        (dimensionless): the inner IF segments keep ``(1 − f)·T_IF`` and the
+        nucleus shell balances the rest, ``f·T_IF`` pulling radially outward at
+        each of its nodes (a prestressed nucleus; its shell is statically
+        determinate — 30 edges, 12 nodes less 6 rigid motions — so its forces
+        are unique). 0 (default): the stress-free nucleus described above.
 
     Returns
     -------
@@ -620,6 +634,19 @@ def nucleated_cell(alpha: float = 0.0, delta: float | None = None, L: float = 1.
     paper = paper_cell(alpha, delta, L, parametrization=parametrization)
     p = dict(paper.parameters)
     st = nucleated_structure(p["alpha"], p["delta"], p["L"], radius)
+    frac = finite_scalar("nucleus_load", nucleus_load, "a number in [0, 1) (fraction of the IF tension)")
+    if not 0.0 <= frac < 1.0:
+        raise ValueError(f"nucleus_load must lie in [0, 1) (fraction of the IF tension the nucleus carries), got {frac!r}")
     ifs = paper.T0[21:]
-    T0 = np.concatenate([paper.T0[:21], ifs, ifs, np.zeros(len(st.tendons) - 45)])
-    return equilibrate(st, parametrization, T0=T0, parameters={**p, "nucleus_radius": radius})
+    T0 = np.concatenate([paper.T0[:21], ifs, (1.0 - frac) * ifs, np.zeros(len(st.tendons) - 45)])
+    params = {**p, "nucleus_radius": radius} | ({"nucleus_load": frac} if frac else {})
+    if frac:  # the shell's forces that balance the IFs' unbalanced pull f·T_IF on its nodes (unique, see above)
+        A = equilibrium_matrix(member_geometry(*_reference_geometry(st, parametrization)), sparse=False)
+        x, *_ = np.linalg.lstsq(A[:, 45:], -(A[:, :45] @ T0[:45]), rcond=None)
+        T0[45:] = x
+    return equilibrate(st, parametrization, T0=T0, parameters=params)
+
+
+def _reference_geometry(structure: Structure, parametrization: str):
+    co = make_coordinates(structure, parametrization)
+    return co, co.q0, kinematics(co, co.q0)

@@ -169,7 +169,7 @@ def _from_path(inputs) -> list[CellSource]:
         return _from_table(path)
     if _glob.has_magic(text):
         files = sorted(Path(p) for p in _glob.glob(text, recursive=True) if Path(p).is_file())
-        base = Path(*[part for part in _fixed_prefix(text)]) if _fixed_prefix(text) else Path(".")
+        base = Path(*_fixed_prefix(text)) if _fixed_prefix(text) else Path(".")
         return _from_files(base, files)
     raise SourceError(f"{text}: no such file or directory")
 

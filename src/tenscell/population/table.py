@@ -29,7 +29,6 @@ fitted parameters
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -197,7 +196,7 @@ class PopulationResult:
         """
         from pathlib import Path
 
-        from ..io.outputs import atomic_path, json_ready, write_csv_rows, write_text
+        from ..io.outputs import atomic_path, json_text, write_csv_rows, write_text
         from ..plotting import save
         from ..reports.population import population_markdown
 
@@ -206,7 +205,7 @@ class PopulationResult:
         with atomic_path(d / "population.parquet") as tmp:
             self.table.to_parquet(tmp, index=False)
         _write_frame(d / "summary.csv", self.summary(), write_csv_rows)
-        write_text(d / "cells.jsonl", "".join(json.dumps(json_ready(r, infinities=True), allow_nan=False) + "\n"
+        write_text(d / "cells.jsonl", "".join(json_text(r, indent=None) + "\n"
                                               for r in self.records))
         rec = None
         if truth is not None:
@@ -232,7 +231,7 @@ def read_table(path):
     if path.endswith((".parquet", ".pq")):
         return pd.read_parquet(path)
     text = [c for c in _TEXT if c != "converged"]
-    df = pd.read_csv(path, keep_default_na=False, na_values=[""], dtype={c: "str" for c in text})
+    df = pd.read_csv(path, keep_default_na=False, na_values=[""], dtype=dict.fromkeys(text, "str"))
     return df.fillna({c: "" for c in text if c in df.columns})
 
 
