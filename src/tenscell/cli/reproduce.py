@@ -75,8 +75,9 @@ def reproduce_fit(out: Path, log) -> None:
     _reproduce_mechanisms(out, data, result, log)
 
 
-#: the mechanisms `make reproduce` fits beside the joint per-tendon fit: the few-parameter mechanism with the lowest BIC in
-#: `tenscell study mechanisms` on the bundled data (docs/fitting.md); this run re-measures its BIC against the per-tendon fit
+#: the mechanisms `make reproduce` fits beside the joint per-tendon fit: the few-parameter mechanism with the lowest
+#: BIC in `tenscell study mechanisms` on the bundled data (docs/fitting.md); this run re-measures it against the
+#: per-tendon fit
 REPRODUCE_MECHANISMS = ("springpot+visc",)
 
 
@@ -98,9 +99,10 @@ def _reproduce_mechanisms(out: Path, data, per_tendon, log) -> None:
     write_csv_rows(out / "mechanisms_vs_per_tendon.csv", ["model", "free_parameters", "stiffness_spread_decades",
                                                           "rms_prestress_sweep", "rms_frequency_sweep", "AIC",
                                                           "BIC"], rows)
-    md = ["# The winning mechanism beside the paper's per-tendon fit", "",
+    md = ["# The best few-parameter mechanism beside the paper's per-tendon fit", "",
           "Both bundled data sets, fitted jointly (the frequency sweep at "
-          f"{data[1].prestress[0]:g} Pa). The best few-parameter mechanism of `tenscell study mechanisms`, **{win[0]}** ({win[1]} free parameters) has BIC "
+          f"{data[1].prestress[0]:g} Pa). The best few-parameter mechanism of `tenscell study mechanisms`, "
+          f"**{win[0]}** ({win[1]} free parameters), has BIC "
           f"{win[6]:.1f} against {rows[0][6]:.1f} for the per-tendon fit ({rows[0][1]} parameters): "
           + ("the mechanism is preferred." if win[6] < rows[0][6] else "the per-tendon fit is preferred."), "",
           table(("model", "free parameters", "stiffness spread (decades)", "RMS prestress sweep",
