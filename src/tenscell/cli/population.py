@@ -158,9 +158,8 @@ def run_fit(args) -> int:
         result = fit_population(sources, options=options, seed=args.seed, workers=args.workers,
                                 scheduler=args.scheduler, work_dir=work, resume=args.resume)
     except KeyboardInterrupt:
-        print(f"tenscell fit-population: interrupted; finished cells are kept in {work}/; "
-              "run the same command with --resume to continue", file=sys.stderr)
-        raise
+        raise KeyboardInterrupt(f"tenscell fit-population: interrupted; finished cells are kept in {work}/; "
+                                "run the same command with --resume to continue") from None
     with out as d:
         result.write(d, truth=truth)
     shutil.rmtree(work, ignore_errors=True)
@@ -194,9 +193,8 @@ def run_study(args) -> int:
             result = sweep_study(args.prestress, args.heterogeneity, work, f_hz=args.freq,
                                  realizations=args.realizations, **where)
     except KeyboardInterrupt:
-        print(f"tenscell large-study: interrupted; finished parts are kept in {work}/; "
-              "run the same command with --resume to continue", file=sys.stderr)
-        raise
+        raise KeyboardInterrupt(f"tenscell large-study: interrupted; finished parts are kept in {work}/; "
+                                "run the same command with --resume to continue") from None
     with out as d:
         (work / PARTS).rename(d / PARTS)
         shutil.copy2(work / "study.json", d / "study.json")

@@ -119,10 +119,121 @@ def cluster(*, client=None, workers: int | None = None, scheduler: str | None = 
             yield c
         return
     n = usable_cpus() if workers is None else int(workers)
-    # loopback only, no dashboard: a run on a shared machine opens no port to the network
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None, silence_logs=logging.ERROR) as lc, Client(lc) as c:
+    with _local_cluster(n, timeout) as c:
         yield c
+
+
+#: environment of a local cluster's worker processes: one BLAS/OpenMP thread, as every hot path of the main
+#: process runs (Dask's default also sets MALLOC_TRIM_THRESHOLD_, which the main process does not have)
+WORKER_ENVIRON = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
+@contextlib.contextmanager
+def _local_cluster(n: int, timeout: float) -> Iterator[Any]:
+    """A loopback cluster of ``n`` single-thread worker processes that Ctrl-C leaves quiet and stops at once.
+
+    The terminal sends SIGINT to every process of the foreground group; Dask's
+    worker processes would each print a KeyboardInterrupt traceback and their
+    nannies a CancelledError. So Dask's event-loop thread is started here with
+    SIGINT blocked: it keeps the block, and so does every thread and worker
+    process it starts (at start-up and when it replaces a dead worker) —
+    workers never see Ctrl-C. This thread alone handles it, at any moment
+    including start-up, and then kills the workers (:func:`_kill_workers`):
+    their work is dropped anyway. No dashboard; the scheduler's own HTTP
+    endpoint takes a free loopback port (never "port 8787 is already in use").
+    """
+    import dask
+    from distributed import Client, LocalCluster
+    from distributed.utils import LoopRunner
+
+    with _sigint_blocked():
+        loop = LoopRunner()
+        loop.start()
+    lc = client = None
+    quiet = _Quiet()
+    try:
+        with dask.config.set({"distributed.nanny.pre-spawn-environ": WORKER_ENVIRON}):
+            lc = LocalCluster(n_workers=0, threads_per_worker=1, processes=True, host="127.0.0.1", loop=loop.loop,
+                              dashboard_address=None, silence_logs=logging.ERROR,
+                              scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"})
+            client = Client(lc, timeout=timeout)
+            lc.scale(n)
+            # ready means every worker is up: a run never starts on a half-built cluster, nor does a test wait
+            # a fixed time for one (the bound only keeps a broken machine from hanging here)
+            client.wait_for_workers(n, timeout=max(timeout, 300.0))
+        yield client
+    finally:
+        # the workers hold nothing once the block is left (results are in, or dropped on Ctrl-C or an error):
+        # they are ended at once rather than asked to close (0.7-0.9 s at load 10), and the teardown then
+        # logs nothing (the scheduler reports each closed connection, a nanny its worker that died starting)
+        quiet.start()
+        try:
+            if lc is not None:
+                _kill_workers(lc)
+            if client is not None:
+                client.close(timeout=2)
+            if lc is not None:
+                lc.close(timeout=5)
+            loop.stop()
+        finally:
+            quiet.stop()
+
+
+class _Quiet:
+    """Silence logging (Dask's, Tornado's: their loggers set their own levels) until :meth:`stop`."""
+
+    def __init__(self):
+        self._before: int | None = None
+
+    def start(self) -> None:
+        self._before = logging.root.manager.disable
+        logging.disable(logging.CRITICAL)
+
+    def stop(self) -> None:
+        if self._before is not None:
+            logging.disable(self._before)
+        self._before = None
+
+
+def _kill_workers(lc) -> None:
+    """SIGKILL a local cluster's worker processes, started or still starting (on Ctrl-C or an error)."""
+    import signal
+
+    from distributed.core import Status
+
+    # the nannies still starting are not in .workers yet (only in the private ._created)
+    for nanny in {*getattr(lc, "workers", {}).values(), *getattr(lc, "_created", ())}:
+        if nanny.status == Status.running:
+            # a running nanny restarts a worker that dies (and closing would wait for the new one); one that
+            # is closing gracefully closes itself instead
+            nanny.status = Status.closing_gracefully
+        # the multiprocessing.Process under Dask's wrappers has its pid from the moment it is forked
+        proc = getattr(getattr(getattr(nanny, "process", None), "process", None), "_process", None)
+        pid = getattr(proc, "pid", None)
+        if pid:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+
+
+@contextlib.contextmanager
+def _sigint_blocked():
+    """Block SIGINT in this thread (and threads/processes it starts) for the block; main thread only."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    # multiprocessing starts its resource tracker at first need, blocking and then *unblocking* SIGINT in the
+    # thread that starts it (it would undo this block in Dask's event-loop thread): start it now
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)  # a Ctrl-C held meanwhile is raised here
 
 
 def n_threads(client) -> int:
