@@ -16,7 +16,8 @@ def add_cluster_options(p) -> None:
     """``--workers N | --scheduler ADDRESS``: where the tasks run (shared by every Dask command)."""
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=integer(0, 4096), default=None,
-                   help="local Dask workers started for this run (default: one per CPU; 0: no Dask, in this process)")
+                   help="local Dask workers started for this run (default: one per CPU when the work pays for starting "
+                        "them, judged from the first task's time, else in this process; 0: no Dask)")
     g.add_argument("--scheduler", default=None,
                    help="an existing Dask scheduler: tcp://HOST:PORT or a scheduler file (dask scheduler "
                         "--scheduler-file F)")
@@ -156,7 +157,8 @@ def run_fit(args) -> int:
     sources = read_sources(args.input)
     try:
         result = fit_population(sources, options=options, seed=args.seed, workers=args.workers,
-                                scheduler=args.scheduler, work_dir=work, resume=args.resume)
+                                scheduler=args.scheduler, work_dir=work, resume=args.resume,
+                                notify=_notifier("fit-population"))
     except KeyboardInterrupt:
         raise KeyboardInterrupt(f"tenscell fit-population: interrupted; finished cells are kept in {work}/; "
                                 "run the same command with --resume to continue") from None
@@ -184,7 +186,8 @@ def run_study(args) -> int:
         _engine.check_scheduler(args.scheduler)
     if args.resume and not work.is_dir():
         raise ValueError(f"--resume: no unfinished study in {work}")
-    where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed)
+    where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed,
+                 notify=_notifier("large-study"))
     try:
         if args.study == "monte-carlo":
             result = monte_carlo_study(args.draws, work, spread=args.spread, parameters=args.parameters,
@@ -207,3 +210,8 @@ def run_study(args) -> int:
     print(f"tenscell large-study {args.study}: {result.n_rows} rows in {result.n_parts} parts; "
           f"{result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0
+
+
+def _notifier(command: str):
+    """One line on stderr when the engine keeps the work in this process (too small to pay for a cluster)."""
+    return lambda line: print(f"tenscell {command}: {line}", file=sys.stderr, flush=True)
