@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: reproduce test bench install clean docs typecheck
+.PHONY: reproduce test bench install clean docs typecheck lint
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -41,6 +41,10 @@ $(DEV_STAMP): $(STAMP)
 
 typecheck: $(DEV_STAMP)
 	$(VENV)/bin/mypy
+
+# the linter (ruff, rules and the reasons for what they leave out in pyproject.toml)
+lint: $(DEV_STAMP)
+	$(VENV)/bin/ruff check .
 
 clean:
 	rm -rf $(VENV) out build src/*.egg-info .pytest_cache docs/_build docs/api/generated docs/auto_examples docs/jupyter_execute

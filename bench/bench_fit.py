@@ -175,7 +175,7 @@ def main():
             hits.append(hit)
             line = (f"{name:>15} seed {seed}: {_shape(name, r)} (shape {'ok' if _shape_ok(name, r) else 'OFF'}); "
                     f"target after "
-                    f"{'%.2f s' % hit if hit is not None else 'NEVER'}; whole fit {wall:.1f} s (CPU here {cpu:.1f} s"
+                    f"{f'{hit:.2f} s' if hit is not None else 'NEVER'}; whole fit {wall:.1f} s (CPU here {cpu:.1f} s"
                     f"{', workers not counted' if args.jobs > 1 else ''}); stopped: {r.stop_reason}")
             if cmd is not None:
                 line += f"; whole command {cmd[0]:.2f} s (exit {cmd[1]})"

@@ -1,6 +1,6 @@
 """Scale: G', G'' at 100 frequencies, creep and relaxation, against degrees of freedom (3D lattices).
 
-Each row builds a block lattice of 6-strut modules (``tenscell.lattice_cell``: node-sharing
+Each row builds a block lattice of 6-strut modules (``tenscell.model.lattice_cell``: node-sharing
 modules, assembled self-stress), linearizes it (with the positive-definiteness check) and computes
 G', G'' at 100 frequencies from 10⁻² to 10³ Hz — the library's own sparse path: CHOLMOD
 (cvxopt) factors K0 once for the check and K0 + σC0 once for a shifted Lanczos run. In the same
@@ -78,7 +78,7 @@ def _old_moduli(cell, lin):
 
 def run(shape):
     t0 = time.perf_counter()
-    cell = tenscell.lattice_cell(*shape)
+    cell = tenscell.model.lattice_cell(*shape)
     t1 = time.perf_counter()
     count = _Counter()
     modal.factorize_spd = count
@@ -101,10 +101,10 @@ def run(shape):
 
 def creep_relaxation():
     """Creep + relaxation of the 1,896-coordinate lattice: the library (sparse) against the old dense path."""
-    cell = tenscell.lattice_cell(*CREEP_SHAPE)
+    cell = tenscell.model.lattice_cell(*CREEP_SHAPE)
     lin = tenscell.linearize(cell, P=P, EA=_EA(cell), c=C)
     t0 = time.perf_counter()
-    spec = tenscell.creep_spectrum(lin)
+    spec = tenscell.timedomain.creep_spectrum(lin)
     rel = tenscell.stress_relaxation(lin)
     t_new = time.perf_counter() - t0
     K0, C0 = lin.K0.toarray(), lin.C0.toarray()

@@ -82,11 +82,13 @@ _SECTIONS = {
     "sensitivity": "Sensitivity",
     "studies": "Studies of the paper's discussion",
     "population": "Populations of cells",
+    "_threads": "Settings",
+    "_errors": "Errors",
 }
-#: modules documented whole, below the top-level names
-API_MODULES = ["tenscell.plotting", "tenscell.io.importers", "tenscell.io.data", "tenscell.fitting",
-               "tenscell.dynamics", "tenscell.sensitivity", "tenscell.studies", "tenscell.population", "tenscell.linear",
-               "tenscell.model"]
+#: subpackages and modules documented whole (their __all__), below the top-level entry points, in pipeline order
+API_MODULES = ["tenscell.model", "tenscell.laws", "tenscell.linear", "tenscell.response", "tenscell.timedomain",
+               "tenscell.io", "tenscell.summary", "tenscell.dynamics", "tenscell.fitting", "tenscell.sensitivity",
+               "tenscell.studies", "tenscell.population", "tenscell.reports", "tenscell.plotting"]
 
 
 def _section(module: str) -> str:
@@ -101,8 +103,10 @@ def _write_api_index() -> None:
     for module, names in tenscell._EXPORTS.items():
         groups.setdefault(_section(module), []).extend(names)
     lines = ["API reference", "=============", "",
-             "Everything below is importable from the top level (``import tenscell as tc; tc.paper_cell()``);",
-             "submodules load on first use. Units are SI: N, m, s, Pa, Hz.", "", ".. currentmodule:: tenscell", ""]
+             "The entry points are importable from the top level (``import tenscell as tc; tc.paper_cell()``);",
+             "everything else from its subpackage (``tc.model.regular_cell``, ``from tenscell.laws import Voigt``),",
+             "listed under Modules. Submodules load on first use. Units are SI: N, m, s, Pa, Hz.", "",
+             ".. currentmodule:: tenscell", ""]
     for title, names in groups.items():
         lines += [title, "-" * len(title), "", ".. autosummary::", "   :toctree: generated", ""]
         lines += [f"   {n}" for n in sorted(names, key=str.lower)] + [""]

@@ -4,7 +4,7 @@ Fit a lab's data
 
 Measured moduli rarely come in tenscell's own column names and units. This example
 reads a frequency sweep exported with angular frequency in rad/s and moduli in kPa,
-converts it explicitly with a :class:`tenscell.ColumnMap`, and fits the paper's cell
+converts it explicitly with a :class:`tenscell.io.ColumnMap`, and fits the paper's cell
 to it (tendon stiffnesses, damping, prestress and strut length).
 
 The numbers are the airway smooth muscle data of Fabry et al. (2001) shipped with
@@ -29,7 +29,7 @@ print(path.read_text().splitlines()[:3])
 # %%
 # Read it: the map names the columns; the units come from the headers (a unit the
 # file does not state must be given in the map, e.g. ``modulus_unit="kPa"``).
-data = tc.read_table(path, tc.ColumnMap(frequency="omega", storage="G'", loss="G''"))
+data = tc.read_table(path, tc.io.ColumnMap(frequency="omega", storage="G'", loss="G''"))
 print(data)
 print(data.comments[-1])
 

@@ -15,7 +15,7 @@ import tenscell as tc
 from tenscell.io.structure_files import member_values
 
 t0 = time.perf_counter()
-block = tc.lattice_cell(8, 8, 4)
+block = tc.model.lattice_cell(8, 8, 4)
 print(block)
 
 # %%

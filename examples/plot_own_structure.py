@@ -5,7 +5,7 @@ Your own structure
 Any tensegrity can be written to and read from a JSON structure file
 (``docs/structure-format.md``). Here the paper's cell is saved, edited by hand —
 the nucleus raised by 0.1 m and the paper's equal-tension requirement on the
-intermediate filaments dropped — and read back. :func:`tenscell.equilibrate`
+intermediate filaments dropped — and read back. :func:`tenscell.model.equilibrate`
 finds the new self-stress; the moduli of the two cells are compared.
 """
 import json
@@ -19,7 +19,7 @@ import tenscell as tc
 
 folder = Path(tempfile.mkdtemp())
 paper = tc.paper_cell()
-tc.save_structure(folder / "paper.json", paper.structure, EA=1.0, c=1.0, description="the paper's cell")
+tc.io.save_structure(folder / "paper.json", paper.structure, EA=1.0, c=1.0, description="the paper's cell")
 
 doc = json.loads((folder / "paper.json").read_text())
 print(doc["units"], doc["nodes"][-1])
@@ -32,7 +32,7 @@ doc["nodes"][-1]["xyz"][2] += 0.1
 del doc["equal_tension_groups"]
 (folder / "raised.json").write_text(json.dumps(doc, indent=1))
 
-raised = tc.equilibrate(tc.load_structure(folder / "raised.json"))
+raised = tc.model.equilibrate(tc.load_structure(folder / "raised.json"))
 print(raised)
 
 # %%

@@ -88,7 +88,8 @@ def test_reproduce_homogeneous_outputs(tmp_path):
     reproduce_homogeneous(tmp_path, lambda msg: None)
     for name in ("fig2_prestress.png", "fig3_frequency.png", "fig2_prestress.csv", "fig3_frequency.csv", "claims.md"):
         assert (tmp_path / name).stat().st_size > 0
-    rows = list(csv.reader(open(tmp_path / "fig3_frequency.csv")))
+    with open(tmp_path / "fig3_frequency.csv") as fh:
+        rows = list(csv.reader(fh))
     assert rows[0] == ["prestress_Pa", "frequency_Hz", "G_storage_Pa", "G_loss_Pa"]
     claims = (tmp_path / "claims.md").read_text()
     for k in range(1, 5):

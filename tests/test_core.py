@@ -13,7 +13,6 @@ from hypothesis import strategies as st
 
 import tenscell
 from tenscell.model.equilibrium import generalized_forces, member_geometry, tangent_stiffness
-from tenscell.model.coordinates import kinematics
 
 F_WIDE = np.logspace(-3, 5, 161)  # Hz
 
@@ -69,9 +68,9 @@ def test_all_strut_ends_on_one_sphere(cell):
 
 def test_regular_member_geometry():
     """At the regular member every actin tendon has length L·√(3/8) and the sphere radius is √5·L/4."""
-    c = tenscell.paper_cell(delta=tenscell.REGULAR_DELTA, intermediate_filaments=False)
+    c = tenscell.paper_cell(delta=tenscell.model.REGULAR_DELTA, intermediate_filaments=False)
     np.testing.assert_allclose(c.lengths, math.sqrt(3 / 8), rtol=1e-13)
-    x = tenscell.paper_structure(0.0, tenscell.REGULAR_DELTA, 1.0).nodes
+    x = tenscell.model.paper_structure(0.0, tenscell.model.REGULAR_DELTA, 1.0).nodes
     np.testing.assert_allclose(np.linalg.norm(x[:12] - x[12], axis=1), math.sqrt(5) / 4, rtol=1e-13)
     np.testing.assert_allclose(x[12, 2], math.sqrt(3) / 4, rtol=1e-13)
 
@@ -94,25 +93,25 @@ def test_equal_if_state_positive_inside_band(delta_deg):
 
 
 def test_regular_member_with_ifs_is_not_prestressable():
-    with pytest.raises(tenscell.NotPrestressableError, match="intermediate_filament"):
-        tenscell.paper_cell(delta=tenscell.REGULAR_DELTA)
-    with pytest.raises(tenscell.NotPrestressableError):
+    with pytest.raises(tenscell.model.NotPrestressableError, match="intermediate_filament"):
+        tenscell.paper_cell(delta=tenscell.model.REGULAR_DELTA)
+    with pytest.raises(tenscell.model.NotPrestressableError):
         tenscell.paper_cell(delta=math.radians(56.0))
 
 
 def test_if_free_cell_lives_on_its_curve():
     c = tenscell.paper_cell(intermediate_filaments=False)
     assert c.n == 21 and c.m == 21 and c.self_stress_dim == 1
-    assert math.isclose(c.parameters["delta"], tenscell.REGULAR_DELTA, rel_tol=1e-12)
+    assert math.isclose(c.parameters["delta"], tenscell.model.REGULAR_DELTA, rel_tol=1e-12)
     np.testing.assert_allclose(c.T0, 1 / math.sqrt(21), rtol=1e-10)  # regular member: all actin equal
-    with pytest.raises(tenscell.NotPrestressableError, match="curve"):
+    with pytest.raises(tenscell.model.NotPrestressableError, match="curve"):
         tenscell.paper_cell(delta=math.radians(50.0), intermediate_filaments=False)
 
 
 def test_rest_lengths_reproduce_prestress(cell):
     """Tendons with l0 from Eq. (11) carry exactly P·T0 at q0, and A(q0)·T = 0 (equilibrium)."""
     P, EA = 2500.0, np.linspace(0.5, 3.0, 33)
-    l0 = tenscell.rest_lengths(cell, P, EA)
+    l0 = tenscell.laws.rest_lengths(cell, P, EA)
     f, geom = generalized_forces(cell, cell.q0, lambda l: EA * (l / l0 - 1))
     np.testing.assert_allclose(EA * (geom.lengths / l0 - 1), P * cell.T0, rtol=1e-12)
     assert np.linalg.norm(f) < 1e-9 * P
@@ -211,11 +210,11 @@ def test_passivity_heterogeneous(cell, P, EA, c):
 
 def test_static_and_high_frequency_limits(lin):
     Gp, Gpp = tenscell.moduli(lin, np.array([1e-6, 1e8]))
-    G0 = tenscell.static_modulus(lin)
+    G0 = tenscell.response.static_modulus(lin)
     x = np.linalg.solve(lin.K0, -lin.H0)
     np.testing.assert_allclose(G0, 0.5 / lin.L / (lin.D0 @ x), rtol=1e-12)
     np.testing.assert_allclose(Gp[0], G0, rtol=1e-9)
-    eta = tenscell.viscosity_limit(lin)
+    eta = tenscell.response.viscosity_limit(lin)
     np.testing.assert_allclose(Gpp[1] / (2 * np.pi * 1e8), eta, rtol=1e-6)
     assert G0 > 0 and 300 < G0 < 310  # P=1000, EA=c=1: 304.92 Pa
 
@@ -259,12 +258,12 @@ def test_coordinate_invariance_angles_vs_local():
 
 
 def test_relaxation_spectrum(lin):
-    spec = tenscell.relaxation_spectrum(lin)
+    spec = tenscell.linear.relaxation_spectrum(lin)
     V = spec.modes
     np.testing.assert_allclose(V.T @ lin.C0 @ V, np.eye(24), atol=1e-10)
     np.testing.assert_allclose(V.T @ lin.K0 @ V, np.diag(spec.rates), atol=1e-8 * spec.rates.max())
     assert np.all(spec.rates > 0) and np.all(spec.residues >= -1e-15)
-    np.testing.assert_allclose(spec.weights.sum(), 0.5 / lin.L / tenscell.static_modulus(lin), rtol=1e-10)
+    np.testing.assert_allclose(spec.weights.sum(), 0.5 / lin.L / tenscell.response.static_modulus(lin), rtol=1e-10)
 
 
 def test_frequency_response_grid_matches_single_calls(cell):
@@ -284,19 +283,19 @@ def test_if_free_cell_uses_direct_solves():
     lin = tenscell.linearize(c, 1000.0)
     assert np.linalg.matrix_rank(lin.C0) < c.n  # an undamped mechanism
     with pytest.raises(ValueError, match="singular"):
-        tenscell.relaxation_spectrum(lin)
+        tenscell.linear.relaxation_spectrum(lin)
     Gp, Gpp = tenscell.moduli(lin, F_WIDE)
     assert np.all(np.isfinite(Gp)) and np.all(Gpp > 0)
     # a spectrum built on a round-off Cholesky of the singular C0 gave G'(1e-4 Hz) < 0 here
     for P in (300.0, 1000.0):
         lin = tenscell.linearize(c, P)
-        np.testing.assert_allclose(tenscell.moduli(lin, 1e-4)[0], tenscell.static_modulus(lin), rtol=1e-6)
+        np.testing.assert_allclose(tenscell.moduli(lin, 1e-4)[0], tenscell.response.static_modulus(lin), rtol=1e-6)
 
 
 def test_if_free_curve_off_alpha_zero():
     """Near α = 0 the IF-free curve is prestressable; at α = 0.2 rad its self-stress compresses actin."""
     assert tenscell.paper_cell(alpha=0.05, intermediate_filaments=False).T0.min() > 0
-    with pytest.raises(tenscell.NotPrestressableError, match="curve delta\\*\\(alpha\\) itself"):
+    with pytest.raises(tenscell.model.NotPrestressableError, match="curve delta\\*\\(alpha\\) itself"):
         tenscell.paper_cell(alpha=0.2, intermediate_filaments=False)
 
 
@@ -328,32 +327,32 @@ def test_bad_cell_input(kw, word):
 
 def test_unstable_reference_is_rejected():
     c = tenscell.paper_cell(delta=math.radians(44.0))
-    with pytest.raises(tenscell.NotPositiveDefiniteError, match="positive definite"):
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="positive definite"):
         tenscell.linearize(c, 1000.0)
 
 
 def test_load_on_fixed_node_is_rejected():
-    s = tenscell.paper_structure(0.0, tenscell.DEFAULT_DELTA, 1.0)
-    with pytest.raises(tenscell.StructureError, match="load"):
+    s = tenscell.model.paper_structure(0.0, tenscell.model.DEFAULT_DELTA, 1.0)
+    with pytest.raises(tenscell.model.StructureError, match="load"):
         tenscell.Structure(nodes=s.nodes, struts=s.struts, tendons=s.tendons, families=s.families, fixed=s.fixed,
-                           load=tenscell.Point((0,), (1.0,)), probe=s.probe)
-    with pytest.raises(tenscell.StructureError, match="probe"):
+                           load=tenscell.model.Point((0,), (1.0,)), probe=s.probe)
+    with pytest.raises(tenscell.model.StructureError, match="probe"):
         tenscell.Structure(nodes=s.nodes, struts=s.struts, tendons=s.tendons, families=s.families, fixed=s.fixed,
-                           load=s.load, probe=tenscell.Point((1, 2), (0.5, 0.5)))
+                           load=s.load, probe=tenscell.model.Point((1, 2), (0.5, 0.5)))
 
 
 def test_structure_validation_names_the_element():
-    s = tenscell.paper_structure(0.0, tenscell.DEFAULT_DELTA, 1.0)
+    s = tenscell.model.paper_structure(0.0, tenscell.model.DEFAULT_DELTA, 1.0)
     bad = list(s.tendons)
     bad[17] = (4, 4)
-    with pytest.raises(tenscell.StructureError, match="tendon 17 joins node 4 to itself"):
+    with pytest.raises(tenscell.model.StructureError, match="tendon 17 joins node 4 to itself"):
         tenscell.Structure(nodes=s.nodes, struts=s.struts, tendons=bad, families=s.families, fixed=s.fixed,
                            load=s.load, probe=s.probe)
     bad[17] = bad[3]
-    with pytest.raises(tenscell.StructureError, match="duplicates"):
+    with pytest.raises(tenscell.model.StructureError, match="duplicates"):
         tenscell.Structure(nodes=s.nodes, struts=s.struts, tendons=bad, families=s.families, fixed=s.fixed,
                            load=s.load, probe=s.probe)
     bad[17] = (3, 99)
-    with pytest.raises(tenscell.StructureError, match="unknown node 99"):
+    with pytest.raises(tenscell.model.StructureError, match="unknown node 99"):
         tenscell.Structure(nodes=s.nodes, struts=s.struts, tendons=bad, families=s.families, fixed=s.fixed,
                            load=s.load, probe=s.probe)

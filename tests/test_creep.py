@@ -79,9 +79,9 @@ def test_creep_limits(lin, lin_noif):
     # J(0) = 0 with positive definite C0; J(∞) = static compliance = (0.5/L)/G'(0)
     assert spec.instantaneous == 0.0
     assert spec.compliance(0.0) == 0.0
-    assert spec.compliance(1e3) == pytest.approx((0.5 / lin.L) / tenscell.static_modulus(lin), rel=1e-12)
+    assert spec.compliance(1e3) == pytest.approx((0.5 / lin.L) / tenscell.response.static_modulus(lin), rel=1e-12)
     # initial creep rate = Σ r_k = D0 C0⁻¹ (−H0) (pure dashpot response), so G''/ω → (0.5/L)/rate
-    assert spec.rate(0.0) == pytest.approx((0.5 / lin.L) / tenscell.viscosity_limit(lin), rel=1e-10)
+    assert spec.rate(0.0) == pytest.approx((0.5 / lin.L) / tenscell.response.viscosity_limit(lin), rel=1e-10)
     # J(0+) without IFs is the high-frequency compliance limit
     inst = creep_spectrum(lin_noif).instantaneous
     assert inst == pytest.approx(_J_direct(lin_noif, 1e13).real, rel=1e-7)
@@ -93,7 +93,7 @@ def test_creep_limits(lin, lin_noif):
 
 def test_spectrum_matches_linear_relaxation_spectrum(lin):
     spec = creep_spectrum(lin)
-    rel = tenscell.relaxation_spectrum(lin)
+    rel = tenscell.linear.relaxation_spectrum(lin)
     assert np.allclose(np.sort(spec.times), np.sort(rel.times), rtol=1e-9)
     assert spec.static == pytest.approx(rel.weights.sum(), rel=1e-10)
     times, weights = spec.significant(rtol=1e-3)
@@ -119,9 +119,9 @@ def test_relaxation_is_the_laplace_inverse_of_creep(which, lin, lin_noif):
 
 def test_relaxation_limits(lin, lin_noif):
     rel = stress_relaxation(lin)
-    assert rel.modulus(1e3) == pytest.approx(tenscell.static_modulus(lin), rel=1e-10)
-    assert rel.viscosity == pytest.approx(tenscell.viscosity_limit(lin), rel=1e-10)
-    assert relaxation_modulus(lin, 1e3) == pytest.approx(tenscell.static_modulus(lin), rel=1e-10)
+    assert rel.modulus(1e3) == pytest.approx(tenscell.response.static_modulus(lin), rel=1e-10)
+    assert rel.viscosity == pytest.approx(tenscell.response.viscosity_limit(lin), rel=1e-10)
+    assert relaxation_modulus(lin, 1e3) == pytest.approx(tenscell.response.static_modulus(lin), rel=1e-10)
     # relaxation modulus decreases monotonically to G'(0)
     G = rel.modulus(np.logspace(-6, 0, 100))
     assert np.all(np.diff(G) <= 1e-12 * G[0])

@@ -108,7 +108,7 @@ def test_power_dashpot_linearization(cell):
     assert np.all(lin2.C0 == 0.0)
     Gp, Gpp = tenscell.moduli(lin2, [0.01, 1.0, 100.0])
     assert np.all(Gpp == 0.0)
-    assert np.allclose(Gp, tenscell.static_modulus(lin2), rtol=1e-12)
+    assert np.allclose(Gp, tenscell.response.static_modulus(lin2), rtol=1e-12)
     lin1 = linearize_law(cell, power_dashpot_law(cell, beta=1.0))
     assert np.allclose(lin1.C0, tenscell.linearize(cell).C0)
     with pytest.raises(LinearizationError, match="no linearization"):

@@ -129,7 +129,7 @@ def test_elastic_struts_return_to_their_lengths():
 
 def test_paper_cell_topology_form_finds_to_a_usable_cell():
     """From a crude shape of the paper's anchored topology to a cell whose moduli are computed."""
-    st = tenscell.paper_structure(0.0, math.radians(50), 1.0)
+    st = tenscell.model.paper_structure(0.0, math.radians(50), 1.0)
     rng = np.random.default_rng(3)
     X = st.nodes.copy()
     X[12] += 0.1 * rng.standard_normal(3)  # nucleus off centre
@@ -156,7 +156,7 @@ def test_reports_when_no_configuration_exists():
     # rest lengths longer than the cables can reach: slack
     with pytest.raises(FormFindingError, match="slack"):
         find_form(_icosahedron(_perturbed(1)), rest_length=0.8)
-    assert issubclass(FormFindingError, tenscell.NotPrestressableError)
+    assert issubclass(FormFindingError, tenscell.model.NotPrestressableError)
 
 
 @pytest.mark.parametrize(

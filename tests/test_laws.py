@@ -30,8 +30,11 @@ from tenscell.dynamics import oscillatory_response
 from tenscell.laws import (
     CompositeLaw,
     LinearSpring,
+    Maxwell,
     Parameter,
     PowerDashpot,
+    Springpot,
+    StandardLinearSolid,
     StiffeningFilament,
     TendonLaw,
     Voigt,
@@ -103,13 +106,24 @@ LAWS = {
 }
 
 
+#: laws with a frequency-dependent tangent (no constant (k, c)): the consumers below either realize them
+#: with internal variables or refuse them in one line (tests at the end of this file)
+DYNAMIC_LAWS = {
+    "maxwell": Maxwell(EA=EA, c=C),
+    "sls": StandardLinearSolid(EA=EA, EA_arm=RNG.uniform(0.5, 5.0, CELL.m), c=C),
+    "springpot": Springpot(EA=EA, kappa=RNG.uniform(0.1, 2.0, CELL.m), alpha=RNG.uniform(0.1, 0.9, CELL.m)),
+    "dynamic-by-family": family_laws(CELL, {"actin": Maxwell(EA=1.5, c=0.3)},
+                                     default=Springpot(EA=0.8, kappa=0.5, alpha=0.25)),
+}
+
+
 def test_every_law_class_is_run_through_every_consumer():
-    """A new law class in tenscell.laws must join LAWS (and so every test below)."""
+    """A new law class in tenscell.laws must join LAWS or DYNAMIC_LAWS (and so every test below)."""
     classes = {obj for obj in vars(laws).values()
                if isinstance(obj, type) and issubclass(obj, TendonLaw) and obj is not TendonLaw
                and not obj.__name__.startswith("_")}
     covered = set()
-    for law in LAWS.values():
+    for law in list(LAWS.values()) + list(DYNAMIC_LAWS.values()):
         covered.add(type(law))
         if isinstance(law, CompositeLaw):
             covered |= {type(part) for part in law.laws}
@@ -285,4 +299,105 @@ def test_small_amplitude_simulation_is_the_linear_model(name):
 
 def test_a_law_without_rest_lengths_is_refused_by_simulate_with_advice():
     with pytest.raises(ValueError, match="at_prestress"):
-        tenscell.simulate(CELL, Voigt(EA=1.0, c=1.0), tenscell.SineForce(1.0, 1.0), 1.0)
+        tenscell.dynamics.simulate(CELL, Voigt(EA=1.0, c=1.0), tenscell.dynamics.SineForce(1.0, 1.0), 1.0)
+
+
+# ---- 5. laws with dynamics of their own, through every consumer -----------------------------------------
+# moduli: the exact kernel; creep/relaxation: the internal-variable realization; elasticities: exact from the
+# dynamic tangent; the nonlinear time domain and constant (k, c) consumers: a one-line refusal naming the way.
+@pytest.mark.parametrize("name", list(DYNAMIC_LAWS))
+def test_dynamic_law_moduli_through_linearize_law_equal_the_kernel(name):
+    from tenscell.linear.dynamic import dynamic_moduli
+
+    lin = linearize_law(CELL, DYNAMIC_LAWS[name], P0)
+    assert lin.realization is not None and lin.K0.shape[0] == CELL.n + lin.realization.r
+    Gs, Gl = tenscell.moduli(lin, F)
+    Ks, Kl = dynamic_moduli(CELL, DYNAMIC_LAWS[name], P0, F)
+    assert _rel(Gs, Ks) < 1e-12 and _rel(Gl, Kl) < 1e-12
+
+
+@pytest.mark.parametrize("name", list(DYNAMIC_LAWS))
+def test_dynamic_law_creep_and_relaxation_from_the_realization(name):
+    """Creep and relaxation run on the realized pencil; J(t) rises to the exact static compliance (probe = load)."""
+    from tenscell.linear.dynamic import dynamic_stiffness_static
+
+    law = DYNAMIC_LAWS[name]
+    lin = linearize_law(CELL, law, P0)
+    spec = tenscell.timedomain.creep_spectrum(lin)
+    K0 = dynamic_stiffness_static(CELL, law, P0)
+    assert spec.static == pytest.approx(CELL.probe @ np.linalg.solve(K0, CELL.load), rel=1e-9)
+    J = spec.compliance(np.logspace(-4, 3, 15))
+    assert np.all(np.diff(J) >= -1e-12 * spec.static)
+    R = tenscell.stress_relaxation(lin)
+    assert R.equilibrium == pytest.approx(1.0 / spec.static, rel=1e-9)
+
+
+@pytest.mark.parametrize("name", list(DYNAMIC_LAWS))
+def test_dynamic_law_elasticities_match_finite_differences(name):
+    """analytic_elasticities of a dynamic law (exact, from complex_stiffness_derivatives) against central
+    differences of ln G through the same law, for P and for the first and last tendon of every parameter."""
+    law = DYNAMIC_LAWS[name]
+    el = analytic_elasticities(linearize_law(CELL, law, P0), F)
+    h = 1e-5
+    fd_P = (_lnG(law, P0 * math.exp(h)) - _lnG(law, P0 * math.exp(-h))) / (2 * h)
+    assert _rel(el.complex[el.index("P")], fd_P) < 1e-6
+    vals = law.parameter_values(CELL.m)
+    for i, pname in enumerate(law.names):
+        for j in np.flatnonzero(~np.isnan(vals[i]))[[0, -1]]:
+            fd = (_lnG(_replace(law, pname, j, math.exp(h)), P0) - _lnG(_replace(law, pname, j, math.exp(-h)), P0)) / (2 * h)
+            an = el.complex[el.index(f"{pname}[{j}]")]
+            assert np.abs(an - fd).max() < 1e-6 * max(np.abs(fd).max(), 1e-3), (pname, j)
+
+
+@pytest.mark.parametrize("name", list(DYNAMIC_LAWS))
+def test_dynamic_laws_are_refused_in_one_line_where_they_have_no_meaning(name):
+    from tenscell.laws import DynamicLawError
+    from tenscell.summary import relaxation_modes
+
+    law = DYNAMIC_LAWS[name]
+    placed = law.at_prestress(CELL, P0)
+    for call in (lambda: law.tangent_at_rest(CELL.lengths, P0 * CELL.T0),
+                 lambda: oscillatory_response(CELL, placed, 0.1, 1.0),
+                 lambda: tenscell.dynamics.simulate(CELL, placed, tenscell.dynamics.SineForce(1.0, 1.0), 1.0),
+                 lambda: linearize_law(CELL, placed)):
+        with pytest.raises(DynamicLawError) as err:
+            call()
+        assert "\n" not in str(err.value) and ("dynamic" in str(err.value) or "internal" in str(err.value))
+    lin = linearize_law(CELL, law, P0)
+    with pytest.raises(ValueError, match="internal variables"):
+        relaxation_modes(lin)
+    with pytest.raises(ValueError, match="internal dynamics"):
+        tenscell.response.viscosity_limit(lin)
+
+
+def test_dynamic_laws_on_a_sparse_lattice():
+    """Sparse cells: the kernel solves one sparse LU per frequency (= the Lanczos path for Voigt); a realized
+    SLS lattice creeps through the sparse pencil and its compliance equals the kernel's."""
+    from tenscell.io.structure_files import member_values
+    from tenscell.linear.dynamic import dynamic_moduli
+    from tenscell.linear.modal import modal_compliance
+    from tenscell.model.lattices import lattice_cell
+    from tenscell.linear.modal import NotPositiveDefiniteError
+
+    cell = lattice_cell(9, 9, 1)
+    assert cell.sparse
+    f = np.logspace(-2, 3, 4)
+    voigt = Voigt(EA=member_values(cell.structure, {"strut": 1e3, "default": 1.0}), c=1.0)
+    G0 = tenscell.moduli(linearize_law(cell, voigt, P0), f)
+    G1 = dynamic_moduli(cell, voigt, P0, f)
+    assert _rel(G1[0], G0[0]) < 1e-9 and _rel(G1[1], G0[1]) < 1e-9  # the Lanczos path is converged to 1e-12
+    law = family_laws(cell, {"strut": Voigt(EA=1e3, c=1.0)}, default=StandardLinearSolid(EA=1.0, EA_arm=1.0, c=1.0))
+    lin = linearize_law(cell, law, P0)
+    assert lin.pencil.sparse
+    tau, rho, err = lin.pencil.retardation()
+    J = tenscell.compliance(lin, f)
+    assert _rel(modal_compliance(tau, rho, 2 * np.pi * f), J) < 1e-8
+    # a cytoplasm on the sparse realized pencil: its retardation spectrum gives G* + iωη of the kernel
+    visc = linearize_law(cell, law, P0, viscosity=0.3)
+    tau, rho, err = visc.pencil.retardation()
+    Gv = (0.5 / cell.strut_length) / modal_compliance(tau, rho, 2 * np.pi * f)
+    G = (0.5 / cell.strut_length) / J + 2j * np.pi * f * 0.3
+    assert _rel(Gv, G) < 1e-8
+    # Maxwell tendons everywhere relax the material stiffness the lattice's stability needs: refused in one line
+    with pytest.raises(NotPositiveDefiniteError, match="not a stable equilibrium"):
+        dynamic_moduli(cell, family_laws(cell, {"strut": Voigt(EA=1e3, c=1.0)}, default=Maxwell(EA=1.0, c=1.0)), P0, f)

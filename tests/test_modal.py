@@ -36,7 +36,7 @@ def _as_sparse(lin):
 @pytest.fixture(scope="module")
 def mid():
     """A 450-coordinate lattice, dense, and its sparse twin."""
-    cell = tenscell.lattice_cell(3, 3, 2)
+    cell = tenscell.model.lattice_cell(3, 3, 2)
     lin = tenscell.linearize(cell, 1000.0, _lattice_EA(cell), 1.0)
     return lin, _as_sparse(lin)
 
@@ -51,7 +51,7 @@ def test_sparse_model_is_factorized_once_per_matrix(monkeypatch):
         return real(A, what)
 
     monkeypatch.setattr(modal, "factorize_spd", counting)
-    cell = tenscell.lattice_cell(4, 4, 4)
+    cell = tenscell.model.lattice_cell(4, 4, 4)
     assert cell.sparse
     lin = tenscell.linearize(cell, 1000.0, _lattice_EA(cell), 1.0)  # the check: K0's Cholesky
     assert calls == ["K0"]
@@ -59,17 +59,17 @@ def test_sparse_model_is_factorized_once_per_matrix(monkeypatch):
     tenscell.moduli(lin, np.logspace(-1, 2, 7))  # other frequencies: same shifted factor, same run
     creep_spectrum(lin)
     stress_relaxation(lin)
-    tenscell.relaxation_spectrum(lin)
-    tenscell.static_modulus(lin)
-    tenscell.viscosity_limit(lin)
-    tenscell.relaxation_modes(lin, 2)  # the slowest modes run on the check's own factor
+    tenscell.linear.relaxation_spectrum(lin)
+    tenscell.response.static_modulus(lin)
+    tenscell.response.viscosity_limit(lin)
+    tenscell.summary.relaxation_modes(lin, 2)  # the slowest modes run on the check's own factor
     assert calls.count("K0") == 1 and len(calls) == 2, calls  # K0 once, K0 + σC0 once
     # without the check, the frequency response and the time domain share one factorization
     calls.clear()
     lin2 = tenscell.linearize(cell, 1500.0, _lattice_EA(cell), 1.0, check=False)
     tenscell.moduli(lin2, F)
     creep_spectrum(lin2)
-    tenscell.relaxation_spectrum(lin2)
+    tenscell.linear.relaxation_spectrum(lin2)
     assert len(calls) == 1 and calls[0] != "K0", calls
 
 
@@ -87,9 +87,9 @@ def test_dense_model_is_decomposed_once(monkeypatch):
     tenscell.moduli(lin, F[::2])
     creep_spectrum(lin)
     stress_relaxation(lin)
-    tenscell.relaxation_spectrum(lin)
-    tenscell.viscosity_limit(lin)
-    tenscell.relaxation_modes(lin, 2)
+    tenscell.linear.relaxation_spectrum(lin)
+    tenscell.response.viscosity_limit(lin)
+    tenscell.summary.relaxation_modes(lin, 2)
     assert calls == [(lin.cell.n, lin.cell.n)]
 
 
@@ -115,13 +115,13 @@ def test_sparse_creep_and_relaxation_equal_dense(mid):
     np.testing.assert_allclose(rs.force(T), rd.force(T), rtol=1e-8)
     assert rs.equilibrium == pytest.approx(rd.equilibrium, rel=1e-12)
     assert rs.impulse == pytest.approx(rd.impulse, rel=1e-9)
-    assert tenscell.viscosity_limit(lin_s) == pytest.approx(tenscell.viscosity_limit(lin), rel=1e-9)
-    assert tenscell.static_modulus(lin_s) == pytest.approx(tenscell.static_modulus(lin), rel=1e-12)
+    assert tenscell.response.viscosity_limit(lin_s) == pytest.approx(tenscell.response.viscosity_limit(lin), rel=1e-9)
+    assert tenscell.response.static_modulus(lin_s) == pytest.approx(tenscell.response.static_modulus(lin), rel=1e-12)
 
 
 def test_sparse_relaxation_spectrum_reproduces_the_compliance(mid):
     lin, lin_s = mid
-    spec = tenscell.relaxation_spectrum(lin_s)
+    spec = tenscell.linear.relaxation_spectrum(lin_s)
     w = 2 * np.pi * F
     J = (spec.residues[None, :] / (spec.rates[None, :] + 1j * w[:, None])).sum(axis=1)
     np.testing.assert_allclose(J, tenscell.compliance(lin, F), rtol=1e-9)
@@ -129,7 +129,7 @@ def test_sparse_relaxation_spectrum_reproduces_the_compliance(mid):
     # a Gauss quadrature of the load's spectral measure: the sum rules hold, and its vectors are
     # C0-normalized Ritz vectors (a cluster of equal local rates shows up as one Ritz pair)
     assert np.sum(spec.residues / spec.rates) == pytest.approx(lin.pencil.static_compliance(), rel=1e-12)
-    dense = tenscell.relaxation_spectrum(lin)
+    dense = tenscell.linear.relaxation_spectrum(lin)
     assert np.sum(spec.residues) == pytest.approx(np.sum(dense.residues), rel=1e-9)
     assert dense.rates[0] * (1 - 1e-9) <= spec.rates[0] and spec.rates[-1] <= dense.rates[-1] * (1 + 1e-9)
     np.testing.assert_allclose(np.einsum("ik,ik->k", spec.modes, lin.C0 @ spec.modes), 1.0, rtol=1e-9)
@@ -143,7 +143,7 @@ def test_sparse_creep_with_probe_other_than_load(mid):
     np.testing.assert_allclose(creep_spectrum(_as_sparse(other)).compliance(T), creep_spectrum(other).compliance(T),
                                rtol=1e-8, atol=1e-10 * abs(creep_spectrum(other).static))
     with pytest.raises(ValueError, match="probe is not the load"):
-        tenscell.relaxation_spectrum(_as_sparse(other))
+        tenscell.linear.relaxation_spectrum(_as_sparse(other))
 
 
 def test_sparse_singular_damping_is_instantaneous_compliance(monkeypatch):
@@ -154,14 +154,14 @@ def test_sparse_singular_damping_is_instantaneous_compliance(monkeypatch):
     assert cs.instantaneous == pytest.approx(cd.instantaneous, rel=1e-8)
     np.testing.assert_allclose(cs.compliance(T), cd.compliance(T), rtol=1e-9)
     with pytest.raises(ValueError, match="singular"):
-        tenscell.relaxation_spectrum(_as_sparse(lin))
+        tenscell.linear.relaxation_spectrum(_as_sparse(lin))
 
 
 def test_cholmod_detects_indefinite_K0(monkeypatch):
     lin = tenscell.linearize(tenscell.paper_cell(delta=math.radians(44.0)), 1000.0, check=False)
-    with pytest.raises(tenscell.NotPositiveDefiniteError, match="pivot"):
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="pivot"):
         _as_sparse(lin).pencil.check()
-    with pytest.raises(tenscell.NotPositiveDefiniteError, match="smallest eigenvalue"):
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="smallest eigenvalue"):
         lin.pencil.check()
 
 
@@ -173,7 +173,7 @@ def test_grid_equals_models_and_checks_every_prestress():
     for i, P in enumerate(Ps):
         np.testing.assert_allclose(r.J[i], tenscell.compliance(tenscell.linearize(cell, P, 2.0, 0.5), F), rtol=1e-11)
     bad = tenscell.paper_cell(delta=math.radians(44.0))
-    with pytest.raises(tenscell.NotPositiveDefiniteError, match="P=1000"):
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="P=1000"):
         tenscell.frequency_response(bad, F, [1000.0, 2000.0])
 
 

@@ -27,10 +27,9 @@ def test_interrupt_leaves_previous_set(tmp_path):
     d = tmp_path / "o"
     with OutputSet(d) as s:
         (s / "a.txt").write_text("1")
-    with pytest.raises(KeyboardInterrupt):
-        with OutputSet(d) as s:
-            (s / "b.txt").write_text("2")
-            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt), OutputSet(d) as s:
+        (s / "b.txt").write_text("2")
+        raise KeyboardInterrupt
     assert _names(d) == ["a.txt", MANIFEST]
     assert (d / "a.txt").read_text() == "1"
     assert _names(tmp_path) == ["o"]

@@ -27,23 +27,23 @@ def lin(cell):
 
 def _structure_file(tmp_path_factory, cell):
     path = tmp_path_factory.mktemp("sf") / "cell.json"
-    tc.save_structure(path, cell.structure, EA=2.0, c=0.5, T0=cell.T0, description="the paper cell\nsecond line")
-    return tc.load_structure_file(path)
+    tc.io.save_structure(path, cell.structure, EA=2.0, c=0.5, T0=cell.T0, description="the paper cell\nsecond line")
+    return tc.io.load_structure_file(path)
 
 
 BUILDERS = {
     "Structure": lambda cell, lin, tmp: cell.structure,
     "Cell": lambda cell, lin, tmp: cell,
     "LinearModel": lambda cell, lin, tmp: lin,
-    "RelaxationSpectrum": lambda cell, lin, tmp: tc.relaxation_spectrum(lin),
+    "RelaxationSpectrum": lambda cell, lin, tmp: tc.linear.relaxation_spectrum(lin),
     "FrequencyResponse": lambda cell, lin, tmp: tc.frequency_response(cell, np.logspace(-1, 2, 7), [500.0, 2000.0]),
-    "CreepSpectrum": lambda cell, lin, tmp: tc.creep_spectrum(lin),
+    "CreepSpectrum": lambda cell, lin, tmp: tc.timedomain.creep_spectrum(lin),
     "StressRelaxation": lambda cell, lin, tmp: tc.stress_relaxation(lin),
-    "PowerLawFit": lambda cell, lin, tmp: tc.fit_power_law(np.logspace(-2, 1, 12), 2e-3 * np.logspace(-2, 1, 12) ** 0.3),
-    "RelaxationModes": lambda cell, lin, tmp: tc.relaxation_modes(lin, 3),
+    "PowerLawFit": lambda cell, lin, tmp: tc.timedomain.fit_power_law(np.logspace(-2, 1, 12), 2e-3 * np.logspace(-2, 1, 12) ** 0.3),
+    "RelaxationModes": lambda cell, lin, tmp: tc.summary.relaxation_modes(lin, 3),
     "StructureSummary": lambda cell, lin, tmp: tc.summarize(cell)[0],
     "StructureFile": lambda cell, lin, tmp: _structure_file(tmp, cell),
-    "FormFindingResult": lambda cell, lin, tmp: tc.find_form(tc.expanded_octahedron(), force_density=1.0),
+    "FormFindingResult": lambda cell, lin, tmp: tc.model.find_form(tc.model.expanded_octahedron(), force_density=1.0),
     "RheologyData": lambda cell, lin, tmp: tc.bundled("stamenovic2002"),
 }
 
@@ -120,10 +120,10 @@ def test_structure_table_lengths_are_member_lengths(cell):
 
 
 def test_spectrum_tables_add_up_to_the_static_compliance(lin):
-    creep = tc.creep_spectrum(lin)
+    creep = tc.timedomain.creep_spectrum(lin)
     df = creep.to_dataframe()
     assert df["weight_m_per_N"].sum() + df.attrs["instantaneous_m_per_N"] == pytest.approx(creep.static, rel=1e-12)
-    rel = tc.relaxation_spectrum(lin).to_dataframe()
+    rel = tc.linear.relaxation_spectrum(lin).to_dataframe()
     np.testing.assert_allclose(rel["time_s"] * rel["rate_per_s"], 1.0, rtol=1e-15)
     assert rel["weight_m_per_N"].sum() == pytest.approx(creep.static, rel=1e-9)  # two routes to J(∞)
 

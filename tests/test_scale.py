@@ -33,7 +33,7 @@ def _lattice_EA(cell):
 # ---- spheres -------------------------------------------------------------------------
 @pytest.mark.parametrize("n", [6, 12, 30])
 def test_sphere_cells(n):
-    cell = tenscell.sphere_cell(n)
+    cell = tenscell.model.sphere_cell(n)
     s = cell.structure
     assert len(s.struts) == n and s.n_nodes == 2 * n + 1 and len(s.fixed) == 3
     fam = np.array(s.families)
@@ -49,21 +49,21 @@ def test_sphere_cells(n):
     np.testing.assert_allclose(J, _direct(lin, FREQS), rtol=1e-10)
     assert np.all(Gp > 0) and np.all(Gpp > 0)
     assert np.all(np.diff(Gp) >= -1e-9 * Gp.max())  # storage modulus rises with frequency
-    assert abs(tenscell.log_slope(FREQS, Gpp)[0] - 1.0) < 1e-2  # Voigt elements: G'' ∝ f at low f
+    assert abs(tenscell.response.log_slope(FREQS, Gpp)[0] - 1.0) < 1e-2  # Voigt elements: G'' ∝ f at low f
 
 
 def test_sphere_rejects_other_sizes():
     with pytest.raises(ValueError, match="n_struts must be one of"):
-        tenscell.sphere_cell(8)
+        tenscell.model.sphere_cell(8)
 
 
 # ---- lattices ------------------------------------------------------------------------
 def test_module_tensions():
     t = lattice_module_tensions(0.25, intermediate_filaments=False)
     assert abs(t["strut"] + math.sqrt(6.0)) < 1e-12  # the regular icosahedron
-    with pytest.raises(tenscell.NotPrestressableError, match="intermediate filaments not in tension"):
+    with pytest.raises(tenscell.model.NotPrestressableError, match="intermediate filaments not in tension"):
         lattice_module_tensions(0.25)  # the regular member has slack IFs, as in the paper
-    with pytest.raises(tenscell.NotPrestressableError, match="no symmetric self-stress"):
+    with pytest.raises(tenscell.model.NotPrestressableError, match="no symmetric self-stress"):
         lattice_module_tensions(0.21, intermediate_filaments=False)
     t = lattice_module_tensions(0.21)
     assert t["intermediate_filament"] > 0 and t["strut"] < 0
@@ -72,12 +72,12 @@ def test_module_tensions():
 @pytest.mark.parametrize("shape", [(3, 2, 1), (2, 2, 2)])
 def test_lattice_shares_nodes_and_self_stress(shape):
     nx, ny, nz = shape
-    st, T0 = tenscell.lattice_structure(nx, ny, nz)
+    st, T0 = tenscell.model.lattice_structure(nx, ny, nz)
     N = nx * ny * nz
     faces = (nx - 1) * ny * nz + nx * (ny - 1) * nz + nx * ny * (nz - 1)
     assert st.n_nodes == 12 * N - 2 * faces + N  # two nodes per shared face, one centre per module
     assert st.n_tendons == 42 * N and len(st.fixed) == 2 * nx * ny
-    cell = tenscell.lattice_cell(nx, ny, nz)
+    cell = tenscell.model.lattice_cell(nx, ny, nz)
     assert np.max(np.abs(cell.A @ cell.T0)) < 1e-12
     cable = np.array([f != "strut" for f in st.families])
     assert np.all(cell.T0[cable] > 0) and np.all(cell.T0[~cable] < 0)
@@ -89,9 +89,9 @@ def test_lattice_shares_nodes_and_self_stress(shape):
 
 def test_lattice_bad_input():
     with pytest.raises(ValueError, match="nx must be a whole number >= 1"):
-        tenscell.lattice_cell(0, 2)
+        tenscell.model.lattice_cell(0, 2)
     with pytest.raises(ValueError, match="offset must lie between"):
-        tenscell.lattice_cell(2, 2, offset=0.6)
+        tenscell.model.lattice_cell(2, 2, offset=0.6)
 
 
 # ---- sparse versus dense on small structures -----------------------------------------
@@ -101,14 +101,14 @@ def test_sparse_and_dense_paths_agree(monkeypatch, which):
         if which == "paper":
             return tenscell.paper_cell(), 1.0
         if which == "sphere12":
-            return tenscell.sphere_cell(12), 1.0
-        c = tenscell.lattice_cell(2, 2, 1)
+            return tenscell.model.sphere_cell(12), 1.0
+        c = tenscell.model.lattice_cell(2, 2, 1)
         return c, _lattice_EA(c)
 
     dense, EA = build()
     lin_d = tenscell.linearize(dense, 1000.0, EA, 1.0)
     J_d = tenscell.compliance(lin_d, FREQS)
-    G0_d = tenscell.static_modulus(lin_d)
+    G0_d = tenscell.response.static_modulus(lin_d)
     monkeypatch.setattr(equilibrium, "SPARSE_THRESHOLD", 10)  # the whole pipeline goes sparse
     sparse_cell, _ = build()
     assert sparse_cell.sparse and sp.issparse(sparse_cell.Kp)
@@ -117,13 +117,13 @@ def test_sparse_and_dense_paths_agree(monkeypatch, which):
     assert sp.issparse(lin_s.K0)
     J_s = tenscell.compliance(lin_s, FREQS)  # one factorization + Lanczos
     np.testing.assert_allclose(J_s, J_d, rtol=1e-10)
-    assert abs(tenscell.static_modulus(lin_s) / G0_d - 1) < 1e-12
+    assert abs(tenscell.response.static_modulus(lin_s) / G0_d - 1) < 1e-12
 
 
 def test_sparse_path_detects_unstable_reference(monkeypatch):
     monkeypatch.setattr(equilibrium, "SPARSE_THRESHOLD", 10)
     cell = tenscell.paper_cell(delta=math.radians(44.0))  # K0 loses definiteness below about 45.5°
-    with pytest.raises(tenscell.NotPositiveDefiniteError, match="pivot"):
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="pivot"):
         tenscell.linearize(cell, 1000.0)
 
 
@@ -131,16 +131,16 @@ def test_lp_self_stress_matches_svd():
     cell = tenscell.paper_cell()
     T = self_stress_lp(sp.csr_matrix(cell.A), cell.structure.families, cell.structure.equal_tension_groups)
     np.testing.assert_allclose(T, cell.T0, atol=1e-10)
-    bad = tenscell.paper_structure(0.0, math.radians(60.0), 1.0)
+    bad = tenscell.model.paper_structure(0.0, math.radians(60.0), 1.0)
     co = tenscell.model.coordinates.make_coordinates(bad)
     A = equilibrium.equilibrium_matrix(equilibrium.member_geometry(co, co.q0), sparse=True)
-    with pytest.raises(tenscell.NotPrestressableError):
+    with pytest.raises(tenscell.model.NotPrestressableError):
         self_stress_lp(A, bad.families, bad.equal_tension_groups)
 
 
 def test_medium_lattice_uses_sparse_path_end_to_end():
     """Above the threshold without patching: Lanczos against per-frequency sparse LU solves."""
-    cell = tenscell.lattice_cell(5, 4, 4)
+    cell = tenscell.model.lattice_cell(5, 4, 4)
     assert cell.sparse and cell.n > equilibrium.SPARSE_THRESHOLD and cell.self_stress_dim == -1
     lin = tenscell.linearize(cell, 1000.0, _lattice_EA(cell), 1.0)
     f = np.logspace(-2, 3, 12)
@@ -193,7 +193,7 @@ def test_krylov_polarization_for_probe_other_than_load():
 
 
 def test_krylov_shift_choice_does_not_change_the_answer():
-    cell = tenscell.lattice_cell(3, 3, 2)
+    cell = tenscell.model.lattice_cell(3, 3, 2)
     lin = tenscell.linearize(cell, 1000.0, _lattice_EA(cell), 1.0)
     lin = dataclasses.replace(lin, K0=sp.csr_matrix(lin.K0), C0=sp.csr_matrix(lin.C0))
     f = FREQS[::3]
@@ -203,9 +203,9 @@ def test_krylov_shift_choice_does_not_change_the_answer():
 
 
 def test_sparse_relaxation_modes_are_eigenpairs():
-    cell = tenscell.lattice_cell(5, 5, 4)
+    cell = tenscell.model.lattice_cell(5, 5, 4)
     lin = tenscell.linearize(cell, 1000.0, _lattice_EA(cell), 1.0)
-    modes = tenscell.relaxation_modes(lin, 3)
+    modes = tenscell.summary.relaxation_modes(lin, 3)
     K, C = lin.K0, lin.C0
     assert np.all(np.diff(modes.rates) >= 0) and modes.residuals is not None
     for lam, v, r in zip(modes.rates, modes.vectors.T, modes.residuals):
@@ -214,4 +214,4 @@ def test_sparse_relaxation_modes_are_eigenpairs():
     # the slowest mode of the paper cell, through the sparse route, is the dense one
     dense = tenscell.linearize(tenscell.paper_cell(), 1000.0)
     lin_s = dataclasses.replace(dense, K0=sp.csr_matrix(dense.K0), C0=sp.csr_matrix(dense.C0))
-    assert abs(tenscell.relaxation_modes(lin_s, 1).rates[0] / tenscell.relaxation_spectrum(dense).rates[0] - 1) < 1e-10
+    assert abs(tenscell.summary.relaxation_modes(lin_s, 1).rates[0] / tenscell.linear.relaxation_spectrum(dense).rates[0] - 1) < 1e-10

@@ -63,3 +63,36 @@ def test_submodules_as_attributes_and_unknown_names():
         tenscell.no_such_thing
     with pytest.raises(AttributeError):
         tenscell._private_probe
+
+
+def test_the_top_level_is_the_entry_points():
+    # what a user types in the first hour; the rest is reached through its subpackage
+    assert 18 <= len(tenscell.__all__) <= 25, tenscell.__all__
+    assert {"paper_cell", "linearize", "moduli", "frequency_response", "fit", "read_csv", "TenscellError"} \
+        <= set(tenscell.__all__)
+
+
+def test_every_subpackage_states_its_public_names():
+    import importlib
+    import pkgutil
+
+    for info in pkgutil.iter_modules(tenscell.__path__):
+        if info.name.startswith("_"):
+            continue
+        module = importlib.import_module(f"tenscell.{info.name}")
+        names = getattr(module, "__all__", None)
+        assert names, f"tenscell.{info.name} has no __all__"
+        missing = [n for n in names if not hasattr(module, n)]
+        assert not missing, f"tenscell.{info.name}.__all__ names what it does not have: {missing}"
+
+
+def test_old_top_level_names_warn_and_name_their_new_home():
+    import importlib
+
+    assert not set(tenscell._MOVED) & set(tenscell._WHERE)
+    assert len(tenscell._MOVED) + len(tenscell._WHERE) == 103 + 1  # every name of 0.1.0, and TenscellError
+    for name, home in tenscell._MOVED.items():
+        with pytest.warns(DeprecationWarning, match=rf"tenscell\.{name} is deprecated .* tenscell\.{home}\.{name}"):
+            old = getattr(tenscell, name)
+        assert old is getattr(importlib.import_module(f"tenscell.{home}"), name), name
+        assert name in importlib.import_module(f"tenscell.{home}").__all__, (home, name)

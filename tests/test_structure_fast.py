@@ -102,9 +102,9 @@ def _break(rng, nodes, struts, tendons, fixed):
 @pytest.mark.parametrize("base", ["paper", "lattice"])
 def test_validation_matches_a_member_by_member_loop(base):
     if base == "paper":
-        s = tenscell.paper_structure(0.0, tenscell.DEFAULT_DELTA, 1.0)
+        s = tenscell.model.paper_structure(0.0, tenscell.model.DEFAULT_DELTA, 1.0)
     else:
-        s = tenscell.lattice_structure(2, 2, 1)[0]
+        s = tenscell.model.lattice_structure(2, 2, 1)[0]
     rng = np.random.default_rng(7)
     seen = set()
     for _ in range(300):
@@ -118,7 +118,7 @@ def test_validation_matches_a_member_by_member_loop(base):
 
 
 def _paper_parts():
-    s = tenscell.paper_structure(0.0, tenscell.DEFAULT_DELTA, 1.0)
+    s = tenscell.model.paper_structure(0.0, tenscell.model.DEFAULT_DELTA, 1.0)
     return s, dict(nodes=s.nodes, struts=list(s.struts), tendons=list(s.tendons), families=s.families,
                    fixed=s.fixed, load=s.load, probe=s.probe)
 
@@ -193,7 +193,7 @@ def reference_lattice(nx, ny, nz, L=1.0, offset=DEFAULT_OFFSET, intermediate_fil
     ((1, 1, 1), {}), ((2, 3, 2), {"L": 2.5e-6, "offset": 0.15}),
 ])
 def test_lattice_matches_a_module_by_module_construction(shape, kw):
-    st, T0 = tenscell.lattice_structure(*shape, **kw)
+    st, T0 = tenscell.model.lattice_structure(*shape, **kw)
     nodes, tendons, families, fixed, load, T0_ref = reference_lattice(*shape, **kw)
     np.testing.assert_array_equal(st.nodes, nodes)
     assert st.tendons == tendons and st.families == families and st.fixed == fixed and st.struts == ()

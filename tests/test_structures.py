@@ -35,7 +35,7 @@ def test_paper_cell_round_trip(tmp_path):
     assert s.name == t.name and sf.description == "the paper's cell"
     assert np.array_equal(sf.EA, EA) and np.array_equal(sf.c, c) and np.array_equal(sf.T0, cell.T0)
     # the physics of the reloaded structure is the same: self-stress found again, same compliance
-    cell2 = tenscell.equilibrate(s)
+    cell2 = tenscell.model.equilibrate(s)
     np.testing.assert_allclose(cell2.T0, cell.T0, rtol=0, atol=1e-14)
     J1 = tenscell.compliance(tenscell.linearize(cell, 1000.0, EA, c), FREQS)
     J2 = tenscell.compliance(tenscell.linearize(cell2, 1000.0, sf.EA, sf.c), FREQS)
@@ -46,12 +46,12 @@ def test_paper_cell_round_trip(tmp_path):
 
 
 def test_lattice_round_trip_keeps_self_stress(tmp_path):
-    cell = tenscell.lattice_cell(2, 2, 1)
+    cell = tenscell.model.lattice_cell(2, 2, 1)
     path = tmp_path / "lattice.json"
     save_structure(path, cell.structure, T0=cell.T0)
     sf = load_structure_file(path)
     assert sf.structure.node_names == ()  # unnamed nodes are written as indices
-    cell2 = tenscell.equilibrate(sf.structure, "local", T0=sf.T0)
+    cell2 = tenscell.model.equilibrate(sf.structure, "local", T0=sf.T0)
     np.testing.assert_array_equal(cell2.T0, cell.T0)
     assert load_structure(path).n_tendons == cell.m
 
@@ -151,7 +151,7 @@ def test_structure_error_for_tendon_to_itself_in_constructor():
 
 
 def test_member_values():
-    s = tenscell.lattice_structure(1, 1, 1)[0]
+    s = tenscell.model.lattice_structure(1, 1, 1)[0]
     EA = member_values(s, {"strut": 1e3, "default": 2.0})
     fam = np.array(s.families)
     assert np.all(EA[fam == "strut"] == 1e3) and np.all(EA[fam != "strut"] == 2.0)
@@ -163,14 +163,14 @@ def test_member_values():
 
 
 def test_structure_to_dict_is_json():
-    obj = structure_to_dict(tenscell.paper_structure(0.0, math.radians(50), 1.0))
+    obj = structure_to_dict(tenscell.model.paper_structure(0.0, math.radians(50), 1.0))
     assert json.loads(json.dumps(obj)) == obj
 
 
 # ---- node-based formulation ---------------------------------------------------------------
 def test_pin_jointed_paper_cell_has_same_tendon_self_stress_and_converges_to_rigid():
     rigid = tenscell.paper_cell()
-    pj = tenscell.equilibrate(pin_jointed(rigid.structure), "local")
+    pj = tenscell.model.equilibrate(pin_jointed(rigid.structure), "local")
     assert pj.n == 3 * 10  # 10 movable nodes, 3 coordinates each
     np.testing.assert_allclose(pj.T0[:33], rigid.T0, atol=1e-12)  # normalized over the cables in both
     assert np.all(pj.T0[33:] < 0)  # struts in compression
@@ -223,7 +223,7 @@ def _rigid_motions(X):
 def test_free_icosahedron_matches_independent_nodal_assembly():
     P = 100.0
     st = _icosahedron()
-    cell = tenscell.equilibrate(pin_jointed(st), "local")
+    cell = tenscell.model.equilibrate(pin_jointed(st), "local")
     assert cell.self_stress_dim == 1 and cell.n == 36
     members = list(cell.structure.tendons)
     fam = np.array(cell.structure.families)
@@ -262,7 +262,7 @@ def test_free_icosahedron_rigid_struts_summary():
 
 
 def test_summary_reports_not_prestressable():
-    st = tenscell.paper_structure(0.0, math.radians(60), 1.0)  # beyond the regular member: IFs compressed
+    st = tenscell.model.paper_structure(0.0, math.radians(60), 1.0)  # beyond the regular member: IFs compressed
     s, cell, lin = summarize(st)
     assert not s.prestressable and cell is None and lin is None
     assert s.verdict.startswith("NOT prestressable") and s.rank == 24 and s.self_stress_dim == 9
@@ -306,7 +306,7 @@ def test_cli_show_draws_a_structure_that_is_not_prestressable(tmp_path, capsys):
     from tenscell.cli import main
 
     path = tmp_path / "flat.json"
-    save_structure(path, tenscell.paper_structure(0.0, math.radians(60.0), 1.0))
+    save_structure(path, tenscell.model.paper_structure(0.0, math.radians(60.0), 1.0))
     assert main(["show", str(path), "--out", str(tmp_path / "out")]) == 0
     assert "NOT prestressable" in capsys.readouterr().out
     assert (tmp_path / "out" / "flat_structure.png").exists() and not (tmp_path / "out" / "flat_modes.png").exists()

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tenscell import paper_cell, stiffening_law
+from tenscell import paper_cell
+from tenscell.laws import stiffening_law
 from tenscell.dynamics import creep_response, oscillatory_response
 from tenscell.reports.sensitivity import sensitivity_markdown
 from tenscell.reports.studies import no_if_markdown, references_markdown, semiflexible_markdown, stiffening_markdown

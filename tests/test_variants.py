@@ -12,16 +12,10 @@ import math
 import numpy as np
 import pytest
 
-from tenscell import (
-    NotPositiveDefiniteError,
-    NotPrestressableError,
-    REGULAR_DELTA,
-    compliance,
-    linearize,
-    moduli,
-    paper_cell,
-    static_modulus,
-)
+from tenscell import compliance, linearize, moduli, paper_cell
+from tenscell.linear import NotPositiveDefiniteError
+from tenscell.model import REGULAR_DELTA, NotPrestressableError
+from tenscell.response import static_modulus
 from tenscell import cli
 from tenscell.laws import StiffeningFilament
 from tenscell.model import shapes

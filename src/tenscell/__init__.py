@@ -2,8 +2,9 @@
 
 The pipeline, one stage per subpackage or module::
 
-    model (structure -> coordinates -> equilibrium -> shapes) -> laws -> linear -> response
-          -> timedomain -> analyses (dynamics, fitting, sensitivity, studies) -> io, plotting, cli
+    model (structure -> coordinates -> equilibrium -> shapes) -> laws -> linear -> response, timedomain
+          -> io (data in) -> analyses (dynamics, fitting, sensitivity, summary, studies, population)
+          -> reports, plotting -> cli
 
 Quick start::
 
@@ -12,6 +13,13 @@ Quick start::
     lin = tenscell.linearize(cell, P=1000.0, EA=1.0, c=1.0)
     f = np.logspace(-2, 3, 61)                       # Hz
     Gp, Gpp = tenscell.moduli(lin, f)                # Pa
+
+The top level holds the entry points (``paper_cell``, ``linearize``,
+``moduli``, ``frequency_response``, ``fit``, ``read_csv``...); everything else
+is reached through its subpackage, each with its own ``__all__``
+(``tenscell.model.regular_cell``, ``tenscell.laws.Voigt``,
+``tenscell.io.DataError``...). Every error tenscell raises on purpose is a
+``tenscell.TenscellError``.
 
 ``import tenscell`` loads nothing heavy: each public name below is imported
 from its module the first time it is used (PEP 562), so the command line and
@@ -24,51 +32,58 @@ from importlib import import_module
 # typing.TYPE_CHECKING without importing typing (mypy and pyright treat this name as true)
 TYPE_CHECKING = False
 
-__version__ = "0.1.0"
+from ._version import __version__  # noqa: E402
 
-# Public name -> the module (relative to this package) that defines it.
-# To export a new name: add it to its module's tuple here AND to the
-# TYPE_CHECKING imports below (tests/test_startup.py checks that both agree).
+# The entry points a user types in the first hour: public name -> the module (relative to this package) that
+# defines it. To export a new name here: add it to its module's tuple AND to the TYPE_CHECKING imports below
+# (tests/test_startup.py checks that both agree). Everything else is reached through its subpackage
+# (``tenscell.model``, ``tenscell.laws``, ``tenscell.io``...), each with its own ``__all__``.
 _EXPORTS: dict[str, tuple[str, ...]] = {
-    # structure and reference
-    "model.structure": ("Point", "Structure", "StructureError"),
-    "io.structure_files": ("StructureFile", "load_structure", "load_structure_file", "member_values",
-                           "save_structure"),
-    "model.equilibrium": ("Cell", "NotPrestressableError", "equilibrate"),
-    "model.formfinding": ("FormFindingError", "FormFindingResult", "find_form", "pin_jointed", "rigid_body_modes"),
-    "model.shapes": ("DEFAULT_DELTA", "REGULAR_DELTA", "cylindrical_cell", "if_free_delta", "paper_cell",
-                     "paper_structure", "regular_cell", "semiflexible_paper_cell"),
-    "model.lattices": ("expanded_octahedron", "lattice_cell", "lattice_structure", "sphere_cell",
-                       "sphere_structure"),
-    # laws, linearization, response
-    "laws": ("CompositeLaw", "LinearSpring", "LinearizationError", "PowerDashpot", "StiffeningFilament", "Tangent",
-             "TendonLaw", "Voigt", "family_laws", "power_dashpot_law", "rest_lengths", "stiffening_law", "voigt_law"),
-    "linear.linearize": ("LinearModel", "NotPositiveDefiniteError", "RelaxationSpectrum", "linearize",
-                         "linearize_law", "linearize_tangent", "relaxation_spectrum"),
-    "response": ("FrequencyResponse", "compliance", "frequency_response", "log_slope", "loss_tangent", "moduli",
-                 "static_modulus", "viscosity_limit"),
-    "linear.krylov": ("krylov_compliance",),
+    "model.shapes": ("paper_cell",),
+    "model.structure": ("Structure",),
+    "model.equilibrium": ("Cell",),
+    "io.structure_files": ("load_structure",),
+    "linear.linearize": ("LinearModel", "linearize"),
+    "response": ("FrequencyResponse", "compliance", "frequency_response", "moduli"),
+    "timedomain": ("creep_compliance", "stress_relaxation"),
+    "io.data": ("RheologyData", "bundled", "read_csv"),
+    "io.importers": ("read_table",),
+    "fitting": ("FitResult", "fit"),
+    "summary": ("summarize",),
     "_threads": ("set_threads", "threads"),
-    "timedomain": ("CreepSpectrum", "PowerLawFit", "StressRelaxation", "creep_compliance", "creep_spectrum",
-                   "fit_power_law", "local_exponent", "relaxation_modulus", "stress_relaxation"),
-    # measured data
-    "io.data": ("DataError", "RheologyData", "bundled", "bundled_names", "read_csv"),
-    "io.importers": ("ColumnMap", "read_rheocompass", "read_table"),
-    # analyses
-    "summary": ("relaxation_modes", "summarize"),
-    "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
-                 "creep_response", "oscillatory_response", "simulate"),
-    "fitting": ("FitParameter", "FitResult", "fit"),
-    "sensitivity": ("analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table", "sensitivity_study"),
-    "studies.no_if": ("loss_peak", "no_if_study"),
-    "studies.references": ("prestress_map", "references_study"),
-    "studies.semiflexible": ("linearize_semiflexible", "semiflexible_study"),
-    "studies.stiffening": ("linearize_stiffening", "stiffening_study"),
+    "_errors": ("TenscellError",),
 }
 
 _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 
 __all__ = list(_WHERE)
+
+# Names that were top-level before 0.2.0: name -> the public subpackage or module that has it now. They keep
+# working, with a DeprecationWarning naming the new place, until 0.3.0.
+_MOVED_FROM = {
+    "model": ("Point", "StructureError", "NotPrestressableError", "equilibrate", "FormFindingError",
+              "FormFindingResult", "find_form", "pin_jointed", "rigid_body_modes", "DEFAULT_DELTA", "REGULAR_DELTA",
+              "cylindrical_cell", "if_free_delta", "paper_structure", "regular_cell", "semiflexible_paper_cell",
+              "expanded_octahedron", "lattice_cell", "lattice_structure", "sphere_cell", "sphere_structure"),
+    "io": ("StructureFile", "load_structure_file", "member_values", "save_structure", "DataError", "bundled_names",
+           "ColumnMap", "read_rheocompass"),
+    "laws": ("CompositeLaw", "LinearSpring", "LinearizationError", "PowerDashpot", "StiffeningFilament", "Tangent",
+             "TendonLaw", "Voigt", "family_laws", "power_dashpot_law", "rest_lengths", "stiffening_law", "voigt_law"),
+    "linear": ("NotPositiveDefiniteError", "RelaxationSpectrum", "linearize_law", "linearize_tangent",
+               "relaxation_spectrum", "krylov_compliance"),
+    "response": ("log_slope", "loss_tangent", "static_modulus", "viscosity_limit"),
+    "timedomain": ("CreepSpectrum", "PowerLawFit", "StressRelaxation", "creep_spectrum", "fit_power_law",
+                   "local_exponent", "relaxation_modulus"),
+    "summary": ("relaxation_modes",),
+    "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
+                 "creep_response", "oscillatory_response", "simulate"),
+    "fitting": ("FitParameter",),
+    "sensitivity": ("analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table",
+                    "sensitivity_study"),
+    "studies": ("loss_peak", "no_if_study", "prestress_map", "references_study", "linearize_semiflexible",
+                "semiflexible_study", "linearize_stiffening", "stiffening_study"),
+}
+_MOVED = {name: home for home, names in _MOVED_FROM.items() for name in names}
 
 
 def __getattr__(name: str) -> object:
@@ -76,6 +91,13 @@ def __getattr__(name: str) -> object:
     module = _WHERE.get(name)
     if module is not None:
         value = getattr(import_module(f".{module}", __name__), name)
+    elif name in _MOVED:
+        import warnings
+
+        home = _MOVED[name]
+        warnings.warn(f"tenscell.{name} is deprecated since 0.2.0 and will be removed in 0.3.0: use "
+                      f"tenscell.{home}.{name} (from tenscell.{home} import {name})", DeprecationWarning, stacklevel=2)
+        return getattr(import_module(f".{home}", __name__), name)  # not cached: every use warns
     elif not name.startswith("_"):
         try:
             value = import_module(f".{name}", __name__)
@@ -100,45 +122,18 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # what type checkers and IDEs see; keep in step with _EXPORTS
-    from .dynamics import (
-        SimulationError, SineDisplacement, SineForce, StepForce, amplitude_sweep, creep_response, oscillatory_response,
-        simulate,
-    )
+    from ._errors import TenscellError
     from ._threads import set_threads, threads
-    from .fitting import FitParameter, FitResult, fit
-    from .io.data import DataError, RheologyData, bundled, bundled_names, read_csv
-    from .io.importers import ColumnMap, read_rheocompass, read_table
-    from .io.structure_files import StructureFile, load_structure, load_structure_file, member_values, save_structure
-    from .laws import (
-        CompositeLaw, LinearSpring, LinearizationError, PowerDashpot, StiffeningFilament, Tangent, TendonLaw, Voigt,
-        family_laws, power_dashpot_law, rest_lengths, stiffening_law, voigt_law,
-    )
-    from .linear.krylov import krylov_compliance
-    from .linear.linearize import (
-        LinearModel, NotPositiveDefiniteError, RelaxationSpectrum, linearize, linearize_law, linearize_tangent,
-        relaxation_spectrum,
-    )
-    from .model.equilibrium import Cell, NotPrestressableError, equilibrate
-    from .model.formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
-    from .model.lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
-    from .model.shapes import (
-        DEFAULT_DELTA, REGULAR_DELTA, cylindrical_cell, if_free_delta, paper_cell, paper_structure, regular_cell,
-        semiflexible_paper_cell,
-    )
-    from .model.structure import Point, Structure, StructureError
-    from .response import (
-        FrequencyResponse, compliance, frequency_response, log_slope, loss_tangent, moduli, static_modulus,
-        viscosity_limit,
-    )
-    from .sensitivity import analytic_elasticities, elasticities, monte_carlo, perturbation_table, sensitivity_study
-    from .studies.no_if import loss_peak, no_if_study
-    from .studies.references import prestress_map, references_study
-    from .studies.semiflexible import linearize_semiflexible, semiflexible_study
-    from .studies.stiffening import linearize_stiffening, stiffening_study
-    from .summary import relaxation_modes, summarize
-    from .timedomain import (
-        CreepSpectrum, PowerLawFit, StressRelaxation, creep_compliance, creep_spectrum, fit_power_law,
-        local_exponent, relaxation_modulus, stress_relaxation,
-    )
+    from .fitting import FitResult, fit
+    from .io.data import RheologyData, bundled, read_csv
+    from .io.importers import read_table
+    from .io.structure_files import load_structure
+    from .linear.linearize import LinearModel, linearize
+    from .model.equilibrium import Cell
+    from .model.shapes import paper_cell
+    from .model.structure import Structure
+    from .response import FrequencyResponse, compliance, frequency_response, moduli
+    from .summary import summarize
+    from .timedomain import creep_compliance, stress_relaxation
     from . import dynamics, fitting, io, laws, linear, model, plotting, reports, response, sensitivity, studies
-    from . import summary, timedomain
+    from . import population, summary, timedomain

@@ -15,18 +15,33 @@ A result is a frozen dataclass declared with ``repr=False`` and gives
     draws on the given matplotlib axes (or a new figure's) and returns the
     axes; the drawing code lives in :mod:`tenscell.plotting`, which never
     chooses a backend.
+
+How a result reaches the plotting layer
+---------------------------------------
+Results are computed in early stages of the pipeline (``model/``,
+``linear/``, ``response``...) and drawn by the last one (``plotting/``), which
+imports them; an import the other way would run back up the pipeline (and
+load matplotlib with the physics). As python-control keeps its response
+objects apart from its plotting module, a result's ``plot()`` only names the
+drawing function it wants: ``plotter("structure_3d")(self, ax=ax)``.
+:func:`plotter` imports :mod:`tenscell.plotting` on first use; on import, that
+package registers every drawing function it defines
+(:func:`register_plotters`). This is the one place a result reaches
+``plotting/``; ``tests/test_architecture.py`` checks that no other does.
 """
 from __future__ import annotations
 
 from collections import Counter
-from typing import TYPE_CHECKING, Any, Iterable, Mapping
+from importlib import import_module
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Mapping
 
 import numpy as np
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["format_repr", "dataframe", "span", "counts", "UNIT_SUFFIXES", "DIMENSIONLESS", "has_unit"]
+__all__ = ["format_repr", "dataframe", "span", "counts", "UNIT_SUFFIXES", "DIMENSIONLESS", "has_unit", "plotter",
+           "register_plotters"]
 
 #: unit suffixes of DataFrame columns (SI, written out without symbols so they are valid identifiers)
 UNIT_SUFFIXES = (
@@ -76,3 +91,27 @@ def counts(labels: Iterable[str]) -> str:
 def has_unit(column: str) -> bool:
     """Whether a float column's name states its unit (or is a known dimensionless quantity)."""
     return column in DIMENSIONLESS or column.endswith(UNIT_SUFFIXES)
+
+
+#: drawing functions by name; tenscell.plotting fills it when it is imported
+_PLOTTERS: dict[str, Callable[..., Any]] = {}
+
+
+def register_plotters(functions: Mapping[str, Callable[..., Any]]) -> None:
+    """Make drawing functions available to :func:`plotter` (called by :mod:`tenscell.plotting` on import)."""
+    for name, function in functions.items():
+        if _PLOTTERS.setdefault(name, function) is not function:
+            raise ValueError(f"two drawing functions are named {name!r}")
+
+
+def plotter(name: str) -> Callable[..., Any]:
+    """The drawing function ``name`` of :mod:`tenscell.plotting` (which is imported on first use).
+
+    The one way a result's ``plot()`` reaches the plotting layer (module docstring).
+    """
+    if name not in _PLOTTERS:
+        import_module("tenscell.plotting")  # registers every drawing function
+    try:
+        return _PLOTTERS[name]
+    except KeyError:
+        raise LookupError(f"tenscell.plotting has no drawing function {name!r}") from None

@@ -16,7 +16,7 @@ from ._checks import positive_array
 from .model.equilibrium import Cell, weighted_gram
 from .linear.krylov import krylov_compliance
 from .linear.linearize import LinearModel, linearize
-from .linear.modal import modal_compliance, modulus, prestress_grid_compliance
+from .linear.modal import continuum_factor, modal_compliance, modulus, prestress_grid_compliance
 from ._threads import hot_path
 
 __all__ = [
@@ -29,6 +29,12 @@ __all__ = [
     "loss_tangent",
     "log_slope",
 ]
+
+
+def _voigt(cell: Cell, EA, c):
+    from .laws import Voigt
+
+    return Voigt(EA=positive_array("EA", EA, (cell.m,), "N"), c=positive_array("c", c, (cell.m,), "N·s/m"))
 
 
 def _frequencies(f_hz) -> np.ndarray:
@@ -56,6 +62,10 @@ def compliance(lin: LinearModel, f_hz) -> np.ndarray:
     ndarray of complex, same shape as ``f_hz``
     """
     f = _frequencies(f_hz)
+    if lin.realization is not None:  # a law with internal dynamics: its exact tangent, not the realization
+        from .linear.dynamic import exact_compliance
+
+        return exact_compliance(lin, f)
     if lin.pencil.sparse:
         return krylov_compliance(lin, f).J
     m = lin.pencil.modes
@@ -86,6 +96,12 @@ def viscosity_limit(lin: LinearModel) -> float:
     """
     from .linear.modal import ZERO_TIME
 
+    if lin.realization is not None:
+        from .laws import DynamicLawError
+
+        raise DynamicLawError(f"the {type(lin.law).__name__} tendons have internal dynamics: G''/ω of the exact law tends to "
+                         f"the cytoplasm's viscosity ({lin.viscosity:g} Pa·s) alone, its realization's C0 is not that law's "
+                         "high-frequency limit; evaluate moduli(lin, f) at the frequencies you need")
     tau, rho, _ = lin.pencil.retardation()
     if tau.size == 0 or tau.min() <= ZERO_TIME * tau.max():
         raise ValueError("C0 is singular: G''/ω has no finite high-frequency limit")
@@ -116,16 +132,20 @@ class FrequencyResponse:
         Compliance (m/N).
     L : float
         Strut length of the cell (m).
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s) in parallel with the structure, included in ``J``
+        (``G = (0.5/L)/J = G_structure + iωη``); 0 for none.
     """
 
     frequency_hz: np.ndarray
     prestress: np.ndarray
     J: np.ndarray
     L: float
+    viscosity: float = 0.0
 
     @property
     def G(self) -> np.ndarray:
-        """Complex modulus ``G' + iG''`` (Pa), shape (nP, nf)."""
+        """Complex modulus ``G' + iG''`` (Pa), shape (nP, nf), the cytoplasm included."""
         return modulus(self.J, self.L)
 
     @property
@@ -178,7 +198,7 @@ class FrequencyResponse:
             "prestress_N": np.repeat(self.prestress, nf), "frequency_Hz": np.tile(self.frequency_hz, nP),
             "G_storage_Pa": self.G_storage.ravel(), "G_loss_Pa": self.G_loss.ravel(),
             "loss_tangent": self.loss_tangent.ravel(),
-        }, {"L_m": self.L})
+        }, {"L_m": self.L, "viscosity_Pa_s": self.viscosity})
 
     def plot(self, axes=None, x: str = "frequency", **kw):
         """G' and G'' on a pair of axes: against frequency (log-log, one curve per P) or prestress.
@@ -195,16 +215,15 @@ class FrequencyResponse:
         -------
         ndarray of two Axes
         """
-        from . import plotting
+        from ._results import plotter
 
         if x not in ("frequency", "prestress"):
             raise ValueError(f"x: expected 'frequency' or 'prestress', got {x!r}")
-        draw = plotting.moduli_vs_frequency if x == "frequency" else plotting.moduli_vs_prestress
-        return draw(self, axes, **kw)
+        return plotter("moduli_vs_frequency" if x == "frequency" else "moduli_vs_prestress")(self, axes, **kw)
 
 
 @hot_path
-def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0) -> FrequencyResponse:
+def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0, *, law=None, viscosity: float = 0.0) -> FrequencyResponse:
     """Compliance and moduli for arrays of prestresses and frequencies in one call.
 
     Parameters
@@ -215,7 +234,13 @@ def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0) -> FrequencyResponse:
     P : float or array_like, shape (nP,)
         Prestresses (N), > 0.
     EA, c : float or array_like, shape (m,)
-        Tendon stiffness (N) and damping (N·s/m).
+        Tendon stiffness (N) and damping (N·s/m) of Voigt tendons (the paper's model).
+    law : TendonLaw, optional
+        Any tendon law instead of Voigt(EA, c), e.g. :class:`tenscell.laws.Springpot`
+        (its tangent is taken at tensions ``P·T0`` for each P; laws with internal
+        dynamics through :func:`tenscell.linear.dynamic.dynamic_compliance`, exact).
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), ≥ 0, in parallel with the structure: ``G* += iωη``.
 
     Returns
     -------
@@ -223,6 +248,14 @@ def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0) -> FrequencyResponse:
     """
     f = np.atleast_1d(_frequencies(f_hz)).ravel()
     Ps = np.atleast_1d(positive_array("P (prestress)", P, unit="N")).ravel()
+    if law is not None or viscosity:
+        from .linear.dynamic import dynamic_complex_modulus, viscosity_value
+
+        eta = viscosity_value(viscosity)
+        the_law = law if law is not None else _voigt(cell, EA, c)
+        G = np.stack([dynamic_complex_modulus(cell, the_law, p, f, viscosity=eta) for p in Ps])
+        return FrequencyResponse(frequency_hz=f, prestress=Ps, J=continuum_factor(cell.strut_length) / G, L=cell.strut_length,
+                                 viscosity=eta)
     J = None
     if not cell.sparse and Ps.size > 1:
         # K0(P) = P·Kp + Σ EA_j a_j a_jᵀ/l_j is affine in P and C0 does not depend on it: one batched eigensolve

@@ -154,7 +154,9 @@ class Elasticities:
 
     def plot(self, ax=None, **kw):
         """Elasticities of G' and G'' against f (groups, largest members) on a pair of axes (or a new figure)."""
-        from .plotting.variants import elasticities_figure
+        from ._results import plotter
+
+        elasticities_figure = plotter("elasticities_figure")
 
         return elasticities_figure(self, axes=ax, **kw)
 
@@ -194,6 +196,8 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
     """
     f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
     w = 2 * np.pi * f
+    if lin.realization is not None:
+        return _dynamic_elasticities(lin, f)
     dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M)  # noqa: E731
     Kp, A = dense(lin.Kp), dense(lin.cell.A)
     X = lin.pencil.resolvent(w, -lin.H0)  # the model's one modal decomposition (tenscell.linear.modal)
@@ -222,6 +226,41 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
         frequency_hz=f, names=tuple(names), groups=tuple(groups), values=np.concatenate(values),
         complex=np.vstack(rows), G=modulus(J, lin.L), methods=("analytic",) * n, errors=np.zeros(n),
     )
+
+
+@hot_path
+def _dynamic_elasticities(lin: LinearModel, f: np.ndarray) -> Elasticities:
+    """Exact elasticities for a law with internal dynamics, from its dynamic tangent (not its realization).
+
+    ``K(ω) = P·Σ T0∇²l + Σ k*_j(ω) a_j a_jᵀ`` with ``k*`` at tensions ``P·T0``:
+    ``∂J/∂θ = −(∂k*_j/∂θ)(yᵀa_j)(a_jᵀx)`` and
+    ``∂J/∂P = −yᵀ(Σ T0∇²l)x − Σ_j T0_j ∂k*_j/∂T (yᵀa_j)(a_jᵀx)``; a cytoplasm
+    (``lin.viscosity``) adds ``iωη`` to G and depends on none of them.
+    """
+    from .linear.dynamic import _solves
+
+    cell, law, w = lin.cell, lin.law, 2 * np.pi * f
+    l, T = cell.lengths, lin.P * cell.T0
+    dT, dk = law.complex_stiffness_derivatives(l, T, w)
+    x, y = _solves(cell, lin.P, law.complex_stiffness(l, T, w), both=True)  # one LU per frequency
+    assert y is not None
+    Js = x @ np.asarray(cell.probe, dtype=float)
+    prod = (cell.A.T @ y.T).T * (cell.A.T @ x.T).T  # (nf, m): (yᵀa_j)(a_jᵀx)
+    H = cell.prestress_hessian
+    Hx = (H @ x.T).T if sp.issparse(H) else x @ np.asarray(H).T
+    dJ_P = -np.einsum("wi,wi->w", y, Hx) - (prod * dT) @ cell.T0
+    G = modulus(Js, lin.L) + 1j * w * lin.viscosity
+    dG = lambda dJ_: -modulus(Js, lin.L) * dJ_ / Js  # noqa: E731  ∂G/∂θ = −(0.5/L)·∂J/∂θ/J²
+    vals = law.parameter_values(cell.m)
+    rows = [(i, j) for i in range(len(law.names)) for j in np.flatnonzero(~np.isnan(vals[i]))]
+    fam = [_family_tag(x) for x in cell.structure.families]
+    out = [vals[i, j] * dG(-dk[i][:, j] * prod[:, j]) / G for i, j in rows] + [lin.P * dG(dJ_P) / G]
+    names = [f"{law.names[i]}[{j}]" for i, j in rows] + ["P"]
+    groups = [f"{law.names[i]} {fam[j]}" for i, j in rows] + ["P"]
+    values = np.array([vals[i, j] for i, j in rows] + [lin.P])
+    n = len(names)
+    return Elasticities(frequency_hz=f, names=tuple(names), groups=tuple(groups), values=values,
+                        complex=np.vstack(out), G=G, methods=("analytic",) * n, errors=np.zeros(n))
 
 
 def _modulus(alpha, delta, L, P, EA, c, f, intermediate_filaments=True):
@@ -585,7 +624,9 @@ class MonteCarloResult:
 
     def plot(self, ax=None, **kw):
         """Histograms of the largest change of G' and G'' per valid draw, on a pair of axes (or a new figure)."""
-        from .plotting.variants import monte_carlo_figure
+        from ._results import plotter
+
+        monte_carlo_figure = plotter("monte_carlo_figure")
 
         return monte_carlo_figure([self], axes=ax, **kw)
 
@@ -684,7 +725,6 @@ def monte_carlo_draws(factors, *, parameters: str = "all", alpha: float = 0.0, d
     reasons : list of str
         The error type of each invalid draw, "" for valid ones.
     """
-    from ._progress import progress_bar
 
     factors = np.atleast_2d(np.asarray(factors, dtype=float))
     n = factors.shape[0]

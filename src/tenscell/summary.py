@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sp
 
 from .model.coordinates import Coordinates, kinematics, make_coordinates
@@ -23,7 +22,9 @@ from .model.equilibrium import Cell, NotPrestressableError, equilibrate, equilib
 from .model.formfinding import rigid_body_modes
 from .linear.krylov import load_modes
 from .linear.linearize import LinearModel, NotPositiveDefiniteError, linearize
-from .model.structure import STRUT, Structure
+from .linear.modal import complement_basis
+from .laws import DynamicLawError
+from .model.structure import Structure, cable_mask
 from ._threads import hot_path
 
 __all__ = ["StructureSummary", "summarize", "relaxation_modes", "RelaxationModes", "node_displacements"]
@@ -170,48 +171,13 @@ def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "
     for f in s.families:
         fams[f] = fams.get(f, 0) + 1
     rigid = _rigid_dof(s)
-    if cell is not None:
-        n = cell.n
-        dim = cell.self_stress_dim
-        rank = cell.m - dim if dim >= 0 else -1
-    else:
-        coords = make_coordinates(s, parametrization)
-        A = equilibrium_matrix(member_geometry(coords, coords.q0))
-        n = coords.n
-        if sp.issparse(A):
-            rank = dim = -1
-        else:
-            rank = int(np.linalg.matrix_rank(A, tol=1e-10 * max(np.abs(A).max(), 1e-300)))
-            dim = s.n_tendons - rank
+    n, rank, dim = _ranks(s, cell, parametrization)
     mech = n - rank if rank >= 0 else -1
     stable, lin, min_t = None, None, float("nan")
     if cell is None:
         verdict = f"NOT prestressable: {reason}"
     else:
-        cable = np.array([f != STRUT for f in s.families])
-        min_t = float(cell.T0[cable].min())
-        try:
-            lin = linearize(cell, P=P, EA=EA, c=c, check=rigid == 0)
-            if rigid:
-                stable = _stable_free(lin)
-                if stable is False:
-                    lin = None
-            else:
-                stable = True
-        except NotPositiveDefiniteError:
-            stable, lin = False, None
-        where = f"at P={P:g} N"
-        if stable:
-            verdict = (f"prestressable and stable: every tendon in tension (smallest normalized tension "
-                       f"{min_t:.4g}), K0 positive definite {where}")
-        elif stable is None:
-            verdict = (f"prestressable (smallest normalized tension {min_t:.4g}); stability of this free-standing "
-                       "structure not checked at this size")
-        else:
-            verdict = (f"prestressable (smallest normalized tension {min_t:.4g}) but NOT stable {where}: K0 is not "
-                       "positive definite" + (" on the complement of the rigid-body motions" if rigid else ""))
-        if rigid:
-            verdict += f"; free-standing: {rigid} rigid-body motion(s) excluded"
+        stable, lin, min_t, verdict = _stability(cell, P, EA, c, rigid)
     summary = StructureSummary(
         name=s.name, n_nodes=s.n_nodes, n_fixed=len(s.fixed), n_point_nodes=len(s.point_nodes),
         n_struts=len(s.struts), n_anchored=sum(s.is_anchored(k) for k in range(len(s.struts))),
@@ -222,21 +188,54 @@ def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "
     return summary, cell, lin
 
 
+def _ranks(s: Structure, cell: Cell | None, parametrization: str) -> tuple[int, int, int]:
+    """(coordinates, rank of the equilibrium matrix, self-stress dimension); -1 where not computed (sparse)."""
+    if cell is not None:
+        dim = cell.self_stress_dim
+        return cell.n, (cell.m - dim if dim >= 0 else -1), dim
+    coords = make_coordinates(s, parametrization)
+    A = equilibrium_matrix(member_geometry(coords, coords.q0))
+    if sp.issparse(A):
+        return coords.n, -1, -1
+    rank = int(np.linalg.matrix_rank(A, tol=1e-10 * max(np.abs(A).max(), 1e-300)))
+    return coords.n, rank, s.n_tendons - rank
+
+
+def _stability(cell: Cell, P: float, EA, c, rigid: int):
+    """(stable: bool or None, the linear model or None, smallest normalized tension, the verdict's words)."""
+    min_t = float(cell.T0[cable_mask(cell.structure.families)].min())
+    stable: bool | None
+    lin: LinearModel | None
+    try:
+        lin = linearize(cell, P=P, EA=EA, c=c, check=rigid == 0)
+        stable = _stable_free(lin) if rigid else True
+        if stable is False:
+            lin = None
+    except NotPositiveDefiniteError:
+        stable, lin = False, None
+    where = f"at P={P:g} N"
+    if stable:
+        verdict = (f"prestressable and stable: every tendon in tension (smallest normalized tension "
+                   f"{min_t:.4g}), K0 positive definite {where}")
+    elif stable is None:
+        verdict = (f"prestressable (smallest normalized tension {min_t:.4g}); stability of this free-standing "
+                   "structure not checked at this size")
+    else:
+        verdict = (f"prestressable (smallest normalized tension {min_t:.4g}) but NOT stable {where}: K0 is not "
+                   "positive definite" + (" on the complement of the rigid-body motions" if rigid else ""))
+    if rigid:
+        verdict += f"; free-standing: {rigid} rigid-body motion(s) excluded"
+    return stable, lin, min_t, verdict
+
+
 def _complement(lin: LinearModel) -> np.ndarray:
-    R = rigid_body_modes(lin.cell.coords)
-    return scipy.linalg.null_space(R.T) if R.shape[1] else np.eye(lin.cell.n)
+    return complement_basis(rigid_body_modes(lin.cell.coords), lin.cell.n)
 
 
 def _stable_free(lin: LinearModel):
     if sp.issparse(lin.K0):
         return None
-    Q = _complement(lin)
-    K = Q.T @ lin.K0 @ Q
-    try:
-        np.linalg.cholesky(0.5 * (K + K.T))
-        return True
-    except np.linalg.LinAlgError:
-        return False
+    return lin.pencil.restricted(_complement(lin)).is_positive_definite()
 
 
 def node_displacements(coords: Coordinates, v: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
@@ -289,7 +288,9 @@ class RelaxationModes:
 
     def plot(self, ax=None, **kw):
         """The rates as bars; draw the mode shapes with :func:`tenscell.plotting.relaxation_modes_3d`."""
-        from .plotting import rates_bar
+        from ._results import plotter
+
+        rates_bar = plotter("rates_bar")
 
         return rates_bar(self.rates, ax=ax, **kw)
 
@@ -301,12 +302,15 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     Solves ``C0 v = μ K0 v`` (K0 positive definite; μ = 1/λ, μ = 0 for an
     undamped mechanism) and keeps the largest μ. Free-standing structures
     are treated on the complement of their rigid-body motions. Dense models
-    use a generalized eigensolver; sparse ones (more than 1500 coordinates)
-    return the slowest modes *that the load excites*
+    use the pencil's modal decomposition (:meth:`~tenscell.linear.modal.Pencil.slow_modes`);
+    sparse ones (more than 1500 coordinates) return the slowest modes *that the load excites*
     (:func:`tenscell.linear.krylov.load_modes`).
     """
     if not (isinstance(k, (int, np.integer)) and k >= 1):
         raise ValueError(f"k (number of modes) must be a whole number >= 1, got {k!r}")
+    if lin.realization is not None:
+        raise DynamicLawError(f"relaxation_modes: the {type(lin.law).__name__} tendons' internal variables are part of "
+                         "every mode, which then has no node displacements alone; use creep_spectrum(lin) for its times")
     n = lin.cell.n
     if sp.issparse(lin.K0):
         # ARPACK does not converge in reasonable time on lattices, whose slowest rate is shared by
@@ -315,17 +319,11 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
         mu = 1.0 / rates
     elif rigid_body_modes(lin.cell.coords).shape[1] == 0:
         # anchored structures: the model's one modal decomposition (C0 v = τ K0 v, τ = μ ascending)
-        modes = lin.pencil.modes
-        k = min(k, n)
-        mu, V = modes.tau[n - k:], modes.vectors[:, n - k:]
+        mu, V = lin.pencil.slow_modes(k)
         resid = None
-    else:
+    else:  # free-standing: the pencil on the complement of the rigid-body motions
         Q = _complement(lin)
-        K = Q.T @ lin.K0 @ Q
-        C = Q.T @ lin.C0 @ Q
-        m = K.shape[0]
-        k = min(k, m)
-        mu, W = scipy.linalg.eigh(0.5 * (C + C.T), 0.5 * (K + K.T), subset_by_index=[m - k, m - 1])
+        mu, W = lin.pencil.restricted(Q).slow_modes(k)
         V = Q @ W
         resid = None
     order = np.argsort(mu)[::-1][:k]

@@ -13,7 +13,7 @@ step at t = 0, is exact and closed-form:
 ``J(t) = J_inst + Σ_{τ_k>0} ρ_k (1 − e^{−t/τ_k})``,  ``J_inst = Σ_{τ_k=0} ρ_k``
 
 (``τ_k = 1/λ_k`` and ``ρ_k = r_k/λ_k`` in the notation of
-:class:`tenscell.RelaxationSpectrum`; ``J_inst = 0`` when C0 is positive
+:class:`tenscell.linear.RelaxationSpectrum`; ``J_inst = 0`` when C0 is positive
 definite, as for the paper cell with intermediate filaments).
 
 The **relaxation function**, the force after a unit displacement step, is
@@ -156,7 +156,9 @@ class CreepSpectrum:
 
     def plot(self, ax=None, t=None, **kw):
         """Creep compliance J(t) (m/N) on log-log axes; ``t`` (s) defaults to span the retardation times."""
-        from .plotting import loglog_curve
+        from ._results import plotter
+
+        loglog_curve = plotter("loglog_curve")
 
         t = _plot_times(self.times) if t is None else positive_array("t (time)", t, unit="s")
         return loglog_curve(t, self.compliance(t), ax=ax, xlabel="time after the step t (s)",
@@ -288,7 +290,9 @@ class StressRelaxation:
 
     def plot(self, ax=None, t=None, **kw):
         """Relaxation modulus G(t) (Pa, regular part) on log-log axes; ``t`` (s) defaults to span the mode times."""
-        from .plotting import loglog_curve
+        from ._results import plotter
+
+        loglog_curve = plotter("loglog_curve")
 
         t = _plot_times(self.times) if t is None else positive_array("t (time)", t, unit="s")
         return loglog_curve(t, self.modulus(t), ax=ax, xlabel="time after the step t (s)",
@@ -460,7 +464,9 @@ class PowerLawFit:
 
     def plot(self, ax=None, **kw):
         """The fitted ``A·t^α`` over its window on log-log axes (e.g. over a creep curve's axes)."""
-        from .plotting import loglog_curve
+        from ._results import plotter
+
+        loglog_curve = plotter("loglog_curve")
 
         t = np.logspace(np.log10(self.t_min), np.log10(self.t_max), 50)
         kw.setdefault("label", f"A·t^α, α = {self.alpha:.3f}")

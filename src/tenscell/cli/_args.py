@@ -21,7 +21,7 @@ import sys
 __all__ = [
     "Parser", "HelpFormatter", "number", "integer", "number_list", "frequencies", "member_values",
     "lattice_size", "grid_cost", "add_model_options", "add_prestress", "add_out", "hidden_alias", "add_from_fit",
-    "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS",
+    "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS", "path",
 ]
 
 #: allowed range of each physical quantity (closed interval, in the flag's unit). The model is
@@ -185,16 +185,24 @@ def frequencies(max_points: int = MAX_GRID_POINTS):
 
 
 def grid_cost(n: int) -> str:
-    """What ``n`` (P, f) points cost: ``"about 37.3 GiB of memory and 2e+03 s"``."""
-    return f"about {_bytes(n * _BYTES_PER_POINT)} of memory and {n * _SECONDS_PER_POINT:.2g} s"
+    """What ``n`` (P, f) points cost: ``"about 37.3 GiB of memory and 2e+03 s"`` (calibrated rates, above)."""
+    from ._cost import duration, size
+
+    return f"about {size(n * _BYTES_PER_POINT)} of memory and {duration(n * _SECONDS_PER_POINT)}"
 
 
-def _bytes(n: float) -> str:
-    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
-        if n < 1024 or unit == "TiB":
-            return f"{n:.3g} {unit}"
-        n /= 1024
-    return f"{n:.3g} TiB"  # pragma: no cover
+def path(what: str = "a path"):
+    """An argparse ``type``: a non-empty path (an empty one would silently mean the current directory or a default)."""
+    def convert(text):
+        text = str(text)
+        if not text.strip():
+            raise argparse.ArgumentTypeError(f"empty value; expected {what}")
+        if "\0" in text:
+            raise argparse.ArgumentTypeError(f"{text[:40]!r} holds a NUL byte; expected {what}")
+        return text
+
+    convert.__name__ = "path"
+    return convert
 
 
 def member_values(quantity: str):
@@ -236,11 +244,13 @@ def lattice_size(max_modules: int):
         dims = tuple(integer(1, max_modules, "modules per direction")(p) for p in parts)
         total = math.prod(dims)
         if total > max_modules:
+            from ._cost import size
+
             coords = 24 * total
-            gb = 1.25 * (coords / 1.07e5) ** 1.4
+            factorization = 1.25e9 * (coords / 1.07e5) ** 1.4  # bytes, calibrated (docstring)
             raise argparse.ArgumentTypeError(
                 f"{'x'.join(map(str, dims))} is {total:,} modules: about {coords:,} coordinates and "
-                f"{gb:.3g} GB for the factorization alone; at most {max_modules:,} modules "
+                f"{size(factorization)} for the factorization alone; at most {max_modules:,} modules "
                 f"(about {24 * max_modules:,} coordinates)")
         return dims
 
@@ -273,7 +283,7 @@ def add_prestress(p: argparse.ArgumentParser, *, sweep: bool, default: str = "10
 
 def add_from_fit(p: argparse.ArgumentParser) -> None:
     """``--from-fit FIT_JSON``: the fitted cell of a ``tenscell fit`` run instead of the model options."""
-    p.add_argument("--from-fit", metavar="FIT_JSON", default=None,
+    p.add_argument("--from-fit", metavar="FIT_JSON", default=None, type=path("a fit.json file"),
                    help="use the fitted cell of a `tenscell fit` run (its fit.json): cell, strut length, EA, c and "
                         "prestress; the cell and tendon options are then refused")
 
@@ -322,12 +332,13 @@ def add_out(p: argparse.ArgumentParser, default: str | None = None, *, derived: 
     the command derives from its other arguments (``args.out`` is then None).
     """
     text = "output directory (created, or replaced as a whole by a successful run)"
+    directory = path("a directory")
     if derived is not None:
-        p.add_argument("--out", default=None, help=f"{text} (default: {derived})")
+        p.add_argument("--out", type=directory, default=None, help=f"{text} (default: {derived})")
     elif default is None:
-        p.add_argument("--out", required=True, help=text)
+        p.add_argument("--out", type=directory, required=True, help=text)
     else:
-        p.add_argument("--out", default=default, help=text)
+        p.add_argument("--out", type=directory, default=default, help=text)
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:

@@ -5,6 +5,7 @@ import argparse
 import math
 import sys
 
+from ._cost import Cost, announce, check, measure
 from ._args import (RANGES, add_model_options, add_out, add_prestress, frequencies, hidden_alias, integer, number,
                     number_list)
 
@@ -55,7 +56,8 @@ def register(sub) -> None:
                    help="cycles to simulate (default: adaptive, until two consecutive cycles agree)")
     p.add_argument("--control", choices=("force", "displacement"), default="force",
                    help="prescribe the force or the probe displacement")
-    p.add_argument("--samples", type=integer(8, 100_000), default=128, help="samples per cycle")
+    # the harmonic analysis reads 20 harmonics, which takes more than 40 samples per period (Nyquist)
+    p.add_argument("--samples", type=integer(41, 100_000), default=128, help="samples per cycle")
     add_out(p)
     add_model_options(p)
     _add_law_options(p)
@@ -96,6 +98,9 @@ def law_from_args(args):
     from ._args import fitted_from_args, model_from_args, prestress_from_args
     from ..laws import power_dashpot_law, voigt_law
 
+    if args.velocity_scale is not None and args.beta == 1.0:
+        raise ValueError(f"--velocity-scale {args.velocity_scale:g} m/s smooths the power-law dashpot; with --beta 1 "
+                         "(the Voigt law) there is none (give --beta too)")
     fitted = fitted_from_args(args)
     if fitted is None:
         cell, EA, c = model_from_args(args)
@@ -184,14 +189,41 @@ def check_samples(samples: int, cycles: int | None) -> None:
     n = samples * n_cycles
     if n > MAX_SAMPLES:
         what = f"--cycles {cycles}" if cycles is not None else f"up to {ADAPTIVE_MAX_CYCLES} adaptive cycles"
-        raise ValueError(f"--samples {samples} × {what} is {n:,} samples (about {n * 40 * 8 / 1e9:.2g} GB of "
+        from ._cost import size
+
+        raise ValueError(f"--samples {samples} × {what} is {n:,} samples (about {size(n * 40 * 8)} of "
                          f"traces); at most {MAX_SAMPLES:,}")
+
+
+def simulate_cost(cell, law, f: float, amplitudes, cycles: int | None, kw: dict):
+    """The simulations' cost from one cycle at the largest amplitude, timed here; None for one short simulation.
+
+    Every simulation runs ``cycles`` cycles, or in the adaptive mode 2 to :data:`ADAPTIVE_MAX_CYCLES` (the
+    line states both). The first cycle also carries the setup, so the rate is on the high side for small
+    amplitudes.
+    """
+    from ..dynamics import oscillatory_response
+
+    n_sims = len(amplitudes)
+    if n_sims == 1 and (cycles or 0) <= 10:
+        return None
+    big = max(amplitudes)
+    per = measure(lambda: oscillatory_response(cell, law, big, f, **{**kw, "cycles": 1}), max_calls=1)
+    unit = "N" if kw.get("control", "force") == "force" else "m"
+    timed = f"; one cycle at {big:g} {unit} timed"
+    if cycles:
+        return Cost("cycle", n_sims * cycles, per, 1, detail=f"= {n_sims} simulations × {cycles} cycles{timed}")
+    return Cost("cycle", n_sims * 2, per, 1, count_max=n_sims * ADAPTIVE_MAX_CYCLES,
+                detail=f"= {n_sims} simulations × 2 to {ADAPTIVE_MAX_CYCLES} adaptive cycles{timed}")
 
 
 def run_simulate(args) -> int:
     from ..io.outputs import OutputSet
 
     check_samples(args.samples, args.cycles)
+    sweep_amps = getattr(args, "sweep_amplitudes", None) or (args.amplitude if len(args.amplitude) > 1 else None)
+    if sweep_amps and args.control == "displacement":
+        raise ValueError("--control displacement takes one --amplitude (m): the amplitude sweep prescribes forces (N)")
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     import numpy as np
 
@@ -202,13 +234,15 @@ def run_simulate(args) -> int:
     from ..io.tables import finite
 
     amplitude = args.amplitude[0]
-    sweep_amps = getattr(args, "sweep_amplitudes", None) or (args.amplitude if len(args.amplitude) > 1 else None)
     cell, law, solver = law_from_args(args)
     f = args.freq
     check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
     check_resolvable_frequency(cell, law, f, solver["rtol"])
     EquationsOfMotion(cell, law, SineForce(1.0, f))  # refuses a singular damping matrix before any output
     kw = dict(control=args.control, cycles=args.cycles, samples_per_cycle=args.samples, **solver)
+    cost = simulate_cost(cell, law, f, [amplitude, *(sweep_amps or ())], args.cycles, kw)
+    if cost is not None:
+        announce(check(cost, "--amplitude × --cycles" if args.cycles else "--amplitude"))
     stage(f"simulating {args.cycles or 'until periodic,'} cycles at {f:g} Hz, amplitude {amplitude:g} "
           f"{'N' if args.control == 'force' else 'm'}")
     res = oscillatory_response(cell, law, amplitude, f, **kw)
@@ -274,9 +308,29 @@ def _jsonable(v):
     return v
 
 
+def creep_times(t_min: float, t_max: float, points: int):
+    """The output times of `tenscell creep` (s): ``points`` log-spaced from ``t_min`` to ``t_max``."""
+    import numpy as np
+
+    return np.logspace(math.log10(t_min), math.log10(t_max), points)
+
+
+def check_window(t, window) -> None:
+    """ValueError unless --window holds at least two of the output times ``t`` (a power law needs two points)."""
+    if window is None:
+        return
+    a, b = window
+    inside = int(((t >= a) & (t <= b)).sum())
+    if inside < 2:
+        raise ValueError(f"--window {a:g}:{b:g} s holds {inside} of the {t.size} output times "
+                         f"({t[0]:g} to {t[-1]:g} s, --t-min/--t-max/--points); a power-law fit needs at least 2")
+
+
 def run_creep(args) -> int:
     if not args.t_min < args.t_max:
         raise ValueError(f"--t-min must be below --t-max, got {args.t_min:g} s and {args.t_max:g} s")
+    t = creep_times(args.t_min, args.t_max, args.points)
+    check_window(t, args.window)
     from ..io.outputs import OutputSet
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
@@ -296,7 +350,6 @@ def run_creep(args) -> int:
     if len(amplitudes):
         check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
     EquationsOfMotion(cell, law, StepForce(1.0))  # refuses a singular damping matrix before any output
-    t = np.logspace(math.log10(args.t_min), math.log10(args.t_max), args.points)
     win = args.window or (float(t[0]), float(t[-1]))
     P0 = args.prestress_N
     try:

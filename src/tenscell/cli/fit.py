@@ -6,7 +6,7 @@ import contextlib
 import time
 from pathlib import Path
 
-from ._args import add_out, integer, number
+from ._args import RANGES, add_out, integer, number
 
 #: the fit's parametrizations (the same tuples as tenscell.fitting.TENDON_MODES / DAMPING_MODES,
 #: written out so that building the parser does not import the fitting code; a test checks they agree)
@@ -35,7 +35,7 @@ def register(sub) -> None:
                     "Writes fit.json, fit.csv, fit.png and report.md into --out. Exit status 0 if every data "
                     "set's RMS of the log10 errors reached --tolerance, 1 if not, 2 for bad input.")
     p.add_argument("data", nargs="+", help="CSV file(s) of measured moduli or creep compliance, or bundled:NAME")
-    p.add_argument("--prestress", action="append", metavar="FILE=PA",
+    p.add_argument("--prestress", action="append", type=stated_prestress, metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     p.add_argument("--tendons", choices=TENDON_MODES, default="per-tendon",
                    help="stiffness per tendon (as in the paper), per family, or one for all")
@@ -70,6 +70,10 @@ def register(sub) -> None:
 
 #: parameter kinds that --bound takes, with their units
 BOUND_UNITS = {"EA": "N", "c": "N·s/m", "P": "N", "s": "m²", "P_data": "Pa", "L": "m"}
+#: allowed bounds of each kind: the ranges of the matching flags (s = P / P_data spans their ratio)
+BOUND_RANGES = {"EA": RANGES["EA"][:2], "c": RANGES["c"][:2], "P": RANGES["prestress"][:2],
+                "P_data": RANGES["prestress"][:2], "L": RANGES["L"][:2],
+                "s": (RANGES["prestress"][0] / RANGES["prestress"][1], RANGES["prestress"][1] / RANGES["prestress"][0])}
 
 
 def _pair(text: str, flag: str, example: str) -> tuple[str, str]:
@@ -87,7 +91,10 @@ def _bound(text):
     parts = value.split(":")
     if len(parts) != 2:
         raise argparse.ArgumentTypeError(f"{kind}: expected LO:HI in {unit}, got {value[:40]!r}")
-    lo, hi = (number(0.0, None, unit, open_lo=True)(x) for x in parts)
+    try:
+        lo, hi = (number(*BOUND_RANGES[kind], unit)(x) for x in parts)
+    except argparse.ArgumentTypeError as err:
+        raise argparse.ArgumentTypeError(f"{kind}: {err}") from None
     if not lo < hi:
         raise argparse.ArgumentTypeError(f"{kind}: the lower bound {lo:g} {unit} must be below the upper bound "
                                          f"{hi:g} {unit}")
@@ -153,6 +160,13 @@ def search_space(args, datasets) -> dict:
     return space
 
 
+def check_contradictions(args) -> None:
+    """Refuse flags that contradict each other (before any file is read)."""
+    if getattr(args, "max_decades", None) is not None and args.tendons == "uniform":
+        raise ValueError(f"--max-decades {args.max_decades:g} bounds the spread of the tendon stiffnesses; with "
+                         "--tendons uniform there is one stiffness and no spread (use per-family or per-tendon)")
+
+
 def _names_text(names) -> str:
     per_tendon = [n for n in names if n.startswith("EA[")]
     rest = [n for n in names if not n.startswith("EA[")]
@@ -164,9 +178,13 @@ def add_constraints(p) -> None:
     p.add_argument("--min-prestress-share", type=number(0.0, 1.0, open_lo=True), default=None, metavar="S",
                    help="keep the prestress mechanically active: P·Kp must carry at least this share (0-1) of "
                         "the static stiffness at every prestress of the data")
-    p.add_argument("--min-prestress-elasticity", type=number(0.0, 10.0, open_lo=True), default=None, metavar="E",
+    # at most 1: with K0 = Ke + P·Kp, Ke positive semi-definite, the static elasticity is the prestress share
+    # (<= 1, 1 when P·Kp carries all the stiffness); at 0.1 Hz, 300 random paper cells (EA, c, P over eight
+    # decades) gave at most 0.95. A bound above 1 is one no cell meets
+    p.add_argument("--min-prestress-elasticity", type=number(0.0, 1.0, open_lo=True), default=None, metavar="E",
                    help="keep the prestress mechanically active: dlnG'/dlnP at 0.1 Hz must be at least E at every "
-                        "prestress of the data (adherent cells: about 0.7)")
+                        "prestress of the data (0 < E <= 1, 1 meaning G' proportional to P; adherent cells: about "
+                        "0.7)")
     p.add_argument("--max-decades", type=number(0.0, 100.0, "decades", open_lo=True), default=None, metavar="D",
                    help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
 
@@ -181,21 +199,36 @@ def read_data_arg(text: str, min_points: int):
     return read_measurements(text, min_points=min_points)
 
 
+def stated_prestress(text):
+    """An argparse ``type``: ``FILE=PA``, the prestress (Pa, in the range of --prestress) of a data file."""
+    name, sep, value = str(text).rpartition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected FILE=PA (e.g. freq.csv=1000), got {str(text)[:40]!r}")
+    lo, hi, _ = RANGES["prestress"]
+    return name.strip(), number(lo, hi, "Pa")(value)
+
+
+stated_prestress.__name__ = "stated prestress"
+
+
 def read_datasets(paths, prestress_options, min_points: int):
-    """Read the data files and attach the prestresses stated by ``--prestress FILE=PA``."""
-    stated = {}
-    for opt in prestress_options or ():
-        name, sep, value = opt.rpartition("=")
-        if not sep or not name:
-            raise ValueError(f"--prestress: expected FILE=PA (e.g. freq.csv=1000), got {opt!r}")
+    """Read the data files and attach the prestresses stated by ``--prestress FILE=PA`` ((file, Pa) pairs)."""
+    seen: dict = {}
+    for p in paths:
+        key = p.lower() if p.lower().startswith("bundled:") else Path(p).resolve()
+        if key in seen:
+            raise ValueError(f"{p} is given twice (as {seen[key]} too): a joint fit would count its points twice")
+        seen[key] = p
+    stated: dict[int, float] = {}
+    for name, value in prestress_options or ():
         match = [k for k, p in enumerate(paths) if name in (p, Path(p).name)]
         if len(match) != 1:
-            raise ValueError(f"--prestress {opt}: {name!r} matches {len(match)} of the data files given "
+            raise ValueError(f"--prestress {name}={value:g}: {name!r} matches {len(match)} of the data files given "
                              f"({', '.join(paths)})")
-        try:
-            stated[match[0]] = float(value)
-        except ValueError:
-            raise ValueError(f"--prestress {opt}: {value!r} is not a number (Pa)") from None
+        if match[0] in stated:
+            raise ValueError(f"--prestress {name}={value:g}: {name} already has --prestress "
+                             f"{name}={stated[match[0]]:g}; one prestress per file")
+        stated[match[0]] = value
     datasets = []
     for k, p in enumerate(paths):
         d = read_data_arg(p, min_points if len(paths) == 1 else 1)
@@ -337,6 +370,7 @@ def run(args) -> int:
     from ..io.outputs import OutputSet
     from ..io.thinning import bin_datasets
 
+    check_contradictions(args)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping))
     binned = bin_datasets(datasets, args.max_points)  # moduli only: creep data are kept as they are
@@ -349,6 +383,9 @@ def run(args) -> int:
     if args.holdout is not None:
         if len(datasets) != 1:
             raise ValueError(f"--holdout applies to one frequency sweep, got {len(datasets)} data sets")
+        if not hasattr(datasets[0], "frequency_hz"):
+            raise ValueError(f"--holdout applies to a frequency sweep of G', G''; {args.data[0]} holds creep "
+                             "compliance J(t)")
         from ..fitting.models import split_holdout
 
         try:

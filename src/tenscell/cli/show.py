@@ -4,7 +4,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._args import (add_out, add_prestress, fitted_from_args, integer, lattice_size, member_values, number,
+from ._args import (add_out, add_prestress, fitted_from_args, integer, lattice_size, member_values, number, path,
                     prestress_from_args)
 
 #: built-in structures `tenscell show` knows by name
@@ -34,7 +34,7 @@ def register(sub) -> None:
     p.add_argument("--L", type=number(quantity="L"), default=1.0, help="strut length of a built-in (m)")
     p.add_argument("--size", type=lattice_size(MAX_LATTICE_MODULES), default=None,
                    help="modules of a built-in lattice: NXxNY (sheet) or NXxNYxNZ (block); default 4x4 and 3x3x3")
-    p.add_argument("--save", default=None, help="also write the structure to this JSON file")
+    p.add_argument("--save", type=path("a file name"), default=None, help="also write the structure to this JSON file")
     p.set_defaults(func=run)
 
 
@@ -61,6 +61,9 @@ def _check_target(args) -> None:
         return
     if not Path(t).is_file():
         raise ValueError(f"{t!r} is neither a file nor a built-in ({', '.join(SHOW_BUILTINS)})")
+    for typed, flag in ((args.L != 1.0, f"--L {args.L:g}"), (args.size is not None, "--size")):
+        if typed:
+            raise ValueError(f"{flag} applies to the built-in structures; the file {t} gives its own geometry")
 
 
 def show_target(args):
@@ -125,8 +128,10 @@ def run(args) -> int:
         if T0 is not None:
             try:
                 target = equilibrate(structure, "local", T0=T0)
-            except NotPrestressableError:
-                target = structure
+            except NotPrestressableError as err:
+                # the file states a self-stress: searching for another one would answer a different question
+                raise ValueError(f"{args.target}: {str(err).replace('the given T0', 'its T0')}; correct it or omit "
+                                 "T0 to let tenscell find a self-stress") from None
     else:
         target, structure = obj, obj.structure
     EA = expand(structure, EA, "--EA", "N")

@@ -4,7 +4,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._args import add_out, integer, number, number_list
+from ._args import add_out, integer, number, number_list, path
+from .fit import stated_prestress
 
 def _study_no_if(out: Path, log, args=None) -> None:
     from .. import plotting
@@ -118,10 +119,7 @@ def _study_compactness(out: Path, log, args=None) -> None:
     from ..reports.compactness import compactness_markdown
     from ..studies.compactness import compactness_study
     from .._parallel import jobs_for
-    from .fit import read_datasets
-
-    datasets = read_datasets(args.data, args.prestress, 1)
-    s = compactness_study(datasets, args.decades, damping=args.damping, starts=args.starts, seed=args.seed,
+    s = compactness_study(args.datasets, args.decades, damping=args.damping, starts=args.starts, seed=args.seed,
                           jobs=jobs_for(args.starts, args.jobs), tolerance=args.tolerance)
     write_csv_rows(out / "compactness.csv", s.HEADER, s.rows())
     plotting.save(s.plot(title="Best fit against the bound on the stiffness spread"), out / "compactness_front.png")
@@ -152,6 +150,22 @@ STUDIES = {
 }
 
 
+#: Monte Carlo draws of the sensitivity study run without an estimate (200, the default, take about 2 s)
+_QUICK_DRAWS = 1000
+
+#: options that apply to some studies only: dest -> (default, flag, studies); any other value elsewhere is refused
+_STUDY_OPTIONS = {
+    "draws": (200, "--draws", ("sensitivity",)),
+    "seed": (0, "--seed", ("sensitivity", "compactness")),
+    "decades": (tuple(float(d) for d in range(1, 15)), "--decades", ("compactness",)),
+    "prestress": (None, "--prestress", ("compactness",)),
+    "damping": ("uniform", "--damping", ("compactness",)),
+    "starts": (4, "--starts", ("compactness",)),
+    "jobs": (None, "--jobs", ("compactness",)),
+    "tolerance": (0.01, "--tolerance", ("compactness",)),
+}
+
+
 def register(sub) -> None:
     p = sub.add_parser("study", help="run one of the discussion's variant studies (figures, CSV, markdown)",
                        description="Studies of the paper's discussion and future work: no-if (no intermediate "
@@ -165,13 +179,13 @@ def register(sub) -> None:
     add_out(p, derived="study-NAME")
     p.add_argument("--draws", type=integer(1, 100_000), default=200, help="Monte Carlo draws per set (sensitivity)")
     p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed (sensitivity, compactness)")
-    p.add_argument("--from-fit", metavar="FIT_JSON", default=None,
+    p.add_argument("--from-fit", metavar="FIT_JSON", type=path("a fit.json file"), default=None,
                    help="sensitivity: of the fitted paper cell of a `tenscell fit` run (its fit.json: strut length, "
                         "EA, c and prestress; a fit to data that state their prestress at their median)")
     g = p.add_argument_group("compactness (fits with the stiffness spread bounded to each of --decades)")
     g.add_argument("--decades", type=number_list(0.0, 100.0, "decades", open_lo=True),
-                   default=tuple(float(d) for d in range(1, 15)), help="bounds on the spread (comma list)")
-    g.add_argument("--prestress", action="append", metavar="FILE=PA",
+                   default=_STUDY_OPTIONS["decades"][0], help="bounds on the spread (comma list)")
+    g.add_argument("--prestress", action="append", type=stated_prestress, metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     g.add_argument("--damping", choices=("uniform", "per-family"), default="uniform", help="damping c")
     g.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per bound")
@@ -205,6 +219,9 @@ def run(args) -> int:
     if (args.name == "compactness") != bool(args.data):
         raise ValueError("study compactness needs data files (e.g. bundled:fabry2001)" if args.name == "compactness"
                          else f"study {args.name} takes no data files, got {' '.join(args.data)}")
+    for dest, (default, flag, names) in _STUDY_OPTIONS.items():
+        if args.name not in names and getattr(args, dest) != default:
+            raise ValueError(f"{flag} applies to study {' and '.join(names)}, not to study {args.name}")
     if args.from_fit is not None:
         if args.name != "sensitivity":
             raise ValueError(f"--from-fit applies to study sensitivity, not to study {args.name}")
@@ -212,6 +229,16 @@ def run(args) -> int:
     from .._progress import stage
 
     out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")
+    if args.name in DATA_STUDIES:  # read and check the data files before the study's stage line and any fit
+        from .fit import read_datasets
+
+        args.datasets = read_datasets(args.data, args.prestress, 1)
+    if args.name == "sensitivity" and args.draws > _QUICK_DRAWS:
+        from ._cost import Cost, announce, check
+        from .population import monte_carlo_rate
+
+        per = monte_carlo_rate("all", 0.1, args.seed)
+        announce(check(Cost("draw", 2 * args.draws, per, 1, detail="(two Monte Carlo sets of --draws)"), "--draws"))
     t = time.perf_counter()
     stage(f"study {args.name} ...")
     with out as d:

@@ -40,16 +40,17 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from ..laws import TendonLaw
+from .._errors import TenscellError
+from ..laws import DynamicLawError, TendonLaw
 from ..model.coordinates import kinematics
 from ..model.equilibrium import Cell, equilibrium_matrix, member_geometry, point_vector
-from ..model.structure import STRUT
+from ..model.structure import cable_mask
 from .loads import LOADS
 
 __all__ = ["SimulationError", "SlackEvent", "MotionState", "EquationsOfMotion"]
 
 
-class SimulationError(ValueError):
+class SimulationError(TenscellError, ValueError):
     """The time integration cannot proceed (singular damping, no convergence, forbidden slack)."""
 
 
@@ -161,6 +162,11 @@ class EquationsOfMotion:
             raise ValueError(f"loading must be a SineForce, StepForce or SineDisplacement, got {type(loading).__name__}")
         if not isinstance(law, TendonLaw):
             raise ValueError(f"law must be a tenscell.laws.TendonLaw, got {type(law).__name__}")
+        if law.dynamic:
+            raise DynamicLawError(
+                f"the nonlinear time domain integrates tendon laws T(l, l') without internal state; this "
+                f"{type(law).__name__} law has internal dynamics: use tenscell.linear.linearize_law(cell, law, P) for its "
+                "linear creep and relaxation and tenscell.linear.dynamic.dynamic_moduli for its moduli")
         if law.l0 is None:
             raise ValueError("the tendon law has no rest lengths: place it at the cell's reference with "
                              "law.at_prestress(cell, P) (or build it with voigt_law, power_dashpot_law, stiffening_law)")
@@ -170,9 +176,9 @@ class EquationsOfMotion:
         self.coords = cell.coords
         self.q0 = np.asarray(cell.q0, dtype=float)
         self.n, self.m = cell.n, cell.m
-        self.cable = np.array([f != STRUT for f in cell.structure.families], dtype=bool)
+        self.cable = cable_mask(cell.structure.families)
         self.displacement_control = loading.controls == "displacement"
-        self.gamma = 10.0 * getattr(loading, "omega") if self.displacement_control else 0.0  # a SineDisplacement
+        self.gamma = 10.0 * getattr(loading, "omega") if self.displacement_control else 0.0  # noqa: B009 - a SineDisplacement (mypy sees the union)
         geom0 = cell.geometry
         idx = np.where(geom0.index < 0, self.n, geom0.index)
         self._idx = idx

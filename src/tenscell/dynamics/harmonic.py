@@ -34,8 +34,7 @@ def linear_steady_state(lin: LinearModel, loading) -> np.ndarray:
     if not isinstance(loading, (SineForce, SineDisplacement)):
         raise ValueError("a periodic steady state needs a SineForce or SineDisplacement loading")
     w = loading.omega
-    Z = lin.K0 + 1j * w * lin.C0
-    x = np.linalg.solve(Z, (-lin.H0).astype(complex))
+    x = lin.pencil.solve_at(1j * w, -lin.H0)
     Fhat = loading.phasor if loading.controls == "force" else loading.phasor / (lin.D0 @ x)
     return np.asarray(lin.cell.q0) + (x * Fhat).real
 
@@ -175,23 +174,8 @@ def oscillatory_response(
     -------
     OscillatoryResponse
     """
-    if control not in ("force", "displacement"):
-        raise ValueError(f"control must be 'force' or 'displacement', got {control!r}")
-    if start not in ("auto", "linear", "rest"):
-        raise ValueError(f"start must be 'auto', 'linear' or 'rest', got {start!r}")
+    analyse, N, tol, cycles = _check_oscillation(control, start, analyse, samples_per_cycle, periodicity_tol, cycles)
     loading = (SineForce if control == "force" else SineDisplacement)(amplitude, frequency_hz)
-    analyse = int(analyse)
-    if analyse < 1:
-        raise ValueError(f"analyse must be at least 1 cycle, got {analyse}")
-    N = int(samples_per_cycle)
-    if N < 8:
-        raise ValueError(f"samples_per_cycle must be at least 8, got {samples_per_cycle!r}")
-    tol = positive_scalar("periodicity_tol", periodicity_tol)
-    max_cycles = int(max_cycles)
-    if cycles is not None:
-        cycles = int(cycles)
-        if cycles < analyse:
-            raise ValueError(f"cycles ({cycles}) must be at least analyse ({analyse})")
     lin, note = _linear_or_note(cell, law)
     if start == "linear" and lin is None:
         raise LinearizationError(f"start='linear' needs a linearization: {note}")
@@ -206,20 +190,49 @@ def oscillatory_response(
     if cycles is not None:
         sim = run(0, cycles, q_start)
     else:
-        total = analyse + 1
-        sim = run(0, total, q_start)
-        prev = float("inf")
-        while total < max_cycles:
-            p = harmonics(sim, cycles=analyse, n_harmonics=2).periodicity
-            if p <= tol or p > 0.5 * prev:
-                break
-            prev = p
-            more = min(total, max_cycles - total)
-            sim = _concat(sim, run(total, total + more, sim.q[-1]))
-            total += more
-        cycles = total
+        sim, cycles = _until_periodic(run, q_start, analyse, tol, int(max_cycles))
     h = harmonics(sim, cycles=analyse, n_harmonics=n_harmonics)
     return OscillatoryResponse(simulation=sim, harmonics=h, linear=lin, linear_note=note, settle_cycles=cycles - analyse)
+
+
+def _check_oscillation(control, start, analyse, samples_per_cycle, periodicity_tol, cycles):
+    """The options of :func:`oscillatory_response`, checked: (analyse, samples per cycle, tolerance, cycles)."""
+    if control not in ("force", "displacement"):
+        raise ValueError(f"control must be 'force' or 'displacement', got {control!r}")
+    if start not in ("auto", "linear", "rest"):
+        raise ValueError(f"start must be 'auto', 'linear' or 'rest', got {start!r}")
+    analyse = int(analyse)
+    if analyse < 1:
+        raise ValueError(f"analyse must be at least 1 cycle, got {analyse}")
+    N = int(samples_per_cycle)
+    if N < 8:
+        raise ValueError(f"samples_per_cycle must be at least 8, got {samples_per_cycle!r}")
+    tol = positive_scalar("periodicity_tol", periodicity_tol)
+    if cycles is not None:
+        cycles = int(cycles)
+        if cycles < analyse:
+            raise ValueError(f"cycles ({cycles}) must be at least analyse ({analyse})")
+    return analyse, N, tol, cycles
+
+
+def _until_periodic(run, q_start, analyse: int, tol: float, max_cycles: int) -> tuple[Simulation, int]:
+    """``analyse + 1`` cycles, then more (doubling the total) until periodic to ``tol``, stalled or at ``max_cycles``.
+
+    ``run(k0, k1, q)`` simulates cycles k0..k1 from state q. Returns the
+    simulation of every cycle and their number.
+    """
+    total = analyse + 1
+    sim = run(0, total, q_start)
+    prev = float("inf")
+    while total < max_cycles:
+        p = harmonics(sim, cycles=analyse, n_harmonics=2).periodicity
+        if p <= tol or p > 0.5 * prev:
+            break
+        prev = p
+        more = min(total, max_cycles - total)
+        sim = _concat(sim, run(total, total + more, sim.q[-1]))
+        total += more
+    return sim, total
 
 
 def amplitude_sweep(cell: Cell, law: TendonLaw, frequency_hz: float, amplitudes, *, progress: bool | None = None,

@@ -84,6 +84,39 @@ def simulate(
         each cable's constitutive tension (slack below
         :attr:`EquationsOfMotion.slack_tolerance`).
     """
+    t_start, t_end, rtol = _check_options(t_start, t_end, rtol, method, jacobian, slack)
+    eq = EquationsOfMotion(cell, law, loading)
+    t_eval = None if t_eval is None else _check_times(t_eval, t_start, t_end)
+    y, atol, max_step = _start(eq, loading, q_start, rtol, atol, max_step)
+
+    fam = cell.structure.families
+    cables = np.flatnonzero(eq.cable)
+    taut0 = eq.state(t_start, y).taut
+    events: list[SlackEvent] = [SlackEvent(t_start, int(j), fam[j], "slack") for j in cables if not taut0[j]]
+    if slack == "error" and events:
+        raise SimulationError(f"tendon {events[0].tendon} ({events[0].family}) is slack at t={t_start:g} s")
+    sol = solve_ivp(
+        lambda t, yy: eq.velocity(t, yy), (t_start, t_end), y, method=method, t_eval=t_eval,
+        events=[_slack_event(eq, int(j), slack == "error") for j in cables], rtol=rtol, atol=atol,
+        jac=(lambda t, yy: eq.jacobian(t, yy)) if jacobian == "analytic" else None, max_step=max_step,
+    )
+    events += _switches(sol, cables, taut0, fam, loading, t_start)
+    return _record(eq, law, loading, sol, events)
+
+
+def _slack_event(eq: EquationsOfMotion, j: int, stop: bool):
+    """solve_ivp event: cable ``j``'s constitutive tension crosses the slack tolerance (stop at going slack)."""
+
+    def event(t, yy):
+        return float(eq.state(t, yy).trial[j]) + eq.slack_tolerance
+
+    event.terminal = stop  # type: ignore[attr-defined]
+    event.direction = -1 if stop else 0  # type: ignore[attr-defined]
+    return event
+
+
+def _check_options(t_start, t_end, rtol, method: str, jacobian: str, slack: str) -> tuple[float, float, float]:
+    """The scalar options of :func:`simulate`, checked: (t_start, t_end, rtol)."""
     t_end = positive_scalar("t_end", t_end, "s")
     t_start = finite_scalar("t_start", t_start, "a finite time (s)")
     if not 0.0 <= t_start < t_end:
@@ -95,16 +128,12 @@ def simulate(
         raise ValueError(f"jacobian must be 'analytic' or 'numeric', got {jacobian!r}")
     if slack not in ("allow", "error"):
         raise ValueError(f"slack must be 'allow' or 'error', got {slack!r}")
-    eq = EquationsOfMotion(cell, law, loading)
+    return t_start, t_end, rtol
+
+
+def _start(eq: EquationsOfMotion, loading, q_start, rtol: float, atol, max_step) -> tuple[np.ndarray, float, float]:
+    """(initial state q − q0, absolute tolerance, largest step), checked, with their defaults (see :func:`simulate`)."""
     n = eq.n
-    if t_eval is not None:
-        t_eval = np.asarray(t_eval, dtype=float).ravel()
-        if (t_eval.size == 0 or not np.all(np.isfinite(t_eval)) or t_eval.min() < t_start
-                or t_eval.max() > t_end * (1 + 1e-12)):
-            raise ValueError(f"t_eval must be finite times within [t_start={t_start:g}, t_end={t_end:g}] s")
-        if np.any(np.diff(t_eval) <= 0):
-            raise ValueError("t_eval must be strictly increasing")
-        t_eval = np.minimum(t_eval, t_end)
     y = np.zeros(n) if q_start is None else np.asarray(q_start, dtype=float) - eq.q0
     if y.shape != (n,) or not np.all(np.isfinite(y)):
         raise ValueError(f"q_start must be {n} finite coordinates")
@@ -114,27 +143,22 @@ def simulate(
     if max_step is None:
         max_step = loading.period / 16.0 if loading.period else np.inf
     max_step = positive_scalar("max_step", max_step, "s") if np.isfinite(max_step) else np.inf
+    return y, atol, max_step
 
-    fam = cell.structure.families
-    tol = eq.slack_tolerance
-    cables = np.flatnonzero(eq.cable)
-    st0 = eq.state(t_start, y)
-    events: list[SlackEvent] = [SlackEvent(t_start, int(j), fam[j], "slack") for j in cables if not st0.taut[j]]
-    if slack == "error" and events:
-        raise SimulationError(f"tendon {events[0].tendon} ({events[0].family}) is slack at t={t_start:g} s")
 
-    def make_event(j):
-        def ev(t, yy):
-            return float(eq.state(t, yy).trial[j]) + tol
-        ev.terminal = slack == "error"
-        ev.direction = -1 if slack == "error" else 0
-        return ev
+def _check_times(t_eval, t_start: float, t_end: float) -> np.ndarray:
+    """Output times (s): finite, strictly increasing, within [t_start, t_end] (a last time a hair over is t_end)."""
+    t_eval = np.asarray(t_eval, dtype=float).ravel()
+    if (t_eval.size == 0 or not np.all(np.isfinite(t_eval)) or t_eval.min() < t_start
+            or t_eval.max() > t_end * (1 + 1e-12)):
+        raise ValueError(f"t_eval must be finite times within [t_start={t_start:g}, t_end={t_end:g}] s")
+    if np.any(np.diff(t_eval) <= 0):
+        raise ValueError("t_eval must be strictly increasing")
+    return np.minimum(t_eval, t_end)
 
-    sol = solve_ivp(
-        lambda t, yy: eq.velocity(t, yy), (t_start, t_end), y, method=method, t_eval=t_eval,
-        events=[make_event(j) for j in cables], rtol=rtol, atol=atol,
-        jac=(lambda t, yy: eq.jacobian(t, yy)) if jacobian == "analytic" else None, max_step=max_step,
-    )
+
+def _switches(sol, cables: np.ndarray, taut0: np.ndarray, fam, loading, t_start: float) -> list[SlackEvent]:
+    """The slack/taut switches found by the solver's events; SimulationError if it failed or stopped at one."""
     if sol.status == -1:
         raise SimulationError(f"time integration failed at t={sol.t[-1] if sol.t.size else t_start:.6g} s: {sol.message}")
     if sol.status == 1:
@@ -144,13 +168,20 @@ def simulate(
             f"tendon {j} ({fam[j]}) would go into compression at t={float(sol.t_events[k][0]):.6g} s "
             f"(load {loading!r}); run with slack='allow' to let it go slack"
         )
+    events = []
     for k, j in enumerate(map(int, cables)):
         # the constitutive tension changes sign at each root, so the switches alternate
-        slack_now = not st0.taut[j]
+        slack_now = not taut0[j]
         for te in sol.t_events[k]:
             slack_now = not slack_now
             events.append(SlackEvent(float(te), int(j), fam[j], "slack" if slack_now else "taut"))
-    events.sort(key=lambda e: (e.time, e.tendon))
+    return events
+
+
+def _record(eq: EquationsOfMotion, law: TendonLaw, loading, sol, events: list[SlackEvent]) -> Simulation:
+    """The :class:`Simulation` of a finished solve: every output sample's state, events in time order."""
+    events = sorted(events, key=lambda e: (e.time, e.tendon))
+    n = eq.n
     ts, ys = np.asarray(sol.t, dtype=float), np.asarray(sol.y, dtype=float).reshape(n, -1).T
     states = [eq.state(tk, yk) for tk, yk in zip(ts, ys)]
 
@@ -158,7 +189,7 @@ def simulate(
         return np.array([getattr(s, name) for s in states], dtype=float)
 
     return Simulation(
-        cell=cell, law=law, loading=loading, t=ts, q=np.array([s.q for s in states]).reshape(-1, n),
+        cell=eq.cell, law=law, loading=loading, t=ts, q=np.array([s.q for s in states]).reshape(-1, n),
         force=col("force"), z=col("z"), u=col("u"), u_rate=col("u_rate"),
         tensions=np.array([s.tensions for s in states]).reshape(-1, eq.m), power=col("power"),
         taut=np.array([s.taut for s in states], dtype=bool).reshape(-1, eq.m), events=tuple(events),

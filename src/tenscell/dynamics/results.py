@@ -120,7 +120,9 @@ class Simulation:
 
     def plot(self, ax=None, **kw):
         """Probe displacement against time (slack intervals shaded); returns the axes."""
-        from ..plotting.dynamics import simulation_axes
+        from .._results import plotter
+
+        simulation_axes = plotter("simulation_axes")
 
         return simulation_axes(self, ax=ax, **kw)
 
@@ -209,7 +211,9 @@ class Harmonics:
 
     def plot(self, ax=None, **kw):
         """Harmonic amplitudes relative to the fundamental (log scale); returns the axes."""
-        from ..plotting.dynamics import harmonics_axes
+        from .._results import plotter
+
+        harmonics_axes = plotter("harmonics_axes")
 
         return harmonics_axes(self, ax=ax, **kw)
 
@@ -345,7 +349,9 @@ class OscillatoryResponse:
 
     def plot(self, ax=None, **kw):
         """Force against probe displacement over the analysed cycle(s), with the linear ellipse; returns the axes."""
-        from ..plotting.dynamics import loop_axes
+        from .._results import plotter
+
+        loop_axes = plotter("loop_axes")
 
         return loop_axes(self, ax=ax, **kw)
 
@@ -442,7 +448,9 @@ class AmplitudeSweep:
 
     def plot(self, ax=None, **kw):
         """Departure from the linear moduli and THD against amplitude (log-log); returns the axes."""
-        from ..plotting.dynamics import amplitude_sweep_axes
+        from .._results import plotter
+
+        amplitude_sweep_axes = plotter("amplitude_sweep_axes")
 
         return amplitude_sweep_axes(self, ax=ax, **kw)
 
@@ -487,6 +495,8 @@ class CreepResponse:
 
     def plot(self, ax=None, **kw):
         """J(t) on log-log axes, simulated and linear; returns the axes."""
-        from ..plotting.dynamics import creep_axes
+        from .._results import plotter
+
+        creep_axes = plotter("creep_axes")
 
         return creep_axes(self, ax=ax, **kw)

@@ -5,8 +5,11 @@ stiffnesses, the damping c, the prestress P and the strut length L so that the
 model's G', G'' match measured data; a homogeneous cell cannot do it. This
 package does the same for any :class:`tenscell.io.data.RheologyData`:
 
-- :mod:`~tenscell.fitting.problem`: the parameter layout, residuals and their
-  analytic Jacobian (:class:`FitProblem`, :func:`make_problem`);
+- :mod:`~tenscell.fitting.layout`: the parameters, their names, units, bounds
+  and fixes, and the data's arrays (:func:`required_points`, :data:`TENDON_MODES`);
+- :mod:`~tenscell.fitting.problem`: residuals and their analytic Jacobian
+  (:class:`FitProblem`, :func:`make_problem`), from the model and its
+  derivatives in :mod:`~tenscell.fitting.derivatives`;
 - :mod:`~tenscell.fitting.search`: starts, basin hopping, least squares,
   stopping (:func:`fit`);
 - :mod:`~tenscell.fitting.result`: what a fit returns (:class:`FitResult`,

@@ -80,7 +80,7 @@ class Combination:
 
     def to_dict(self) -> dict:
         """JSON-ready dict."""
-        return {"exponents": {n: e for n, e in self.exponents}, "singular_value": self.singular_value,
+        return {"exponents": dict(self.exponents), "singular_value": self.singular_value,
                 "standard_error_ln": self.standard_error, "text": self.text()}
 
 

@@ -1,5 +1,11 @@
 """The fitting problem: a cell's linear model against data, a parameter layout, residuals and their analytic Jacobian.
 
+The second of the fit's three layers (lmfit's parameters → problem →
+minimizer): :mod:`~tenscell.fitting.layout` lays the parameters out,
+:class:`FitProblem` holds the plain arrays and computes residuals, penalties
+and Jacobians from the model of :mod:`~tenscell.fitting.derivatives`, and
+:func:`tenscell.fitting.fit` (:mod:`~tenscell.fitting.search`) searches.
+
 Parameters and units
 --------------------
 * ``EA`` (N): per tendon (``tendons="per-tendon"``, 33 values for the paper
@@ -60,23 +66,17 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg
 import scipy.sparse as sp
 
-from .._checks import positive_scalar
 from .._results import format_repr
-from ..io.data import DataError, RheologyData
-from ..laws import Voigt
-from ..linear.modal import modulus, prestress_grid_modes
+from ..linear.whitening import rescaled_basis, unit_damping_basis, whitened_basis
 from ..model.equilibrium import Cell
+from .derivatives import _Evaluation, evaluate
+from .layout import (DAMPING_MODES, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
+                     prestress_varies, required_points)
 from .result import FitParameter
 
 __all__ = ["TENDON_MODES", "DAMPING_MODES", "FitProblem", "make_problem", "required_points", "as_datasets"]
-
-#: how tendon stiffnesses are parametrized
-TENDON_MODES = ("per-tendon", "per-family", "uniform")
-#: how tendon damping is parametrized
-DAMPING_MODES = ("uniform", "per-family")
 
 _LN10 = math.log(10.0)
 # A residual (in decades) returned where the model is not a stable, passive
@@ -88,69 +88,6 @@ _PENALTY = 10.0
 _SHARE_WEIGHT = 30.0
 
 
-def _whiten(Lc, A, H, load, probe):
-    """A, H (symmetric), load, probe in the basis where C0 = Lc Lcᵀ becomes the identity."""
-    solve = scipy.linalg.solve_triangular
-    B = solve(Lc, A, lower=True, check_finite=False)
-    X = solve(Lc, H, lower=True, check_finite=False)
-    Ht = solve(Lc, X.T, lower=True, check_finite=False)
-    bt = solve(Lc, load, lower=True, check_finite=False)
-    Dt = solve(Lc, probe, lower=True, check_finite=False)
-    return B, 0.5 * (Ht + Ht.T), bt, Dt
-
-
-def _tangents(EA, c, lengths, T0, P):
-    """The Voigt law's tangents at tensions ``P_g·T0`` for every prestress group (the one place the fit meets the law).
-
-    Returns ``(k, dk, dk_dT·T0, eta, deta)``: tangent stiffness ``k`` (groups, m)
-    in N/m with its derivative by ``ln EA_j`` and the prestress derivative
-    ``∂k/∂P = (∂k/∂T)·T0`` (groups, m); tangent damping ``η`` (m,) in N·s/m with
-    its derivative by ``ln c_j``. From :meth:`tenscell.laws.Voigt.tangent`.
-    """
-    g, m = P.size, EA.size
-    law = Voigt._trusted(EA=np.tile(EA, g), c=np.tile(c, g))
-    tg = law.tangent(np.tile(lengths, g), (P[:, None] * T0[None]).ravel())
-    i_ea, i_c = tg.row("EA"), tg.row("c")
-    shape = (g, m)
-    k = tg.k.reshape(shape)
-    dk = (tg.dk[i_ea] * law.EA).reshape(shape)
-    kP = (tg.dk_dT * np.tile(T0, g)).reshape(shape)
-    eta, deta = tg.c[:m], tg.dc[i_c][:m] * c
-    return k, dk, kP, eta, deta
-
-
-@dataclass(frozen=True, eq=False)
-class _Spectrum:
-    """The relaxation spectrum of the model at one parameter vector, per prestress group."""
-
-    P: np.ndarray  # (groups,) effective prestress (N) on the reference cell
-    dk: np.ndarray  # (groups, m) d k_j / d ln EA_j (N/m)
-    deta: np.ndarray  # (m,) d η_j / d ln c_j (N·s/m)
-    B: np.ndarray  # (n, m) whitened tendon directions
-    Kpt: np.ndarray  # (groups, n, n) whitened ∂K0/∂P = Σ T0_j ∇²l_j + Σ (∂k_j/∂P) a_j a_jᵀ
-    lam: np.ndarray  # (groups, n) relaxation rates (1/s)
-    W: np.ndarray  # (groups, n, n) C0-orthonormal modes (whitened)
-    alpha: np.ndarray  # (groups, n) probe projections
-    beta: np.ndarray  # (groups, n) load projections
-
-
-@dataclass(frozen=True, eq=False)
-class _Evaluation:
-    """Moduli, their log-derivatives and the prestress share at one parameter vector."""
-
-    G: np.ndarray  # (N,) complex moduli (Pa)
-    dlogG: np.ndarray | None  # (N, n_params) d ln G / d phi
-    share: np.ndarray | None  # (groups,) prestress share of the static stiffness
-    dshare: np.ndarray | None  # (groups, n_params) d ln share / d phi
-    elasticity: np.ndarray | None = None  # (groups,) ∂ln G'/∂ln P at elasticity_omega
-    delasticity: np.ndarray | None = None  # (groups, n_params) its d ln / d phi
-    Jc: np.ndarray | None = None  # (Nc,) creep compliance at the creep data's times (1/Pa)
-    dlogJc: np.ndarray | None = None  # (Nc, n_params) d ln Jc / d phi
-
-
-# ---------------------------------------------------------------------------------
-# the problem: model, data, parameter layout
-# ---------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False, repr=False)
 class FitProblem:
     """The linear model of a cell against one or several data sets, with a parameter layout.
@@ -320,81 +257,15 @@ class FitProblem:
         return EA / lam**2, c / lam, P / lam**2
 
     def _whitening(self, eta):
-        """(B, Ht, bt, Dt): A, the prestress Hessian, load and probe in the basis where C0 = I."""
+        """(B, Ht, bt, Dt): A, the prestress Hessian, load and probe in the basis where C0 = I; None if C0 is not
+        positive definite (:mod:`tenscell.linear.whitening`)."""
         if self.n_c == 1:  # C0 = c·A Aᵀ: rescale the precomputed basis
-            s = 1.0 / math.sqrt(eta[0])
-            B0, Ht0, bt0, Dt0 = self.white_unit
-            return B0 * s, Ht0 * (s * s), bt0 * s, Dt0 * s
-        try:
-            Lc = np.linalg.cholesky((self.A * eta) @ self.A.T)
-        except np.linalg.LinAlgError:
-            return None
-        return _whiten(Lc, self.A, self.H, self.load, self.probe)
-
-    def _spectrum(self, phi) -> _Spectrum | None:
-        """Relaxation spectrum per prestress group; None where the model is not a stable cell.
-
-        ``K0 = P·Σ T0_j ∇²l_j + Σ k_j a_j a_jᵀ`` with the law's tangent
-        stiffness ``k_j`` at tension ``P·T0_j`` (it depends on P), ``C0 = Σ η_j a_j a_jᵀ``.
-        """
-        EA, c, P = self._effective(phi)
-        k, dk, kP, eta, deta = _tangents(EA, c, self.lengths, self.T0, P)
-        wh = self._whitening(eta)
-        if wh is None:
-            return None
-        B, Ht, bt, Dt = wh
-        lam, W = prestress_grid_modes(Ht, np.matmul(B[None] * k[:, None, :], B.T[None]), P)
-        if not np.all(lam > 0):
-            return None
-        alpha = np.einsum("gnk,n->gk", W, Dt)  # probe projections, D0·v_k
-        beta = np.einsum("gnk,n->gk", W, bt)  # load projections, −H0·v_k
-        Kpt = Ht[None] + np.matmul(B[None] * kP[:, None, :], B.T[None])
-        return _Spectrum(P=P, dk=dk, deta=deta, B=B, Kpt=Kpt, lam=lam, W=W, alpha=alpha, beta=beta)
+            return rescaled_basis(self.white_unit, float(eta[0]))
+        return whitened_basis(self.A, eta, self.H, self.load, self.probe)
 
     def _evaluate(self, phi, jac: bool, share: bool = False, elasticity: bool = False) -> _Evaluation | None:
         """Moduli (and, if asked, their log-derivatives, the prestress share and elasticity); None if unstable."""
-        spec = self._spectrum(phi)
-        if spec is None:
-            return None
-        g = self.group_index
-        R = 1.0 / (spec.lam[g] + 1j * self.omega[:, None])  # (N, n)
-        aR = spec.alpha[g] * R
-        bR = spec.beta[g] * R
-        J = np.sum(spec.alpha[g] * bR, axis=1)
-        G = modulus(J, self.L_ref)
-        dlogG = self._dlogG(spec, J, aR, bR) if jac else None
-        sh, dsh = self._share(spec, jac) if share else (None, None)
-        el, de = self._storage_elasticity(spec, jac) if elasticity else (None, None)
-        Jc, dJc = self._creep(spec, jac) if self.n_creep else (None, None)
-        return _Evaluation(G=G, dlogG=dlogG, share=sh, dshare=dsh, elasticity=el, delasticity=de, Jc=Jc,
-                           dlogJc=dJc)
-
-    def _creep(self, spec, jac: bool):
-        """Creep compliance (1/Pa) at the creep points and, if ``jac``, d ln J / d phi (module :mod:`.creep`)."""
-        from .creep import creep_derivatives, creep_from_modes
-
-        Jc = np.empty(self.n_creep)
-        dJ = np.zeros((self.n_creep, self.n_params)) if jac else None
-        AV, M = self._modal(spec) if jac else (None, None)
-        for g in np.unique(self.creep_group):
-            sel = np.flatnonzero(self.creep_group == g)
-            t = self.creep_t[sel]
-            # J in 1/Pa is the cell's compliance (m/N) times 2L (the continuum factor of G = (0.5/L)/J)
-            Jc[sel] = 2.0 * self.L_ref * creep_from_modes(spec.lam[g], spec.alpha[g], spec.beta[g], t)
-            if jac:
-                assert dJ is not None and AV is not None and M is not None  # computed above when jac
-                d_EA, d_c, d_Pg = creep_derivatives(spec.lam[g], spec.alpha[g], spec.beta[g], AV[g], M[g], t,
-                                                    spec.dk[g], spec.deta, spec.P[g])
-                d_P = np.zeros((sel.size, self.n_groups))
-                d_P[:, g] = d_Pg
-                dJ[sel] = 2.0 * self.L_ref * self._to_params(d_EA, d_c, d_P)
-        return Jc, (None if dJ is None else dJ / Jc[:, None])
-
-    def _modal(self, spec):
-        """AV = a_jᵀ v_k (groups, m, n) and M = Vᵀ Kp V (groups, n, n)."""
-        AV = np.matmul(spec.B.T[None], spec.W)
-        M = np.matmul(np.transpose(spec.W, (0, 2, 1)), np.matmul(spec.Kpt, spec.W))
-        return AV, M
+        return evaluate(self, phi, jac, share, elasticity)
 
     def _to_params(self, d_EA, d_c, d_P):
         """Per-tendon and per-group derivatives (rows: points or groups) to derivatives by all parameters.
@@ -408,77 +279,6 @@ class FitProblem:
         out[:, self.prestress_slice] = d_P @ self.group_map
         out[:, -1] = -2.0 * d_P.sum(axis=1) - 2.0 * d_EA.sum(axis=1) - d_c.sum(axis=1)
         return out
-
-    def _dlogG(self, spec, J, aR, bR):
-        """d ln G / d phi at the data points, shape (N, n_params)."""
-        AV, M = self._modal(spec)
-        g = self.group_index
-        if spec.lam.shape[0] == 1:  # one prestress: plain matrix products
-            ax = bR @ AV[0].T  # a_jᵀ x(ω_i), (N, m)
-            ay = aR @ AV[0].T  # a_jᵀ y(ω_i)
-            dJ_P = -np.einsum("ik,kl,il->i", aR, M[0], bR) * spec.P[0]  # P ∂J/∂P
-        else:
-            ax = np.einsum("imk,ik->im", AV[g], bR)
-            ay = np.einsum("imk,ik->im", AV[g], aR)
-            dJ_P = -np.einsum("ik,ikl,il->i", aR, M[g], bR) * spec.P[g]
-        pr = ax * ay
-        dJ_EA = -pr * spec.dk[g]  # EA_j ∂J/∂EA_j
-        dJ_c = -1j * self.omega[:, None] * pr * spec.deta  # c_j ∂J/∂c_j
-        d_P = np.zeros((J.size, self.n_groups), dtype=complex)
-        d_P[np.arange(J.size), g] = dJ_P
-        return -self._to_params(dJ_EA, dJ_c, d_P) / J[:, None]
-
-    def _activity(self, spec, w: float, jac: bool):
-        """The prestress elasticity ``e = ∂ln G/∂ln P = P·yᵀKp x / J`` per group at ω = ``w`` (rad/s), complex.
-
-        With ``x = Z⁻¹(−H0)``, ``y = Z⁻ᵀD0ᵀ``, ``Z = K0 + iωC0`` and
-        ``J = D0·x``. Returns ``(e, J, d ln e/d phi, d ln J/d phi)``, the
-        derivatives (groups, n_params) from ``∂x = −Z⁻¹(∂Z)x`` and its
-        transpose (None without ``jac``). At ``w = 0``, ``e`` is real: the
-        prestress share of the static stiffness.
-        """
-        P = spec.P
-        r = 1.0 / (spec.lam + 1j * w)
-        xs, ys = spec.beta * r, spec.alpha * r  # x, y in modal coordinates
-        J = np.sum(spec.alpha * xs, axis=1)
-        AV, M = self._modal(spec)
-        Mx, My = np.einsum("gkl,gl->gk", M, xs), np.einsum("gkl,gl->gk", M, ys)
-        Q = np.sum(ys * Mx, axis=1)  # yᵀ Kp x
-        e = P * Q / J
-        if not jac:
-            return e, J, None, None
-        ax, ay = np.einsum("gmk,gk->gm", AV, xs), np.einsum("gmk,gk->gm", AV, ys)
-        au, av = np.einsum("gmk,gk->gm", AV, Mx * r), np.einsum("gmk,gk->gm", AV, My * r)
-        # by ln EA_j (∂Z = dk_j a_j a_jᵀ) and ln c_j (∂Z = iω dη_j a_j a_jᵀ): Q and J both move
-        both, single = ay * au + av * ax, ay * ax
-        sc = 1j * w * spec.deta
-        d_EA = -spec.dk * (both / Q[:, None] - single / J[:, None])
-        d_c = -sc * (both / Q[:, None] - single / J[:, None])
-        # by the group's own ln P (∂Z = P Kp; the Voigt law's ∂k/∂T depends on neither T nor EA)
-        R = np.sum(My * Mx * r, axis=1)  # yᵀ Kp Z⁻¹ Kp x
-        d_P = np.diag(1.0 - 2.0 * P * R / Q + P * Q / J)
-        dlnJ = self._to_params(-spec.dk * single / J[:, None], -sc * single / J[:, None], np.diag(-P * Q / J))
-        return e, J, self._to_params(d_EA, d_c, d_P), dlnJ
-
-    def _share(self, spec, jac: bool):
-        """Prestress share of the static stiffness per group (real), and d ln share / d phi."""
-        e, _, de, _ = self._activity(spec, 0.0, jac)
-        return e.real, (None if de is None else de.real)
-
-    def _storage_elasticity(self, spec, jac: bool):
-        """``∂ln G'/∂ln P`` per group at :attr:`elasticity_omega`, and its d ln / d phi.
-
-        ``E' = Re(G·e)/Re(G)`` with ``G ∝ 1/J``.
-        """
-        e, J, de, dJ = self._activity(spec, self.elasticity_omega, jac)
-        G = 1.0 / J
-        E = (G * e).real / G.real
-        if not jac:
-            return E, None
-        dG = -dJ * G[:, None]  # dG = G·d ln G
-        dA = (G * e)[:, None] * (de - dJ)
-        dE = (dA.real * G.real[:, None] - (G * e).real[:, None] * dG.real) / (G.real**2)[:, None]
-        return E, dE / E[:, None]
 
     # -- residuals ------------------------------------------------------------------
     def moduli(self, theta) -> tuple[np.ndarray, np.ndarray]:
@@ -711,211 +511,26 @@ def _central(fun, theta, step):
 # ---------------------------------------------------------------------------------
 # building a problem
 # ---------------------------------------------------------------------------------
-def required_points(tendons: str = "per-tendon", damping: str = "uniform", n_families: int = 2) -> int:
-    """Minimum number of data points for a fit of one data set.
-
-    Each point gives two residuals. Per-tendon stiffnesses are deliberately
-    over-parametrized (as in the paper: 36 parameters against 32 residuals
-    for the 16-point frequency data; the trust-region solver handles it, and
-    the alternatives show the non-uniqueness), so they count as one stiffness
-    here; the other parameters (c, P or s, L) each count. A joint fit needs
-    one more point per data set whose prestress is fitted.
-    """
-    n_ea = {"per-tendon": 1, "per-family": n_families, "uniform": 1}[_choice("tendons", tendons, TENDON_MODES)]
-    n_c = n_families if _choice("damping", damping, DAMPING_MODES) == "per-family" else 1
-    return n_ea + n_c + 2
-
-
-def _choice(name, value, allowed):
-    if value not in allowed:
-        raise ValueError(f"{name} must be one of {', '.join(repr(a) for a in allowed)}, got {value!r}")
-    return value
-
-
-def _tendon_labels(cell: Cell) -> list[str]:
-    st = cell.structure
-    names = st.node_names if st.node_names else tuple(str(i) for i in range(st.n_nodes))
-    return [f"{names[a]}-{names[b]} ({fam})" for (a, b), fam in zip(st.tendons, st.families)]
-
-
-def _family_groups(cell: Cell) -> tuple[np.ndarray, list[str]]:
-    fams = list(dict.fromkeys(cell.structure.families))  # in order of appearance
-    groups = np.array([fams.index(f) for f in cell.structure.families])
-    return groups, fams
-
-
-def _is_creep(d) -> bool:
-    return getattr(d, "kind", None) == "creep"
-
-
-def as_datasets(data) -> tuple:
-    """One data set or a sequence of them as a tuple of :class:`RheologyData` or
-    :class:`~tenscell.io.creep_data.CreepData` (ValueError otherwise)."""
-    from ..io.creep_data import CreepData
-
-    kinds = (RheologyData, CreepData)
-    items = (data,) if isinstance(data, kinds) else tuple(data) if isinstance(data, (list, tuple)) else None
-    if not items or not all(isinstance(d, kinds) for d in items):
-        raise ValueError("data must be a tenscell.io.data.RheologyData or CreepData, or a non-empty list of them, "
-                         f"got {type(data).__name__}")
-    return items
-
-
-def _stiffness_layout(cell: Cell, tendons: str, damping: str):
-    """(ea_groups, ea_names, ea_desc, c_groups, c_names, c_desc) for the parametrization."""
-    m = cell.m
-    fam_groups, fams = _family_groups(cell)
-    labels = _tendon_labels(cell)
-    if tendons == "per-tendon":
-        ea = (np.arange(m), [f"EA[{j}]" for j in range(m)],
-              [f"stiffness of tendon {j}, {lab}" for j, lab in enumerate(labels)])
-    elif tendons == "per-family":
-        ea = (fam_groups, [f"EA_{f}" for f in fams], [f"stiffness of every {f} tendon" for f in fams])
-    else:
-        ea = (np.zeros(m, dtype=int), ["EA"], ["stiffness of every tendon"])
-    if damping == "per-family":
-        cc = (fam_groups, [f"c_{f}" for f in fams], [f"damping of every {f} tendon" for f in fams])
-    else:
-        cc = (np.zeros(m, dtype=int), ["c"], ["damping of every tendon"])
-    return (*ea, *cc)
-
-
-def _prestress_layout(datasets):
-    """Prestress parameters and groups: (names, units, descs, kinds, groups) with groups a list of
-    (dataset, measured Pa or NaN, log offset, {parameter position: 1}) and point -> group index."""
-    known = [d.prestress is not None for d in datasets]
-    joint = len(datasets) > 1
-    names, units, descs, kinds = [], [], [], []
-    if any(known):
-        names.append("s")
-        units.append("m²")
-        kinds.append("s")
-        descs.append("prestress scale: model prestress (N) = s × prestress (Pa) of the data"
-                     + (" (one scale links the data sets)" if joint else ""))
-    own = {}
-    for k, d in enumerate(datasets):
-        if known[k]:
-            continue
-        own[k] = len(names)
-        if any(known):
-            names.append(f"P_data[{k}]")
-            units.append("Pa")
-            kinds.append("P_data")
-            descs.append(f"prestress (Pa) at which data set {k} ({d.source}) was measured: not stated, so fitted")
-        else:
-            names.append(f"P[{k}]" if joint else "P")
-            units.append("N")
-            kinds.append("P")
-            descs.append("prestress: tendon tensions are P·T0" + (f" for data set {k} ({d.source})" if joint else ""))
-    groups, point_group = [], []
-    for k, d in enumerate(datasets):
-        if known[k]:
-            uniq, inv = np.unique(d.prestress, return_inverse=True)
-            base = len(groups)
-            groups += [(k, float(p), math.log(p), {0: 1.0}) for p in uniq]
-            point_group.append(base + np.asarray(inv).ravel())
-        else:
-            links = {own[k]: 1.0}
-            if any(known):
-                links[0] = 1.0
-            groups.append((k, math.nan, 0.0, links))
-            point_group.append(np.full(d.n, len(groups) - 1))
-    return names, units, descs, kinds, groups, point_group
-
-
-def _default_bounds(datasets, L_ref):
-    """Default bounds per parameter kind and the scales used by the initial guess.
-
-    A creep point at time t counts as a modulus 1/J at the angular frequency 1/t.
-    """
-    Gs = np.concatenate([1.0 / d.compliance if _is_creep(d) else d.G_storage for d in datasets])
-    omega = np.concatenate([1.0 / d.time_s if _is_creep(d) else 2 * np.pi * d.frequency_hz for d in datasets])
-    S = float(np.median(Gs)) * L_ref**2
-    w_m = float(np.exp(np.mean(np.log(omega))))
-    known = [d.prestress for d in datasets if d.prestress is not None]
-    P_med = float(np.median(np.concatenate(known))) if known else 1.0
-    defaults = {
-        "EA": (1e-8 * S, 1e6 * S),
-        "c": (1e-6 * S / w_m, 1e6 * S / w_m),
-        "P": (1e-10 * S, 1e4 * S),
-        "s": (1e-10 * S / P_med, 1e4 * S / P_med),
-        "P_data": (1e-3 * P_med, 1e3 * P_med),
-        "L": (1e-3 * L_ref, 1e3 * L_ref),
-    }
-    return defaults, S, w_m, P_med
-
-
-def _apply_bounds(kinds, bounds, defaults):
-    bounds = dict(bounds or {})
-    for key in bounds:
-        if key not in defaults:
-            raise ValueError(f"bounds: unknown parameter kind {key!r}; allowed: {', '.join(defaults)}")
-        if key not in kinds:
-            raise ValueError(f"bounds: {key!r} does not apply to these data (parameters here: "
-                             f"{', '.join(dict.fromkeys(kinds))})")
-    lower = np.empty(len(kinds))
-    upper = np.empty(len(kinds))
-    for i, k in enumerate(kinds):
-        lo, hi = bounds.get(k, defaults[k])
-        lo = positive_scalar(f"bounds[{k!r}] lower", lo)
-        hi = positive_scalar(f"bounds[{k!r}] upper", hi)
-        if not lo < hi:
-            raise ValueError(f"bounds[{k!r}]: the lower bound {lo!r} must be below the upper bound {hi!r}")
-        lower[i], upper[i] = math.log(lo), math.log(hi)
-    return lower, upper
-
-
-def _apply_fixed(names, kinds, lower, upper, fixed, damping, L_ref, P_med):
-    free = np.ones(len(names), dtype=bool)
-    fixed_log = 0.5 * (lower + upper)
-    fixed_log[-1] = math.log(L_ref) if lower[-1] < math.log(L_ref) < upper[-1] else fixed_log[-1]
-    for i, k in enumerate(kinds):  # a data set's own prestress starts at the others' median
-        if k == "P_data" and lower[i] < math.log(P_med) < upper[i]:
-            fixed_log[i] = math.log(P_med)
-    for key, value in dict(fixed or {}).items():
-        if key not in names:  # any parameter may be held fixed (a stiffness group, a damping, a prestress, L)
-            raise ValueError(f"fixed: cannot fix {key!r}; parameters here: {', '.join(names)}")
-        v = positive_scalar(f"fixed[{key!r}]", value)
-        i = names.index(key)
-        if not lower[i] <= math.log(v) <= upper[i]:
-            raise ValueError(f"fixed[{key!r}] = {v!r} lies outside its bounds [{math.exp(lower[i]):.6g}, "
-                             f"{math.exp(upper[i]):.6g}]")
-        free[i] = False
-        fixed_log[i] = math.log(v)
-    return free, fixed_log
-
-
-def _cell_matrices(cell: Cell):
-    """Dense A, the symmetric prestress Hessian Σ T0_j ∇²l_j and the Cholesky factor of A Aᵀ.
+def _cell_arrays(cell: Cell) -> dict:
+    """The cell as :class:`FitProblem` fields: dense A, the symmetric prestress Hessian Σ T0_j ∇²l_j, lengths,
+    T0, load, probe, the strut length and the whitened basis of unit damping.
 
     ValueError if C0 would be singular.
     """
     dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M, dtype=float)  # noqa: E731
     A, H = dense(cell.A), dense(cell.prestress_hessian)
-    AAt = A @ A.T
-    ev = np.linalg.eigvalsh(AAt)
-    # Cholesky alone can pass a singular matrix on rounding noise; compare with its scale
-    if not ev[0] > 1e-10 * ev[-1]:
+    H = 0.5 * (H + H.T)
+    load, probe = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
+    white_unit = unit_damping_basis(A, H, load, probe)
+    if white_unit is None:
         raise ValueError(
             f"{cell.describe()}: the damping matrix C0 = Σ c_j a_j a_jᵀ is singular (the tendons leave a mechanism "
             "undamped, e.g. the cell without intermediate filaments), so its relaxation spectrum, which the fit "
             "uses, does not exist; fit a cell with a positive definite C0"
         )
-    return A, 0.5 * (H + H.T), np.linalg.cholesky(AAt)
-
-
-def _check_options(min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz):
-    if min_prestress_elasticity is not None:
-        min_prestress_elasticity = positive_scalar("min_prestress_elasticity", min_prestress_elasticity)
-    elasticity_frequency_hz = positive_scalar("elasticity_frequency_hz", elasticity_frequency_hz, "Hz")
-    if min_prestress_share is not None:
-        min_prestress_share = positive_scalar("min_prestress_share", min_prestress_share)
-        if min_prestress_share >= 1.0:
-            raise ValueError(f"min_prestress_share must be below 1 (a share of the static stiffness), "
-                             f"got {min_prestress_share!r}")
-    if max_decades is not None:
-        max_decades = positive_scalar("max_decades", max_decades, "decades")
-    return min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz
+    return dict(A=A, lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float), H=H,
+                load=load, probe=probe, L_ref=float(cell.strut_length),
+                white_unit=white_unit)
 
 
 def make_problem(
@@ -986,72 +601,11 @@ def make_problem(
     from ..model.shapes import paper_cell
 
     datasets = as_datasets(data)
-    _choice("tendons", tendons, TENDON_MODES)
-    _choice("damping", damping, DAMPING_MODES)
-    min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz = _check_options(
-        min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz)
+    options = check_options(min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz)
     cell = paper_cell() if cell is None else cell
     if not isinstance(cell, Cell):
         raise ValueError(f"cell must be a tenscell Cell, got {type(cell).__name__}")
-    A, H, chol = _cell_matrices(cell)
-
-    ea_groups, ea_names, ea_desc, c_groups, c_names, c_desc = _stiffness_layout(cell, tendons, damping)
-    p_names, p_units, p_desc, p_kinds, groups, point_group = _prestress_layout(datasets)
-    n_points = sum(d.n for d in datasets)
-    need = required_points(tendons, damping, n_families=len(_family_groups(cell)[1])) + len(p_names) - 1
-    if n_points < need:
-        src = datasets[0].source if len(datasets) == 1 else f"{len(datasets)} data sets"
-        raise DataError(
-            f"{src}: {n_points} data point{'s' if n_points != 1 else ''}, fewer than the {need} the fit "
-            f"needs (tendons={tendons!r}, damping={damping!r}: at least as many points as stiffness groups "
-            f"+ damping groups + prestress parameters + L)"
-        )
-    names = tuple(ea_names + c_names + p_names + ["L"])
-    units = tuple(["N"] * len(ea_names) + ["N·s/m"] * len(c_names) + p_units + ["m"])
-    descs = tuple(ea_desc + c_desc + p_desc + ["strut length (redundant with P, EA, c: see docs)"])
-    kinds = tuple(["EA"] * len(ea_names) + ["c"] * len(c_names) + p_kinds + ["L"])
-
-    L_ref = float(cell.strut_length)
-    defaults, S, w_m, P_med = _default_bounds(datasets, L_ref)
-    lower, upper = _apply_bounds(kinds, bounds, defaults)
-    free, fixed_log = _apply_fixed(names, kinds, lower, upper, fixed, damping, L_ref, P_med)
-
-    n_p = len(p_names)
-    group_map = np.zeros((len(groups), n_p))
-    for g, (_, _, _, links) in enumerate(groups):
-        for j, v in links.items():
-            group_map[g, j] = v
-    measured = [d.prestress for d in datasets if d.prestress is not None]
-    varies = bool(measured) and np.unique(np.concatenate(measured)).size > 1
-    load, probe = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
-    moduli = [k for k, d in enumerate(datasets) if not _is_creep(d)]
-    creep = [k for k, d in enumerate(datasets) if _is_creep(d)]
-    mod = [datasets[k] for k in moduli]
-
-    def cat(parts, dtype=float):
-        return np.concatenate(parts) if parts else np.zeros(0, dtype=dtype)
-
-    y_mod = [np.log10(cat([d.G_storage for d in mod])), np.log10(cat([d.G_loss for d in mod]))]
-    w_mod = [cat([d.weights_storage for d in mod]), cat([d.weights_loss for d in mod])]
-    return FitProblem(
-        names=names, units=units, descriptions=descs, kinds=kinds, lower=lower, upper=upper, free=free,
-        fixed_log=fixed_log, tendons=tendons, damping=damping, n_ea=len(ea_names), n_c=len(c_names),
-        ea_groups=np.asarray(ea_groups), c_groups=np.asarray(c_groups),
-        A=A, lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float), H=H, load=load,
-        probe=probe, L_ref=L_ref, white_unit=_whiten(chol, A, H, load, probe),
-        sources=tuple(d.source for d in datasets),
-        omega=2 * np.pi * cat([d.frequency_hz for d in mod]),
-        dataset_index=cat([np.full(datasets[k].n, k) for k in moduli], int),
-        group_index=cat([point_group[k] for k in moduli], int),
-        group_log_offset=np.array([g[2] for g in groups]), group_map=group_map,
-        group_measured=np.array([g[1] for g in groups]), group_dataset=np.array([g[0] for g in groups]),
-        y_obs=np.concatenate(y_mod + [np.log10(datasets[k].compliance) for k in creep]),
-        weights=np.concatenate(w_mod + [datasets[k].weights for k in creep]),
-        scale_stiffness=S, scale_damping=S / w_m,
-        prestress_matters=bool(varies or min_prestress_share is not None or min_prestress_elasticity is not None),
-        min_prestress_share=min_prestress_share, max_decades=max_decades,
-        min_prestress_elasticity=min_prestress_elasticity, elasticity_omega=2 * math.pi * elasticity_frequency_hz,
-        creep_t=cat([datasets[k].time_s for k in creep]),
-        creep_dataset=cat([np.full(datasets[k].n, k) for k in creep], int),
-        creep_group=cat([point_group[k] for k in creep], int),
-    )
+    layout, point_group = parameter_layout(cell, datasets, tendons, damping, bounds, fixed)
+    matters = prestress_varies(datasets) or min_prestress_share is not None or min_prestress_elasticity is not None
+    return FitProblem(**layout, **_cell_arrays(cell), **data_arrays(datasets, point_group),
+                      prestress_matters=bool(matters), **options)

@@ -617,7 +617,9 @@ class FitResult:
 
         Returns the axes (an array of axes for several panels).
         """
-        from ..plotting.fits import plot_fit
+        from .._results import plotter
+
+        plot_fit = plotter("plot_fit")
 
         return plot_fit(self, ax=ax, dataset=dataset, **kw)
 

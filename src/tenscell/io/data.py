@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import TenscellError
 from .outputs import atomic_path
 
 __all__ = [
@@ -70,7 +71,7 @@ _BUNDLED = (
 )
 
 
-class DataError(ValueError):
+class DataError(TenscellError, ValueError):
     """Invalid or unreadable rheology data.
 
     The message names the file (or data source), the 1-based line number in
@@ -300,7 +301,9 @@ class RheologyData:
 
     def plot(self, ax=None, **kw):
         """G' (filled) and G'' (open circles) against f (log-log) or prestress (:func:`tenscell.plotting.measured`)."""
-        from ..plotting import measured
+        from .._results import plotter
+
+        measured = plotter("measured")
 
         return measured(self, ax=ax, **kw)
 

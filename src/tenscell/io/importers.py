@@ -212,7 +212,7 @@ def _canonical_unit(text: str) -> str | None:
     t = text.strip().strip("[]()").strip()
     if t in ("Hz", "rad/s", "Pa", "kPa", "MPa", "deg", "rad"):
         return t
-    return _ALIASES.get(t.lower().replace("·", " ").replace("**", "^"), None)
+    return _ALIASES.get(t.lower().replace("·", " ").replace("**", "^"))
 
 
 def _resolve(table: _Table, cmap: ColumnMap) -> dict[str, tuple[int, str]]:

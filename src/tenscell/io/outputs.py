@@ -29,6 +29,7 @@ import tempfile
 from typing import Literal
 from pathlib import Path
 
+from .._errors import TenscellError
 from .._parallel import sigint_deferred
 
 __all__ = ["atomic_path", "write_csv_rows", "write_json", "json_ready", "write_text", "write_bytes", "OutputSet",
@@ -123,7 +124,7 @@ def write_bytes(path, data: bytes) -> None:
         tmp.write_bytes(data)
 
 
-class OutputLocationError(ValueError):
+class OutputLocationError(TenscellError, ValueError):
     """The output location cannot receive a run's files (message names the flag)."""
 
 
@@ -181,6 +182,13 @@ def _check_parent(path: Path, flag: str) -> None:
         raise OutputLocationError(f"{flag} {path}: {probe} is not a directory")
     if not os.access(probe, os.W_OK | os.X_OK):
         raise OutputLocationError(f"{flag} {path}: {probe} is not writable")
+    # os.access trusts the permission bits; a read-only mount, /proc or a full quota refuse only an actual
+    # write, which would otherwise come after the computation: try one (an empty directory, removed at once)
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=_TEMP, dir=probe))
+    except OSError as err:
+        raise OutputLocationError(f"{flag} {path}: cannot create anything in {probe} "
+                                  f"({err.strerror or type(err).__name__})") from None
 
 
 def check_output_file(path, flag: str) -> Path:
@@ -258,19 +266,23 @@ class OutputSet:
     flag : str
         The option that named ``target``, for error messages.
 
-    Use::
+    Notes
+    -----
+    Entering may happen long after construction; everything written inside
+    the block goes to the staging directory, and leaving it without an
+    exception moves the set into place. An exception (including
+    KeyboardInterrupt) removes the staging directory and leaves the previous
+    set as it was.
+
+    Examples
+    --------
+    ::
 
         out = OutputSet(args.out, command="tenscell fit ...")   # validate first
         ...                                                        # compute
         with out as d:                                             # d: the staging directory
             write_csv_rows(d / "fit.csv", header, rows)
         # here the complete set is at args.out
-
-    Entering may happen long after construction; everything written inside
-    the block goes to the staging directory, and leaving it without an
-    exception moves the set into place. An exception (including
-    KeyboardInterrupt) removes the staging directory and leaves the previous
-    set as it was.
     """
 
     def __init__(self, target, *, command: str = "", flag: str = "--out"):
@@ -313,11 +325,11 @@ class OutputSet:
         return False
 
     def _write_manifest(self, staging: Path) -> None:
-        from .. import __version__
+        from .._version import __version__
         files = sorted(str(p.relative_to(staging)) for p in staging.rglob("*") if p.is_file())
         write_json(staging / MANIFEST, {
             "command": self.command, "tenscell_version": __version__,
-            "finished_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            "finished_utc": _dt.datetime.now(_dt.UTC).isoformat(timespec="seconds"),
             "files": files})
 
     def _commit(self, staging: Path) -> None:

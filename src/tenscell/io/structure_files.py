@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from .outputs import write_text
-from ..model.structure import Point, Structure, StructureError
+from ..model.structure import Point, Structure, StructureError, member_values
 
 __all__ = [
     "StructureFile",
@@ -87,7 +87,7 @@ class StructureFile:
         Tendon damping (N·s/m); 1 N·s/m where the file gives none.
     T0 : ndarray, shape (m,) or None
         A self-stress (dimensionless, any scale) if the file gives one for
-        every tendon; pass it to :func:`tenscell.equilibrate` (``T0=``) to
+        every tendon; pass it to :func:`tenscell.model.equilibrate` (``T0=``) to
         skip the search for one (useful for very large structures).
     description : str
         Free text from the file.
@@ -218,8 +218,9 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         else:
             names.append(None)
             pos = nd
-        xyz.append(_vector(pos, 3, f"node {i} position"))
+        xyz.append(_vector(pos, 3, f"node {i}{'' if names[-1] is None else ' ' + repr(names[-1])} position"))
     nodes = np.array(xyz) * lu
+    _check_coordinates(nodes, names, lu)
     index: dict[str, int] = {}
     for i, nm in enumerate(names):
         if nm is None:
@@ -266,8 +267,9 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         if not isinstance(fam, str) or not fam:
             raise StructureError(f"tendon {j} needs a 'family' (e.g. \"actin\", \"intermediate_filament\", \"strut\")")
         families.append(fam)
-        EA.append(_positive(t.get("EA", 1.0 / fu), f"tendon {j}: EA") * fu)
-        c.append(_positive(t.get("c", 1.0 / (fu * tu / lu)), f"tendon {j}: c") * fu * tu / lu)
+        EA.append(_in_window(_positive(t.get("EA", 1.0 / fu), f"tendon {j}: EA") * fu, f"tendon {j}: EA", "N"))
+        c.append(_in_window(_positive(t.get("c", 1.0 / (fu * tu / lu)), f"tendon {j}: c") * fu * tu / lu,
+                            f"tendon {j}: c", "N·s/m"))
         T0.append(t.get("T0"))
     have_T0 = [v is not None for v in T0]
     if any(have_T0) and not all(have_T0):
@@ -275,7 +277,12 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         raise StructureError(f"tendon {missing} has no 'T0' although other tendons do; give all or none")
     T0a = None
     if raw_t and all(have_T0):
+        # any scale, but inside the library's window: the norm of a T0 of 1e300 overflows (and reads as zero)
         T0a = np.array([_finite(v, f"tendon {j}: T0") for j, v in enumerate(T0)])
+        for k, v in enumerate(T0a.tolist()):
+            if v:
+                _in_window(abs(v), f"tendon {k}: |T0|", "")
+        _check_tensions(T0a, families)
 
     groups = []
     for g, grp in enumerate(_list(obj.get("equal_tension_groups", []), "'equal_tension_groups'")):
@@ -300,6 +307,48 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         load=load, probe=probe, equal_tension_groups=tuple(groups), name=name, node_names=node_names,
     )
     return StructureFile(structure=structure, EA=np.array(EA), c=np.array(c), T0=T0a, description=description)
+
+
+#: largest distance of a node from the origin (m): the --L flag's upper bound. Beyond it, squared lengths and the
+#: stiffness terms of the strut rotations (EA·L²) overflow float64 long before any physical structure is reached
+MAX_COORDINATE_M = 1e6
+
+
+def _check_coordinates(nodes: np.ndarray, names: list, lu: float) -> None:
+    """StructureError naming the first node farther than :data:`MAX_COORDINATE_M` from the origin (in the file's unit)."""
+    far = np.abs(nodes).max(axis=1) > MAX_COORDINATE_M
+    if far.any():
+        i = int(np.flatnonzero(far)[0])
+        label = f"node {i}" + ("" if names[i] is None else f" {names[i]!r}")
+        raise StructureError(f"{label} position {(nodes[i] / lu).tolist()}: a coordinate beyond "
+                             f"{MAX_COORDINATE_M / lu:g} (the file's length unit; {MAX_COORDINATE_M:g} m)")
+
+
+def _in_window(v: float, what: str, unit: str) -> float:
+    """``v`` (SI) inside the library's window of physical values (:data:`tenscell._checks.MAGNITUDE`)."""
+    from .._checks import positive_scalar
+
+    try:
+        return positive_scalar(what, v, unit)
+    except ValueError as err:
+        raise StructureError(str(err)) from None
+
+
+def _check_tensions(T0: np.ndarray, families: list) -> None:
+    """A self-stress puts every cable in tension (T0 > 0); only compressible families (struts, nucleus) may push."""
+    from ..model.structure import cable_mask
+
+    cable = cable_mask(families)
+    bad = [j for j in np.flatnonzero(cable).tolist() if T0[j] <= 0]
+    if not bad:
+        return
+    j = bad[0]
+    n_cables = int(cable.sum())
+    hint = (" (every tendon's T0 is <= 0: if the file counts tension as negative, flip the signs)"
+            if len(bad) == n_cables else "")
+    raise StructureError(f"tendon {j}: T0 = {float(T0[j])!r}, but tendons carry tension only (T0 > 0; "
+                         f"{len(bad)} of {n_cables} tendons have T0 <= 0){hint}; omit T0 to let tenscell "
+                         "find a self-stress")
 
 
 def _unknown(d: dict, allowed: set, where: str) -> None:
@@ -451,40 +500,3 @@ def _dumps(obj: dict) -> str:
             lines.append(f"  {json.dumps(key)}: {json.dumps(v, allow_nan=False)}{comma}")
     lines.append("}")
     return "\n".join(lines) + "\n"
-
-
-# ---- per-member values --------------------------------------------------------------
-def member_values(structure: Structure, values, name: str = "value", unit: str = "") -> np.ndarray:
-    """Expand a per-member property to an array over the structure's tendons.
-
-    Parameters
-    ----------
-    structure : Structure
-    values : float, dict or array_like
-        One value for all members; a dict ``{family: value}`` (every family
-        present must be given; key ``"default"`` covers the rest); or one
-        value per member, shape (m,).
-    name, unit : str
-        For error messages, e.g. ``"EA"``, ``"N"``.
-
-    Returns
-    -------
-    ndarray, shape (m,)
-    """
-    m = structure.n_tendons
-    if isinstance(values, dict):
-        out = np.empty(m)
-        for j, fam in enumerate(structure.families):
-            if fam in values:
-                out[j] = values[fam]
-            elif "default" in values:
-                out[j] = values["default"]
-            else:
-                raise ValueError(f"{name}: no value for family {fam!r} (tendon {j}); give it or a 'default'")
-        return out
-    arr = np.asarray(values, dtype=float)
-    if arr.ndim == 0:
-        return np.full(m, float(arr))
-    if arr.shape != (m,):
-        raise ValueError(f"{name} must be a scalar, a {{family: value}} dict or have shape ({m},){' (' + unit + ')' if unit else ''}, got shape {arr.shape}")
-    return arr.copy()

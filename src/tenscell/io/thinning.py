@@ -66,8 +66,6 @@ def bin_log_frequency(data, max_points: int = DEFAULT_MAX_POINTS):
         The binned data (with SDs that carry each bin's weight), its comments
         extended by one line stating the rule and the point counts.
     """
-    from .data import RheologyData
-
     if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) or max_points < 1:
         raise ValueError(f"max_points must be an integer >= 1, got {max_points!r}")
     n = data.n
@@ -115,7 +113,7 @@ def bin_log_frequency(data, max_points: int = DEFAULT_MAX_POINTS):
     prestress = None if data.prestress is None else log_mean(data.prestress)
     rule = (f"{_NOTE}{n} to {freq.size} points by tenscell.io.thinning.bin_log_frequency "
             f"(max_points={max_points}): equal log10-f bins per prestress, weighted log means, weight sqrt(sum w^2)")
-    return RheologyData(
+    return type(data)(  # a RheologyData (not imported: io.data imports this module for RheologyData.binned)
         frequency_hz=freq, G_storage=Gs, G_loss=Gl, prestress=prestress,
         G_storage_sd=Gs * math.log(10.0) / w_s, G_loss_sd=Gl * math.log(10.0) / w_l,
         source=data.source, comments=tuple(data.comments) + (rule,),

@@ -53,6 +53,11 @@ Laws
 :class:`LinearSpring`
     ``T = k(l − l0) + c·l'``: a spring given by its stiffness in N/m (the law
     behind :func:`tenscell.linear.linearize.linearize_tangent`).
+:class:`Maxwell`, :class:`StandardLinearSolid`, :class:`Springpot`
+    tendons with dynamics of their own (filament turnover, a Zener solid, a
+    fractional element): ``dynamic = True``, an exact frequency-dependent
+    tangent ``complex_stiffness(l, T, ω)`` and its derivatives, no constant
+    (k, c) (:mod:`tenscell.laws.viscoelastic`).
 :class:`CompositeLaw`
     different laws on different tendons (e.g. Voigt actin and stiffening
     IFs); :func:`family_laws` builds one from tendon families.
@@ -73,16 +78,17 @@ Layout
 ------
 ``base`` (the protocol: :class:`TendonLaw`, :class:`Tangent`, :class:`Parameter`),
 ``springs`` (Voigt, power-law dashpot, linear spring), ``filaments`` (stiffening
-filaments), ``composite`` (per-family laws), ``constructors`` (the paper's placements at
+filaments), ``viscoelastic`` (laws with internal dynamics), ``composite`` (per-family laws), ``constructors`` (the paper's placements at
 a prestress). A new law is one new module here, re-exported below.
 """
 from __future__ import annotations
 
-from .base import LinearizationError, Parameter, Tangent, TendonLaw
+from .base import DEFAULT_REALIZATION_TOL, DynamicLawError, LinearizationError, Parameter, Realization, Tangent, TendonLaw
 from .composite import CompositeLaw, family_laws
 from .constructors import power_dashpot_law, rest_lengths, stiffening_law, voigt_law
 from .filaments import StiffeningFilament
 from .springs import DEFAULT_VELOCITY_SCALE, LinearSpring, PowerDashpot, Voigt
+from .viscoelastic import DEFAULT_REALIZATION_BAND_HZ, SPRINGPOT_TIME, Maxwell, Springpot, StandardLinearSolid, springpot_prony
 
 
 __all__ = [
@@ -93,6 +99,15 @@ __all__ = [
     "PowerDashpot",
     "StiffeningFilament",
     "LinearSpring",
+    "Maxwell",
+    "StandardLinearSolid",
+    "Springpot",
+    "SPRINGPOT_TIME",
+    "Realization",
+    "springpot_prony",
+    "DEFAULT_REALIZATION_TOL",
+    "DEFAULT_REALIZATION_BAND_HZ",
+    "DynamicLawError",
     "CompositeLaw",
     "family_laws",
     "LinearizationError",

@@ -10,15 +10,32 @@ from typing import Any, ClassVar, NamedTuple, Self
 
 import numpy as np
 
+from .._errors import TenscellError
 from .._checks import positive_array, positive_scalar
 from .._results import dataframe, format_repr
 from ..model.equilibrium import Cell
 
-__all__ = ["TendonLaw", "Parameter", "Tangent", "LinearizationError"]
+__all__ = ["TendonLaw", "Parameter", "Tangent", "Realization", "LinearizationError", "DynamicLawError",
+           "angular_frequencies", "DEFAULT_REALIZATION_TOL"]
+
+#: default relative accuracy of an approximate internal-variable realization over its band (|Δk*|/|k*|)
+DEFAULT_REALIZATION_TOL = 1e-3
 
 
-class LinearizationError(ValueError):
+class LinearizationError(TenscellError, ValueError):
     """The tendon law has no linearization at rest (its rate derivative at l' = 0 is infinite)."""
+
+
+class DynamicLawError(LinearizationError):
+    """The tendon law's tangent depends on frequency: it has no constant pair (k, c), or no state-free motion."""
+
+
+def angular_frequencies(omega) -> np.ndarray:
+    """``omega`` (rad/s) as a finite, non-negative 1-D float array (a scalar becomes shape (1,))."""
+    w = np.atleast_1d(np.asarray(omega, dtype=float)).ravel()
+    if not (np.all(np.isfinite(w)) and np.all(w >= 0)):
+        raise ValueError(f"omega (angular frequency) must be finite numbers >= 0 (rad/s), got {omega!r}")
+    return w
 
 
 class Parameter(NamedTuple):
@@ -113,6 +130,57 @@ def _unit_tag(unit: str) -> str:
         unit, unit.replace("·", "").replace("/", "_per_") or "1")
 
 
+# ---- internal-variable realizations ---------------------------------------------------------------
+@dataclass(frozen=True, eq=False, repr=False)
+class Realization:
+    """Tendons as springs, dashpots and Maxwell arms: the law with internal variables, for constant matrices.
+
+    Tendon j carries ``k_j`` (N/m) and ``c_j`` (N·s/m) in parallel, plus the
+    Maxwell arms ``a`` with ``tendon[a] = j``: a spring ``arm_k[a]`` (N/m) in
+    series with a dashpot ``arm_c[a]`` (N·s/m), whose dashpot extension is one
+    internal variable. Its dynamic tangent is
+    ``k_j + iωc_j + Σ_{a∈j} arm_k·iωτ_a/(1 + iωτ_a)``, ``τ_a = arm_c/arm_k``.
+
+    Attributes
+    ----------
+    k, c : ndarray, shape (m,)
+    tendon : ndarray of int, shape (r,)
+    arm_k, arm_c : ndarray, shape (r,)
+    error : float
+        Largest relative error ``|k*_realized − k*|/|k*|`` over ``band_hz``
+        (0 when the realization is exact at every frequency).
+    band_hz : tuple of float, or None
+        The band (Hz) the error refers to; None for an exact realization.
+    """
+
+    k: np.ndarray
+    c: np.ndarray
+    tendon: np.ndarray
+    arm_k: np.ndarray
+    arm_c: np.ndarray
+    error: float = 0.0
+    band_hz: tuple | None = None
+
+    @property
+    def r(self) -> int:
+        """Number of internal variables (Maxwell arms)."""
+        return int(self.tendon.size)
+
+    def complex_stiffness(self, omega) -> np.ndarray:
+        """The realization's dynamic tangent (N/m), shape (n_omega, m), ω in rad/s."""
+        w = angular_frequencies(omega)
+        out = self.k[None, :] + 1j * np.multiply.outer(w, self.c)
+        z = 1j * np.multiply.outer(w, self.arm_c)
+        arms = self.arm_k * z / (self.arm_k + z)
+        for i in range(w.size):
+            np.add.at(out[i], self.tendon, arms[i])
+        return out
+
+    def __repr__(self) -> str:
+        acc = "exact" if self.band_hz is None else f"within {self.error:.2g} relative over {self.band_hz[0]:g}–{self.band_hz[1]:g} Hz"
+        return format_repr(f"Realization of {self.k.size} tendons with {self.r} internal variables ({acc})")
+
+
 # ---- the base class -----------------------------------------------------------------------------------
 class TendonLaw:
     """Base class of every tendon law (see the module docstring for the interface).
@@ -125,6 +193,9 @@ class TendonLaw:
     #: the per-tendon parameters, in order (their fields hold scalars or (m,) arrays)
     parameters: ClassVar[tuple[Parameter, ...]] = ()
     rate_linear: ClassVar[bool] = True
+    #: True for laws whose tangent depends on frequency (internal dynamics: Maxwell, standard linear solid,
+    #: springpot); they define :meth:`complex_stiffness` and have no constant (k, c)
+    dynamic: ClassVar[bool] = False
     l0: Any = None
 
     # -- to implement -----------------------------------------------------------------------------
@@ -286,6 +357,44 @@ class TendonLaw:
             dk=np.array([bc(dk.get(n, z)) for n in self.names]).reshape(len(self.names), m),
             dc=np.array([bc(dc.get(n, z)) for n in self.names]).reshape(len(self.names), m),
         )
+
+    def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
+        """The law at a reference as springs, dashpots and Maxwell arms (:class:`Realization`).
+
+        Rate-linear laws: ``(k, c)`` of :meth:`tangent_at_rest`, no arms (exact).
+        Laws with internal dynamics override it: exact for Maxwell and the standard
+        linear solid (one arm per tendon), a Prony series accurate to ``tol`` over
+        ``band_hz`` (Hz) for the springpot.
+        """
+        k, c = self.tangent_at_rest(l, T)
+        none = np.zeros(0)
+        return Realization(k=np.asarray(k, dtype=float), c=np.asarray(c, dtype=float), tendon=np.zeros(0, dtype=int),
+                           arm_k=none, arm_c=none)
+
+    # -- the dynamic tangent (frequency domain) ---------------------------------------------------------
+    def complex_stiffness(self, l, T, omega) -> np.ndarray:
+        """Dynamic tangent ``k*_j(ω) = ∂T_j/∂l_j`` (N/m, complex) about tensions ``T`` (N) at lengths ``l`` (m).
+
+        Shape ``(n_omega, m)`` for ``omega`` (rad/s, ≥ 0). For a rate-linear law
+        it is ``k + iω·c`` from :meth:`tangent_at_rest`; laws with internal
+        dynamics (``dynamic = True``) override it with their exact form.
+        """
+        w = angular_frequencies(omega)
+        k, c = self.tangent_at_rest(l, T)
+        return np.asarray(k, dtype=float)[None, :] + 1j * np.multiply.outer(w, np.asarray(c, dtype=float))
+
+    def complex_stiffness_derivatives(self, l, T, omega) -> tuple[np.ndarray, np.ndarray]:
+        """``(∂k*/∂T, ∂k*/∂θ)``: shapes ``(n_omega, m)`` (1/m) and ``(p, n_omega, m)``, θ in :attr:`names` order.
+
+        Derivatives at fixed parameters (the rest length follows the tension)
+        and at fixed tension respectively; 0 where a tendon has no such
+        parameter. Default: from :meth:`tangent`, ``∂k + iω·∂c``.
+        """
+        w = angular_frequencies(omega)
+        t = self.tangent(l, T)
+        dk_dT = t.dk_dT[None, :] + 1j * np.multiply.outer(w, t.dc_dT)
+        dk = t.dk[:, None, :] + 1j * w[None, :, None] * t.dc[:, None, :]
+        return dk_dT, dk
 
     @classmethod
     def _trusted(cls, **fields):

@@ -8,7 +8,7 @@ import numpy as np
 
 from .._checks import positive_array
 from ..model.equilibrium import Cell
-from .base import Tangent, TendonLaw, _refs
+from .base import DEFAULT_REALIZATION_TOL, Realization, Tangent, TendonLaw, _refs, angular_frequencies
 
 __all__ = ["CompositeLaw", "family_laws"]
 
@@ -66,6 +66,11 @@ class CompositeLaw(TendonLaw):
     def rate_linear(self) -> bool:  # type: ignore[override]  # per instance here, a class constant elsewhere
         """Every part is rate-linear."""
         return all(law.rate_linear for law in self.laws)
+
+    @property
+    def dynamic(self) -> bool:  # type: ignore[override]  # per instance here, a class constant elsewhere
+        """Some part has a frequency-dependent tangent."""
+        return any(law.dynamic for law in self.laws)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -152,6 +157,45 @@ class CompositeLaw(TendonLaw):
                 units.setdefault(n, t.units[r])
         return Tangent(l=l, T=np.array(T, dtype=float), k=k, c=c, dk_dT=dkT, dc_dT=dcT, names=names,
                        units=tuple(units[n] for n in names), values=self.parameter_values(m), dk=dk, dc=dc)
+
+
+    def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
+        """Each part's realization on its tendons (error: the largest of the parts')."""
+        l, T = _refs(l, T)
+        k, c = np.empty(self.m), np.empty(self.m)
+        tendon, ak, ac, err, band = [], [], [], 0.0, None
+        for law, i in zip(self.laws, self.indices):
+            r = law.realization(l[i], T[i], band_hz, tol)
+            k[i], c[i] = r.k, r.c
+            tendon.append(i[r.tendon])
+            ak.append(r.arm_k)
+            ac.append(r.arm_c)
+            err, band = max(err, r.error), (r.band_hz or band)
+        return Realization(k=k, c=c, tendon=np.concatenate(tendon).astype(int), arm_k=np.concatenate(ak),
+                           arm_c=np.concatenate(ac), error=err, band_hz=band)
+
+    def complex_stiffness(self, l, T, omega) -> np.ndarray:
+        """Each part's dynamic tangent on its tendons (N/m), shape ``(n_omega, m)``."""
+        l, T = _refs(l, T)
+        w = angular_frequencies(omega)
+        out = np.empty((w.size, self.m), dtype=complex)
+        for law, i in zip(self.laws, self.indices):
+            out[:, i] = law.complex_stiffness(l[i], T[i], w)
+        return out
+
+    def complex_stiffness_derivatives(self, l, T, omega) -> tuple[np.ndarray, np.ndarray]:
+        """Each part's ``(∂k*/∂T, ∂k*/∂θ)`` assembled on the union of names (0 where a tendon lacks θ)."""
+        l, T = _refs(l, T)
+        w = angular_frequencies(omega)
+        names = self.names
+        dT = np.empty((w.size, self.m), dtype=complex)
+        dk = np.zeros((len(names), w.size, self.m), dtype=complex)
+        for law, i in zip(self.laws, self.indices):
+            sub_T, sub = law.complex_stiffness_derivatives(l[i], T[i], w)
+            dT[:, i] = sub_T
+            for r, n in enumerate(law.names):
+                dk[names.index(n)][:, i] = sub[r]
+        return dT, dk
 
 
 def family_laws(cell: Cell, laws: Mapping[str, TendonLaw], default: TendonLaw | None = None) -> CompositeLaw:

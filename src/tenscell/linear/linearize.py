@@ -12,6 +12,7 @@ The relaxation spectrum solves ``K0 v = λ C0 v`` (rates λ in 1/s) with
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -20,8 +21,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from .._checks import positive_array, positive_scalar
-from ..laws import LinearSpring, TendonLaw, Voigt
+from ..laws import DynamicLawError, LinearSpring, TendonLaw, Voigt
+from ..laws.base import DEFAULT_REALIZATION_TOL, Realization
 from ..model.equilibrium import Cell, tangent_stiffness
+from .dynamic import cytoplasm_damping, viscosity_value
 from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
 )
@@ -33,6 +36,8 @@ __all__ = [
     "linearize",
     "linearize_tangent",
     "linearize_law",
+    "realize",
+    "with_cytoplasm",
     "relaxation_spectrum",
     "NotPositiveDefiniteError",
 ]
@@ -71,6 +76,15 @@ class LinearModel:
         :func:`tenscell.sensitivity.analytic_elasticities` differentiates.
         None only for models built by hand, which are then read as Voigt
         tendons with ``EA`` and ``c``.
+    viscosity : float
+        Newtonian cytoplasm in parallel with the structure (Pa·s): a dashpot
+        ``2L·η`` (N·s/m) on the probe, in C0, so that ``G* = G*_structure + iωη``
+        (probe = load); 0 for none.
+    realization : Realization or None
+        For a law with internal dynamics (:mod:`tenscell.laws.viscoelastic`):
+        its internal-variable realization; K0, C0, H0, D0 then have
+        ``n + realization.r`` rows, the last ``r`` the arms' dashpot
+        extensions (:func:`tenscell.linear.linearize.realize`). None otherwise.
     """
 
     cell: Cell
@@ -83,6 +97,8 @@ class LinearModel:
     D0: np.ndarray
     l0: np.ndarray
     law: Any = None
+    viscosity: float = 0.0
+    realization: Any = None
 
     @property
     def tendon_law(self):
@@ -128,12 +144,19 @@ class LinearModel:
     def __repr__(self) -> str:
         from .._results import format_repr, span
 
+        extra = []
+        if self.realization is not None:
+            R = self.realization
+            acc = "exact" if R.band_hz is None else f"within {R.error:.2g} over {R.band_hz[0]:g}–{R.band_hz[1]:g} Hz"
+            extra.append(f"{type(self.law).__name__} tendons realized with {R.r} internal variables ({acc}); "
+                         "moduli from the exact dynamic tangent")
         return format_repr(
             f"LinearModel of {self.cell.describe()} at P = {self.P:.6g} N",
             f"{self.cell.n} coordinates, {self.cell.m} tendons; {'sparse' if sp.issparse(self.K0) else 'dense'} "
             "K0, C0",
             f"EA {span(self.EA, 'N')}; c {span(self.c, 'N·s/m')}; tensions {span(self.tensions, 'N')}",
-            f"strut length L = {self.L:.4g} m",
+            f"strut length L = {self.L:.4g} m" + (f"; cytoplasm η = {self.viscosity:.4g} Pa·s" if self.viscosity else ""),
+            *extra,
         )
 
     def to_dataframe(self):
@@ -154,16 +177,13 @@ class LinearModel:
         prestresses use :func:`tenscell.frequency_response` and its ``plot``.
         Returns the two axes.
         """
-        from ..response import FrequencyResponse, compliance
+        from .._results import plotter
 
-        f = np.logspace(-2, 3, 61) if f_hz is None else np.atleast_1d(np.asarray(f_hz, dtype=float))
-        resp = FrequencyResponse(frequency_hz=f, prestress=np.array([self.P]), J=compliance(self, f)[None, :],
-                                 L=self.L)
-        return resp.plot(axes=axes, **kw)
+        return plotter("linear_model_moduli")(self, axes=axes, f_hz=f_hz, **kw)
 
 
 @hot_path
-def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True) -> LinearModel:
+def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = True, viscosity: float = 0.0) -> LinearModel:
     """Linearize the cell's equations of motion at prestress ``P`` (Voigt tendons, the paper's model).
 
     The paper-facing convenience for :func:`linearize_law` with
@@ -183,6 +203,9 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     check : bool
         Verify that K0 is positive definite (default). Turn off only in
         inner loops that have already checked.
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), ≥ 0, in parallel with the structure
+        (``G* += iωη``; see :attr:`LinearModel.viscosity`).
 
     Returns
     -------
@@ -207,7 +230,8 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     EA = positive_array("EA", EA, (m,), "N")
     c = positive_array("c", c, (m,), "N·s/m")
     # validated above: skip the law's own checks on this hot path (parameter sweeps, fits)
-    return _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
+    lin = _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
+    return with_cytoplasm(lin, viscosity) if viscosity else lin
 
 
 @hot_path
@@ -258,7 +282,8 @@ def linearize_tangent(cell: Cell, P: float, k, c=1.0, *, l0=None, check: bool = 
     return _from_law(cell, P, LinearSpring._trusted(k=k, c=c), check=check, l0=l0)
 
 
-def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True) -> LinearModel:
+def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True, viscosity: float = 0.0,
+                  band_hz=None, tol: float | None = None) -> LinearModel:
     """The linear model of a cell with any tendon law, about its reference at rest.
 
     ``K0 = Σ T_j ∇²l_j + Σ k_j a_j a_jᵀ`` and ``C0 = Σ c_j a_j a_jᵀ`` with the
@@ -280,6 +305,15 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
         projection of those tensions on ``T0``.
     check : bool
         Verify that K0 is positive definite.
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), ≥ 0, in parallel with the structure
+        (see :attr:`LinearModel.viscosity`).
+    band_hz, tol
+        For a law with internal dynamics only (``law.dynamic``): the band (Hz)
+        and relative tolerance of its internal-variable realization
+        (:func:`tenscell.linear.linearize.realize`; exact for Maxwell and the
+        standard linear solid, a Prony series for the springpot). Needs ``P``;
+        ignored for rate-linear laws, whose linearization is exact.
 
     Returns
     -------
@@ -300,6 +334,13 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
         raise ValueError(f"law must be a tenscell.laws.TendonLaw, got {type(law).__name__}")
     if law.m is not None and law.m != cell.m:
         raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
+    if law.dynamic:
+        if P is None:
+            raise DynamicLawError(f"a {type(law).__name__} law has internal dynamics: pass the prestress P to "
+                                  "linearize_law (its realization is built at tensions P·T0)")
+        return realize(cell, law, P, band_hz=band_hz, tol=tol, viscosity=viscosity, check=check)
+    if viscosity:
+        return with_cytoplasm(linearize_law(cell, law, P, check=check), viscosity)
     if P is not None:
         return _from_law(cell, positive_scalar("P (prestress)", P, "N"), law, check=check)
     T = np.asarray(law.elastic(cell.lengths), dtype=float)
@@ -349,4 +390,97 @@ def _from_law(cell: Cell, P: float, law, *, check: bool, T=None, EA=None, l0=Non
     )
     if check:
         lin.pencil.check()
+    return lin
+
+
+# ---- laws with internal dynamics and the cytoplasm ------------------------------------------------------
+def with_cytoplasm(lin, viscosity: float):
+    """The linear model with a Newtonian cytoplasm η (Pa·s) in parallel: C0 += 2Lη·D0ᵀD0 (``G* += iωη``)."""
+    eta = viscosity_value(viscosity)
+    if eta == lin.viscosity:
+        return lin
+    n = lin.cell.n
+    extra = (eta - lin.viscosity) * cytoplasm_damping(lin.cell, 1.0)
+    if lin.K0.shape[0] > n:  # a realized model: the cytoplasm acts on the structure's coordinates only
+        extra = sp.block_diag([extra, sp.csr_matrix((lin.K0.shape[0] - n,) * 2)]).tocsr() if sp.issparse(lin.C0) \
+            else np.pad(extra, (0, lin.K0.shape[0] - n))
+    lin2 = dataclasses.replace(lin, C0=lin.C0 + extra, viscosity=eta)
+    lin2.__dict__.pop("pencil", None)
+    return lin2
+
+
+def _augmented(cell: Cell, P: float, R: Realization):
+    """``(K, C)`` of the realized pencil (:mod:`tenscell.linear.dynamic`), dense or sparse like the cell."""
+    A = cell.A
+    Kq = assemble_stiffness(cell, P, R.k)
+    Cq = assemble_damping(cell, R.c)
+    if cell.sparse:
+        B = sp.csr_matrix(A)[:, R.tendon]
+        G = sp.diags(R.arm_k)
+        K = sp.bmat([[Kq + B @ G @ B.T, -(B @ G)], [-(G @ B.T), G]]).tocsr()
+        C = sp.bmat([[Cq, None], [None, sp.diags(R.arm_c)]]).tocsr()
+        return K, C
+    B = np.asarray(A)[:, R.tendon]
+    BG = B * R.arm_k
+    K = np.block([[Kq + BG @ B.T, -BG], [-BG.T, np.diag(R.arm_k)]])
+    C = np.block([[Cq, np.zeros((cell.n, R.r))], [np.zeros((R.r, cell.n)), np.diag(R.arm_c)]])
+    return K, C
+
+
+@hot_path
+def realize(cell: Cell, law: TendonLaw, P: float, *, band_hz=None, tol: float | None = None, viscosity: float = 0.0,
+            check: bool = True):
+    """The linear model of a cell whose tendon law has internal dynamics, with internal variables.
+
+    Maxwell and standard-linear-solid tendons are realized exactly (one
+    internal variable per tendon); springpots by a Prony series accurate to
+    ``tol`` (relative, in k*) over ``band_hz``
+    (:meth:`tenscell.laws.Springpot.realization`). The frequency domain of
+    the returned model (``tenscell.compliance``, ``tenscell.moduli``) uses the
+    exact kernel, not the realization; the time domain (creep, relaxation,
+    the retardation spectrum) uses the realized pencil.
+
+    Parameters
+    ----------
+    cell : Cell
+    law : TendonLaw
+    P : float
+        Prestress scale (N).
+    band_hz : (float, float), optional
+        Band (Hz) of an approximate realization; default the paper's 10⁻² to 10³ Hz.
+    tol : float, optional
+        Its relative accuracy (default :data:`tenscell.laws.base.DEFAULT_REALIZATION_TOL` = 1e-3).
+    viscosity : float
+        Cytoplasm viscosity η (Pa·s), see :func:`with_cytoplasm`.
+    check : bool
+        Verify that the realized K is positive definite (the relaxed static state is stable).
+
+    Returns
+    -------
+    LinearModel
+        With ``realization`` set; K0, C0 of size ``n + realization.r``.
+    """
+    P = positive_scalar("P (prestress)", P, "N")
+    if law.m is not None and law.m != cell.m:
+        raise ValueError(f"the tendon law has {law.m} tendons but the cell has {cell.m}")
+    l, T = cell.lengths, P * cell.T0
+    R = law.realization(l, T, band_hz, DEFAULT_REALIZATION_TOL if tol is None else positive_scalar("tol", tol))
+    K, C = _augmented(cell, P, R)
+    z = np.zeros(R.r)
+    if "EA" in law.names and not np.isnan(vals := law.parameter_values(cell.m)[law.names.index("EA")]).any():
+        EA = vals
+    else:
+        EA = R.k * l - T
+    placed = law.at_prestress(cell, P)
+    lin = LinearModel(cell=cell, P=P, EA=EA, c=R.c, K0=K, C0=C, H0=np.concatenate([-np.asarray(cell.load), z]),
+                      D0=np.concatenate([np.asarray(cell.probe), z]), l0=np.asarray(placed.l0, dtype=float),
+                      law=placed, realization=R)
+    lin = with_cytoplasm(lin, viscosity)
+    if check:
+        try:
+            lin.pencil.check()
+        except NotPositiveDefiniteError:
+            raise NotPositiveDefiniteError(
+                f"the relaxed static stiffness of {cell.describe()} with {type(law).__name__} tendons at P={P:.6g} N "
+                f"is not positive definite: the reference is not a stable equilibrium. {_STABILITY_HINT}") from None
     return lin

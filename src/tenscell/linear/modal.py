@@ -57,14 +57,18 @@ import numpy as np
 import scipy.linalg
 import scipy.linalg.lapack
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ..model.equilibrium import weighted_gram
 from .krylov import DEFAULT_BAND_HZ, LanczosRun, converge, default_shift
-from .sparse import NotPositiveDefinite, factorize_spd
+from .._errors import NotPositiveDefiniteError
+from .sparse import factorize_spd
 from .._threads import hot_path
 
 __all__ = [
     "NotPositiveDefiniteError",
+    "positive_definite_factor",
+    "complement_basis",
     "continuum_factor",
     "modulus",
     "assemble_stiffness",
@@ -87,10 +91,6 @@ SPECTRUM_TOL = 1e-10
 SHIFT_REUSE_FACTOR = 4.0
 #: rows of prestresses per block of the grid's modal sum (keeps the block in cache)
 _GRID_BLOCK = 8
-
-
-class NotPositiveDefiniteError(ValueError):
-    """K0 is not positive definite: the reference is not a stable equilibrium."""
 
 
 # ---- the continuum factor ---------------------------------------------------------------------
@@ -192,6 +192,49 @@ def _ritz_is_zero(tau: np.ndarray) -> np.ndarray:
     return tau <= ZERO_TIME * max(float(tau.max()) if tau.size else 0.0, 1e-300)
 
 
+# ---- positive definiteness: one criterion ---------------------------------------------------------
+def positive_definite_factor(M, *, what: str = "K0", describe: str = "the model", hint: str = ""):
+    """The Cholesky factor of a symmetric matrix, which exists exactly when it is positive definite.
+
+    The one criterion of positive definiteness in tenscell (a stable
+    equilibrium is one whose K0 passes it): dense LAPACK Cholesky, or sparse
+    CHOLMOD (:mod:`tenscell.linear.sparse`). Grids of prestresses use the
+    equivalent test that every relaxation rate of the whitened pencil is
+    positive (:func:`prestress_grid_modes`).
+
+    Returns
+    -------
+    ndarray or SparseCholesky
+        Lower-triangular factor (dense) or the sparse factorization.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        If ``M`` is not positive definite; the message names ``what`` and
+        ``describe`` and gives the smallest eigenvalue (dense) or the failed
+        pivot's column (sparse), then ``hint``.
+    """
+    if sp.issparse(M):
+        try:
+            return factorize_spd(M, what=what)
+        except NotPositiveDefiniteError as err:
+            detail = f"a pivot of its sparse Cholesky factorization is <= 0, at column {err.column}"
+    else:
+        try:
+            return np.linalg.cholesky(M)
+        except np.linalg.LinAlgError:
+            detail = f"smallest eigenvalue {float(np.linalg.eigvalsh(M)[0]):.3g}"
+    raise NotPositiveDefiniteError(
+        f"{what} is not positive definite for {describe} ({detail}): "
+        "the reference is not a stable equilibrium." + (f" {hint}" if hint else "")
+    )
+
+
+def complement_basis(R: np.ndarray, n: int) -> np.ndarray:
+    """Orthonormal basis (n, n − r) of the complement of the columns of ``R`` (n, r), e.g. rigid-body motions."""
+    return scipy.linalg.null_space(R.T) if R.shape[1] else np.eye(n)
+
+
 # ---- the pencil -----------------------------------------------------------------------------------
 class Pencil:
     """The pencil (K0, C0) of one linear model with its decompositions, each computed once.
@@ -237,20 +280,7 @@ class Pencil:
         NotPositiveDefiniteError
             If K0 is not positive definite.
         """
-        if self.sparse:
-            try:
-                return factorize_spd(self.K0, what="K0")
-            except NotPositiveDefinite as err:
-                detail = f"a pivot of its sparse Cholesky factorization is <= 0, at column {err.column}"
-        else:
-            try:
-                return np.linalg.cholesky(self.K0)
-            except np.linalg.LinAlgError:
-                detail = f"smallest eigenvalue {float(np.linalg.eigvalsh(self.K0)[0]):.3g}"
-        raise NotPositiveDefiniteError(
-            f"K0 is not positive definite for {self.describe} ({detail}): "
-            "the reference is not a stable equilibrium." + (f" {self.hint}" if self.hint else "")
-        )
+        return positive_definite_factor(self.K0, what="K0", describe=self.describe, hint=self.hint)
 
     def check(self) -> None:
         """Raise :class:`NotPositiveDefiniteError` unless K0 is positive definite (factors K0 once)."""
@@ -267,6 +297,60 @@ class Pencil:
     def static_compliance(self) -> float:
         """``J(0) = D0 K0⁻¹ b`` (m/N)."""
         return float(self.probe @ self.solve(self.load))
+
+    @hot_path
+    def solve_at(self, s: complex, rhs: np.ndarray) -> np.ndarray:
+        """``(K0 + s·C0)⁻¹ rhs`` at one complex shift ``s`` (1/s; ``s = iω`` for a steady state at ω in rad/s).
+
+        One LU factorization of the shifted matrix (dense LAPACK, sparse SuperLU):
+        for a single shift it is cheaper than the modal decomposition.
+        """
+        Z = self.K0 + s * self.C0
+        rhs = np.asarray(rhs)
+        if self.sparse:
+            return spla.splu(sp.csc_matrix(Z, dtype=complex)).solve(rhs.astype(complex))
+        return np.linalg.solve(Z, rhs.astype(complex))
+
+    def restricted(self, Q: np.ndarray, describe: str | None = None) -> Pencil:
+        """The pencil on the subspace spanned by the orthonormal columns of ``Q`` (dense): ``(QᵀK0Q, QᵀC0Q)``.
+
+        For free-standing structures, whose K0 is singular along the rigid-body
+        motions: their stability and modes are those of the pencil on the
+        complement (:func:`complement_basis`).
+        """
+        K, C = Q.T @ np.asarray(self.K0) @ Q, Q.T @ np.asarray(self.C0) @ Q
+        return Pencil(0.5 * (K + K.T), 0.5 * (C + C.T), Q.T @ self.load, Q.T @ self.probe,
+                      describe=self.describe if describe is None else describe, hint=self.hint)
+
+    def is_positive_definite(self) -> bool:
+        """Whether K0 is positive definite (the criterion of :attr:`cholesky`, whose factor is kept)."""
+        try:
+            self.check()
+        except NotPositiveDefiniteError:
+            return False
+        return True
+
+    def slow_modes(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """The ``k`` largest retardation times μ = 1/λ (s) of ``C0 v = μ K0 v`` with their modes, dense.
+
+        Returns ``(mu, V)``: μ ascending (0 for a mode the tendons do not
+        damp), K0-orthonormal vectors as the columns of V, shape (n, k). From
+        the one modal decomposition (:attr:`modes`).
+        """
+        m = self.modes
+        k = min(int(k), self.n)
+        return m.tau[self.n - k:], m.vectors[:, self.n - k:]
+
+    @cached_property
+    def damping_modes(self) -> tuple[np.ndarray, np.ndarray]:
+        """Eigenvalues (N·s/m, ascending) and orthonormal eigenvectors of C0 alone (dense).
+
+        A zero eigenvalue is a motion no tendon damps: the undamped mechanism
+        of a cell whose tendons leave one (e.g. without intermediate filaments).
+        """
+        if self.sparse:
+            raise ValueError(f"{self.describe} is sparse: the eigendecomposition of its C0 is not formed")
+        return np.linalg.eigh(np.asarray(self.C0))
 
     # -- dense: one eigensolve ---------------------------------------------------------------------
     @cached_property
@@ -297,7 +381,7 @@ class Pencil:
 
         ``(K0 + iωC0)⁻¹ = V diag(1/(1 + iωτ)) Vᵀ``; the pencil is symmetric, so
         this also gives ``(K0 + iωC0)⁻ᵀ rhs``. For elasticities and other
-        derivatives of J (:func:`tenscell.analytic_elasticities`).
+        derivatives of J (:func:`tenscell.sensitivity.analytic_elasticities`).
         """
         m = self.modes
         V = m.vectors
@@ -314,7 +398,7 @@ class Pencil:
             Ks = self.shifted(shift).tocsc()
             try:
                 self._factors[shift] = factorize_spd(Ks, what=f"K0 + {shift:g}·C0")
-            except NotPositiveDefinite as err:
+            except NotPositiveDefiniteError as err:
                 raise NotPositiveDefiniteError(
                     f"K0 + {shift:g}·C0 is not positive definite for {self.describe} (a pivot of its sparse Cholesky "
                     f"factorization is <= 0, at column {err.column}), so neither is K0: the reference is not a "
@@ -454,7 +538,7 @@ class RelaxationSpectrum:
         the Ritz vectors, exact eigenvectors only where a Ritz pair has
         converged: a cluster of (nearly) equal rates, such as a lattice's
         identical local modes, is represented by fewer Ritz pairs carrying its
-        total weight (what J needs; see :func:`tenscell.relaxation_modes` for
+        total weight (what J needs; see :func:`tenscell.summary.relaxation_modes` for
         converged slowest modes).
     error_estimate : float
         Relative accuracy of the spectrum's ``J`` (0 for the dense, exact decomposition).
@@ -494,7 +578,9 @@ class RelaxationSpectrum:
 
     def plot(self, ax=None, **kw):
         """Each mode's compliance weight r/λ (m/N) against its relaxation time 1/λ (s), as stems."""
-        from ..plotting import spectrum_stems
+        from .._results import plotter
+
+        spectrum_stems = plotter("spectrum_stems")
 
         return spectrum_stems(self.times, self.weights, ax=ax, xlabel="relaxation time 1/λ (s)",
                               ylabel="compliance weight r/λ (m/N)", **kw)

@@ -21,21 +21,13 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
+from .._errors import NotPositiveDefiniteError
+
 __all__ = ["NotPositiveDefinite", "SparseCholesky", "factorize_spd"]
 
 
-class NotPositiveDefinite(ValueError):
-    """The matrix is not positive definite: its Cholesky factorization meets a pivot <= 0.
-
-    Attributes
-    ----------
-    column : int
-        Column (of the reordered matrix) at which the factorization stopped.
-    """
-
-    def __init__(self, message: str, column: int):
-        super().__init__(message)
-        self.column = column
+#: the sparse factorization's name for the one not-positive-definite error (its ``column`` says where it stopped)
+NotPositiveDefinite = NotPositiveDefiniteError
 
 
 class SparseCholesky:

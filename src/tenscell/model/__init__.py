@@ -1,1 +1,25 @@
-"""What a structure is and where it rests: members, coordinates, equilibrium, reference shapes."""
+"""What a structure is and where it rests: members, coordinates, equilibrium, reference shapes.
+
+The public names of ``model/``'s modules (:mod:`~tenscell.model.structure`,
+:mod:`~tenscell.model.equilibrium`, :mod:`~tenscell.model.formfinding`,
+:mod:`~tenscell.model.shapes`, :mod:`~tenscell.model.lattices`), importable from here.
+"""
+from .equilibrium import Cell, NotPrestressableError, equilibrate
+from .formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
+from .lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
+from .shapes import (DEFAULT_DELTA, REGULAR_DELTA, cylindrical_cell, if_free_delta, paper_cell, paper_structure,
+                     regular_cell, semiflexible_paper_cell)
+from .structure import ACTIN, INTERMEDIATE_FILAMENT, STRUT, Point, Structure, StructureError, member_values
+
+__all__ = [
+    # structures
+    "Point", "Structure", "StructureError", "member_values", "ACTIN", "INTERMEDIATE_FILAMENT", "STRUT",
+    # equilibrium and form-finding
+    "Cell", "NotPrestressableError", "equilibrate", "FormFindingError", "FormFindingResult", "find_form",
+    "pin_jointed", "rigid_body_modes",
+    # the paper's cell and its references
+    "paper_cell", "paper_structure", "regular_cell", "cylindrical_cell", "semiflexible_paper_cell", "if_free_delta",
+    "DEFAULT_DELTA", "REGULAR_DELTA",
+    # spheres and lattices
+    "sphere_cell", "sphere_structure", "lattice_cell", "lattice_structure", "expanded_octahedron",
+]

@@ -28,8 +28,9 @@ import numpy as np
 import scipy.linalg
 import scipy.sparse as sp
 
+from .._errors import TenscellError
 from .coordinates import Coordinates, NodeKinematics, kinematics, make_coordinates
-from .structure import STRUT, Point, Structure
+from .structure import Point, Structure, cable_mask
 
 __all__ = [
     "NotPrestressableError",
@@ -54,7 +55,7 @@ __all__ = [
 SPARSE_THRESHOLD = 1500
 
 
-class NotPrestressableError(ValueError):
+class NotPrestressableError(TenscellError, ValueError):
     """The requested reference admits no self-stress with all tendons in tension."""
 
 
@@ -229,7 +230,7 @@ def self_stress(
                 f"{describe} is not prestressable with equal tensions in the requested groups: "
                 f"the {dim}-dimensional self-stress space contains no such state"
             )
-    cable = np.array([f != STRUT for f in families])
+    cable = cable_mask(families)
     if N.shape[1] == 1:
         T = N[:, 0]
         if T[cable].sum() < 0:
@@ -294,7 +295,7 @@ def self_stress_lp(
     """
     A = sp.csr_matrix(A)
     n, m = A.shape
-    cable = np.array([f != STRUT for f in families])
+    cable = cable_mask(families)
     nc = int(cable.sum())
     rows = [sp.hstack([A, sp.csr_matrix((n, 1))])]
     rhs = [np.zeros(n)]
@@ -451,7 +452,9 @@ class Cell:
 
     def plot(self, ax=None, **kw):
         """The cell's structure in 3D (:func:`tenscell.plotting.structure_3d`)."""
-        from ..plotting import structure_3d
+        from .._results import plotter
+
+        structure_3d = plotter("structure_3d")
 
         return structure_3d(self.structure, ax=ax, **{"title": self.describe(), **kw})
 
@@ -535,7 +538,7 @@ def _check_given_self_stress(A, families, T0, label) -> np.ndarray:
     T0 = np.array(T0, dtype=float)
     if T0.shape != (len(families),) or not np.all(np.isfinite(T0)):
         raise ValueError(f"T0 must be {len(families)} finite tensions, got shape {T0.shape}")
-    cable = np.array([f != STRUT for f in families])
+    cable = cable_mask(families)
     T0 = T0 / np.linalg.norm(T0[cable])
     resid = np.linalg.norm(A @ T0) / max(np.abs(A).max() if not sp.issparse(A) else abs(A).max(), 1e-300)
     if resid > 1e-8:

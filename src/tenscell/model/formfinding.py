@@ -46,8 +46,7 @@ from .equilibrium import (
     member_geometry,
     tangent_stiffness,
 )
-from ..io.structure_files import member_values
-from .structure import STRUT, Structure
+from .structure import STRUT, Structure, member_values
 
 __all__ = [
     "FormFindingError",

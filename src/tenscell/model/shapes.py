@@ -25,11 +25,13 @@ import numpy as np
 from .._checks import finite_scalar, positive_scalar
 from .coordinates import kinematics, make_coordinates
 from .equilibrium import Cell, NotPrestressableError, equilibrate, equilibrium_matrix, member_geometry
-from .structure import ACTIN, INTERMEDIATE_FILAMENT, Point, Structure
+from .structure import ACTIN, INTERMEDIATE_FILAMENT, NUCLEUS, Point, Structure
 
 __all__ = [
     "paper_cell",
     "paper_structure",
+    "nucleated_cell",
+    "nucleated_structure",
     "paper_nodes",
     "if_free_delta",
     "DEFAULT_DELTA",
@@ -446,6 +448,24 @@ def _turn_orbits(structure: Structure) -> np.ndarray:
     return orbit
 
 
+def _cylindrical_residual(base: Structure, orbit: np.ndarray):
+    """``z -> (A(q)·T, ‖T‖ − 1)`` for z = (5 shape parameters, class tensions): equilibrium of the cylindrical cell."""
+
+    def residual(z):
+        try:
+            nodes = cylindrical_nodes(z[:5], 1.0)
+        except ValueError:
+            return np.full(25, 1e3)
+        st = Structure(nodes=nodes, struts=base.struts, tendons=base.tendons, families=base.families,
+                       fixed=base.fixed, load=base.load, probe=base.probe)
+        co = make_coordinates(st, "angles")
+        A = equilibrium_matrix(member_geometry(co, co.q0), sparse=False)
+        T = z[5:][orbit]
+        return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
+
+    return residual
+
+
 def find_cylindrical_reference(
     start=None, *, min_tension: float = 0.02, stiffness_check=(1000.0, 1.0), n_starts: int = 10, seed: int = 0
 ) -> tuple[float, ...]:
@@ -498,18 +518,7 @@ def find_cylindrical_reference(
     if p0.shape != (5,):
         raise ValueError(f"start must have 5 entries (θ_C1, θ_B1, θ_D1, z_B1/L, z_N/L), got {p0.size}")
     P, EA = stiffness_check
-
-    def residual(z):
-        try:
-            nodes = cylindrical_nodes(z[:5], 1.0)
-        except ValueError:
-            return np.full(25, 1e3)
-        st = Structure(nodes=nodes, struts=base.struts, tendons=base.tendons, families=base.families,
-                       fixed=base.fixed, load=base.load, probe=base.probe)
-        co = make_coordinates(st, "angles")
-        A = equilibrium_matrix(member_geometry(co, co.q0), sparse=False)
-        T = z[5:][orbit]
-        return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
+    residual = _cylindrical_residual(base, orbit)
 
     from scipy.optimize import least_squares  # here, not at import (see if_free_delta)
 
@@ -536,3 +545,108 @@ def find_cylindrical_reference(
             return params
         reasons.append(f"start {k}: unstable (smallest K0 eigenvalue {lam:.3g})")
     raise NotPrestressableError("no stable cylindrical reference found: " + "; ".join(reasons))
+
+
+# ---- the nucleus ----------------------------------------------------------------------------------------
+def _nucleus_pairs() -> tuple[tuple[int, int], ...]:
+    """The nucleus shell's 30 edges: the strut ends' neighbours (21 actin + 3 base + 6 strut pairs), an icosahedron."""
+    struts = ((_A1, _C1), (_A2, _C2), (_A3, _C3), (_D1, _B1), (_D2, _B2), (_D3, _B3))
+    return tuple(sorted(set(_actin_pairs()) | {(0, 1), (0, 2), (1, 2)} | {(min(p), max(p)) for p in struts}))
+
+
+def nucleated_structure(alpha: float, delta: float, L: float, radius: float = 0.5) -> Structure:
+    """The paper cell with a nucleus: a stiff shell the 12 intermediate filaments pass through.
+
+    Each IF (strut end → centre node N) is split at the fraction ``radius``
+    of its length from N by a nucleus node; the 12 nucleus nodes, on the
+    IFs' lines through the centre, are joined by the 30 edges of an
+    icosahedron (the strut ends' neighbour pattern) of family ``"nucleus"``.
+    Members: 21 actin, 12 outer IF segments (strut end → nucleus node),
+    12 inner IF segments (nucleus node → N), 30 nucleus edges, in this
+    order; nodes: the paper cell's 13, then the nucleus nodes K1…K12.
+    """
+    paper = paper_structure(alpha, delta, L, intermediate_filaments=True)
+    x = paper.nodes
+    O = x[_N]
+    nuc = O + radius * (x[:12] - O)  # on each IF's line, radius·|IF| from the centre
+    nodes = np.vstack([x, nuc])
+    k = lambda i: 13 + i  # noqa: E731  the nucleus node on strut end i's IF
+    actin = list(_actin_pairs())
+    outer = [(i, k(i)) for i in range(12)]
+    inner = [(k(i), _N) for i in range(12)]
+    shell = [(k(a), k(b)) for a, b in _nucleus_pairs()]
+    tendons = actin + outer + inner + shell
+    families = [ACTIN] * 21 + [INTERMEDIATE_FILAMENT] * 24 + [NUCLEUS] * len(shell)
+    return Structure(
+        nodes=nodes, struts=paper.struts, tendons=tuple(tendons), families=tuple(families), fixed=paper.fixed,
+        load=paper.load, probe=paper.probe, name="nucleated paper cell",
+        node_names=PAPER_NODE_NAMES + tuple(f"K{i + 1}" for i in range(12)),
+    )
+
+
+def nucleated_cell(alpha: float = 0.0, delta: float | None = None, L: float = 1.0, radius: float = 0.5,
+                   parametrization: str = "angles", nucleus_load: float = 0.0) -> Cell:
+    """The paper cell with a nucleus tied to its intermediate filaments (:func:`nucleated_structure`).
+
+    The self-stress is the paper cell's: actin and IFs carry the paper's
+    ``T0`` (each IF's two segments its tension), the nucleus edges carry no
+    force at the reference (the IFs pass straight through the nucleus nodes,
+    so each is balanced without them). The nucleus is then stress-free and
+    acts through its material stiffness only: give its edges (family
+    ``"nucleus"``) a stiffness with :func:`tenscell.laws.family_laws` or
+    per-member arrays. Limits that hold exactly: with nucleus edges of
+    vanishing stiffness and IF segments whose Voigt time ``c/k`` equals the
+    whole IF's (``c_segment = c·l_IF/l_segment``), the moduli are the paper
+    cell's at every frequency (a tensioned, undamped kink node condenses
+    exactly; two Voigt springs of one time constant in series are one); the
+    static modulus rises monotonically with the nucleus stiffness (probe =
+    load, K grows in the positive-semidefinite order).
+
+    The self-stress is normalized over the 45 cables (each IF counted twice),
+    so the tensions ``P·T0`` equal the paper cell's at the prestress
+    ``P·T0[0]/paper_cell().T0[0]`` (the actin tendons' ratio, 0.922 at the
+    default reference).
+
+    Parameters
+    ----------
+    alpha, delta, L
+        As :func:`paper_cell` (rad, rad, m); δ defaults to 50°.
+    radius : float
+        Where the nucleus nodes sit on the IFs, as a fraction of the IF length
+        from the centre, 0 < radius < 1 (the nucleus's size relative to the cell).
+    parametrization : {"angles", "local"}
+    nucleus_load : float
+        The fraction of each IF's tension that the nucleus carries, 0 ≤ f < 1
+        (dimensionless): the inner IF segments keep ``(1 − f)·T_IF`` and the
+        nucleus shell balances the rest, ``f·T_IF`` pulling radially outward at
+        each of its nodes (a prestressed nucleus; its shell is statically
+        determinate — 30 edges, 12 nodes less 6 rigid motions — so its forces
+        are unique). 0 (default): the stress-free nucleus described above.
+
+    Returns
+    -------
+    Cell
+        75 members (21 actin, 24 IF segments, 30 nucleus edges), 60 coordinates.
+    """
+    radius = finite_scalar("radius (nucleus)", radius, "a number strictly between 0 and 1 (fraction of the IF length)")
+    if not 0.0 < radius < 1.0:
+        raise ValueError(f"radius (nucleus) must lie strictly between 0 and 1 (fraction of the IF length), got {radius!r}")
+    paper = paper_cell(alpha, delta, L, parametrization=parametrization)
+    p = dict(paper.parameters)
+    st = nucleated_structure(p["alpha"], p["delta"], p["L"], radius)
+    frac = finite_scalar("nucleus_load", nucleus_load, "a number in [0, 1) (fraction of the IF tension)")
+    if not 0.0 <= frac < 1.0:
+        raise ValueError(f"nucleus_load must lie in [0, 1) (fraction of the IF tension the nucleus carries), got {frac!r}")
+    ifs = paper.T0[21:]
+    T0 = np.concatenate([paper.T0[:21], ifs, (1.0 - frac) * ifs, np.zeros(len(st.tendons) - 45)])
+    params = {**p, "nucleus_radius": radius} | ({"nucleus_load": frac} if frac else {})
+    if frac:  # the shell's forces that balance the IFs' unbalanced pull f·T_IF on its nodes (unique, see above)
+        A = equilibrium_matrix(member_geometry(*_reference_geometry(st, parametrization)), sparse=False)
+        x, *_ = np.linalg.lstsq(A[:, 45:], -(A[:, :45] @ T0[:45]), rcond=None)
+        T0[45:] = x
+    return equilibrate(st, parametrization, T0=T0, parameters=params)
+
+
+def _reference_geometry(structure: Structure, parametrization: str):
+    co = make_coordinates(structure, parametrization)
+    return co, co.q0, kinematics(co, co.q0)

@@ -24,14 +24,25 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Point", "Structure", "StructureError", "ACTIN", "INTERMEDIATE_FILAMENT", "STRUT"]
+from .._errors import TenscellError
+
+__all__ = ["Point", "Structure", "StructureError", "ACTIN", "INTERMEDIATE_FILAMENT", "STRUT", "NUCLEUS",
+           "COMPRESSIBLE_FAMILIES", "cable_mask", "member_values"]
 
 ACTIN = "actin"
 INTERMEDIATE_FILAMENT = "intermediate_filament"
 STRUT = "strut"  # an elastic (non-rigid) compression member listed among the members
+NUCLEUS = "nucleus"  # a member of the nucleus body: elastic, may carry either sign of force (not a cable)
+#: families whose members may carry compression in the self-stress (every other member is a cable: tension only)
+COMPRESSIBLE_FAMILIES = frozenset({STRUT, NUCLEUS})
 
 
-class StructureError(ValueError):
+def cable_mask(families) -> np.ndarray:
+    """Whether each member is a cable (tension only), shape (m,): its family is not in :data:`COMPRESSIBLE_FAMILIES`."""
+    return np.array([f not in COMPRESSIBLE_FAMILIES for f in families], dtype=bool)
+
+
+class StructureError(TenscellError, ValueError):
     """A structure that is not well formed; the message names the element."""
 
 
@@ -185,8 +196,9 @@ class Structure:
         Working tendons (members whose tension enters the equations) as node pairs.
     families : sequence of str
         One family per tendon, e.g. ``"actin"``, ``"intermediate_filament"``;
-        ``"strut"`` marks an elastic compression member, which may carry a
-        negative force in the self-stress.
+        ``"strut"`` marks an elastic compression member and ``"nucleus"`` a
+        member of a nucleus body; both may carry a negative force in the
+        self-stress (every other member is a cable).
     fixed : sequence of int
         Fixed nodes (ball-joint anchors, supports).
     load, probe : Point
@@ -346,6 +358,44 @@ class Structure:
 
     def plot(self, ax=None, **kw):
         """The structure in 3D, coloured as the paper's Fig. 1 (:func:`tenscell.plotting.structure_3d`)."""
-        from ..plotting import structure_3d
+        from .._results import plotter
+
+        structure_3d = plotter("structure_3d")
 
         return structure_3d(self, ax=ax, **kw)
+
+
+def member_values(structure: Structure, values, name: str = "value", unit: str = "") -> np.ndarray:
+    """Expand a per-member property to an array over the structure's tendons.
+
+    Parameters
+    ----------
+    structure : Structure
+    values : float, dict or array_like
+        One value for all members; a dict ``{family: value}`` (every family
+        present must be given; key ``"default"`` covers the rest); or one
+        value per member, shape (m,).
+    name, unit : str
+        For error messages, e.g. ``"EA"``, ``"N"``.
+
+    Returns
+    -------
+    ndarray, shape (m,)
+    """
+    m = structure.n_tendons
+    if isinstance(values, dict):
+        out = np.empty(m)
+        for j, fam in enumerate(structure.families):
+            if fam in values:
+                out[j] = values[fam]
+            elif "default" in values:
+                out[j] = values["default"]
+            else:
+                raise ValueError(f"{name}: no value for family {fam!r} (tendon {j}); give it or a 'default'")
+        return out
+    arr = np.asarray(values, dtype=float)
+    if arr.ndim == 0:
+        return np.full(m, float(arr))
+    if arr.shape != (m,):
+        raise ValueError(f"{name} must be a scalar, a {{family: value}} dict or have shape ({m},){' (' + unit + ')' if unit else ''}, got shape {arr.shape}")
+    return arr.copy()

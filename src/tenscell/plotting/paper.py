@@ -15,7 +15,7 @@ from ._style import colors, label_moduli, new_panels, styled
 if TYPE_CHECKING:
     from ..response import FrequencyResponse
 
-__all__ = ["fig2_prestress", "fig3_frequency", "moduli_vs_frequency", "moduli_vs_prestress"]
+__all__ = ["fig2_prestress", "fig3_frequency", "moduli_vs_frequency", "moduli_vs_prestress", "linear_model_moduli"]
 
 _PANELS = (8.0, 3.4)
 
@@ -71,6 +71,19 @@ def moduli_vs_frequency(resp: FrequencyResponse, axes: Sequence[Axes] | None = N
     if legend:
         a1.legend(title="prestress", ncol=2, loc="upper left")
     return ax
+
+
+def linear_model_moduli(lin, axes: Sequence[Axes] | None = None, f_hz=None, **kw) -> np.ndarray:
+    """G' and G'' of one :class:`~tenscell.linear.linearize.LinearModel` against frequency (``LinearModel.plot``).
+
+    ``f_hz`` defaults to 61 frequencies from 0.01 to 1000 Hz (the paper's
+    window); ``kw`` as :func:`moduli_vs_frequency`.
+    """
+    from ..response import FrequencyResponse, compliance
+
+    f = np.logspace(-2, 3, 61) if f_hz is None else np.atleast_1d(np.asarray(f_hz, dtype=float))
+    resp = FrequencyResponse(frequency_hz=f, prestress=np.array([lin.P]), J=compliance(lin, f)[None, :], L=lin.L)
+    return moduli_vs_frequency(resp, axes, **kw)
 
 
 def fig2_prestress(resp: FrequencyResponse, title: str = "Homogeneous cell: moduli versus prestress (paper Fig. 2)",

@@ -29,13 +29,14 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
+from .._errors import TenscellError
 from .._parallel import usable_cpus
 
 __all__ = ["cluster", "stream", "run_tasks", "cluster_pays", "batch_size", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
            "WorkDirError"]
 
 
-class WorkDirError(ValueError):
+class WorkDirError(TenscellError, ValueError):
     """A work directory holds a different or unfinished run (one line naming it)."""
 
 
@@ -67,11 +68,11 @@ def open_work_dir(path, settings_file: str, settings: dict, resume: bool) -> Pat
     return path
 
 
-class TaskLost(Exception):
+class TaskLost(TenscellError):
     """A task whose workers kept dying (Dask gave up on it); carries Dask's message."""
 
 
-class SchedulerLost(ConnectionError):
+class SchedulerLost(TenscellError, ConnectionError):
     """The connection to the Dask scheduler was lost: the run stops; what was written is kept."""
 
 

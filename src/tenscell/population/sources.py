@@ -41,6 +41,8 @@ from pathlib import Path, PurePosixPath
 
 import numpy as np
 
+from .._errors import TenscellError
+
 __all__ = ["CellSource", "SourceError", "read_sources", "CELL_COLUMN", "CONDITION_COLUMN"]
 
 CELL_COLUMN = "cell"
@@ -48,7 +50,7 @@ CONDITION_COLUMN = "condition"
 _TABLE_SUFFIXES = (".csv", ".parquet", ".pq")
 
 
-class SourceError(ValueError):
+class SourceError(TenscellError, ValueError):
     """The population input cannot be listed at all (missing, empty, duplicate ids): one line naming it."""
 
 
@@ -167,7 +169,7 @@ def _from_path(inputs) -> list[CellSource]:
         return _from_table(path)
     if _glob.has_magic(text):
         files = sorted(Path(p) for p in _glob.glob(text, recursive=True) if Path(p).is_file())
-        base = Path(*[part for part in _fixed_prefix(text)]) if _fixed_prefix(text) else Path(".")
+        base = Path(*_fixed_prefix(text)) if _fixed_prefix(text) else Path(".")
         return _from_files(base, files)
     raise SourceError(f"{text}: no such file or directory")
 

@@ -173,13 +173,17 @@ class PopulationResult:
 
     def plot(self, ax=None, **kw):
         """Distributions of the fitted parameters per condition (see :mod:`tenscell.plotting.population`)."""
-        from ..plotting.population import parameter_distributions
+        from .._results import plotter
+
+        parameter_distributions = plotter("parameter_distributions")
 
         return parameter_distributions(self.table, self.parameter_columns, ax=ax, **kw)
 
     def plot_moduli(self, ax=None, **kw):
         """Population G', G'': median and interquartile band, fitted against data (per condition)."""
-        from ..plotting.population import population_moduli
+        from .._results import plotter
+
+        population_moduli = plotter("population_moduli")
 
         return population_moduli(self, ax=ax, **kw)
 
@@ -229,7 +233,7 @@ def read_table(path):
     if path.endswith((".parquet", ".pq")):
         return pd.read_parquet(path)
     text = [c for c in _TEXT if c != "converged"]
-    df = pd.read_csv(path, keep_default_na=False, na_values=[""], dtype={c: "str" for c in text})
+    df = pd.read_csv(path, keep_default_na=False, na_values=[""], dtype=dict.fromkeys(text, "str"))
     return df.fillna({c: "" for c in text if c in df.columns})
 
 

@@ -1,1 +1,22 @@
-"""The paper's studies: claims, variants of the discussion, future work."""
+"""The paper's studies: claims, variants of the discussion, future work.
+
+One module per study (:mod:`~tenscell.studies.claims`, :mod:`~tenscell.studies.no_if`,
+:mod:`~tenscell.studies.references`, :mod:`~tenscell.studies.semiflexible`,
+:mod:`~tenscell.studies.stiffening`, :mod:`~tenscell.studies.compactness`); their
+entry points and results are importable from here.
+"""
+from .claims import homogeneous_study, paper_claims
+from .compactness import CompactnessStudy, compactness_study
+from .no_if import LossPeak, NoIFStudy, loss_peak, no_if_study
+from .references import ReferencesStudy, prestress_map, references_study
+from .semiflexible import BucklingError, SemiflexibleStudy, linearize_semiflexible, semiflexible_study
+from .stiffening import StiffeningStudy, linearize_stiffening, stiffening_study
+
+__all__ = [
+    "homogeneous_study", "paper_claims",
+    "no_if_study", "NoIFStudy", "loss_peak", "LossPeak",
+    "references_study", "ReferencesStudy", "prestress_map",
+    "semiflexible_study", "SemiflexibleStudy", "linearize_semiflexible", "BucklingError",
+    "stiffening_study", "StiffeningStudy", "linearize_stiffening",
+    "compactness_study", "CompactnessStudy",
+]

@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model.equilibrium import Cell
-from ..linear.linearize import linearize
 from ..response import FrequencyResponse, frequency_response, log_slope
 from ..sensitivity import perturbation_table
 from ..model.shapes import paper_cell
@@ -148,12 +147,18 @@ def _rise_frequency(f, Gp, factor=1.1):
 
 
 def paper_claims(study: HomogeneousStudy, robust: dict[str, tuple[float, float, str]] | None = None) -> list[Claim]:
-    """Measure the model notes' four claims (and the G'' slope remark) on a study."""
-    claims = []
+    """Measure the model notes' four claims (and the G'' slope remark) on a study (the fourth needs ``robust``)."""
+    claims = [_claim_prestress(study), _claim_rise(study), _claim_loss_slope(study)]
+    if robust is not None:
+        claims.append(_claim_robustness(robust))
+    return claims
+
+
+def _claim_prestress(study: HomogeneousStudy) -> Claim:
+    """Claim 1: G', G'' increase with P; G' more steeply; G' close to linear in P (Fig. 2)."""
     P = study.fig2.prestress
     f2 = study.fig2.frequency_hz
     Gs, Gl = study.fig2.G_storage, study.fig2.G_loss  # (nP, nf)
-    # 1. G', G'' increase with P; G' more steeply; G' ~ linear in P
     inc_s = bool(np.all(np.diff(Gs, axis=0) > 0))
     inc_l = bool(np.all(np.diff(Gl, axis=0) > 0))
     ev = []
@@ -176,11 +181,13 @@ def paper_claims(study: HomogeneousStudy, robust: dict[str, tuple[float, float, 
     ev.insert(1, f"as exponents, ∂lnG'/∂lnP = {e_s.min():.3f} to {e_s.max():.3f} and ∂lnG''/∂lnP = {e_l.min():.3g} to "
                  f"{e_l.max():.3g} over P = {P[0]:g}–{P[-1]:g} and f = {f2[0]:g}–{f2[-1]:g} Hz (cells: see 'Against "
                  "cells' below)")
-    claims.append(Claim(1, "At each f in 1–10 Hz, G' and G'' increase with P; G' much more steeply than G''; G' close to linear in P.",
-                        ev, inc_s and inc_l and steeper and lin_ok))
-    # 2. G' flat at low f, rising above ~1–10 Hz; the rise shifts to higher f with P
-    f3 = study.fig3.frequency_hz
-    G3s, G3l = study.fig3.G_storage, study.fig3.G_loss
+    return Claim(1, "At each f in 1–10 Hz, G' and G'' increase with P; G' much more steeply than G''; G' close to linear in P.",
+                        ev, inc_s and inc_l and steeper and lin_ok)
+
+
+def _claim_rise(study: HomogeneousStudy) -> Claim:
+    """Claim 2: G' flat at low f, rising above ~1–10 Hz; the rise shifts to higher f with P (Fig. 3)."""
+    f3, G3s = study.fig3.frequency_hz, study.fig3.G_storage
     rises = [_rise_frequency(f3, G3s[i]) for i in range(len(study.fig3.prestress))]
     flat = [G3s[i, np.searchsorted(f3, 1.0)] / G3s[i, 0] for i in range(len(study.fig3.prestress))]
     shifts = bool(np.all(np.diff(rises) > 0))
@@ -191,9 +198,14 @@ def paper_claims(study: HomogeneousStudy, robust: dict[str, tuple[float, float, 
         f"rise frequency increases with P: {shifts}",
     ]
     in_band = all(0.5 <= r <= 20 for r in rises)
-    claims.append(Claim(2, "G' is flat at low frequency and rises above roughly 1–10 Hz; the rise shifts to higher f as P grows.",
-                        ev, bool(max(flat) < 1.05 and shifts and in_band) if in_band else None))
-    # 3. G'' rises with f nearly linearly on log-log; little sensitivity to P
+    return Claim(2, "G' is flat at low frequency and rises above roughly 1–10 Hz; the rise shifts to higher f as P grows.",
+                        ev, bool(max(flat) < 1.05 and shifts and in_band) if in_band else None)
+
+
+def _claim_loss_slope(study: HomogeneousStudy) -> Claim:
+    """Claim 3: G'' rises with f nearly linearly on log-log axes; little sensitivity to P (Fig. 3)."""
+    f3 = study.fig3.frequency_hz
+    G3s, G3l = study.fig3.G_storage, study.fig3.G_loss
     sl = log_slope(f3, G3l)
     spread_f = [0.01, 1.0, 100.0]
     ev = [
@@ -213,23 +225,24 @@ def paper_claims(study: HomogeneousStudy, robust: dict[str, tuple[float, float, 
     ev.append("the paper notes the slope of ~1 itself disagrees with cells (measured ~0.2 below 10 Hz); the model reproduces the paper, not the cells")
     i1 = int(np.argmin(np.abs(f3 - 1.0)))
     less_sensitive = G3l[-1, i1] / G3l[0, i1] < G3s[-1, i1] / G3s[0, i1]
-    claims.append(Claim(3, "G'' rises with f, nearly linearly on log-log axes, with little sensitivity to P (less than G').",
-                        ev, bool(np.all(sl > 0) and less_sensitive)))
-    # 4. robustness
-    if robust is not None:
-        size = lambda k: ("±0.05 rad in" if k.startswith("alpha") else "±5% in") if "(half)" in k else (  # noqa: E731
-            "±0.1 rad in" if k == "alpha" else "±10% in")
-        ev = [(f"{size(k)} {k}: not measurable, every perturbation leaves the valid band" if math.isnan(v[0])
-               else f"{size(k)} {k}: max |ΔG'/G'| = {v[0] * 100:.2f}%, max |ΔG''/G''| = {v[1] * 100:.2f}% "
-                    "(0.01–1000 Hz, P = 1000)") + (f"; {v[2]}" if v[2] else "") for k, v in robust.items()]
-        ev.append("'EA actin', 'c IF', ...: each tendon changed alone (worst tendon shown); '(all)': every tendon together; "
-                  "'(half)': half-size changes, since ±10% of δ leaves the valid band")
-        ok = [k for k, v in robust.items() if not v[2] and max(v[0], v[1]) <= 0.08]
-        bad = [k for k, v in robust.items() if k not in ok]
-        ev.append(f"holds (≤ 8%) for: {', '.join(ok) or 'none'}; fails for: {', '.join(bad) or 'none'}")
-        claims.append(Claim(4, "A ±10% change of a parameter changes the moduli by at most 8%.", ev,
-                            True if not bad else (False if not ok else None)))
-    return claims
+    return Claim(3, "G'' rises with f, nearly linearly on log-log axes, with little sensitivity to P (less than G').",
+                        ev, bool(np.all(sl > 0) and less_sensitive))
+
+
+def _claim_robustness(robust: dict[str, tuple[float, float, str]]) -> Claim:
+    """Claim 4: a ±10 % change of a parameter changes the moduli by at most 8 % (from :func:`robustness`)."""
+    size = lambda k: ("±0.05 rad in" if k.startswith("alpha") else "±5% in") if "(half)" in k else (  # noqa: E731
+        "±0.1 rad in" if k == "alpha" else "±10% in")
+    ev = [(f"{size(k)} {k}: not measurable, every perturbation leaves the valid band" if math.isnan(v[0])
+           else f"{size(k)} {k}: max |ΔG'/G'| = {v[0] * 100:.2f}%, max |ΔG''/G''| = {v[1] * 100:.2f}% "
+                "(0.01–1000 Hz, P = 1000)") + (f"; {v[2]}" if v[2] else "") for k, v in robust.items()]
+    ev.append("'EA actin', 'c IF', ...: each tendon changed alone (worst tendon shown); '(all)': every tendon together; "
+              "'(half)': half-size changes, since ±10% of δ leaves the valid band")
+    ok = [k for k, v in robust.items() if not v[2] and max(v[0], v[1]) <= 0.08]
+    bad = [k for k, v in robust.items() if k not in ok]
+    ev.append(f"holds (≤ 8%) for: {', '.join(ok) or 'none'}; fails for: {', '.join(bad) or 'none'}")
+    return Claim(4, "A ±10% change of a parameter changes the moduli by at most 8%.", ev,
+                        True if not bad else (False if not ok else None))
 
 
 @dataclass(frozen=True)

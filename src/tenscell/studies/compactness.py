@@ -92,7 +92,9 @@ class CompactnessStudy:
 
     def plot(self, ax=None, **kw):
         """The front: best RMS against the bound (see :func:`tenscell.plotting.fits.compactness_front`)."""
-        from ..plotting.fits import compactness_front
+        from .._results import plotter
+
+        compactness_front = plotter("compactness_front")
 
         return compactness_front(self.decades, self.rms, tolerance=self.tolerance, knee=self.knee, ax=ax, **kw)
 

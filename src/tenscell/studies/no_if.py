@@ -146,7 +146,9 @@ class NoIFStudy:
 
     def plot(self, ax=None, **kw):
         """G', G'' against f with and without IFs, peaks marked, on a pair of axes (or a new figure); returns them."""
-        from ..plotting.variants import no_if_figure
+        from .._results import plotter
+
+        no_if_figure = plotter("no_if_figure")
 
         return no_if_figure(self, axes=ax, **kw)
 
@@ -190,7 +192,7 @@ def no_if_study(
     peaks_EA = [(float(e), loss_peak(linearize(cell, P=reference_P, EA=e, c=c))) for e in grid("EA_values", EA_values, "N")]
     peaks_c = [(float(x), loss_peak(linearize(cell, P=reference_P, EA=EA, c=x))) for x in grid("c_values", c_values, "N·s/m")]
     lin = linearize(cell, P=reference_P, EA=EA, c=c)
-    lam, V = np.linalg.eigh(lin.C0)
+    lam, V = lin.pencil.damping_modes  # C0's eigenpairs: V[:, 0] is the undamped mechanism
     v = V[:, 0]
     resid = float(np.linalg.norm(cell.A.T @ v) / np.linalg.norm(cell.A))
     # as ω → ∞ only the undamped mechanism v can move: J → (D0·v)²/(vᵀK0v), and vᵀK0v = P·vᵀKp v

@@ -85,7 +85,9 @@ class ReferenceMap:
 
     def plot(self, ax=None, **kw):
         """The validity map over (α, δ) in degrees; returns the axes."""
-        from ..plotting.variants import reference_map_figure
+        from .._results import plotter
+
+        reference_map_figure = plotter("reference_map_figure")
 
         return reference_map_figure(self, ax=ax, **kw)
 
@@ -182,7 +184,9 @@ class ReferencesStudy:
 
     def plot(self, ax=None, P: float | None = None, **kw):
         """G' and G'' of every reference against f at prestress ``P`` (default: the middle one), on a pair of axes."""
-        from ..plotting.variants import references_figure
+        from .._results import plotter
+
+        references_figure = plotter("references_figure")
 
         first = next(iter(self.responses.values()))
         P = float(first.prestress[first.prestress.size // 2]) if P is None else float(P)

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._errors import TenscellError
 from .._checks import positive_array, positive_scalar
 from .._results import dataframe, format_repr
 from ..laws import Voigt
@@ -21,7 +22,7 @@ __all__ = ["BucklingError", "euler_critical_prestress", "linearize_semiflexible"
            "semiflexible_study"]
 
 
-class BucklingError(ValueError):
+class BucklingError(TenscellError, ValueError):
     """A strut's compression exceeds its Euler load π²EI/l²: the linear model does not apply."""
 
 
@@ -200,7 +201,9 @@ class SemiflexibleStudy:
 
     def plot(self, ax=None, **kw):
         """Convergence to rigid struts against EA_s, and the 1 Hz moduli, on a pair of axes (or a new figure)."""
-        from ..plotting.variants import semiflexible_figure
+        from .._results import plotter
+
+        semiflexible_figure = plotter("semiflexible_figure")
 
         return semiflexible_figure(self, axes=ax, **kw)
 

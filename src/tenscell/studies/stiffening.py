@@ -110,7 +110,9 @@ class StiffeningStudy:
 
     def plot(self, ax=None, **kw):
         """G'(P) and G''(P) near 1 Hz for each b, on a pair of axes (or a new figure); returns them."""
-        from ..plotting.variants import stiffening_figure
+        from .._results import plotter
+
+        stiffening_figure = plotter("stiffening_figure")
 
         return stiffening_figure(self, axes=ax, **kw)
 
