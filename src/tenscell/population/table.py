@@ -198,9 +198,11 @@ class PopulationResult:
         """
         from pathlib import Path
 
+        from .._results import plotter
         from ..io.outputs import atomic_path, json_ready, write_csv_rows, write_text
-        from ..plotting import save
         from ..reports.population import population_markdown
+
+        save = plotter("save")  # drawn by tenscell.plotting, a later stage (tenscell._results)
 
         d = Path(directory)
         _write_frame(d / "population.csv", self.table, write_csv_rows)
