@@ -119,7 +119,7 @@ def cluster(*, client=None, workers: int | None = None, scheduler: str | None = 
     if scheduler is None and workers == 0:
         yield None
         return
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler is not None:
         scheduler = check_scheduler(scheduler)
