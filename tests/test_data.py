@@ -12,6 +12,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from tenscell._ranges import RANGES
 import tenscell.io.data as data_module
 from tenscell.io.data import (
     DataError,
@@ -507,7 +508,13 @@ def test_write_to_missing_directory_raises(tmp_path):
         write_csv(bundled("fabry2001"), tmp_path / "no_such_dir" / "x.csv")
 
 
-positive = st.floats(min_value=1e-300, max_value=1e300, allow_nan=False, allow_infinity=False)
+def _in_range(quantity):
+    """Any float that tenscell accepts for ``quantity`` (its range in tenscell._ranges.RANGES, ends included)."""
+    lo, hi, _ = RANGES[quantity]
+    return st.floats(min_value=lo, max_value=hi, allow_nan=False, allow_infinity=False)
+
+
+positive = _in_range("modulus")  # moduli, their SDs and prestress (Pa) share one range
 comment_text = st.text(
     alphabet=st.characters(blacklist_categories=("Cs",), blacklist_characters="\r\n\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"),
     max_size=30,
@@ -520,7 +527,7 @@ def rheology_data(draw):
     column = st.lists(positive, min_size=n, max_size=n)
     maybe = lambda: draw(st.one_of(st.none(), column))  # noqa: E731
     return RheologyData(
-        frequency_hz=draw(column),
+        frequency_hz=draw(st.lists(_in_range("frequency"), min_size=n, max_size=n)),
         G_storage=draw(column),
         G_loss=draw(column),
         prestress=maybe(),

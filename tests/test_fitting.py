@@ -15,6 +15,7 @@ import pytest
 from threadpoolctl import threadpool_limits
 
 import tenscell
+from _tolerances import modal_rtol
 from tenscell import fitting
 from tenscell.fitting.search import _initial_guess
 from tenscell.reports.fit import fit_markdown
@@ -90,11 +91,15 @@ def test_problem_moduli_match_core_frequency(cell, tendons, damping):
     lin = tenscell.linearize(tenscell.paper_cell(L=2.3), P=vals[-2], EA=EA, c=c)
     Gs, Gl = tenscell.moduli(lin, data.frequency_hz)
     ms, ml = pr.moduli(theta)
-    np.testing.assert_allclose(ms, Gs, rtol=1e-9)
-    np.testing.assert_allclose(ml, Gl, rtol=1e-9)
+    # two modal decompositions of the same pencil: they agree to its conditioning; the per-tendon draw
+    # spreads EA over 8.8 decades (κ(K0) 1.7e8, τ over 7.5 decades: rtol 4e-6; 1.2e-9 seen on Prescott),
+    # the other parametrizations get ~1e-12
+    rtol = modal_rtol(lin)
+    np.testing.assert_allclose(ms, Gs, rtol=rtol)
+    np.testing.assert_allclose(ml, Gl, rtol=rtol)
     r = pr.residuals(theta)
-    np.testing.assert_allclose(r[: data.n], np.log10(Gs / data.G_storage), atol=1e-12)
-    np.testing.assert_allclose(r[data.n:], np.log10(Gl / data.G_loss), atol=1e-12)
+    np.testing.assert_allclose(r[: data.n], np.log10(Gs / data.G_storage), atol=rtol / math.log(10))
+    np.testing.assert_allclose(r[data.n:], np.log10(Gl / data.G_loss), atol=rtol / math.log(10))
 
 
 def test_problem_moduli_match_core_prestress(cell):
@@ -194,13 +199,34 @@ def test_homogeneous_model_cannot_fit_power_law(cell):
 
 
 def test_heterogeneous_fit_reaches_power_law(cell):
-    """... and a heterogeneous one does, with G' slope near 0.2 across 0.01-100 Hz."""
-    r = fitting.fit(bundled("fabry2001"), cell, starts=1, hops=15, seed=0, tolerance=0.005, progress=False)
-    assert r.converged and r.rms_log10_error <= 0.005
-    _, s1, _ = fitting.frequency_slopes(r, 0.01, 100.0, 1000)
-    assert 0.14 <= s1.min() and s1.max() <= 0.26
+    """... and a heterogeneous one does: across 0.01-100 Hz its mean G' slope is the data's 0.20.
+
+    What is asserted holds for every converged fit, whichever start or BLAS kernel found it: converged
+    means each data set's RMS log10 error is <= tol, so no single G' residual exceeds sqrt(2n)·tol
+    (2n residuals, G' and G''), and the model's log-log secant slope over the 4 decades 0.01-100 Hz
+    (both data frequencies) differs from the data's by at most 2·sqrt(2n)·tol / 4 (0.015 here). The
+    local slopes between the data points are not asserted: where they wander (0.17-0.26 seen) is not
+    fixed by the data. Four starts: a single start converges in about half of the optimizer paths.
+    """
+    data = bundled("fabry2001")
+    tol = 0.005
+    r = fitting.fit(data, cell, starts=4, hops=15, seed=0, tolerance=tol, progress=False)
+    assert r.converged and r.fits[0].rms_log10_error <= tol
+    data_slope = math.log10(data.G_storage[-1] / data.G_storage[0]) / math.log10(
+        data.frequency_hz[-1] / data.frequency_hz[0])
+    assert data_slope == pytest.approx(0.20, abs=1e-4)  # the bundled file is the structural damping law, x-1 = 0.20
+    f, s1, _ = fitting.frequency_slopes(r, 0.01, 100.0, 1000)
+    Gs, _ = r.moduli(np.array([0.01, 100.0]), dataset=0)
+    secant = math.log10(Gs[1] / Gs[0]) / 4.0
+    assert secant == pytest.approx(data_slope, abs=2 * math.sqrt(2 * data.n) * tol / 4.0)
+    # the local slopes integrate to the secant (np.gradient's second-order differences on 1000 points: ~1e-6)
+    x = np.log(f)
+    mean_local = np.sum(0.5 * (s1[1:] + s1[:-1]) * np.diff(x)) / (x[-1] - x[0])  # trapezoid rule
+    assert mean_local == pytest.approx(secant, abs=1e-4)
+    # with one damping c the retardation times c/k must span the data's 4.7 decades of frequency, so the
+    # stiffnesses spread over decades (converged fits found 9-14; a homogeneous cell has 0)
     lo, hi, decades = r.stiffness_spread
-    assert decades > 3  # the stiffnesses must spread over decades
+    assert decades > 3
 
 
 def test_same_seed_same_result_and_jobs_independent(cell):

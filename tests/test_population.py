@@ -498,11 +498,12 @@ def test_workers_never_see_ctrl_c(client):
     assert client.run(os.getpid) == pids  # the same workers, none replaced
 
 
-def _one_interrupt_line(err: str) -> None:
+def _one_interrupt_line(err: str, kept: bool) -> None:
     """stderr: the command's own lines from before the interrupt (its cost estimate), then exactly one line for
-    the interrupt, and nothing from any other process (no traceback, no Dask log or warning)."""
+    the interrupt (naming --resume when finished results were kept), and nothing from any other process (no
+    traceback, no Dask log or warning)."""
     lines = err.splitlines()
-    assert lines and "interrupted" in lines[-1] and "--resume" in lines[-1], err
+    assert lines and "interrupted" in lines[-1] and ("--resume" in lines[-1]) == kept, err
     assert all(line.startswith("tenscell") and "interrupted" not in line for line in lines[:-1]), err
     assert "Traceback" not in err and "8787" not in err, err
 
@@ -544,7 +545,9 @@ def test_ctrl_c_on_fit_population_is_one_line(big_population, tmp_path, port_878
     code, err = _ctrl_c(["fit-population", big_population, "--out", out, "--workers", "2",
                          "--starts", FAST.starts, "--hops", FAST.hops], ready)
     assert code == 130
-    _one_interrupt_line(err)
+    kept = any(not p.name.startswith(".") for p in records.glob("*.json"))
+    _one_interrupt_line(err, kept)
+    assert kept or not records.parent.exists()  # a run that finished nothing leaves nothing behind
     assert not out.exists()
 
 
@@ -558,4 +561,4 @@ def test_ctrl_c_on_large_study_is_one_line(tmp_path, port_8787_taken):
     code, err = _ctrl_c(["large-study", "monte-carlo", "--draws", "300000", "--chunk", "500", "--out", out,
                          "--workers", "2"], ready)
     assert code == 130
-    _one_interrupt_line(err)
+    _one_interrupt_line(err, kept=True)

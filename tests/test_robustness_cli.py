@@ -99,6 +99,8 @@ def test_the_default_work_directory_is_named_when_it_is_a_file(capsys, here):
     (["fit", "m.csv", "--bound", "EA=1e-300:1", "--out", "o"], ["--bound", "EA: 1e-300 N"]),
     (["fit", "m.csv", "--bound", "L=1e-3:1e20", "--out", "o"], ["--bound", "L: 1e+20 m"]),
     (["synth-population", "--cells", "1", "--conditions", "a", "b", "c", "--out", "o"], ["--cells 1", "a, b, c"]),
+    (["synth-population", "--cells", "4", "--conditions", "a", "a", "--out", "o"], ["--conditions", "a given twice"]),
+    (["synth-population", "--cells", "4", "--conditions", "a:Q=2", "--out", "o"], ["--conditions", "a:Q=2"]),
     (["creep", "--window", "10:100", "--out", "o"], ["--window 10:100", "0 of the 61"]),
     (["simulate", "--amplitude", "1,2", "--control", "displacement", "--freq", "1", "--out", "o"],
      ["--control displacement"]),
@@ -262,12 +264,13 @@ def test_the_truth_file_is_read_and_checked_before_any_fit(content, words, capsy
 FAST = ["--workers", "0", "--starts", "1", "--hops", "0"]
 
 
-def test_a_leftover_work_directory_without_records_does_not_break_the_next_run(capsys, here, population):
-    """An earlier run stopped before its first record left OUT.partial/ with its settings only."""
+def test_a_leftover_work_directory_is_named_and_kept(capsys, here, population):
+    """A killed run (SIGKILL) left OUT.partial/ with its settings only; it may as well belong to a run still under
+    way, so a new run is refused naming it (and how to go on) and leaves it as it was."""
     (here / "o.partial" / "cells").mkdir(parents=True)
-    (here / "o.partial" / "run.json").write_text('{"seed": 99}')
-    assert main(["fit-population", str(population), "--out", "o", *FAST]) == 0
-    assert (here / "o" / "manifest.json").is_file() and not (here / "o.partial").exists()
+    (here / "o.partial" / "run.json").write_text("{}")
+    refused(["fit-population", population, "--out", "o", *FAST], capsys, here, "o.partial", "--resume")
+    assert (here / "o.partial" / "run.json").read_text() == "{}"
 
 
 def test_a_run_stopped_before_its_first_record_leaves_no_work_directory(capsys, here, population, monkeypatch):
@@ -428,3 +431,24 @@ def test_extreme_values_in_a_structure_file_are_read_and_used_or_refused_naming_
     summary, cell, lin = summarize(target, EA=sf.EA, c=sf.c)
     if lin is not None:
         assert all(math.isfinite(v) for v in cell.T0)
+
+
+def test_a_live_dask_scheduler_passes_the_preflight(tmp_path):
+    """The handshake check accepts a real scheduler, by address and by scheduler file (and never waits for it)."""
+    distributed = pytest.importorskip("distributed")
+    from tenscell.cli.population import reach_scheduler
+
+    with distributed.LocalCluster(n_workers=0, protocol="tcp", host="127.0.0.1", dashboard_address=None,
+                                  scheduler_port=0) as cluster:
+        reach_scheduler(cluster.scheduler_address)
+        (tmp_path / "sched.json").write_text(json.dumps({"address": cluster.scheduler_address}))
+        reach_scheduler(str(tmp_path / "sched.json"))
+
+
+def test_creep_with_many_output_times_announces_a_lower_bound(capsys, here, monkeypatch):
+    """The rate (replaced here: nothing is timed) is that of the state at one output time, without the integration."""
+    import tenscell.cli.dynamics as dyn
+
+    monkeypatch.setattr(dyn, "measure", lambda fn, **kw: 1.0)
+    refused(["creep", "--amplitude", "0.1,1", "--points", "50000", "--out", "o"], capsys, here, "--amplitude × --points",
+            "estimated 28 h", "100,000 output times", "at least")

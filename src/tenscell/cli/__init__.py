@@ -8,12 +8,16 @@ import the library when they run. Adding a command is one line in
 :func:`main` returns the exit status (also for ``--help`` and refused flags)
 instead of raising SystemExit. Exit status: 0 success, 1 a fit that did not reach its tolerance, 2 bad
 input (one line on stderr naming the flag, before any computation, nothing
-written), 130 interrupted (Ctrl-C), 141 output pipe closed.
+written), 70 internal error (a bug in tenscell, not the input: one line on stderr
+naming the log file that holds the command, what it printed, i.e. what it had
+computed, and the traceback; nothing written), 130 interrupted (Ctrl-C), 141 output
+pipe closed.
 """
 from __future__ import annotations
 
 import argparse
 import importlib
+import io
 import os
 import sys
 import time
@@ -21,7 +25,10 @@ import warnings
 
 from ._args import Parser, command_line
 
-__all__ = ["main", "build_parser", "COMMAND_MODULES"]
+__all__ = ["main", "build_parser", "COMMAND_MODULES", "EXIT_INTERNAL"]
+
+#: exit status of an internal error: a bug in tenscell, not bad input (EX_SOFTWARE of sysexits.h)
+EXIT_INTERNAL = 70
 
 #: command modules, in the order their commands appear in --help; each has ``register(sub)``
 COMMAND_MODULES = (
@@ -45,6 +52,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(
         prog="tenscell",
         description="Tensegrity models of the cytoskeleton: moduli G'(f, P), G''(f, P), fits and studies.",
+        epilog="Exit status: 0 success; 1 a fit that did not reach its tolerance; 2 bad input (one line naming the "
+               f"flag or the file and line, nothing computed or written); {EXIT_INTERNAL} an internal error (a bug, "
+               "not your input: one line naming a log file); 130 interrupted (Ctrl-C).",
     )
     parser.add_argument("--version", action="version", version=f"tenscell {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
@@ -73,13 +83,19 @@ def main(argv=None) -> int:
     adds nothing to them.
     """
     started = time.monotonic()  # the command's own clock (fit.json's "timing")
-    status = _run(argv, started)
+    transcript = _Transcript(sys.stderr)
+    sys.stderr = transcript
+    try:
+        status = _run(argv, started, transcript)
+    finally:
+        if sys.stderr is transcript:
+            sys.stderr = transcript.stream
     if argv is None:
         _exit_now(status)
     return status
 
 
-def _run(argv, started: float) -> int:
+def _run(argv, started: float, transcript: "_Transcript") -> int:
     # The command writes files and never opens windows; the library itself never chooses a backend.
     os.environ.setdefault("MPLBACKEND", "Agg")
     # after Ctrl-C, multiprocessing's resource tracker (a separate process, used by Dask's workers) reports the
@@ -114,6 +130,74 @@ def _run(argv, started: float) -> int:
     except MemoryError:
         print(f"{_prog(args)}: error: out of memory; reduce the size of the run", file=sys.stderr)
         return 2
+    except Exception as err:  # not bad input: a bug; the user gets one line and where the details are
+        log = _write_log(args, argv, err, transcript.text())
+        where = f"details in {log}" if log else "no log could be written"
+        print(f"{_prog(args)}: internal error (a bug in tenscell, not in your input): "
+              f"{type(err).__name__}: {_one_line(err)}; {where}", file=sys.stderr)
+        return EXIT_INTERNAL
+
+
+class _Transcript(io.TextIOBase):
+    """stderr as it was, keeping the last lines written to it (the stage lines: what the command computed)."""
+
+    _KEEP = 200
+
+    def __init__(self, stream):
+        super().__init__()
+        self.stream = stream
+        self._lines: list[str] = []
+
+    def write(self, s: str) -> int:
+        written = self.stream.write(s)
+        if "\r" not in s:  # progress bars redraw with \r: their frames are not kept
+            self._lines.extend(s.splitlines(keepends=True))
+            del self._lines[:-self._KEEP]
+        return written if written is not None else len(s)
+
+    def flush(self) -> None:
+        self.stream.flush()
+
+    def isatty(self) -> bool:
+        return self.stream.isatty()
+
+    def fileno(self) -> int:
+        return self.stream.fileno()
+
+    @property
+    def encoding(self):
+        return getattr(self.stream, "encoding", "utf-8")
+
+    def text(self) -> str:
+        return "".join(self._lines)
+
+
+def _write_log(args, argv, err: BaseException, printed: str) -> str | None:
+    """Write what an internal error needs for a report into a file of its own: its path (None if it could not)."""
+    import datetime
+    import tempfile
+    import traceback
+
+    from .. import __version__
+
+    stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    lines = [
+        f"tenscell {__version__}: internal error at {stamp}",
+        f"command: {getattr(args, 'command_line', None) or command_line(argv)}",
+        " ".join([f"python {sys.version.split()[0]} on {sys.platform}",
+                  *(f"{m} {sys.modules[m].__version__}" for m in ("numpy", "scipy") if m in sys.modules)]),
+        "environment: " + ", ".join(f"{k}={v}" for k, v in sorted(os.environ.items())
+                                       if k.startswith(("TENSCELL_", "OPENBLAS_", "OMP_", "MKL_"))),
+        "", "what the command printed (its stages: what it had computed):", printed.rstrip() or "(nothing)",
+        "", "traceback:", "".join(traceback.format_exception(type(err), err, err.__traceback__)).rstrip(), "",
+    ]
+    try:
+        fd, path = tempfile.mkstemp(prefix=f"tenscell-error-{stamp}-", suffix=".log")
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write("\n".join(lines))
+    except OSError:
+        return None
+    return path
 
 
 def _prog(args) -> str:

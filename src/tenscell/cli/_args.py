@@ -18,22 +18,15 @@ import argparse
 import math
 import sys
 
+# the allowed range of each physical quantity (closed interval, in the flag's unit): one table, which the data
+# readers check files against too (tenscell._ranges explains the bounds)
+from .._ranges import RANGES
+
 __all__ = [
     "Parser", "HelpFormatter", "number", "integer", "number_list", "frequencies", "member_values",
     "lattice_size", "grid_cost", "add_model_options", "add_prestress", "add_out", "hidden_alias", "add_from_fit",
     "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS", "path",
 ]
-
-#: allowed range of each physical quantity (closed interval, in the flag's unit). The model is
-#: linear algebra on these values and their products; inside these bounds every product stays
-#: far from float64 overflow, and outside them a result would be inf/NaN or rounding noise.
-RANGES = {
-    "prestress": (1e-30, 1e30, "N"),
-    "EA": (1e-30, 1e30, "N"),
-    "c": (1e-30, 1e30, "N·s/m"),
-    "L": (1e-9, 1e6, "m"),
-    "frequency": (1e-12, 1e12, "Hz"),
-}
 
 #: most (prestress, frequency) points one command evaluates: each point costs a complex
 #: solve and a CSV row; 10^6 rows are ~50 MB of CSV, 0.4 GB of memory and ~20 s.

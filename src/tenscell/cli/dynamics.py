@@ -217,7 +217,10 @@ def simulate_cost(cell, law, f: float, amplitudes, cycles: int | None, kw: dict)
                 detail=f"= {n_sims} simulations × 2 to {ADAPTIVE_MAX_CYCLES} adaptive cycles{timed}")
 
 
-def run_simulate(args) -> int:
+def _simulate_setup(args):
+    """Every check of `tenscell simulate` before its work: (output set, cell, law, amplitudes swept, the
+    keyword arguments of oscillatory_response)."""
+    from ..dynamics import EquationsOfMotion, SineForce
     from ..io.outputs import OutputSet
 
     check_samples(args.samples, args.cycles)
@@ -225,24 +228,29 @@ def run_simulate(args) -> int:
     if sweep_amps and args.control == "displacement":
         raise ValueError("--control displacement takes one --amplitude (m): the amplitude sweep prescribes forces (N)")
     out = OutputSet(args.out, command=args.command_line, flag="--out")
+    cell, law, solver = law_from_args(args)
+    check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
+    check_resolvable_frequency(cell, law, args.freq, solver["rtol"])
+    EquationsOfMotion(cell, law, SineForce(1.0, args.freq))  # refuses a singular damping matrix before any output
+    kw = dict(control=args.control, cycles=args.cycles, samples_per_cycle=args.samples, **solver)
+    cost = simulate_cost(cell, law, args.freq, [args.amplitude[0], *(sweep_amps or ())], args.cycles, kw)
+    if cost is not None:
+        announce(check(cost, "--amplitude × --cycles" if args.cycles else "--amplitude"))
+    return out, cell, law, sweep_amps, kw
+
+
+def run_simulate(args) -> int:
+    out, cell, law, sweep_amps, kw = _simulate_setup(args)
     import numpy as np
 
     from .. import plotting
     from .._progress import stage
-    from ..dynamics import EquationsOfMotion, SineForce, amplitude_sweep, oscillatory_response
+    from ..dynamics import amplitude_sweep, oscillatory_response
     from ..io.outputs import write_csv_rows, write_json
     from ..io.tables import finite
 
     amplitude = args.amplitude[0]
-    cell, law, solver = law_from_args(args)
     f = args.freq
-    check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
-    check_resolvable_frequency(cell, law, f, solver["rtol"])
-    EquationsOfMotion(cell, law, SineForce(1.0, f))  # refuses a singular damping matrix before any output
-    kw = dict(control=args.control, cycles=args.cycles, samples_per_cycle=args.samples, **solver)
-    cost = simulate_cost(cell, law, f, [amplitude, *(sweep_amps or ())], args.cycles, kw)
-    if cost is not None:
-        announce(check(cost, "--amplitude × --cycles" if args.cycles else "--amplitude"))
     stage(f"simulating {args.cycles or 'until periodic,'} cycles at {f:g} Hz, amplitude {amplitude:g} "
           f"{'N' if args.control == 'force' else 'm'}")
     res = oscillatory_response(cell, law, amplitude, f, **kw)
@@ -326,30 +334,66 @@ def check_window(t, window) -> None:
                          f"({t[0]:g} to {t[-1]:g} s, --t-min/--t-max/--points); a power-law fit needs at least 2")
 
 
-def run_creep(args) -> int:
+#: output times × steps below which creep runs without an estimate (the default 61 × 2 take a few seconds)
+_QUICK_CREEP_POINTS = 1000
+
+
+def creep_cost(eq, cell, force: float, steps: int, points: int):
+    """A lower bound on the nonlinear steps' cost: the state at each output time, timed here once.
+
+    Every output time of every step costs one solve of the state (tensions, velocities, slack set; about
+    1.6 ms for the paper cell), on top of the integration itself, which is not counted. None for short runs.
+    """
+    import numpy as np
+
+    from ..dynamics import EquationsOfMotion, StepForce
+
+    if steps * points <= _QUICK_CREEP_POINTS:
+        return None
+    loaded = EquationsOfMotion(cell, eq.law, StepForce(force)) if force else eq
+    # a new state each call, as along a trajectory (the solver warm-starts from the last one: a repeated state
+    # would take 21 µs instead of the 1.6 ms of a new one)
+    rng = np.random.default_rng(0)
+    scale = 1e-3 * float(np.max(cell.lengths))
+    per = measure(lambda: loaded.state(1.0, rng.normal(scale=scale, size=cell.n)), max_calls=20)
+    return Cost("output time", steps * points, per, 1,
+                detail=f"= {steps} steps × {points} --points; at least: the integration adds to it")
+
+
+def _creep_setup(args):
+    """Every check of `tenscell creep` before its work: (output set, times, cell, law, solver options, step forces)."""
+    from ..dynamics import EquationsOfMotion, StepForce
+    from ..io.outputs import OutputSet
+
     if not args.t_min < args.t_max:
         raise ValueError(f"--t-min must be below --t-max, got {args.t_min:g} s and {args.t_max:g} s")
     t = creep_times(args.t_min, args.t_max, args.points)
     check_window(t, args.window)
-    from ..io.outputs import OutputSet
-
     out = OutputSet(args.out, command=args.command_line, flag="--out")
+    cell, law, solver = law_from_args(args)
+    amplitudes = args.amplitude if args.amplitude is not None else (() if args.from_fit else (0.1, 30.0))
+    if len(amplitudes):
+        check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
+    eq = EquationsOfMotion(cell, law, StepForce(1.0))  # refuses a singular damping matrix before any output
+    cost = creep_cost(eq, cell, max(amplitudes, default=0.0), len(amplitudes), t.size)
+    if cost is not None:
+        announce(check(cost, "--amplitude × --points"))
+    return out, t, cell, law, solver, amplitudes
+
+
+def run_creep(args) -> int:
+    out, t, cell, law, solver, amplitudes = _creep_setup(args)
     import numpy as np
 
     from .. import plotting
     from .._progress import stage
-    from ..dynamics import EquationsOfMotion, StepForce, creep_response, linearize_law
+    from ..dynamics import creep_response, linearize_law
     from ..io.outputs import write_csv_rows, write_json
     from ..io.tables import finite
     from ..laws import LinearizationError
     from ..timedomain import creep_spectrum, fit_power_law, local_exponent, stress_relaxation
     from ..linear.modal import continuum_factor
 
-    cell, law, solver = law_from_args(args)
-    amplitudes = args.amplitude if args.amplitude is not None else (() if args.from_fit else (0.1, 30.0))
-    if len(amplitudes):
-        check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
-    EquationsOfMotion(cell, law, StepForce(1.0))  # refuses a singular damping matrix before any output
     win = args.window or (float(t[0]), float(t[-1]))
     P0 = args.prestress_N
     try:

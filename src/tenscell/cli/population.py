@@ -117,7 +117,14 @@ def run_synth(args) -> int:
     from ..io.outputs import OutputSet
     from ..population.synth import parse_condition, synth_population
 
-    conds = [parse_condition(c, args.model) for c in args.conditions] if args.conditions else None
+    try:
+        conds = [parse_condition(c, args.model) for c in args.conditions] if args.conditions else None
+    except ValueError as err:
+        raise ValueError(f"--conditions: {err}") from None
+    names = [c.name for c in conds or ()]
+    if len(set(names)) < len(names):
+        raise ValueError(f"--conditions: {', '.join(sorted({n for n in names if names.count(n) > 1}))} given twice; "
+                         "names must be distinct")
     if conds and len(conds) > args.cells:
         raise ValueError(f"--cells {args.cells} cannot be split over {len(conds)} --conditions "
                          f"({', '.join(c.name for c in conds)}): give at least one cell per condition")
@@ -259,6 +266,10 @@ def _work_dir(args, out_target: Path) -> Path:
         check_output_file(probe, name)  # the directory exists or can be created, and is writable
     except OutputLocationError as err:
         raise ValueError(f"{name}: {str(err).removeprefix(f'{name} {probe}: ')}") from None
+    if not args.resume and any((work / settings).is_file() for settings, _ in _WORK_LAYOUTS):
+        # refused here, before the cost is measured; the engine refuses it too (for the Python API)
+        raise ValueError(f"{name}: holds an unfinished run ({_finished(work)} finished record(s)); resume it "
+                         "(--resume) or remove the directory")
     return work
 
 
@@ -294,21 +305,21 @@ def discard_empty_work(work: Path, remove_dir: bool) -> bool:
     return True
 
 
-def _run_in(work: Path, own: bool, what: str, run):
-    """``run()`` with its work directory (``own``: the default OUT.partial, not a --work-dir the user chose).
+def _run_in(work: Path, what: str, run):
+    """``run()`` with its work directory.
 
-    A leftover of an earlier run that finished nothing is cleared first, and the directory is removed again
-    if this run stops before its first record; otherwise an interrupt says where the finished records are.
+    If the run stops before its first record, a work directory it created goes again (it would only make
+    the next run ask for --resume); otherwise an interrupt says where the finished records are. A directory
+    found at the start is never removed here: it may belong to a run still under way (the engine refuses
+    it, naming it).
     """
-    if any((work / settings).is_file() for settings, _ in _WORK_LAYOUTS):
-        discard_empty_work(work, remove_dir=own)
     created = not work.exists()
     try:
         return run()
     except BaseException as err:
-        if discard_empty_work(work, remove_dir=created or own):
+        if created and discard_empty_work(work, remove_dir=True):
             raise
-        if isinstance(err, KeyboardInterrupt):
+        if isinstance(err, KeyboardInterrupt) and _finished(work):
             # the one line the command prints for it (tenscell.cli.main prints a KeyboardInterrupt's message)
             raise KeyboardInterrupt(f"{what}: interrupted; finished results are kept in {work}/; run the same "
                                     "command with --resume to continue") from None
@@ -346,7 +357,7 @@ def run_fit(args) -> int:
     cost = _fit_cost(sources, options, args, work)
     if cost is not None:
         announce(check(cost, "INPUT", hint=_CLUSTER_HINT))
-    result = _run_in(work, not args.work_dir, "tenscell fit-population", lambda: fit_population(
+    result = _run_in(work, "tenscell fit-population", lambda: fit_population(
         sources, options=options, seed=args.seed, workers=args.workers, scheduler=args.scheduler, work_dir=work,
         resume=args.resume, notify=_notifier("fit-population")))
     t = result.table
@@ -457,8 +468,9 @@ def run_study(args) -> int:
     if args.resume and not work.is_dir():
         raise ValueError(f"--resume: no unfinished study in {work}")
     cost = _study_cost(args, work)
-    check(cost, "--draws" if args.study == "monte-carlo" else "--prestress × --heterogeneity × --realizations",
-          disk_at=work, hint=_CLUSTER_HINT)
+    flags = ("--prestress × --heterogeneity × --realizations" if args.study == "sweep" else
+             "--draws, --chunk" if args.chunk > 10**5 else "--draws")  # a large chunk is held whole by each worker
+    check(cost, flags, disk_at=work, hint=_CLUSTER_HINT)
     announce(cost)
     where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed,
                  notify=_notifier("large-study"))
@@ -470,7 +482,7 @@ def run_study(args) -> int:
         return sweep_study(args.prestress, args.heterogeneity, work, f_hz=args.freq,
                            realizations=args.realizations, **where)
 
-    result = _run_in(work, True, "tenscell large-study", study)
+    result = _run_in(work, "tenscell large-study", study)
     # everything read from the parts is read before they move into the output set
     medians = result.medians() if result.kind == "sweep" else None
     report = study_markdown(result)

@@ -335,8 +335,11 @@ def split_holdout(data: RheologyData, f_min: float, f_max: float) -> tuple[Rheol
     Raises
     ------
     ValueError
-        For a prestress sweep, bad limits, or a window that leaves no point on one side.
+        For creep data or a prestress sweep, bad limits, or a window that leaves no point on one side.
     """
+    if getattr(data, "kind", None) == "creep":  # CreepData: times, no frequencies to hold out
+        raise ValueError(f"holdout: {data.source} is creep compliance J(t); a frequency window needs a frequency "
+                         "sweep of G', G''")
     f_min = positive_scalar("holdout f_min", f_min, "Hz")
     f_max = positive_scalar("holdout f_max", f_max, "Hz")
     if not f_min < f_max:

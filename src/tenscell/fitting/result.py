@@ -86,6 +86,15 @@ class FitParameter:
         }
 
 
+#: what a null in FitResult.to_dict() (and fit.json) stands for; written into the document as "null_means"
+FIT_NULL_MEANS = (
+    "null: no value. start_rms: a start the search never ran (an earlier start met the target first); "
+    "time_to_tolerance_s, timing.tolerance_met_s: the tolerance was never met; prestress_Pa / prestress_fitted_Pa: "
+    "the data set states no prestress / its prestress is not a fitted parameter; kind: a joint fit; seed, "
+    "constraints: not set; parameters[].at_bound: not at a bound; tendon_stiffness_spread_not_at_bounds: every "
+    "stiffness is at a bound. A null anywhere else is a computed number that is not finite: its value is listed "
+    "under non_finite")
+
 #: largest prestress × frequency grid that FitResult.moduli evaluates in one batch (else per prestress)
 _GRID_POINTS = 200_000
 
@@ -660,7 +669,8 @@ class FitResult:
                 None if self.stiffness_spread_interior is None else dict(
                     zip(("min_N", "max_N", "decades"), self.stiffness_spread_interior))),
             "prestress_activity": self.prestress.to_dict(),
-            "start_rms": list(self.start_rms),
+            # a start the search never ran (an earlier one met the target first) has no RMS: null, not inf
+            "start_rms": [r if math.isfinite(r) else None for r in self.start_rms],
             "alternatives": [a.to_dict() for a in self.alternatives],
             "history": [{"time_s": t, "rms_log10_error": r} for t, r in self.history],
             "identifiability": self.identifiability().to_dict(),
@@ -669,6 +679,7 @@ class FitResult:
         }
         if not self.joint:
             doc["residuals_log10"] = first.to_dict()["residuals_log10"]
+        doc["null_means"] = FIT_NULL_MEANS
         return doc
 
     def _interior_text(self) -> str:

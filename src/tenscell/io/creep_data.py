@@ -22,7 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._results import dataframe, format_repr
-from .data import RheologyData, _csv_lines, _error, _parse_float, _stated_prestress, read_csv
+from .data import (RheologyData, _csv_lines, _error, _locations, _parse_float, _stated_prestress, check_ranges,
+                   read_csv)
 from .outputs import atomic_path
 
 __all__ = ["CreepData", "read_creep_csv", "write_creep_csv", "is_creep_header", "read_measurements"]
@@ -33,6 +34,9 @@ _J_SD = "creep_compliance_sd_per_Pa"
 _PRESTRESS = "prestress_Pa"
 _COLUMNS = (_TIME, _J, _J_SD, _PRESTRESS)
 _CANONICAL = {c.lower(): c for c in _COLUMNS}
+# field -> (its column, the quantity of the one ranges table, tenscell._ranges, its values must lie in, unit)
+_FIELDS = {"time_s": (_TIME, "time", None), "compliance": (_J, "compliance", None),
+           "compliance_sd": (_J_SD, "compliance", None), "prestress": (_PRESTRESS, "prestress", "Pa")}
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -51,12 +55,19 @@ class CreepData:
         Prestress at which each point was measured (Pa), > 0.
     source : str
     comments : tuple of str
+    locations : tuple of str, optional
+        Where each point is in `source` (e.g. ``"line 12"``), for messages.
+
+    Every value must lie in the range tenscell accepts for its quantity (the
+    table :data:`tenscell._ranges.RANGES` that the command-line flags use):
+    times 1e-12..1e12 s, compliances 1e-30..1e30 1/Pa, prestress 1e-30..1e30 Pa.
 
     Raises
     ------
     DataError
-        For arrays that are not 1-D of one non-zero length, or values that
-        are not finite and positive.
+        For arrays that are not 1-D of one non-zero length, values that are
+        not finite and positive, or a value outside its range (naming the
+        column and the location).
     """
 
     time_s: np.ndarray
@@ -65,6 +76,7 @@ class CreepData:
     prestress: np.ndarray | None = None
     source: str = "<memory>"
     comments: tuple = ()
+    locations: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         source = str(self.source)
@@ -88,6 +100,11 @@ class CreepData:
             n = arr.size
             arr.flags.writeable = False
             object.__setattr__(self, name, arr)
+        locations = _locations(source, self.locations, self.n)
+        check_ranges(source, {col: (getattr(self, name), quantity, unit)
+                              for name, (col, quantity, unit) in _FIELDS.items() if getattr(self, name) is not None},
+                     locations)
+        object.__setattr__(self, "locations", locations)
         object.__setattr__(self, "comments", tuple(str(c) for c in self.comments))
 
     kind = "creep"
@@ -159,7 +176,7 @@ def is_creep_header(text: str, source: str = "<text>") -> bool:
 
 def _parse(text: str, source: str) -> CreepData:
     comments: list[str] = []
-    columns, rows = None, []
+    columns, rows, lines = None, [], []
     for lineno, fields in _csv_lines(text, source, comments):
         if columns is None:
             columns = _header(fields, source, lineno)
@@ -175,13 +192,14 @@ def _parse(text: str, source: str) -> CreepData:
                 raise _error(source, f"column {col}: {v:g} must be > 0", lineno)
             row.append(v)
         rows.append(row)
+        lines.append(f"line {lineno}")
     if columns is None:
         raise _error(source, "no header line (the file has no non-comment lines)")
     if not rows:
         raise _error(source, "no data rows after the header")
     arr = dict(zip(columns, np.array(rows, dtype=float).T))
     return CreepData(time_s=arr[_TIME], compliance=arr[_J], compliance_sd=arr.get(_J_SD),
-                     prestress=arr.get(_PRESTRESS), source=source, comments=tuple(comments))
+                     prestress=arr.get(_PRESTRESS), source=source, comments=tuple(comments), locations=tuple(lines))
 
 
 def _read_text(path) -> tuple[str, str]:

@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from .._errors import TenscellError
+from .._ranges import RANGES, range_problem
 from .outputs import atomic_path
 
 __all__ = [
@@ -63,6 +64,16 @@ _POLAR_COLUMNS = (_ABS, _PHASE, _ABS_SD, _PHASE_SD)
 _ALL_COLUMNS = (_PRESTRESS, _FREQUENCY) + _CARTESIAN_COLUMNS + _POLAR_COLUMNS
 _CANONICAL = {name.lower(): name for name in _ALL_COLUMNS}
 
+# Column -> quantity of the one ranges table (tenscell._ranges) its values must lie in; the phase has
+# its own range, [0, 90] deg, checked with the row.
+_COLUMN_QUANTITY = {
+    _FREQUENCY: "frequency", _PRESTRESS: "prestress", _STORAGE: "modulus", _LOSS: "modulus",
+    _STORAGE_SD: "modulus", _LOSS_SD: "modulus", _ABS: "modulus", _ABS_SD: "modulus",
+}
+# RheologyData field -> its column in the package's layout
+_FIELD_COLUMN = {"frequency_hz": _FREQUENCY, "prestress": _PRESTRESS, "G_storage": _STORAGE, "G_loss": _LOSS,
+                 "G_storage_sd": _STORAGE_SD, "G_loss_sd": _LOSS_SD}
+
 # Short name -> file in the package's data directory. A tuple, not a dict,
 # so that no caller can alter the registry.
 _BUNDLED = (
@@ -83,6 +94,34 @@ class DataError(TenscellError, ValueError):
 def _error(source: str, problem: str, line: int | None = None) -> DataError:
     where = f"{source}, line {line}" if line is not None else f"{source}"
     return DataError(f"{where}: {problem}")
+
+
+def _locations(source: str, locations, n: int) -> tuple[str, ...] | None:
+    """``locations`` checked: None, or one str per point."""
+    if locations is None:
+        return None
+    if isinstance(locations, str) or len(locations) != n or not all(isinstance(x, str) for x in locations):
+        raise _error(source, f"locations must be one str per point ({n}), got {locations!r:.80}")
+    return tuple(locations)
+
+
+def check_ranges(source: str, columns: dict, locations: tuple[str, ...] | None) -> None:
+    """Every value within the range of its quantity (:data:`tenscell._ranges.RANGES`), else DataError.
+
+    ``columns``: column name -> (values, quantity, unit or None for the table's). The message names
+    ``source``, the location of the first offending point (its index without ``locations``), the
+    column, the value in its unit and the range: one line.
+    """
+    first = None
+    for column, (values, quantity, unit) in columns.items():
+        lo, hi, _ = RANGES[quantity]
+        for i in np.flatnonzero((values < lo) | (values > hi))[:1]:
+            if first is None or i < first[0]:
+                first = (int(i), column, quantity, unit, float(values[i]))
+    if first is not None:
+        i, column, quantity, unit, value = first
+        where = f"{source}, {locations[i]}" if locations is not None else f"{source}: point {i}"
+        raise DataError(f"{where}: column {column!r}: {range_problem(quantity, value, unit)}")
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -114,6 +153,14 @@ class RheologyData:
     kind : {"frequency", "prestress", None}, optional
         ``"prestress"`` when `prestress` is given, else ``"frequency"``.
         Derived when None; an inconsistent value is an error.
+    locations : tuple of str, optional
+        Where each point is in `source`, in the order given (e.g. ``"line 12"``
+        of a file, ``"row 7"`` of a sheet): readers pass it so that an error
+        names the line. Not kept (None) once the points are reordered.
+
+    Every value must lie in the range tenscell accepts for its quantity (the
+    table :data:`tenscell._ranges.RANGES` that the command-line flags use):
+    frequency 1e-12..1e12 Hz, moduli, their SDs and prestress 1e-30..1e30 Pa.
 
     The points are stored in a canonical order (by prestress, then frequency),
     whatever order they were given in, so that results depend on the data set
@@ -123,7 +170,8 @@ class RheologyData:
     ------
     DataError
         If arrays are not 1-D of equal non-zero length, contain NaN or inf,
-        or have non-positive frequencies, prestresses, moduli or SDs.
+        or have non-positive frequencies, prestresses, moduli or SDs, or a
+        value outside its range (naming the column and the location).
     """
 
     frequency_hz: np.ndarray
@@ -135,6 +183,7 @@ class RheologyData:
     source: str = "<memory>"
     comments: tuple[str, ...] = ()
     kind: str | None = None
+    locations: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         source = str(self.source)
@@ -175,6 +224,9 @@ class RheologyData:
             raise _error(source, f"arrays have different lengths: {lengths}")
         if lengths["frequency_hz"] == 0:
             raise _error(source, "no data points")
+        locations = _locations(source, self.locations, lengths["frequency_hz"])
+        check_ranges(source, {col: (a, _COLUMN_QUANTITY[col], "Pa" if col == _PRESTRESS else None)
+                              for k, a in arrays.items() if a is not None for col in (_FIELD_COLUMN[k],)}, locations)
         # canonical row order (prestress, then frequency, then the values): the same data set gives
         # the same object, and the same fit, whatever the order of the rows in its file
         keys = [a for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
@@ -186,8 +238,10 @@ class RheologyData:
                     arr = arr[order]
                     arr.flags.writeable = False
                     arrays[name] = arr
+            locations = None if locations is None else tuple(locations[i] for i in order)
         for name, arr in arrays.items():
             object.__setattr__(self, name, arr)
+        object.__setattr__(self, "locations", locations)
 
         if isinstance(self.comments, str):
             raise _error(source, "comments must be a sequence of strings, not a str")
@@ -318,6 +372,9 @@ def _stated_prestress(data, prestress_pa) -> float:
         raise _error(data.source, f"prestress {prestress_pa!r} is not a number (Pa)") from None
     if not (math.isfinite(p) and p > 0):
         raise _error(data.source, f"prestress {prestress_pa!r} Pa must be a finite number > 0")
+    problem = range_problem("prestress", p, "Pa")  # the range of a prestress_Pa column
+    if problem is not None:
+        raise _error(data.source, f"stated prestress: {problem}")
     return p
 
 
@@ -479,11 +536,12 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
         G_loss_sd=loss_sd,
         source=source,
         comments=tuple(comments),
+        locations=tuple(f"line {k}" for k in row_lines),
     )
 
 
 def _check_row(row: dict[str, float], source: str, lineno: int) -> None:
-    """Check the physical ranges of one parsed data row."""
+    """Check the physical ranges of one parsed data row (in its own columns: before |G|, phase become G', G'')."""
     positive = {
         _FREQUENCY: "frequency",
         _PRESTRESS: "prestress",
@@ -501,6 +559,10 @@ def _check_row(row: dict[str, float], source: str, lineno: int) -> None:
             raise _error(
                 source, f"column {col}: {kind} {what} ({row[col]:g}); must be > 0", lineno
             )
+    for col, quantity in _COLUMN_QUANTITY.items():
+        problem = range_problem(quantity, row[col], "Pa" if col == _PRESTRESS else None) if col in row else None
+        if problem is not None:
+            raise _error(source, f"column {col!r}: {problem}", lineno)
     if _PHASE in row:
         phase = row[_PHASE]
         if not 0.0 <= phase <= 90.0:

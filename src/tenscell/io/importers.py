@@ -340,7 +340,7 @@ def _data(table: _Table, cmap: ColumnMap, min_points: int) -> RheologyData:
     return RheologyData(
         frequency_hz=v["frequency"], G_storage=Gs, G_loss=Gl, prestress=v.get("prestress"),
         G_storage_sd=v.get("storage_sd"), G_loss_sd=v.get("loss_sd"), source=table.source,
-        comments=(*table.comments, f"imported by tenscell: {how}"),
+        comments=(*table.comments, f"imported by tenscell: {how}"), locations=tuple(table.where),
     )
 
 

@@ -32,7 +32,8 @@ from pathlib import Path
 from .._errors import TenscellError
 from .._parallel import sigint_deferred
 
-__all__ = ["atomic_path", "write_csv_rows", "write_json", "json_ready", "write_text", "write_bytes", "OutputSet",
+__all__ = ["atomic_path", "write_csv_rows", "write_json", "json_ready", "json_text", "NULL_MEANS", "write_text",
+           "write_bytes", "OutputSet",
            "OutputLocationError", "check_output_dir", "check_output_file", "read_manifest", "MANIFEST"]
 
 #: name of the manifest file written into every output set
@@ -92,24 +93,61 @@ def write_csv_rows(path, header, rows) -> None:
             w.writerow([repr(float(v)) if isinstance(v, float) else v for v in r])
 
 
-def json_ready(obj, *, infinities: bool = False):
-    """``obj`` with every NaN float (and, with ``infinities``, every ±inf) replaced by None, recursively.
+#: what a null stands for in tenscell's JSON files: the ``null_means`` entry of a document that has one
+NULL_MEANS = ("null: no value. Either not applicable or not computed (each field's documentation says when), "
+              "or a computed number that is not finite: those are listed in this document's 'non_finite' "
+              "entry (JSON pointer -> 'inf', '-inf' or 'nan'), so no computed value is lost")
 
-    Dicts, lists and tuples are walked (tuples become lists); anything else is returned as it is.
+
+def json_ready(obj, *, found: dict | None = None, _at: str = ""):
+    """``obj`` as plain JSON data: every non-finite float (NaN, ±inf) becomes None, recursively.
+
+    The one JSON cleaner of tenscell: dicts, lists and tuples are walked
+    (tuples become lists, keys become str), numpy scalars and arrays become
+    Python numbers and lists; anything else is returned as it is. With
+    ``found`` (a dict), each replaced value is recorded there under its JSON
+    pointer (``"/start_rms/2": "inf"``).
     """
-    if isinstance(obj, float) and (obj != obj or (infinities and obj in (math.inf, -math.inf))):
+    if type(obj).__module__ == "numpy" and hasattr(obj, "tolist"):
+        obj = obj.tolist()  # numpy scalars and arrays (any shape) as Python numbers and nested lists
+    if isinstance(obj, float) and not math.isfinite(obj):
+        if found is not None:
+            found[_at or "/"] = "nan" if obj != obj else ("inf" if obj > 0 else "-inf")
         return None
     if isinstance(obj, dict):
-        return {k: json_ready(v, infinities=infinities) for k, v in obj.items()}
+        return {str(k): json_ready(v, found=found, _at=f"{_at}/{_pointer(k)}") for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [json_ready(v, infinities=infinities) for v in obj]
+        return [json_ready(v, found=found, _at=f"{_at}/{i}") for i, v in enumerate(obj)]
     return obj
 
 
-def write_json(path, obj) -> None:
-    """Write JSON atomically (indented, NaN written as null; an infinity is an error)."""
+def _pointer(key) -> str:
+    """A JSON pointer reference token (RFC 6901)."""
+    return str(key).replace("~", "~0").replace("/", "~1")
+
+
+def json_text(obj, *, indent: int | None = 2, null_means: str | None = None) -> str:
+    """``obj`` as JSON text: cleaned by :func:`json_ready`, never refused for a non-finite number.
+
+    A dict document whose cleaning replaced a non-finite number gets a
+    ``non_finite`` entry (JSON pointer -> ``"inf"``, ``"-inf"``, ``"nan"``)
+    and a ``null_means`` entry (``null_means``, or :data:`NULL_MEANS`), so the
+    value is still there for whoever reads the file; ``null_means`` given
+    explicitly is written whether or not anything was replaced.
+    """
+    found: dict = {}
+    doc = json_ready(obj, found=found)
+    if isinstance(doc, dict) and (found or null_means):
+        doc.setdefault("null_means", null_means or NULL_MEANS)
+        if found:
+            doc["non_finite"] = found
+    return json.dumps(doc, indent=indent, allow_nan=False)
+
+
+def write_json(path, obj, *, null_means: str | None = None) -> None:
+    """Write JSON atomically (indented; non-finite numbers as null, recorded: see :func:`json_text`)."""
     with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(json_ready(obj), indent=2, allow_nan=False) + "\n")
+        tmp.write_text(json_text(obj, null_means=null_means) + "\n")
 
 
 def write_text(path, text: str) -> None:

@@ -7,19 +7,21 @@ The public names of ``model/``'s modules (:mod:`~tenscell.model.structure`,
 from .equilibrium import Cell, NotPrestressableError, equilibrate
 from .formfinding import FormFindingError, FormFindingResult, find_form, pin_jointed, rigid_body_modes
 from .lattices import expanded_octahedron, lattice_cell, lattice_structure, sphere_cell, sphere_structure
-from .shapes import (DEFAULT_DELTA, REGULAR_DELTA, cylindrical_cell, if_free_delta, paper_cell, paper_structure,
-                     regular_cell, semiflexible_paper_cell)
-from .structure import ACTIN, INTERMEDIATE_FILAMENT, STRUT, Point, Structure, StructureError, member_values
+from .shapes import (DEFAULT_DELTA, REGULAR_DELTA, cylindrical_cell, if_free_delta, nucleated_cell, nucleated_structure,
+                     paper_cell, paper_structure, regular_cell, semiflexible_paper_cell)
+from .structure import (ACTIN, INTERMEDIATE_FILAMENT, NUCLEUS, STRUT, Point, Structure, StructureError, cable_mask,
+                        member_values)
 
 __all__ = [
     # structures
-    "Point", "Structure", "StructureError", "member_values", "ACTIN", "INTERMEDIATE_FILAMENT", "STRUT",
+    "Point", "Structure", "StructureError", "member_values", "ACTIN", "INTERMEDIATE_FILAMENT", "STRUT", "NUCLEUS",
+    "cable_mask",
     # equilibrium and form-finding
     "Cell", "NotPrestressableError", "equilibrate", "FormFindingError", "FormFindingResult", "find_form",
     "pin_jointed", "rigid_body_modes",
     # the paper's cell and its references
     "paper_cell", "paper_structure", "regular_cell", "cylindrical_cell", "semiflexible_paper_cell", "if_free_delta",
-    "DEFAULT_DELTA", "REGULAR_DELTA",
+    "DEFAULT_DELTA", "REGULAR_DELTA", "nucleated_cell", "nucleated_structure",
     # spheres and lattices
     "sphere_cell", "sphere_structure", "lattice_cell", "lattice_structure", "expanded_octahedron",
 ]

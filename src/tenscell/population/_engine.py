@@ -49,7 +49,7 @@ def open_work_dir(path, settings_file: str, settings: dict, resume: bool) -> Pat
     """
     import json
 
-    from ..io.outputs import write_json
+    from ..io.outputs import json_ready, write_json
 
     path = Path(path)
     info = path / settings_file
@@ -57,7 +57,9 @@ def open_work_dir(path, settings_file: str, settings: dict, resume: bool) -> Pat
         if not resume:
             raise WorkDirError(f"{path}: holds an unfinished run; resume it (--resume) or remove the directory")
         old = json.loads(info.read_text())
-        diff = sorted(k for k in set(old) | set(settings) if old.get(k) != settings.get(k))
+        new = json_ready(settings)  # as written: compared with what the unfinished run wrote
+        notes = ("null_means", "non_finite")  # what the JSON writer adds about nulls, not settings
+        diff = sorted(k for k in set(old) | set(new) if k not in notes and old.get(k) != new.get(k))
         if diff:
             raise WorkDirError(f"{path}: the unfinished run used different settings ({', '.join(diff)}); "
                                "resume with the same settings or remove the directory")

@@ -29,7 +29,6 @@ fitted parameters
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -199,7 +198,7 @@ class PopulationResult:
         from pathlib import Path
 
         from .._results import plotter
-        from ..io.outputs import atomic_path, json_ready, write_csv_rows, write_text
+        from ..io.outputs import atomic_path, json_text, write_csv_rows, write_text
         from ..reports.population import population_markdown
 
         save = plotter("save")  # drawn by tenscell.plotting, a later stage (tenscell._results)
@@ -209,7 +208,7 @@ class PopulationResult:
         with atomic_path(d / "population.parquet") as tmp:
             self.table.to_parquet(tmp, index=False)
         _write_frame(d / "summary.csv", self.summary(), write_csv_rows)
-        write_text(d / "cells.jsonl", "".join(json.dumps(json_ready(r, infinities=True), allow_nan=False) + "\n"
+        write_text(d / "cells.jsonl", "".join(json_text(r, indent=None) + "\n"
                                               for r in self.records))
         rec = None
         if truth is not None:
