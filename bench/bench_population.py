@@ -84,9 +84,9 @@ def _large_study(draws: int) -> None:
             rate = draws / (time.perf_counter() - t)
         finally:
             shutil.rmtree(d, ignore_errors=True)
-        per = rate / (workers or 1)
-        print(f"study, {label:15}:         {rate:7.0f} draws/s = {per / kernel:.2f} x the kernel per worker "
-              f"(goal >= 0.80){'; ' + lines[0] if lines else ''}")
+        share = f"; {rate / workers / kernel:.2f} x per worker" if workers else ""
+        print(f"study, {label:15}:         {rate:7.0f} draws/s = {rate / kernel:.2f} x the kernel (goal >= 0.80)"
+              f"{share}{'; ' + lines[0] if lines else ''}")
 
 
 def main():
