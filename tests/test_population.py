@@ -2,6 +2,9 @@
 
 One local cluster of two worker processes serves the module (started once);
 fits use a fast setting (4 starts, no basin hopping) on small populations.
+Tests wait on events (a worker is busy, a record is written, the workers are
+up), never for a fixed time; their bounds (:data:`HANG`) only keep a broken
+run from hanging the suite, and no test asserts how long anything took.
 """
 from __future__ import annotations
 
@@ -27,6 +30,8 @@ from tenscell.population.run import WorkDirError, fit_cell
 from tenscell.population.sources import CellSource, SourceError
 
 FAST = PopulationFitOptions(starts=4, hops=0)
+#: seconds after which a wait is a hang, not a slow machine (a loaded machine takes minutes, not hours)
+HANG = 600.0
 VOLATILE = ["time_s", "source"]  # wall time, and the file path (differs between copies of the data)
 
 
@@ -186,7 +191,7 @@ def test_cluster_run_survives_a_killed_worker_and_equals_serial_run(serial, pop_
     run = threading.Thread(target=lambda: box.update(r=fit_population(pop_dir, options=FAST, seed=7, client=client,
                                                                         progress=False)))
     run.start()
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + HANG
     victim = None
     while victim is None and time.monotonic() < deadline:
         busy = [w for w, tasks in client.processing().items() if tasks]
@@ -194,7 +199,7 @@ def test_cluster_run_survives_a_killed_worker_and_equals_serial_run(serial, pop_
         time.sleep(0.02)
     assert victim is not None, "no task started"
     os.kill(pids[victim], signal.SIGKILL)
-    run.join(timeout=180)
+    run.join(timeout=HANG)
     assert not run.is_alive()
     par = box["r"]
     same_table(serial.table, par.table)
@@ -203,7 +208,7 @@ def test_cluster_run_survives_a_killed_worker_and_equals_serial_run(serial, pop_
     assert t.loc["control/broken", "status"] == "data_error"
     assert "missing required column" in t.loc["control/broken", "error"]
     assert (t.drop(index="control/broken")["status"] == "ok").all()
-    client.wait_for_workers(2, timeout=60)
+    client.wait_for_workers(2, timeout=HANG)
     assert pids[victim] not in client.run(os.getpid).values()  # the worker really died and was replaced
 
 
@@ -239,7 +244,7 @@ def test_external_scheduler_on_loopback(serial, population, tmp_path):
                                "--scheduler-file", str(sched_file)], env=env,
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + HANG
         # the scheduler creates its file first and fills it after: wait for the address, not the file
         while time.monotonic() < deadline and not (sched_file.is_file() and '"address"' in sched_file.read_text()):
             time.sleep(0.1)
@@ -258,7 +263,7 @@ def test_external_scheduler_on_loopback(serial, population, tmp_path):
             p.terminate()
         for p in procs:
             try:
-                p.wait(timeout=20)
+                p.wait(timeout=60)
             except subprocess.TimeoutExpired:
                 p.kill()
                 p.wait()
@@ -296,11 +301,11 @@ def test_cli_synth_fit_resume_and_outputs(tmp_path, monkeypatch):
     def records():  # finished records (not atomic_path's temporary .*.json files)
         return [p for p in work.glob("cells/*.json") if not p.name.startswith(".")]
 
-    deadline = time.monotonic() + 120
+    deadline = time.monotonic() + HANG
     while not records() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.02)
     proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=120)
+    _, err = proc.communicate(timeout=HANG)
     assert proc.returncode == 130 and "--resume" in err
     assert not fits.exists()
     n_done = len(records())
@@ -404,3 +409,156 @@ def test_scheduler_address_forms(tmp_path):
     for bad in ("", "nowhere", "tcp://host:port", str(tmp_path / "missing.json")):
         with pytest.raises(ValueError, match="--scheduler"):
             _engine.check_scheduler(bad)
+
+
+# ---- the engine: where tasks run, batching ----------------------------------------------------------
+def test_cluster_pays_and_batch_size():
+    """A cluster never pays with one worker, pays for long enough work, and batches never starve a worker."""
+    assert not _engine.cluster_pays(10**6, 10.0, 1)
+    assert not _engine.cluster_pays(1, 0.01, 8)  # start-up dominates
+    assert _engine.cluster_pays(1000, 1.0, 2)
+    for n, t, threads in ((1, 0.2, 2), (199, 0.2, 2), (10**5, 1e-4, 2), (40, 5.0, 8)):
+        k = _engine.batch_size(n, t, threads)
+        assert 1 <= k and (k == 1 or n // k >= 4 * threads)
+    assert _engine.batch_size(10**4, 0.2, 2) == round(_engine.TASK_SECONDS / 0.2)
+
+
+def test_small_work_runs_here_and_says_so(population):
+    """With no workers asked for, two quick cells are fitted in this process, announced in one line."""
+    lines = []
+    srcs = read_sources(population)[:2]
+    r = fit_population(list(srcs), options=FAST, seed=7, progress=False, notify=lines.append)
+    assert r.n_workers == 0 and len(lines) == 1 and "in this process" in lines[0] and "\n" not in lines[0]
+    ref = fit_population(list(srcs), options=FAST, seed=7, workers=0, progress=False, notify=lines.append)
+    same_table(ref.table, r.table)
+    assert len(lines) == 1  # workers=0 is the user's choice: nothing to announce
+
+
+def test_batched_stream_yields_every_item_once(client):
+    """Items batched into Dask tasks come back once each, with their own tags (any batch size)."""
+    items = [(i, (i, 2)) for i in range(23)]
+    for batch in (1, 4, 23, 50):
+        got = dict(_engine.stream(client, pow, items, batch=batch))
+        assert got == {i: i ** 2 for i in range(23)}
+
+
+# ---- Ctrl-C on Dask commands: one line, no traceback from any process, nothing left running ---------------
+def _group(pgid: int) -> list[tuple[int, str, str]]:
+    """(pid, state, command line) of the live processes of a process group (zombies excluded)."""
+    out = []
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit():
+            continue
+        try:
+            stat = (d / "stat").read_text()
+            cmd = (d / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+        except OSError:
+            continue
+        fields = stat.rsplit(")", 1)[1].split()
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            out.append((int(d.name), fields[0], cmd))
+    return out
+
+
+def _dask_workers(pgid: int) -> int:
+    return sum("spawn_main" in cmd for _, _, cmd in _group(pgid))
+
+
+def _ctrl_c(argv, ready) -> tuple[int, str]:
+    """Run ``tenscell ARGV`` in its own process group; once ``ready(pgid)``, SIGINT the whole group.
+
+    That is what a terminal's Ctrl-C does: every process of the foreground group,
+    Dask's workers included, gets the signal. Returns (exit status, stderr) once
+    no process of the group is left running.
+    """
+    env = {**os.environ, "TENSCELL_PROGRESS": "0"}
+    proc = subprocess.Popen([sys.executable, "-m", "tenscell", *map(str, argv)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True, env=env)
+    deadline = time.monotonic() + HANG
+    while proc.poll() is None and not ready(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert proc.poll() is None, "the run ended before it could be interrupted"
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=HANG)
+    while _group(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not _group(proc.pid), f"left running: {_group(proc.pid)}"
+    return proc.returncode, err
+
+
+def test_workers_never_see_ctrl_c(client):
+    """SIGINT sent to the workers themselves changes nothing: they hold it blocked (a worker that took it
+    would die with a KeyboardInterrupt traceback and be replaced by its nanny under a new pid)."""
+    pids = client.run(os.getpid)
+    for pid in pids.values():
+        os.kill(pid, signal.SIGINT)
+    for address, pid in pids.items():  # a task pinned to each worker still runs there, in the same process
+        fut = client.submit(os.getpid, pure=False, workers=[address], allow_other_workers=False)
+        assert fut.result(timeout=HANG) == pid
+    assert client.run(os.getpid) == pids  # the same workers, none replaced
+
+
+def _one_interrupt_line(err: str, kept: bool) -> None:
+    """stderr: the command's own lines from before the interrupt (its cost estimate), then exactly one line for
+    the interrupt (naming --resume when finished results were kept), and nothing from any other process (no
+    traceback, no Dask log or warning)."""
+    lines = err.splitlines()
+    assert lines and "interrupted" in lines[-1] and ("--resume" in lines[-1]) == kept, err
+    assert all(line.startswith("tenscell") and "interrupted" not in line for line in lines[:-1]), err
+    assert "Traceback" not in err and "8787" not in err, err
+
+
+@pytest.fixture(scope="module")
+def big_population(tmp_path_factory):
+    d = tmp_path_factory.mktemp("bigpop") / "pop"
+    assert cli(["synth-population", "--cells", "40", "--out", d, "--seed", "5"]) == 0
+    return d
+
+
+@pytest.fixture
+def port_8787_taken():
+    """Port 8787 (Dask's dashboard default) held by someone else for the test."""
+    import socket
+
+    with socket.socket() as s:
+        try:
+            s.bind(("127.0.0.1", 8787))
+            s.listen()
+        except OSError:
+            pass  # already taken: all the better
+        yield
+
+
+@pytest.mark.parametrize("moment", ["starting", "working"])
+def test_ctrl_c_on_fit_population_is_one_line(big_population, tmp_path, port_8787_taken, moment):
+    """Ctrl-C to the whole group while the workers start, or while they fit: exit 130, exactly one line on
+    stderr (the command's), no traceback from any process, no port warning, nothing left running, the
+    finished records kept for --resume."""
+    out = tmp_path / "fits"
+    records = Path(str(out) + ".partial") / "cells"
+
+    def ready(pgid):
+        if moment == "starting":
+            return _dask_workers(pgid) >= 1
+        return _dask_workers(pgid) >= 2 and any(not p.name.startswith(".") for p in records.glob("*.json"))
+
+    code, err = _ctrl_c(["fit-population", big_population, "--out", out, "--workers", "2",
+                         "--starts", FAST.starts, "--hops", FAST.hops], ready)
+    assert code == 130
+    kept = any(not p.name.startswith(".") for p in records.glob("*.json"))
+    _one_interrupt_line(err, kept)
+    assert kept or not records.parent.exists()  # a run that finished nothing leaves nothing behind
+    assert not out.exists()
+
+
+def test_ctrl_c_on_large_study_is_one_line(tmp_path, port_8787_taken):
+    out = tmp_path / "mc"
+    parts = Path(str(out) + ".partial") / "parts"
+
+    def ready(pgid):
+        return _dask_workers(pgid) >= 2 and any(parts.glob("part-*.parquet"))
+
+    code, err = _ctrl_c(["large-study", "monte-carlo", "--draws", "300000", "--chunk", "500", "--out", out,
+                         "--workers", "2"], ready)
+    assert code == 130
+    _one_interrupt_line(err, kept=True)

@@ -42,6 +42,8 @@ NUMERIC_FLAGS = {
     ("study", "sensitivity"): {"--draws": (), "--seed": ("zero",)},
     ("study", "compactness", "DATA"): {"--decades": (), "--starts": (), "--jobs": (), "--tolerance": (),
                                        "--prestress": (), "--temperature": ("negative", "zero")},
+    ("study", "mechanisms", "DATA"): {"--hops": ("zero",), "--starts": (), "--jobs": (), "--tolerance": (),
+                                      "--seed": ("zero",), "--prestress": (), "--temperature": ("negative", "zero")},
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
     ("synth-population", "--out", "OUT"): {"--cells": (), "--noise": ("zero",), "--spread": ("zero",), "--freq": (),

@@ -116,8 +116,10 @@ def _run(argv, started: float, transcript: "_Transcript") -> int:
             # results checked for finiteness where an overflow is possible
             warnings.simplefilter("ignore", RuntimeWarning)
             return int(args.func(args) or 0)
-    except KeyboardInterrupt:
-        print("tenscell: interrupted", file=sys.stderr, flush=True)
+    except KeyboardInterrupt as stop:
+        # one line: a command may say what it kept (KeyboardInterrupt("tenscell CMD: interrupted; ..."))
+        line = stop.args[0] if stop.args and isinstance(stop.args[0], str) else "tenscell: interrupted"
+        print(line, file=sys.stderr, flush=True)
         # the console command leaves at once (main): workers are stopped and output staging removed by now
         return 130
     except BrokenPipeError:

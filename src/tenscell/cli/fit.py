@@ -12,6 +12,11 @@ from ._args import RANGES, add_data_options, add_out, data_options_from_args, in
 #: written out so that building the parser does not import the fitting code; a test checks they agree)
 TENDON_MODES = ("per-tendon", "per-family", "uniform")
 DAMPING_MODES = ("uniform", "per-family")
+#: the mechanisms of `--model` (tenscell.fitting.mechanisms.mechanism_names(), written out for a quick parser;
+#: a test checks they agree)
+MECHANISM_NAMES = ("voigt-per-tendon", "voigt-compact", "voigt-compact+visc", "voigt-lognormal-damping",
+                   "voigt-lognormal-stiffness", "voigt-trap-damping+visc", "maxwell", "maxwell+visc", "sls",
+                   "sls-trap+visc", "springpot", "springpot+visc")
 
 #: the files of one fit: extension -> name in `tenscell fit --out`
 FIT_FILES = {"json": "fit.json", "csv": "fit.csv", "md": "report.md", "png": "fit.png"}
@@ -43,6 +48,9 @@ def register(sub) -> None:
                    help="stiffness per tendon (as in the paper), per family, or one for all")
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform",
                    help="damping c: one for all (as in the paper) or per family")
+    p.add_argument("--model", choices=MECHANISM_NAMES, default=None,
+                   help="fit a mechanism instead of the per-tendon Voigt cell (tenscell.fitting.mechanisms; "
+                        "writes fit.json, report.md, fit.png; --fix/--bound take its parameter names or kinds)")
     add_constraints(p)
     add_data_options(p)
     p.add_argument("--bound", action="append", type=_bound, metavar="KIND=LO:HI", default=None,
@@ -379,6 +387,10 @@ def run(args) -> int:
     from ..io.outputs import OutputSet
     from ..io.thinning import bin_datasets
 
+    if args.model not in (None, "voigt-per-tendon"):
+        from ._mechanism import run_mechanism_fit
+
+        return run_mechanism_fit(args, read_datasets)
     check_contradictions(args)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping),

@@ -18,7 +18,8 @@ def add_cluster_options(p) -> None:
     """``--workers N | --scheduler ADDRESS``: where the tasks run (shared by every Dask command)."""
     g = p.add_mutually_exclusive_group()
     g.add_argument("--workers", type=integer(0, 4096), default=None,
-                   help="local Dask workers started for this run (default: one per CPU; 0: no Dask, in this process)")
+                   help="local Dask workers started for this run (default: one per CPU when the work pays for starting "
+                        "them, judged from the first task's time, else in this process; 0: no Dask)")
     g.add_argument("--scheduler", type=path("an address or a scheduler file"), default=None,
                    help="an existing Dask scheduler: tcp://HOST:PORT or a scheduler file (dask scheduler "
                         "--scheduler-file F)")
@@ -321,8 +322,9 @@ def _run_in(work: Path, what: str, run):
         if created and discard_empty_work(work, remove_dir=True):
             raise
         if isinstance(err, KeyboardInterrupt) and _finished(work):
-            print(f"{what}: interrupted; finished results are kept in {work}/; run the same command with --resume "
-                  "to continue", file=sys.stderr)
+            # the one line the command prints for it (tenscell.cli.main prints a KeyboardInterrupt's message)
+            raise KeyboardInterrupt(f"{what}: interrupted; finished results are kept in {work}/; run the same "
+                                    "command with --resume to continue") from None
         raise
 
 
@@ -359,7 +361,7 @@ def run_fit(args) -> int:
         announce(check(cost, "INPUT", hint=_CLUSTER_HINT))
     result = _run_in(work, "tenscell fit-population", lambda: fit_population(
         sources, options=options, seed=args.seed, workers=args.workers, scheduler=args.scheduler, work_dir=work,
-        resume=args.resume))
+        resume=args.resume, notify=_notifier("fit-population")))
     t = result.table
     n_ok = int((t["status"] == "ok").sum())
     if n_ok == 0:
@@ -501,7 +503,8 @@ def run_study(args) -> int:
              "--draws, --chunk" if args.chunk > 10**5 else "--draws")  # a large chunk is held whole by each worker
     check(cost, flags, disk_at=work, hint=_CLUSTER_HINT)
     announce(cost)
-    where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed)
+    where = dict(workers=args.workers, scheduler=args.scheduler, resume=args.resume, seed=args.seed,
+                 notify=_notifier("large-study"))
 
     def study():
         if args.study == "monte-carlo":
@@ -525,3 +528,8 @@ def run_study(args) -> int:
     print(f"tenscell large-study {args.study}: {result.n_rows} rows in {result.n_parts} parts; "
           f"{result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0
+
+
+def _notifier(command: str):
+    """One line on stderr when the engine keeps the work in this process (too small to pay for a cluster)."""
+    return lambda line: print(f"tenscell {command}: {line}", file=sys.stderr, flush=True)

@@ -136,12 +136,34 @@ def _study_compactness(out: Path, log, args=None) -> None:
     log(written)
 
 
+def _study_mechanisms(out: Path, log, args=None) -> None:
+    from .. import plotting
+    from .._parallel import jobs_for
+    from ..io.outputs import write_csv_rows, write_text
+    from ..plotting.mechanisms import mechanisms_figure
+    from ..reports.mechanisms import STUDY_COLUMNS, mechanisms_markdown, study_table_rows
+    from ..studies.mechanisms import mechanisms_study
+
+    datasets = args.datasets  # read and checked before the study began (run)
+    names = None if args.mechanisms is None else [m.strip() for m in args.mechanisms.split(",") if m.strip()]
+    mech = 12 if names is None else len(names)
+    s = mechanisms_study(datasets, mechanisms=names, starts=args.starts, hops=args.hops, seed=args.seed,
+                         tolerance=args.tolerance, jobs=jobs_for(mech, args.jobs))
+    write_csv_rows(out / "mechanisms.csv", list(STUDY_COLUMNS), study_table_rows(s))
+    plotting.save(mechanisms_figure(s, datasets), out / "mechanisms.png")
+    report = mechanisms_markdown(s)
+    write_text(out / "mechanisms.md", report)
+    print(report.split("## The answer")[0].split("\n\n", 2)[-1], flush=True)
+    log("mechanisms.csv, mechanisms.png, mechanisms.md")
+
+
 #: studies that fit data files given on the command line (not part of `reproduce`'s variants stage)
-DATA_STUDIES = ("compactness",)
+DATA_STUDIES = ("compactness", "mechanisms")
 
 #: the studies of `tenscell study NAME`: name -> writer(out_dir, log, args)
 STUDIES = {
     "compactness": _study_compactness,
+    "mechanisms": _study_mechanisms,
     "no-if": _study_no_if,
     "sensitivity": _study_sensitivity,
     "references": _study_references,
@@ -156,13 +178,15 @@ _QUICK_DRAWS = 1000
 #: options that apply to some studies only: dest -> (default, flag, studies); any other value elsewhere is refused
 _STUDY_OPTIONS = {
     "draws": (200, "--draws", ("sensitivity",)),
-    "seed": (0, "--seed", ("sensitivity", "compactness")),
+    "seed": (0, "--seed", ("sensitivity", "compactness", "mechanisms")),
     "decades": (tuple(float(d) for d in range(1, 15)), "--decades", ("compactness",)),
-    "prestress": (None, "--prestress", ("compactness",)),
+    "prestress": (None, "--prestress", ("compactness", "mechanisms")),
     "damping": ("uniform", "--damping", ("compactness",)),
-    "starts": (4, "--starts", ("compactness",)),
-    "jobs": (None, "--jobs", ("compactness",)),
-    "tolerance": (0.01, "--tolerance", ("compactness",)),
+    "starts": (4, "--starts", ("compactness", "mechanisms")),
+    "jobs": (None, "--jobs", ("compactness", "mechanisms")),
+    "tolerance": (0.01, "--tolerance", ("compactness", "mechanisms")),
+    "mechanisms": (None, "--mechanisms", ("mechanisms",)),
+    "hops": (10, "--hops", ("mechanisms",)),
 }
 
 
@@ -173,13 +197,16 @@ def register(sub) -> None:
                                    "references (valid q0(α, δ), regular and cylindrical cells), semiflexible (elastic "
                                    "struts), stiffening (strain-stiffening IFs); compactness DATA... (how narrow the "
                                    "distribution of tendon stiffnesses can be and still fit the data: best RMS for "
-                                   "each bound on its spread).")
+                                   "each bound on its spread); mechanisms DATA... (every mechanism — per-tendon and "
+                                   "compact Voigt, Maxwell, SLS, springpot, cytoplasm, distributions — fitted to the "
+                                   "same data: parameters, RMS, AIC/BIC, identifiability, G' slope ripple, held-out "
+                                   "error).")
     p.add_argument("name", choices=sorted(STUDIES), help="which study")
-    p.add_argument("data", nargs="*", help="compactness: file(s) of measured moduli (as for `tenscell fit`), or "
-                                           "bundled:NAME")
+    p.add_argument("data", nargs="*", help="compactness, mechanisms: file(s) of measured moduli (as for `tenscell "
+                                           "fit`), or bundled:NAME")
     add_out(p, derived="study-NAME")
     p.add_argument("--draws", type=integer(1, 100_000), default=200, help="Monte Carlo draws per set (sensitivity)")
-    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed (sensitivity, compactness)")
+    p.add_argument("--seed", type=integer(0, 2**63 - 1), default=0, help="random seed (sensitivity, compactness, mechanisms)")
     p.add_argument("--from-fit", metavar="FIT_JSON", type=path("a fit.json file"), default=None,
                    help="sensitivity: of the fitted paper cell of a `tenscell fit` run (its fit.json: strut length, "
                         "EA, c and prestress; a fit to data that state their prestress at their median)")
@@ -189,12 +216,16 @@ def register(sub) -> None:
     g.add_argument("--prestress", action="append", type=stated_prestress, metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     g.add_argument("--damping", choices=("uniform", "per-family"), default="uniform", help="damping c")
-    g.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per bound")
+    g.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per bound (mechanisms: per fit)")
     g.add_argument("--jobs", type=integer(1, 256), default=None,
-                   help="worker processes over the starts (default: one per CPU, at most --starts;"
+                   help="worker processes over the starts (mechanisms: over the mechanisms) (default: one per CPU, at most --starts;"
                         " the result does not depend on it)")
     g.add_argument("--tolerance", type=number(0.0, 10.0, "decades", open_lo=True), default=0.01,
                    help="RMS of the log10 errors (decades) a fit must reach")
+    m = p.add_argument_group("mechanisms (every mechanism fitted to the same data: one table, one figure)")
+    m.add_argument("--mechanisms", metavar="NAMES", default=None,
+                   help="comma list of mechanisms (default all; see `tenscell fit --model`)")
+    m.add_argument("--hops", type=integer(0, 10_000), default=10, help="basin-hopping moves per start")
     add_data_options(p)
     p.set_defaults(func=run)
 
@@ -218,12 +249,18 @@ def run(args) -> int:
 
     from ..io.outputs import OutputSet
 
-    if (args.name == "compactness") != bool(args.data):
-        raise ValueError("study compactness needs data files (e.g. bundled:fabry2001)" if args.name == "compactness"
+    if (args.name in DATA_STUDIES) != bool(args.data):
+        raise ValueError(f"study {args.name} needs data files (e.g. bundled:fabry2001)" if args.name in DATA_STUDIES
                          else f"study {args.name} takes no data files, got {' '.join(args.data)}")
     for dest, (default, flag, names) in _STUDY_OPTIONS.items():
         if args.name not in names and getattr(args, dest) != default:
             raise ValueError(f"{flag} applies to study {' and '.join(names)}, not to study {args.name}")
+    if args.name == "mechanisms" and args.mechanisms is not None:
+        from ..fitting.mechanisms import mechanism_names
+
+        bad = [m for m in args.mechanisms.split(",") if m.strip() and m.strip() not in mechanism_names()]
+        if bad:
+            raise ValueError(f"--mechanisms: unknown mechanism {bad[0]!r}; known: {', '.join(mechanism_names())}")
     if args.from_fit is not None:
         if args.name != "sensitivity":
             raise ValueError(f"--from-fit applies to study sensitivity, not to study {args.name}")

@@ -15,7 +15,11 @@ package does the same for any :class:`tenscell.io.data.RheologyData`:
 - :mod:`~tenscell.fitting.result`: what a fit returns (:class:`FitResult`,
   :class:`FitParameter`, per-data-set :class:`DatasetFit`, model curves and slopes);
 - :mod:`~tenscell.fitting.prestress`: is the prestress doing anything
-  (:class:`PrestressActivity`).
+  (:class:`PrestressActivity`);
+- :mod:`~tenscell.fitting.mechanisms`, :mod:`~tenscell.fitting.mechanism_problem`,
+  :mod:`~tenscell.fitting.mechanism_fit`, :mod:`~tenscell.fitting.heterogeneity`:
+  few-parameter mechanisms (tendon laws with dynamics, cytoplasm, distributions of
+  tendon properties) fitted by the same search (``fit(data, model=NAME)``).
 
 The Markdown report is :func:`tenscell.reports.fit.fit_markdown`.
 """
@@ -23,7 +27,9 @@ from .prestress import PrestressActivity, prestress_activity
 from .problem import DAMPING_MODES, TENDON_MODES, FitProblem, make_problem, required_points
 from .result import (DatasetFit, FitAlternative, FitCurve, FitParameter, FitResult, data_axis, frequency_slopes,
                      model_curve, prestress_slopes)
-from .search import fit
+from .entry import fit
+from .mechanisms import MECHANISMS, Field, Mechanism, mechanism_names
+from .mechanism_fit import FittedMechanism, MechanismFit, fit_mechanism, load_any_fit
 
 __all__ = [
     "TENDON_MODES",
@@ -43,4 +49,12 @@ __all__ = [
     "frequency_slopes",
     "prestress_slopes",
     "required_points",
+    "MECHANISMS",
+    "Mechanism",
+    "Field",
+    "mechanism_names",
+    "MechanismFit",
+    "FittedMechanism",
+    "fit_mechanism",
+    "load_any_fit",
 ]

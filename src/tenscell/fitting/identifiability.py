@@ -287,7 +287,8 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
     pars = problem.parameters(theta)
     free = np.asarray(problem.free, dtype=bool)
     g = problem.gauge()
-    gauge = bool(np.any(g != 0) and np.all(free[g != 0]))  # exact only if it moves something, nothing fixed
+    # an exact gauge only if it moves something and nothing it moves is fixed (a mechanism has none: g = 0)
+    gauge = bool(np.any(g != 0) and np.all(free[g != 0]))
     l_index = problem.n_params - 1
     keep = np.zeros(problem.n_params, dtype=bool)
     excluded = []

@@ -17,8 +17,9 @@ on the seed only, never on ``jobs`` or timing. The search stops when
 
 * the best start meets the polish target (``polish × tolerance`` on every
   data set), or
-* the tolerance was met earlier and the polishing since then has used
-  ``polish_effort`` × the model evaluations it took to get there, or
+* the tolerance was met earlier (at some start's step) and the polishing
+  since that step has used ``polish_effort`` × the model evaluations it took
+  to get there, or
 * every start has finished (its hops, or ``patience`` moves without a 5 %
   improvement).
 
@@ -45,7 +46,7 @@ from .result import FitAlternative, FitResult
 from .._threads import limited
 from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
 
-__all__ = ["fit"]
+__all__ = ["fit", "run_search"]
 
 
 class _Objective:
@@ -228,10 +229,14 @@ def _step(problem: FitProblem, chain: _Chain, settings: _Settings, max_nfev: int
     # shared machine they make each evaluation ~10x slower.
     with limited():  # one place for BLAS threads (tenscell._threads), overridable by the user
         first = chain.theta is None
+        # a problem with starts and moves of its own (a fitted mechanism) brings them: the hook by which a new
+        # fitted model plugs into this search
         if first:
-            x0 = _initial_guess(problem, chain.rng) if chain.initial is None else chain.initial
+            guess = getattr(problem, "initial_guess", None) or (lambda rng: _initial_guess(problem, rng))
+            x0 = guess(chain.rng) if chain.initial is None else chain.initial
         else:
-            x0 = _perturb(problem, chain.theta, chain.rng)
+            move = getattr(problem, "perturb", None) or (lambda th, rng: _perturb(problem, th, rng))
+            x0 = move(chain.theta, chain.rng)
         theta, res, nfev = _least_squares(problem, x0, max_nfev)
         chain.nfev += nfev
         chain.last_nfev = nfev
@@ -261,10 +266,13 @@ def _best(chains) -> _Chain:
 def _rounds(problem, chains, settings, jobs, polish_effort, bar):
     """Advance the starts round by round until a stopping rule holds (module docstring); returns the stop reason.
 
-    The polish target and the polishing budget are checked after each start's
-    step, in start order: the step that meets the polish target, or exhausts
-    the budget, ends the search at once (the later starts of that round are
-    not run, or their steps dropped).
+    The rules are checked after each start's step, in start order. The step
+    at which the best start first meets the tolerance opens the polishing
+    budget: ``polish_effort`` × the evaluations spent up to and including
+    that step. Every later step (the rest of that round included) draws on
+    it; the step that meets the polish target, or exhausts the budget, ends
+    the search at once (the later starts of that round are not run, or their
+    steps dropped), so the result depends on the seed alone.
     """
     budget = None  # evaluations left for polishing, once the tolerance is met
     # worker processes kept across rounds, stopped cleanly on Ctrl-C (tenscell._parallel)
@@ -279,24 +287,29 @@ def _rounds(problem, chains, settings, jobs, polish_effort, bar):
             steps = workers.imap(_step, [(problem, chains[k], settings, cap) for k in active])
             for k, ch in zip(active, steps):
                 chains[k] = ch
-                best = _best(chains)
-                if best.met_score <= settings.target:
+                budget, stop = _polish_rule(chains, ch, budget, settings, polish_effort)
+                if stop:
                     bar.update(1)
-                    return "met the polish target"
-                if budget is not None:
-                    budget -= ch.last_nfev
-                    if budget <= 0:
-                        bar.update(1)
-                        return "polished as long as reaching the tolerance allowed"
+                    return stop
             bar.update(1)
             best = _best(chains)
             bar.set_postfix(rms=f"{min(best.met_score, best.score):.4g}")
-            if budget is None and best.met_theta is not None:
-                # the round's evaluations all count: polishing needs a budget of its own to pin down the
-                # weakly determined parameters (a population's prestress was recovered 5x worse without it)
-                budget = int(polish_effort * sum(c.nfev for c in chains))
-                if budget <= 0:
-                    return "met the tolerance (no polishing asked)"
+
+
+def _polish_rule(chains, ch: _Chain, budget, settings: _Settings, polish_effort: float):
+    """After start ``ch``'s step: the polishing budget left (None before the tolerance is met) and a stop reason."""
+    best = _best(chains)
+    if best.met_score <= settings.target:
+        return budget, "met the polish target"
+    if budget is not None:
+        budget -= ch.last_nfev
+        return budget, ("polished as long as reaching the tolerance allowed" if budget <= 0 else "")
+    if best.met_theta is None:
+        return None, ""
+    # the tolerance is met at this step: polishing gets a budget of its own, counted from here, to pin down
+    # the weakly determined parameters (a population's prestress was recovered 5x worse without any)
+    budget = int(polish_effort * sum(c.nfev for c in chains))
+    return budget, ("" if budget > 0 else "met the tolerance (no polishing asked)")
 
 
 def _merged_history(chains):
@@ -330,85 +343,56 @@ def _count(name: str, value, minimum: int) -> int:
     return int(value)
 
 
-def fit(
-    data,
-    cell: Cell | None = None,
-    *,
-    tendons: str = "per-tendon",
-    damping: str = "uniform",
-    starts: int = 4,
-    seed: int | None = 0,
-    jobs: int = 1,
-    tolerance: float = 0.01,
-    hops: int = 30,
-    patience: int = 6,
-    max_nfev: int = 100,
-    polish: float = 0.2,
-    polish_effort: float = 0.5,
-    bounds: dict | None = None,
-    fixed: dict | None = None,
-    min_prestress_share: float | None = None,
-    max_decades: float | None = None,
-    min_prestress_elasticity: float | None = None,
-    elasticity_frequency_hz: float = 0.1,
-    initial=None,
-    max_points: int | None = DEFAULT_MAX_POINTS,
-    progress: bool | None = None,
-) -> FitResult:
+def fit(data, cell: Cell | None = None, *, tendons: str = "per-tendon", damping: str = "uniform", starts: int = 4,
+        seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01, hops: int = 30, patience: int = 6,
+        max_nfev: int = 100, polish: float = 0.2, polish_effort: float = 0.5, bounds: dict | None = None,
+        fixed: dict | None = None, min_prestress_share: float | None = None, max_decades: float | None = None,
+        min_prestress_elasticity: float | None = None, elasticity_frequency_hz: float = 0.1, initial=None,
+        max_points: int | None = DEFAULT_MAX_POINTS, progress: bool | None = None) -> FitResult:
     """Fit the tensegrity model's G', G'' to measured data (multi-start, analytic Jacobian).
 
     Parameters
     ----------
     data : RheologyData or sequence of RheologyData
-        A frequency or prestress sweep (see :mod:`tenscell.io.data`), or
-        several data sets fitted jointly by one parameter set; a frequency
-        sweep that states its prestress (``data.with_prestress(P_Pa)``) is
-        linked to the others by one prestress scale (see
-        :mod:`tenscell.fitting.problem`).
+        A frequency or prestress sweep (see :mod:`tenscell.io.data`), or several
+        data sets fitted jointly by one parameter set; a frequency sweep that
+        states its prestress (``data.with_prestress(P_Pa)``) is linked to the
+        others by one prestress scale (see :mod:`tenscell.fitting.problem`).
     cell : Cell, optional
         Reference cell; default :func:`tenscell.paper_cell` (strut length 1 m).
     tendons : {"per-tendon", "per-family", "uniform"}
         Stiffness parametrization ("uniform" is the homogeneous baseline).
     damping : {"uniform", "per-family"}
-    starts : int
-        Independent starts (each followed by basin hopping). >= 1.
+    starts, hops, patience, max_nfev : int
+        Independent starts (>= 1), basin-hopping moves per start at most, moves
+        without a 5 % improvement before a start stops, model evaluations per
+        least-squares run.
     seed : int or None
         Seed of the numpy Generator; the same seed gives the same result
         whatever ``jobs`` is. None draws fresh entropy.
     jobs : int
         Worker processes over starts (1 = in this process).
     tolerance : float
-        RMS of the log10 errors (decades) that every data set must reach for
-        the fit to count as converged.
-    hops : int
-        Basin-hopping moves per start, at most.
-    patience : int
-        Stop a start after this many moves without a 5 % improvement of its RMS.
-    max_nfev : int
-        Model evaluations per least-squares run.
-    polish : float
+        RMS of the log10 errors (decades) every data set must reach to converge.
+    polish, polish_effort : float
         The search stops as soon as one start's RMS is ``polish × tolerance``
-        (on every data set): a fit well inside the tolerance, not on its edge.
-    polish_effort : float
-        Once the tolerance is met, polishing towards ``polish × tolerance``
-        may use at most this multiple of the model evaluations spent so far;
-        0 stops at the tolerance.
+        (on every data set), or once the evaluations since the tolerance was
+        first met reach ``polish_effort`` × those it took to meet it (0 stops
+        at the tolerance); see the module docstring.
     bounds, fixed, min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz :
         See :func:`tenscell.fitting.make_problem`.
-    max_points : int or None
-        A moduli data set with more points than this is fitted binned in log
-        frequency per prestress (:func:`tenscell.io.thinning.bin_log_frequency`;
-        the rule and the counts go into the data's comments and the report),
-        as ``tenscell fit --max-points`` does. None fits every point. Creep
-        data are never binned.
     initial : FitResult or array_like, optional
-        A warm start: start 0 begins here instead of at a drawn guess (a
-        FitResult of the same data and parametrization, or its free
-        log-parameters ``theta``); it is moved inside the bounds and, with
-        ``max_decades``, its stiffnesses are compressed to the bound.
+        A warm start: start 0 begins here (a FitResult of the same data and
+        parametrization, or its free log-parameters ``theta``), moved inside
+        the bounds (with ``max_decades``, stiffnesses compressed to the bound).
+    max_points : int or None
+        A moduli data set with more points is fitted binned in log frequency
+        per prestress (:func:`tenscell.io.thinning.bin_log_frequency`; the rule
+        and counts go into the data's comments and the report), as ``tenscell
+        fit --max-points`` does. None fits every point; creep data are never binned.
     progress : bool or None
-        A progress bar: None shows one when someone watches (a terminal or a
-        notebook), True always, False never (see :mod:`tenscell._progress`).
+        A progress bar: None when someone watches (a terminal or a notebook),
+        True always, False never (see :mod:`tenscell._progress`).
 
     Returns
     -------
@@ -419,36 +403,65 @@ def fit(
     ValueError
         Bad options, data or cell (see :func:`make_problem`).
     """
-    from ..model.shapes import paper_cell
-
     t_begin = time.monotonic()
-    datasets = as_datasets(data)
-    if max_points is not None:
-        datasets = bin_datasets(datasets, _count("max_points", max_points, 4))
-    cell = paper_cell() if cell is None else cell
+    datasets, cell = _prepared(data, cell, max_points)
     problem = make_problem(datasets, cell, tendons=tendons, damping=damping, bounds=bounds, fixed=fixed,
                            min_prestress_share=min_prestress_share, max_decades=max_decades,
                            min_prestress_elasticity=min_prestress_elasticity,
                            elasticity_frequency_hz=elasticity_frequency_hz)
-    starts = _count("starts", starts, 1)
-    jobs = _count("jobs", jobs, 1)
-    hops = _count("hops", hops, 0)
-    patience = _count("patience", patience, 1)
-    max_nfev = _count("max_nfev", max_nfev, 1)
+    chains, stop = run_search(problem, starts=starts, seed=seed, jobs=jobs, tolerance=tolerance, hops=hops,
+                              patience=patience, max_nfev=max_nfev, polish=polish, polish_effort=polish_effort,
+                              initial=initial, progress=progress, desc=f"fit ({tendons})", t_begin=t_begin)
+    return _result(problem, datasets, cell, chains, stop, float(tolerance), seed, t_begin)
+
+
+def run_search(problem, *, starts: int = 4, seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01,
+               hops: int = 30, patience: int = 6, max_nfev: int = 100, polish: float = 0.2,
+               polish_effort: float = 0.5, initial=None, progress: bool | None = None, desc: str = "fit",
+               t_begin: float | None = None):
+    """The multi-start search on any problem; returns ``(chains, stop reason)`` (options as for :func:`fit`).
+
+    ``problem`` is a :class:`FitProblem`, or any object with its residual and
+    Jacobian interface that brings its own ``initial_guess(rng)`` and
+    ``perturb(theta, rng)`` (:class:`tenscell.fitting.mechanism_problem.MechanismProblem`).
+    ``t_begin`` (``time.monotonic()``) is the moment the history's times count from (default: now).
+    """
+    t_begin = time.monotonic() if t_begin is None else t_begin
+    settings = _settings(hops, patience, max_nfev, tolerance, polish, polish_effort, t_begin)
+    chains = _chains(problem, _count("starts", starts, 1), seed, initial)
+    with progress_bar(total=settings.hops + 1, desc=desc, unit="round", progress=progress) as bar:
+        stop = _rounds(problem, chains, settings, _count("jobs", jobs, 1), float(polish_effort), bar)
+    return chains, stop
+
+
+def _prepared(data, cell, max_points):
+    """The data sets (binned beyond ``max_points``) and the reference cell (default the paper's)."""
+    from ..model.shapes import paper_cell
+
+    datasets = as_datasets(data)
+    if max_points is not None:
+        datasets = bin_datasets(datasets, _count("max_points", max_points, 4))
+    return datasets, (paper_cell() if cell is None else cell)
+
+
+def _settings(hops, patience, max_nfev, tolerance, polish, polish_effort, t_begin) -> _Settings:
+    """The search's stopping rules, checked (one line naming the option on bad input)."""
     tolerance = positive_scalar("tolerance", tolerance, "decades")
-    polish = positive_scalar("polish", polish)
     if not (isinstance(polish_effort, (int, float)) and math.isfinite(polish_effort) and polish_effort >= 0):
         raise ValueError(f"polish_effort must be a finite number >= 0, got {polish_effort!r}")
+    return _Settings(hops=_count("hops", hops, 0), patience=_count("patience", patience, 1),
+                     max_nfev=_count("max_nfev", max_nfev, 1), tolerance=tolerance,
+                     target=positive_scalar("polish", polish) * tolerance, t_begin=t_begin)
+
+
+def _chains(problem: FitProblem, starts: int, seed, initial) -> list[_Chain]:
+    """One chain per start, each with its own random stream spawned from ``seed``; start 0 may be warm."""
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
         raise ValueError(f"seed must be a non-negative integer or None, got {seed!r}")
     rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(starts)]
     chains = [_Chain(start=k, rng=rngs[k]) for k in range(starts)]
     chains[0].initial = _warm_start(problem, initial)
-    settings = _Settings(hops=hops, patience=patience, max_nfev=max_nfev, tolerance=tolerance,
-                         target=polish * tolerance, t_begin=t_begin)
-    with progress_bar(total=hops + 1, desc=f"fit ({tendons})", unit="round", progress=progress) as bar:
-        stop = _rounds(problem, chains, settings, jobs, float(polish_effort), bar)
-    return _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin)
+    return chains
 
 
 def _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin) -> FitResult:
@@ -476,6 +489,8 @@ def _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin) -> 
         converged=converged, message=message, datasets=datasets, cell=cell, problem=problem, theta=theta,
         tendons=problem.tendons, damping=problem.damping, starts=len(chains), seed=seed,
         elapsed_s=time.monotonic() - t_begin, n_evaluations=sum(ch.nfev for ch in chains),
-        alternatives=alternatives, start_rms=tuple(ch.rms for ch in chains), history=history,
+        alternatives=alternatives, history=history,
+        # a start the search stopped before it ran has no RMS (NaN, null in fit.json), not an infinite one
+        start_rms=tuple(ch.rms if ch.theta is not None else math.nan for ch in chains),
         history_theta=history_theta, stop_reason=stop,
     )

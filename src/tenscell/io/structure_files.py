@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._ranges import RANGES, range_problem
 from .outputs import write_text
 from ..model.structure import Point, Structure, StructureError, member_values
 
@@ -267,9 +268,9 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         if not isinstance(fam, str) or not fam:
             raise StructureError(f"tendon {j} needs a 'family' (e.g. \"actin\", \"intermediate_filament\", \"strut\")")
         families.append(fam)
-        EA.append(_in_window(_positive(t.get("EA", 1.0 / fu), f"tendon {j}: EA") * fu, f"tendon {j}: EA", "N"))
-        c.append(_in_window(_positive(t.get("c", 1.0 / (fu * tu / lu)), f"tendon {j}: c") * fu * tu / lu,
-                            f"tendon {j}: c", "N·s/m"))
+        EA.append(_in_range(_positive(t.get("EA", 1.0 / fu), f"tendon {j}: EA") * fu, "EA", f"tendon {j}: EA"))
+        c.append(_in_range(_positive(t.get("c", 1.0 / (fu * tu / lu)), f"tendon {j}: c") * fu * tu / lu, "c",
+                           f"tendon {j}: c"))
         T0.append(t.get("T0"))
     have_T0 = [v is not None for v in T0]
     if any(have_T0) and not all(have_T0):
@@ -281,7 +282,7 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         T0a = np.array([_finite(v, f"tendon {j}: T0") for j, v in enumerate(T0)])
         for k, v in enumerate(T0a.tolist()):
             if v:
-                _in_window(abs(v), f"tendon {k}: |T0|", "")
+                _in_window(abs(v), f"tendon {k}: |T0|")
         _check_tensions(T0a, families)
 
     groups = []
@@ -309,9 +310,9 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
     return StructureFile(structure=structure, EA=np.array(EA), c=np.array(c), T0=T0a, description=description)
 
 
-#: largest distance of a node from the origin (m): the --L flag's upper bound. Beyond it, squared lengths and the
-#: stiffness terms of the strut rotations (EA·L²) overflow float64 long before any physical structure is reached
-MAX_COORDINATE_M = 1e6
+#: largest distance of a node from the origin (m): the --L flag's upper bound (tenscell._ranges). Beyond it,
+#: squared lengths and the stiffness terms of the strut rotations (EA·L²) leave float64's comfortable range
+MAX_COORDINATE_M = RANGES["L"][1]
 
 
 def _check_coordinates(nodes: np.ndarray, names: list, lu: float) -> None:
@@ -324,12 +325,20 @@ def _check_coordinates(nodes: np.ndarray, names: list, lu: float) -> None:
                              f"{MAX_COORDINATE_M / lu:g} (the file's length unit; {MAX_COORDINATE_M:g} m)")
 
 
-def _in_window(v: float, what: str, unit: str) -> float:
-    """``v`` (SI) inside the library's window of physical values (:data:`tenscell._checks.MAGNITUDE`)."""
+def _in_range(v: float, quantity: str, what: str) -> float:
+    """``v`` (SI) inside the range of ``quantity`` shared with the flags and the data files (tenscell._ranges)."""
+    problem = range_problem(quantity, v)
+    if problem is not None:
+        raise StructureError(f"{what}: {problem}")
+    return v
+
+
+def _in_window(v: float, what: str) -> float:
+    """``v`` (dimensionless, > 0) inside the library's window of values (:data:`tenscell._checks.MAGNITUDE`)."""
     from .._checks import positive_scalar
 
     try:
-        return positive_scalar(what, v, unit)
+        return positive_scalar(what, v)
     except ValueError as err:
         raise StructureError(str(err)) from None
 

@@ -239,6 +239,13 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
         For a non-numeric, non-positive or NaN ``P``, ``EA`` or ``c``.
     NotPositiveDefiniteError
         If K0 is not positive definite (the reference is unstable).
+
+    Notes
+    -----
+    For many prestresses, do not loop ``moduli(linearize(cell, P=P), f)``:
+    ``tenscell.frequency_response(cell, f, P=[...])`` shares everything that
+    does not depend on P and does one batched eigensolve for the whole grid
+    (``bench/bench_sweep.py`` measures both ways against the floor).
     """
     P = positive_scalar("P (prestress)", P, "N")
     m = cell.m

@@ -6,9 +6,12 @@ One place for what every distributed run needs:
   file) or on a local cluster of processes started here (loopback only, no
   dashboard, one thread per worker), or no client at all (``workers=0``: the
   tasks run in this process, in order);
-* :func:`stream` — submit tasks through a bounded window and yield each result
-  as it completes, so that 10⁵ tasks never sit in memory at once and the
-  caller can write each result to disk as it arrives.
+* :func:`stream` — submit tasks, a batch per Dask task, through a bounded
+  window and yield each result as it completes, so that 10⁵ tasks never sit
+  in the cluster at once and the caller can write each result as it arrives;
+* :func:`run_tasks` — what the commands use: times the first task here, then
+  batches the rest so that each Dask task holds about two seconds of work,
+  or keeps them all here when a local cluster would not pay for its start-up.
 
 A worker that dies while running a task is replaced (by its nanny on a local
 cluster) and the scheduler reruns the task elsewhere; after
@@ -19,15 +22,17 @@ task's outcome instead of stopping the run.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import logging
 import os
+import time
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
 from .._errors import TenscellError
 from .._parallel import usable_cpus
 
-__all__ = ["cluster", "stream", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
+__all__ = ["cluster", "stream", "run_tasks", "cluster_pays", "batch_size", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
            "WorkDirError"]
 
 
@@ -92,7 +97,7 @@ def check_scheduler(address: str, flag: str = "--scheduler") -> str:
 
 @contextlib.contextmanager
 def cluster(*, client=None, workers: int | None = None, scheduler: str | None = None,
-            timeout: float = 30.0) -> Iterator[Any]:
+            timeout: float = 30.0, warm: tuple[str, ...] = ()) -> Iterator[Any]:
     """Yield a Dask client (or None for in-process execution when ``workers == 0``).
 
     Parameters
@@ -106,6 +111,9 @@ def cluster(*, client=None, workers: int | None = None, scheduler: str | None = 
         Address or scheduler file of an existing cluster.
     timeout : float
         Seconds to wait for the scheduler (s).
+    warm : tuple of str
+        Modules every worker imports when it starts (a replacement worker too),
+        so that the first task's time is the task's, not the imports'.
     """
     if client is not None:
         yield client
@@ -116,19 +124,139 @@ def cluster(*, client=None, workers: int | None = None, scheduler: str | None = 
     from .._optional import require
 
     require("distributed")  # an optional dependency: one line naming the extra
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler is not None:
         scheduler = check_scheduler(scheduler)
         kw = {"scheduler_file": scheduler} if Path(scheduler).is_file() else {"address": scheduler}
         with Client(timeout=timeout, **kw) as c:
+            _warm_workers(c, warm)
             yield c
         return
     n = usable_cpus() if workers is None else int(workers)
-    # loopback only, no dashboard: a run on a shared machine opens no port to the network
-    with LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None, silence_logs=logging.ERROR) as lc, Client(lc) as c:
+    with _local_cluster(n, timeout) as c:
+        _warm_workers(c, warm)
         yield c
+
+
+def _warm_workers(client, modules: tuple[str, ...]) -> None:
+    if modules:
+        from ._warm import Imports  # a Dask class: imported only with a cluster
+
+        client.register_plugin(Imports(tuple(modules)), name="tenscell-imports")
+
+
+#: environment of a local cluster's worker processes: one BLAS/OpenMP thread, as every hot path of the main
+#: process runs (Dask's default also sets MALLOC_TRIM_THRESHOLD_, which the main process does not have)
+WORKER_ENVIRON = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+
+
+@contextlib.contextmanager
+def _local_cluster(n: int, timeout: float) -> Iterator[Any]:
+    """A loopback cluster of ``n`` single-thread worker processes that Ctrl-C leaves quiet and stops at once.
+
+    The terminal sends SIGINT to every process of the foreground group; Dask's
+    worker processes would each print a KeyboardInterrupt traceback and their
+    nannies a CancelledError. So Dask's event-loop thread is started here with
+    SIGINT blocked: it keeps the block, and so does every thread and worker
+    process it starts (at start-up and when it replaces a dead worker) —
+    workers never see Ctrl-C. This thread alone handles it, at any moment
+    including start-up, and then kills the workers (:func:`_kill_workers`):
+    their work is dropped anyway. No dashboard; the scheduler's own HTTP
+    endpoint takes a free loopback port (never "port 8787 is already in use").
+    """
+    import dask
+    from distributed import Client, LocalCluster
+    from distributed.utils import LoopRunner
+
+    with _sigint_blocked():
+        loop = LoopRunner()
+        loop.start()
+    lc = client = None
+    quiet = _Quiet()
+    try:
+        with dask.config.set({"distributed.nanny.pre-spawn-environ": WORKER_ENVIRON}):
+            lc = LocalCluster(n_workers=0, threads_per_worker=1, processes=True, host="127.0.0.1", loop=loop.loop,
+                              dashboard_address=None, silence_logs=logging.ERROR,
+                              scheduler_kwargs={"dashboard": False, "dashboard_address": "127.0.0.1:0"})
+            client = Client(lc, timeout=timeout)
+            lc.scale(n)
+            # ready means every worker is up: a run never starts on a half-built cluster, nor does a test wait
+            # a fixed time for one (the bound only keeps a broken machine from hanging here)
+            client.wait_for_workers(n, timeout=max(timeout, 300.0))
+        yield client
+    finally:
+        # the workers hold nothing once the block is left (results are in, or dropped on Ctrl-C or an error):
+        # they are ended at once rather than asked to close (0.7-0.9 s at load 10), and the teardown then
+        # logs nothing (the scheduler reports each closed connection, a nanny its worker that died starting)
+        quiet.start()
+        try:
+            if lc is not None:
+                _kill_workers(lc)
+            if client is not None:
+                client.close(timeout=2)
+            if lc is not None:
+                lc.close(timeout=5)
+            loop.stop()
+        finally:
+            quiet.stop()
+
+
+class _Quiet:
+    """Silence logging (Dask's, Tornado's: their loggers set their own levels) until :meth:`stop`."""
+
+    def __init__(self):
+        self._before: int | None = None
+
+    def start(self) -> None:
+        self._before = logging.root.manager.disable
+        logging.disable(logging.CRITICAL)
+
+    def stop(self) -> None:
+        if self._before is not None:
+            logging.disable(self._before)
+        self._before = None
+
+
+def _kill_workers(lc) -> None:
+    """SIGKILL a local cluster's worker processes, started or still starting (on Ctrl-C or an error)."""
+    import signal
+
+    from distributed.core import Status
+
+    # the nannies still starting are not in .workers yet (only in the private ._created)
+    for nanny in {*getattr(lc, "workers", {}).values(), *getattr(lc, "_created", ())}:
+        if nanny.status == Status.running:
+            # a running nanny restarts a worker that dies (and closing would wait for the new one); one that
+            # is closing gracefully closes itself instead
+            nanny.status = Status.closing_gracefully
+        # the multiprocessing.Process under Dask's wrappers has its pid from the moment it is forked
+        proc = getattr(getattr(getattr(nanny, "process", None), "process", None), "_process", None)
+        pid = getattr(proc, "pid", None)
+        if pid:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+
+
+@contextlib.contextmanager
+def _sigint_blocked():
+    """Block SIGINT in this thread (and threads/processes it starts) for the block; main thread only."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    # multiprocessing starts its resource tracker at first need, blocking and then *unblocking* SIGINT in the
+    # thread that starts it (it would undo this block in Dask's event-loop thread): start it now
+    from multiprocessing import resource_tracker
+
+    resource_tracker.ensure_running()
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)  # a Ctrl-C held meanwhile is raised here
 
 
 def n_threads(client) -> int:
@@ -138,14 +266,80 @@ def n_threads(client) -> int:
     return max(1, sum(client.nthreads().values()))
 
 
+#: seconds of work a Dask task is given by batching (each task costs about 0.07 s on a small machine, measured)
+TASK_SECONDS = 2.0
+#: seconds a local cluster takes to be ready (measured on 2 cores: 1.5 s idle, 3–4 s at load 10); the
+#: in-process path is chosen when the whole work is too short to pay for it
+CLUSTER_START_S = 3.0
+
+
+def cluster_pays(n_tasks: int, task_s: float, n_workers: int) -> bool:
+    """Whether ``n_tasks`` of ``task_s`` seconds each finish sooner on a new ``n_workers`` cluster than here."""
+    if n_workers < 2:
+        return False
+    serial = n_tasks * task_s
+    return CLUSTER_START_S + serial / n_workers < serial
+
+
+def batch_size(n_tasks: int, task_s: float, n_threads: int) -> int:
+    """Tasks per Dask task: about :data:`TASK_SECONDS` of work, and still at least 4 per worker thread."""
+    k = max(1, round(TASK_SECONDS / max(task_s, 1e-6)))
+    return int(max(1, min(k, n_tasks // (4 * max(1, n_threads)))))
+
+
+def run_tasks(fn: Callable, items: Iterable[tuple[object, tuple]], *, client=None, workers: int | None = None,
+              scheduler: str | None = None, name: str = "tenscell", warm: tuple[str, ...] = (),
+              notify: Callable[[str], None] | None = None, placed: dict | None = None) -> Iterator[tuple[Any, Any]]:
+    """Run ``fn(*args)`` for each ``(tag, args)``, on Dask or here; yield ``(tag, result)`` as each completes.
+
+    The first task runs here and is timed: it sets the batch size (tasks of
+    about :data:`TASK_SECONDS` each, so Dask's per-task cost is noise), and,
+    when neither ``client``, ``scheduler`` nor ``workers`` is given, whether a
+    local cluster pays at all (:func:`cluster_pays`); when it does not, every
+    task runs here and ``notify`` gets one line saying so. ``workers=0`` runs
+    everything here. Results do not depend on where a task ran. ``placed``,
+    if given, receives ``workers``: the Dask workers used (0: this process).
+    """
+    placed = {} if placed is None else placed
+    placed["workers"] = 0
+    items = list(items)
+    if not items:
+        return
+    here = workers == 0 and client is None and scheduler is None
+    t = time.perf_counter()
+    tag, args = items[0]
+    yield tag, fn(*args)
+    task_s, rest = time.perf_counter() - t, items[1:]
+    if not rest:
+        return
+    n = usable_cpus() if workers is None else int(workers)
+    if not here and client is None and scheduler is None and workers is None and not cluster_pays(len(rest), task_s, n):
+        here = True
+        if notify is not None:
+            notify(f"{len(items)} tasks of about {task_s:.2g} s run in this process: on {n} CPU(s), starting a "
+                   f"local Dask cluster (about {CLUSTER_START_S:g} s) would not pay")
+    if here:
+        yield from ((tag, fn(*args)) for tag, args in rest)
+        return
+    with cluster(client=client, workers=workers, scheduler=scheduler, warm=warm) as c:
+        placed["workers"] = len(c.nthreads())
+        yield from stream(c, fn, rest, name=name, batch=batch_size(len(rest), task_s, n_threads(c)))
+
+
+def _run_batch(fn: Callable, arglists: list) -> list:
+    """One Dask task: ``fn(*args)`` for each of ``arglists``, in order."""
+    return [fn(*args) for args in arglists]
+
+
 def stream(client, fn: Callable, items: Iterable[tuple[object, tuple]], *, window: int | None = None,
-           name: str = "tenscell") -> Iterator[tuple[Any, Any]]:
+           name: str = "tenscell", batch: int = 1) -> Iterator[tuple[Any, Any]]:
     """Run ``fn(*args)`` for each ``(tag, args)`` of ``items``; yield ``(tag, result)`` as each completes.
 
-    At most ``window`` tasks are in the cluster at a time (default: 8 per
-    worker thread, at least 32), refilled as results arrive. A task given up
-    by Dask after repeated worker deaths yields a :class:`TaskLost` as its
-    result. With ``client=None`` the tasks run here, in order.
+    Items go to the cluster ``batch`` at a time (one Dask task each); at most
+    ``window`` tasks are in the cluster at a time (default: 8 per worker
+    thread, at least 32), refilled as results arrive. A task given up by Dask
+    after repeated worker deaths yields a :class:`TaskLost` as the result of
+    each of its items. With ``client=None`` the items run here, in order.
 
     Closing the generator (or an interrupt) cancels the tasks still in flight.
     """
@@ -164,12 +358,12 @@ def stream(client, fn: Callable, items: Iterable[tuple[object, tuple]], *, windo
     done = as_completed()
 
     def submit_next() -> bool:
-        nxt = next(it, None)
-        if nxt is None:
+        group = list(itertools.islice(it, max(1, int(batch))))
+        if not group:
             return False
-        tag, args = nxt
-        fut = client.submit(fn, *args, pure=False, key=f"{name}-{os.urandom(8).hex()}")
-        pending[fut.key] = (tag, fut)
+        fut = client.submit(_run_batch, fn, [args for _, args in group], pure=False,
+                            key=f"{name}-{os.urandom(8).hex()}")
+        pending[fut.key] = ([tag for tag, _ in group], fut)
         done.add(fut)
         return True
 
@@ -178,17 +372,17 @@ def stream(client, fn: Callable, items: Iterable[tuple[object, tuple]], *, windo
             if not submit_next():
                 break
         for fut in done:
-            tag, _ = pending.pop(fut.key)
+            tags, _ = pending.pop(fut.key)
             try:
-                result = fut.result()
+                results = fut.result()
             except KilledWorker as err:
-                result = TaskLost(f"the workers running it died repeatedly ({err})")
+                results = [TaskLost(f"the workers running it died repeatedly ({err})")] * len(tags)
             except CancelledError:
                 # only a lost scheduler cancels our futures; the finished results are already written
                 raise SchedulerLost("lost the Dask scheduler; the finished results are kept: "
                                     "run the same command with --resume when the cluster is back") from None
             fut.release()
-            yield tag, result
+            yield from zip(tags, results)
             submit_next()
     finally:
         if pending and client.status == "running":

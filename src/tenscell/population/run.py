@@ -45,16 +45,16 @@ import numpy as np
 from .._checks import positive_scalar
 from ._engine import WorkDirError, open_work_dir
 from .sources import CellSource, read_sources
+from .table import CURVE_FREQUENCIES
 
 __all__ = ["PopulationFitOptions", "cell_seed", "fit_cell", "fit_population", "CURVE_FREQUENCIES", "STATUSES",
            "WorkDirError"]
 
-#: the common frequency grid (Hz) on which every cell's fitted and measured moduli are kept for the
-#: population bands (10 points per decade; each cell fills only its own data range)
-CURVE_FREQUENCIES = np.logspace(-4, 4, 81)
 #: ``status`` of a cell record: fitted, unreadable data, fit raised, workers died
 STATUSES = ("ok", "data_error", "fit_error", "worker_lost")
 _RUN_FILE = "run.json"
+#: what a worker imports before its first fit (so that a fit takes the same time there as here)
+_WARM = ("tenscell.population.run", "tenscell.fitting", "tenscell.sensitivity", "scipy.optimize")
 _CELLS = "cells"
 
 
@@ -71,6 +71,14 @@ class PopulationFitOptions:
         Search effort per cell.
     tolerance : float
         RMS log10 error (decades) a cell must reach to count as converged.
+    polish_effort : float
+        Polishing budget after the tolerance is met, as a multiple of the
+        evaluations it took (see :func:`tenscell.fitting.fit`). Larger than a
+        single fit's default: a cell's fit is small, and its first start often
+        meets the tolerance in the basin where the prestress is inert at its
+        lower bound (EA compensating, RMS nearly as small), so every start is
+        given its run and the best kept (with a budget of 0.5 the fitted
+        median prestress of the test population was 8 decades off).
     fix_L : bool
         Hold the strut length at the reference cell's (removes the exact gauge
         ``(P, EA, c, L) → (λ²P, λ²EA, λc, λL)`` so cells are comparable).
@@ -85,6 +93,7 @@ class PopulationFitOptions:
     patience: int = 6
     max_nfev: int = 300
     tolerance: float = 0.02
+    polish_effort: float = 10.0
     fix_L: bool = True
     bounds: tuple = field(default=())
 
@@ -100,11 +109,13 @@ class PopulationFitOptions:
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < low:
                 raise ValueError(f"{name} must be a whole number >= {low}, got {v!r}")
         positive_scalar("tolerance", self.tolerance, "decades")
+        positive_scalar("polish_effort", self.polish_effort)
 
     def fit_kwargs(self, cell) -> dict:
         """Keyword arguments of :func:`tenscell.fitting.fit` for a reference ``cell``."""
         kw = dict(tendons=self.tendons, damping=self.damping, starts=self.starts, hops=self.hops,
-                  patience=self.patience, max_nfev=self.max_nfev, tolerance=self.tolerance)
+                  patience=self.patience, max_nfev=self.max_nfev, tolerance=self.tolerance,
+                  polish_effort=self.polish_effort)
         if self.fix_L:
             kw["fixed"] = {"L": float(cell.strut_length)}
         if self.bounds:
@@ -293,6 +304,7 @@ def fit_population(
     resume: bool = False,
     cell=None,
     progress: bool | None = None,
+    notify=None,
 ):
     """Fit every cell of a population, in parallel on Dask, writing each result as it completes.
 
@@ -310,7 +322,9 @@ def fit_population(
         An existing client (not closed here).
     workers : int, optional
         Without ``client`` or ``scheduler``: size of the local cluster started
-        for this run (default the CPU count); 0 fits in this process, without Dask.
+        for this run; 0 fits in this process, without Dask. Default: one worker
+        per CPU when that pays, judged from the first cell's fit time (see
+        :func:`tenscell.population._engine.run_tasks`), else in this process.
     scheduler : str, optional
         Address (``tcp://host:port``) or scheduler file of an existing Dask cluster.
     work_dir : path, optional
@@ -322,6 +336,10 @@ def fit_population(
         Reference cell of every fit (default :func:`tenscell.paper_cell`).
     progress : bool or None
         Progress bar (see :mod:`tenscell._progress`).
+    notify : callable(str), optional
+        Receives one line when the cells are fitted here rather than on a new
+        local cluster because the work is too small to pay for its start-up
+        (only when neither ``client``, ``scheduler`` nor ``workers`` is given).
 
     Returns
     -------
@@ -352,24 +370,24 @@ def fit_population(
     n_reused = len(records)
     bar = progress_bar(total=len(srcs), desc="fit-population", unit="cell", progress=progress)
     bar.update(n_reused)
+    placed: dict = {}
     try:
-        with _engine.cluster(client=client, workers=workers, scheduler=scheduler) as c:
-            n_workers = 0 if c is None else len(c.nthreads())
-            items = ((s, (s, cell_seed(seed, s.cell), options, cell)) for s in todo)
-            for src, rec in _engine.stream(c, fit_cell, items, name="tenscell-fit"):
-                if isinstance(rec, _engine.TaskLost):
-                    rec = {"cell": src.cell, "condition": src.condition, "source": src.source, "digest": src.digest,
-                           "seed": cell_seed(seed, src.cell), "status": "worker_lost", "error": str(rec),
-                           "kind": "", "n_points": 0, "time_s": math.nan}
-                if store is not None:
-                    store.write(rec)
-                records[src.cell] = rec
-                bar.update(1)
+        items = ((s, (s, cell_seed(seed, s.cell), options, cell)) for s in todo)
+        for src, rec in _engine.run_tasks(fit_cell, items, client=client, workers=workers, scheduler=scheduler,
+                                          name="tenscell-fit", warm=_WARM, notify=notify, placed=placed):
+            if isinstance(rec, _engine.TaskLost):
+                rec = {"cell": src.cell, "condition": src.condition, "source": src.source, "digest": src.digest,
+                       "seed": cell_seed(seed, src.cell), "status": "worker_lost", "error": str(rec),
+                       "kind": "", "n_points": 0, "time_s": math.nan}
+            if store is not None:
+                store.write(rec)
+            records[src.cell] = rec
+            bar.update(1)
     finally:
         bar.close()
     ordered = tuple(records[s.cell] for s in srcs)
     return PopulationResult.from_records(ordered, options=options, seed=int(seed), elapsed_s=time.perf_counter() - t0,
-                                         n_workers=n_workers, n_resumed=n_reused)
+                                         n_workers=placed.get("workers", 0), n_resumed=n_reused)
 
 
 def _is_sources(obj) -> bool:

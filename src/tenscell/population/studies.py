@@ -129,7 +129,7 @@ def _open_study(directory: Path, settings: dict, resume: bool) -> set[int]:
     return {int(p.stem.split("-")[1]) for p in (directory / PARTS).glob("part-*.parquet")}
 
 
-def _run(directory, settings, chunks, fn, *, resume, client, workers, scheduler, progress, desc):
+def _run(directory, settings, chunks, fn, *, resume, client, workers, scheduler, progress, desc, notify=None):
     """Run ``fn(settings, k, lo, hi)`` for every missing chunk; write each part as it completes."""
     from .._progress import progress_bar
     from . import _engine
@@ -140,13 +140,13 @@ def _run(directory, settings, chunks, fn, *, resume, client, workers, scheduler,
     bar = progress_bar(total=len(chunks), desc=desc, unit="chunk", progress=progress)
     bar.update(len(chunks) - len(todo))
     try:
-        with _engine.cluster(client=client, workers=workers, scheduler=scheduler) as c:
-            items = ((k, (settings, k, lo, hi)) for k, lo, hi in todo)
-            for k, cols in _engine.stream(c, fn, items, name=f"tenscell-{desc}"):
-                if isinstance(cols, _engine.TaskLost):
-                    raise RuntimeError(f"chunk {k}: {cols}; rerun with --resume")
-                _write_part(directory / PARTS / f"part-{k:05d}.parquet", cols)
-                bar.update(1)
+        items = ((k, (settings, k, lo, hi)) for k, lo, hi in todo)
+        for k, cols in _engine.run_tasks(fn, items, client=client, workers=workers, scheduler=scheduler,
+                                         name=f"tenscell-{desc}", warm=(fn.__module__,), notify=notify):
+            if isinstance(cols, _engine.TaskLost):
+                raise RuntimeError(f"chunk {k}: {cols}; rerun with --resume")
+            _write_part(directory / PARTS / f"part-{k:05d}.parquet", cols)
+            bar.update(1)
     finally:
         bar.close()
     return len(chunks) - len(todo)
@@ -185,7 +185,8 @@ def _mc_chunk(settings: dict, k: int, lo: int, hi: int) -> dict:
 def monte_carlo_study(n: int, directory, *, spread: float = 0.10, alpha_spread: float | None = None,
                       parameters: str = "all", P: float = 1000.0, f_hz=None, seed: int = 0, chunk: int = 1000,
                       bound: float = 0.08, keep_factors: bool = True, client=None, workers: int | None = None,
-                      scheduler: str | None = None, resume: bool = False, progress: bool | None = None) -> StudyResult:
+                      scheduler: str | None = None, resume: bool = False, progress: bool | None = None,
+                      notify=None) -> StudyResult:
     """The Monte Carlo sensitivity study for any number of draws, streamed to ``directory/parts/``.
 
     Parameters
@@ -206,7 +207,7 @@ def monte_carlo_study(n: int, directory, *, spread: float = 0.10, alpha_spread: 
         The summary's bound on the changes (fraction; the paper's 8 %).
     keep_factors : bool
         Also store every draw's factors (one column per parameter).
-    client, workers, scheduler
+    client, workers, scheduler, notify
         Where the chunks run (see :func:`tenscell.population.fit_population`).
 
     Returns
@@ -228,7 +229,7 @@ def monte_carlo_study(n: int, directory, *, spread: float = 0.10, alpha_spread: 
                 "parameters": parameters, "P": positive_scalar("P", P, "N"), "frequency_Hz": f.tolist(),
                 "seed": seed, "chunk": chunk, "keep_factors": bool(keep_factors)}
     resumed = _run(directory, settings, _chunks(n, chunk), _mc_chunk, resume=resume, client=client, workers=workers,
-                   scheduler=scheduler, progress=progress, desc="monte-carlo")
+                   scheduler=scheduler, progress=progress, desc="monte-carlo", notify=notify)
     df = read_study(directory, ["change_storage", "change_loss"])
     cs, cl = df["change_storage"].to_numpy(), df["change_loss"].to_numpy()
     valid = np.isfinite(cs)
@@ -273,7 +274,7 @@ def _sweep_chunk(settings: dict, k: int, lo: int, hi: int) -> dict:
 
 def sweep_study(prestress, heterogeneity, directory, *, f_hz=None, realizations: int = 20, EA: float = 1.0,
                 c: float = 1.0, seed: int = 0, client=None, workers: int | None = None, scheduler: str | None = None,
-                resume: bool = False, progress: bool | None = None) -> StudyResult:
+                resume: bool = False, progress: bool | None = None, notify=None) -> StudyResult:
     """G'(f), G''(f) of heterogeneous paper cells over prestress × heterogeneity, streamed to Parquet.
 
     Parameters
@@ -309,7 +310,7 @@ def sweep_study(prestress, heterogeneity, directory, *, f_hz=None, realizations:
                 "seed": _whole("seed", seed, 0)}
     pairs = [(0, realizations)] * (P.size * sig.size)
     resumed = _run(directory, settings, pairs, _sweep_chunk, resume=resume, client=client, workers=workers,
-                   scheduler=scheduler, progress=progress, desc="sweep")
+                   scheduler=scheduler, progress=progress, desc="sweep", notify=notify)
     n_rows = P.size * sig.size * realizations * f.size
     summary = {"prestress_points": int(P.size), "heterogeneity_points": int(sig.size),
                "realizations": int(realizations), "frequencies": int(f.size)}

@@ -38,7 +38,12 @@ import numpy as np
 from .._optional import require
 from .._results import format_repr
 
-__all__ = ["PopulationResult", "condition_summary", "recovery", "FIXED_COLUMNS", "SUMMARY_COLUMNS", "read_table"]
+__all__ = ["PopulationResult", "condition_summary", "recovery", "FIXED_COLUMNS", "SUMMARY_COLUMNS", "read_table",
+           "CURVE_FREQUENCIES"]
+
+#: the common frequency grid (Hz) on which every cell's fitted and measured moduli are kept for the
+#: population bands (10 points per decade; each cell fills only its own data range)
+CURVE_FREQUENCIES = np.logspace(-4, 4, 81)
 
 _FIRST = ("cell", "condition", "status", "error", "converged", "rms_log10_error", "parameters_at_bound")
 _DERIVED = ("stiffness_spread_decades", "prestress_elasticity_storage", "prestress_elasticity_loss",
@@ -75,8 +80,6 @@ def _table(records):
 
 
 def _curve_arrays(records):
-    from .run import CURVE_FREQUENCIES
-
     n, k = len(records), CURVE_FREQUENCIES.size
     out = {name: np.full((n, k), np.nan) for name in ("model_storage", "model_loss", "data_storage", "data_loss")}
     for i, r in enumerate(records):
@@ -133,8 +136,6 @@ class PopulationResult:
     def from_records(cls, records, *, options, seed: int, elapsed_s: float = math.nan, n_workers: int = 0,
                      n_resumed: int = 0) -> "PopulationResult":
         """Assemble the table and curves from per-cell records (as written by :func:`fit_cell`)."""
-        from .run import CURVE_FREQUENCIES
-
         df, params = _table(records)
         return cls(table=df, parameter_columns=params, records=tuple(records), frequency_hz=CURVE_FREQUENCIES,
                    curves=_curve_arrays(records), options=options, seed=seed, elapsed_s=elapsed_s,
@@ -197,9 +198,11 @@ class PopulationResult:
         """
         from pathlib import Path
 
+        from .._results import plotter
         from ..io.outputs import atomic_path, json_text, write_csv_rows, write_text
-        from ..plotting import save
         from ..reports.population import population_markdown
+
+        save = plotter("save")  # drawn by tenscell.plotting, a later stage (tenscell._results)
 
         d = Path(directory)
         _write_frame(d / "population.csv", self.table, write_csv_rows)

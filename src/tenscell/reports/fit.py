@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from ..fitting.prestress import CELL_ELASTICITY
+from ..fitting.mechanism_fit import noise_rms
 from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
@@ -39,6 +40,15 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
     """What was fitted to what, the verdict, the search."""
     pr = result.problem
     verdict = "**converged**" if result.converged else "**NOT converged**"
+    noise = noise_rms(result.datasets)
+    per_set = [f.rms_log10_error for f in result.fits]
+    if not result.converged and all(n is not None and r <= n for r, n in zip(per_set, noise)):
+        # the data say how well they can be fitted: a fit inside their noise has nothing left to explain
+        verdict = "**inside the data's noise** (the tolerance is not met, but the data cannot tell a better fit)"
+    below = [n for n in noise if n is not None and result.tolerance < n]
+    if below:
+        verdict += (f"; the tolerance {num(result.tolerance)} is below the data's own noise (RMS of the stated sd "
+                    f"{num(max(below), 3)} decades), so the data cannot confirm it")
     each = " on every data set" if result.joint else ""
     lines = [f"- Data: {len(result.datasets)} data set(s), {sum(d.n for d in result.datasets)} points:"]
     for f in result.fits:
@@ -120,6 +130,8 @@ def section_shape(result: FitResult, baseline=None) -> list[str]:
                 rows.append(("homogeneous baseline", *(num(v) for v in prestress_slopes(baseline))))
             out += [f"{head}straight lines over the data's prestress range:", "",
                     table(("", "dG'/dP", "G'(0) (Pa)", "dG''/dP", "G''(0) (Pa)"), rows)]
+            out.append("The fitted model's lines (and its loss tangent η = G''/G' along them) restate the trend "
+                       "of the data it was fitted to: a check of the fit, not a prediction.")
         out.append("")
     return out
 
@@ -155,6 +167,8 @@ def section_stiffness(result: FitResult, baseline=None) -> list[str]:
     """The spread of the fitted stiffnesses (and the bound on it, if any)."""
     lo, hi, dec = result.stiffness_spread
     line = f"Tendon stiffnesses span {num(lo)} to {num(hi)} N: {dec:.1f} decades{result._interior_text()}."
+    if any(result.parameters[g].at_bound for g in set(result.problem.ea_groups.tolist())):
+        line += (" Stiffnesses sit at their bounds: the span is set by the bound box, not measured by the data.")
     D = result.problem.max_decades
     if D is not None:
         line += (f" The fit bounded the spread to {num(D)} decades" +

@@ -146,7 +146,11 @@ def comparison_section(comparison) -> list[str]:
     return out
 
 
-def creep_section(creep, frequency_slope: tuple | None = None) -> list[str]:
+#: largest range of the local creep exponent over the window for which a power law J ≈ A·t^α is printed
+POWER_LAW_SPAN = 0.05
+
+
+def creep_section(creep, frequency_slope: tuple | None = None, constrained: bool = False) -> list[str]:
     """Predicted creep compliance of the fitted cell and its power-law exponent.
 
     Parameters
@@ -154,18 +158,33 @@ def creep_section(creep, frequency_slope: tuple | None = None) -> list[str]:
     creep : PredictedCreep
     frequency_slope : (float, float), optional
         Range of the fitted G′ log-log slope over the frequencies ``1/(2πt)`` of the window.
+    constrained : bool
+        A frequency sweep of the fit covers those frequencies: the creep then restates what the data
+        constrained and is not called a prediction.
     """
     lo, hi = creep.window
-    out = ["## Predicted creep of the fitted cell", ""]
-    out.append(f"After a stress step the fitted cell (prestress {num(creep.prestress_N)} N) creeps as "
-               f"J(t) ≈ {num(creep.A)}·t^**{num(creep.alpha, 3)}** 1/Pa (t in s) over {num(lo)}–{num(hi)} s; the "
-               f"local exponent d ln J/d ln t runs from {num(creep.exponent.min(), 3)} to "
-               f"{num(creep.exponent.max(), 3)} (RMS of the ln residuals of the straight line "
-               f"{num(creep.rms_log, 2)}).")
+    span = float(creep.exponent.max() - creep.exponent.min())
+    # a power law is printed only for a curve that is one: a local exponent constant to within POWER_LAW_SPAN
+    power = span <= POWER_LAW_SPAN
+    title = "Creep of the fitted cell (restates the fitted data)" if constrained else "Predicted creep of the fitted cell"
+    out = [f"## {title}", ""]
+    if power:
+        out.append(f"After a stress step the fitted cell (prestress {num(creep.prestress_N)} N) creeps as "
+                   f"J(t) ≈ {num(creep.A)}·t^**{num(creep.alpha, 3)}** 1/Pa (t in s) over {num(lo)}–{num(hi)} s; the "
+                   f"local exponent d ln J/d ln t runs from {num(creep.exponent.min(), 3)} to "
+                   f"{num(creep.exponent.max(), 3)} (RMS of the ln residuals of the straight line "
+                   f"{num(creep.rms_log, 2)}).")
+    else:
+        out.append(f"After a stress step the fitted cell (prestress {num(creep.prestress_N)} N) creeps over "
+                   f"{num(lo)}–{num(hi)} s with a local exponent d ln J/d ln t from {num(creep.exponent.min(), 3)} "
+                   f"to {num(creep.exponent.max(), 3)}: not a power law over this window (the exponent varies by "
+                   f"{span:.2g}, more than {POWER_LAW_SPAN:g}), so no single exponent is given.")
     if frequency_slope is not None:
         out.append(f"For a power-law material the creep exponent equals the frequency exponent of G′; the fitted "
                    f"G′ slope over the matching frequencies 1/(2πt) runs from {num(frequency_slope[0], 3)} to "
-                   f"{num(frequency_slope[1], 3)}.")
+                   f"{num(frequency_slope[1], 3)}."
+                   + (" That slope was fitted to a frequency sweep covering these frequencies, so this creep "
+                      "restates what the data constrained: it is not a prediction." if constrained else ""))
     out.append("")
     pick = np.unique(np.linspace(0, creep.t.size - 1, 7).round().astype(int))
     out.append(table(["t (s)", "J (1/Pa)", "local exponent"],
@@ -211,5 +230,8 @@ def section_creep(result, baseline=None) -> list[str]:
 
     creep = result.predicted_creep()
     lo, hi = creep.window
-    _, s1, _ = frequency_slopes(result, 1 / (2 * math.pi * hi), 1 / (2 * math.pi * lo), 200)
-    return creep_section(creep, (float(s1.min()), float(s1.max())))
+    f_lo, f_hi = 1 / (2 * math.pi * hi), 1 / (2 * math.pi * lo)
+    _, s1, _ = frequency_slopes(result, f_lo, f_hi, 200)
+    constrained = any(f.axis == "frequency" and f.data.frequency_hz.min() <= f_hi and f.data.frequency_hz.max() >= f_lo
+                      for f in result.fits)
+    return creep_section(creep, (float(s1.min()), float(s1.max())), constrained)
