@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -118,7 +119,7 @@ def test_internal_error_has_its_own_status_one_line_and_a_log(monkeypatch, capsy
     last = err.strip().splitlines()[-1]
     assert "internal error" in last and "AttributeError" in last and "Traceback" not in err
     log = re.search(r"details in (\S+\.log)$", last).group(1)
-    text = open(log, encoding="utf-8").read()
+    text = Path(log).read_text(encoding="utf-8")
     assert "tenscell moduli" in text and "computed the first half" in text and "Traceback" in text
 
 

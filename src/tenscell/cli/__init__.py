@@ -180,7 +180,7 @@ def _write_log(args, argv, err: BaseException, printed: str) -> str | None:
 
     from .. import __version__
 
-    stamp = datetime.datetime.now(datetime.timezone.utc).strftime("%Y%m%dT%H%M%SZ")
+    stamp = datetime.datetime.now(datetime.UTC).strftime("%Y%m%dT%H%M%SZ")
     lines = [
         f"tenscell {__version__}: internal error at {stamp}",
         f"command: {getattr(args, 'command_line', None) or command_line(argv)}",
