@@ -24,7 +24,7 @@ from .._checks import positive_scalar
 from ..io.data import DataError, RheologyData
 from ..model.equilibrium import Cell
 
-__all__ = ["TENDON_MODES", "DAMPING_MODES", "required_points", "as_datasets", "parameter_layout", "data_arrays",
+__all__ = ["ProblemLayout", "TENDON_MODES", "DAMPING_MODES", "required_points", "as_datasets", "parameter_layout", "data_arrays",
            "default_bounds", "check_options", "prestress_varies"]
 
 #: how tendon stiffnesses are parametrized
@@ -296,3 +296,75 @@ def prestress_varies(datasets) -> bool:
     """Whether the data state more than one prestress."""
     measured = [d.prestress for d in datasets if d.prestress is not None]
     return bool(measured) and np.unique(np.concatenate(measured)).size > 1
+
+
+class ProblemLayout:
+    """The parameter and residual layout every fit problem shares (what the search and the reports read).
+
+    A problem holds ``names``, the log-space ``lower``/``upper`` bounds, the boolean ``free`` mask, the
+    fixed log-values ``fixed_log`` (free entries overwritten by ``theta``), the data's ``omega``,
+    ``y_obs``, ``dataset_index`` and ``sources``, and its prestress ``group_map``.
+    :class:`tenscell.fitting.problem.FitProblem` and
+    :class:`tenscell.fitting.mechanism_problem.MechanismProblem` both are one.
+    """
+
+    names: tuple
+    free: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    fixed_log: np.ndarray
+    omega: np.ndarray
+    y_obs: np.ndarray
+    dataset_index: np.ndarray
+    sources: tuple
+    group_map: np.ndarray
+
+    @property
+    def n_params(self) -> int:
+        """Number of all parameters (free and fixed)."""
+        return len(self.names)
+
+    @property
+    def n_free(self) -> int:
+        """Number of free parameters (length of ``theta``)."""
+        return int(self.free.sum())
+
+    @property
+    def n_points(self) -> int:
+        """Number of moduli data points, all data sets together."""
+        return int(self.omega.size)
+
+    @property
+    def n_residuals(self) -> int:
+        """Number of data residuals."""
+        return int(self.y_obs.size)
+
+    @property
+    def n_datasets(self) -> int:
+        """Number of data sets fitted together."""
+        return len(self.sources)
+
+    @property
+    def n_groups(self) -> int:
+        """Number of distinct model prestresses."""
+        return int(self.group_map.shape[0])
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Log-space bounds of the free parameters."""
+        return self.lower[self.free], self.upper[self.free]
+
+    def full(self, theta) -> np.ndarray:
+        """Log values of all parameters from the free ones."""
+        phi = self.fixed_log.copy()
+        phi[self.free] = theta
+        return phi
+
+    def values(self, theta) -> np.ndarray:
+        """Parameter values (SI units) of all parameters, in the order of ``names``."""
+        return np.exp(self.full(theta))
+
+    def rows(self, dataset: int) -> np.ndarray:
+        """Positions of data set ``dataset``'s moduli residuals: its G' rows then its G'' rows."""
+        pts = np.flatnonzero(self.dataset_index == dataset)
+        return np.concatenate([pts, self.n_points + pts])

@@ -31,7 +31,7 @@ from ..linear.modal import modulus
 from ..model.equilibrium import Cell
 from .heterogeneity import DISTRIBUTIONS, assignments
 from .mechanisms import KINDS, Field, Mechanism
-from .layout import _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
+from .layout import ProblemLayout, _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
 from .problem import _PENALTY
 from .result import FitParameter
 
@@ -91,7 +91,7 @@ def _bounds_of(kind: str, S: float, w_m: float, G_loss: float) -> tuple[float, f
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class MechanismProblem:
+class MechanismProblem(ProblemLayout):
     """A mechanism's moduli against one or several data sets (built by :func:`make_mechanism_problem`).
 
     Duck-types the parts of :class:`~tenscell.fitting.problem.FitProblem` that
@@ -135,50 +135,10 @@ class MechanismProblem:
         return (f"MechanismProblem({self.mechanism.name}: {self.n_free} free of {self.n_params} parameters, "
                 f"{self.n_datasets} data set(s), {self.n_points} points)")
 
-    # -- layout (the FitProblem names the search and reports use) ----------------------
-    @property
-    def n_params(self) -> int:
-        return len(self.names)
-
-    @property
-    def n_free(self) -> int:
-        return int(self.free.sum())
-
-    @property
-    def n_points(self) -> int:
-        return int(self.omega.size)
-
-    @property
-    def n_residuals(self) -> int:
-        return int(self.y_obs.size)
-
-    @property
-    def n_datasets(self) -> int:
-        return len(self.sources)
-
-    @property
-    def n_groups(self) -> int:
-        return int(self.group_map.shape[0])
-
+    # -- layout (the rest in fitting.layout.ProblemLayout) ---------------------------
     @property
     def prestress_slice(self) -> slice:
         return slice(self.prestress_start, self.n_params)
-
-    @property
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.lower[self.free], self.upper[self.free]
-
-    def full(self, theta) -> np.ndarray:
-        phi = self.fixed_log.copy()
-        phi[self.free] = theta
-        return phi
-
-    def values(self, theta) -> np.ndarray:
-        return np.exp(self.full(theta))
-
-    def rows(self, dataset: int) -> np.ndarray:
-        pts = np.flatnonzero(self.dataset_index == dataset)
-        return np.concatenate([pts, self.n_points + pts])
 
     def gauge(self) -> np.ndarray:
         """No gauge: the strut length is not a parameter (module docstring of :mod:`.mechanisms`)."""

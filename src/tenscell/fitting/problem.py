@@ -72,7 +72,7 @@ from .._results import format_repr
 from ..linear.whitening import rescaled_basis, unit_damping_basis, whitened_basis
 from ..model.equilibrium import Cell
 from .derivatives import _Evaluation, evaluate
-from .layout import (DAMPING_MODES, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
+from .layout import (DAMPING_MODES, ProblemLayout, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
                      prestress_varies, required_points)
 from .result import FitParameter
 
@@ -89,7 +89,7 @@ _SHARE_WEIGHT = 30.0
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class FitProblem:
+class FitProblem(ProblemLayout):
     """The linear model of a cell against one or several data sets, with a parameter layout.
 
     Built by :func:`make_problem`; holds plain arrays only, so that it can be
@@ -181,61 +181,16 @@ class FitProblem:
             f"{self.n_residuals} residuals" + (f"; {', '.join(opts)}" if opts else ""),
         )
 
-    # -- layout -------------------------------------------------------------------
-    @property
-    def n_params(self) -> int:
-        """Number of all parameters (free and fixed)."""
-        return len(self.names)
-
-    @property
-    def n_free(self) -> int:
-        """Number of free parameters (length of ``theta``)."""
-        return int(self.free.sum())
-
-    @property
-    def n_points(self) -> int:
-        """Number of data points, all data sets together."""
-        return int(self.omega.size)
-
-    @property
-    def n_residuals(self) -> int:
-        """Number of data residuals: 2 per moduli point (G' and G''), 1 per creep point."""
-        return int(self.y_obs.size)
-
+    # -- layout (the rest in fitting.layout.ProblemLayout) --------------------------
     @property
     def n_creep(self) -> int:
         """Number of creep points, all creep data sets together (their residuals come last)."""
         return int(self.creep_t.size)
 
     @property
-    def n_datasets(self) -> int:
-        """Number of data sets fitted together."""
-        return len(self.sources)
-
-    @property
-    def n_groups(self) -> int:
-        """Number of distinct model prestresses (one eigendecomposition each)."""
-        return int(self.group_map.shape[0])
-
-    @property
     def prestress_slice(self) -> slice:
         """Positions of the prestress parameters in :attr:`names`."""
         return slice(self.n_ea + self.n_c, self.n_params - 1)
-
-    @property
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Log-space bounds of the free parameters."""
-        return self.lower[self.free], self.upper[self.free]
-
-    def full(self, theta) -> np.ndarray:
-        """Log values of all parameters from the free ones."""
-        phi = self.fixed_log.copy()
-        phi[self.free] = theta
-        return phi
-
-    def values(self, theta) -> np.ndarray:
-        """Parameter values (SI units) of all parameters, in the order of :attr:`names`."""
-        return np.exp(self.full(theta))
 
     def rows(self, dataset: int) -> np.ndarray:
         """Positions of data set ``dataset``'s residuals: its G' rows then its G'' rows, or its creep rows."""
