@@ -134,14 +134,9 @@ class FittedModel:
     # -- fit.json ---------------------------------------------------------------------------
     def to_dict(self) -> dict:
         """JSON-ready description that :meth:`from_dict` turns back into the same model (floats exact)."""
-        from ..io.structure_files import structure_to_dict
-
         return {
             "format": MODEL_FORMAT,
-            "structure": structure_to_dict(self.cell.structure, EA=self.EA, c=self.c, T0=self.cell.T0),
-            "parametrization": self.cell.coords.kind,
-            "cell_parameters": {k: (v if isinstance(v, (bool, str)) else float(v))
-                                for k, v in self.cell.parameters.items()},
+            **cell_to_dict(self.cell, EA=self.EA, c=self.c),
             "strut_length_m": self.L,
             "P_N": self.P,
             "s_m2": self.s,
@@ -152,15 +147,31 @@ class FittedModel:
     @classmethod
     def from_dict(cls, obj: dict) -> "FittedModel":
         """Rebuild from :meth:`to_dict` (e.g. ``json.load(fit.json)["model"]``)."""
-        from ..io.structure_files import structure_from_dict
-
         if not isinstance(obj, dict) or obj.get("format") != MODEL_FORMAT:
             raise ValueError(f"not a fitted model (expected an object with format {MODEL_FORMAT!r})")
-        sf = structure_from_dict(obj["structure"])
-        cell = equilibrate(sf.structure, obj.get("parametrization", "angles"), T0=sf.T0,
-                           parameters=obj.get("cell_parameters") or {})
+        cell, sf = cell_from_dict(obj)
         return cls(cell=cell, EA=sf.EA, c=sf.c, P=obj.get("P_N"), s=obj.get("s_m2"),
                    prestress_pa=tuple(obj.get("prestress_Pa") or ()), source=str(obj.get("source", "")))
+
+
+def cell_to_dict(cell: Cell, **member_values) -> dict:
+    """The JSON entries that rebuild ``cell`` (:func:`cell_from_dict`): its structure file with ``T0``
+    (and any per-member values such as ``EA``, ``c``), its parametrization and its construction parameters."""
+    from ..io.structure_files import structure_to_dict
+
+    return {"structure": structure_to_dict(cell.structure, T0=cell.T0, **member_values),
+            "parametrization": cell.coords.kind,
+            "cell_parameters": {k: (v if isinstance(v, (bool, str)) else float(v)) for k, v in cell.parameters.items()}}
+
+
+def cell_from_dict(obj: dict):
+    """``(cell, structure_file)`` from the entries :func:`cell_to_dict` wrote (the file keeps its member values)."""
+    from ..io.structure_files import structure_from_dict
+
+    sf = structure_from_dict(obj["structure"])
+    cell = equilibrate(sf.structure, obj.get("parametrization", "angles"), T0=sf.T0,
+                       parameters=obj.get("cell_parameters") or {})
+    return cell, sf
 
 
 def load_fit(path) -> FittedModel:

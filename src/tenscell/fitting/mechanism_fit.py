@@ -27,7 +27,8 @@ import numpy as np
 
 from .._checks import positive_scalar
 from .._results import dataframe, format_repr
-from ..model.equilibrium import Cell, equilibrate
+from ..model.equilibrium import Cell
+from .fitted import cell_from_dict, cell_to_dict
 from .mechanism_problem import MechanismProblem, _layout, _maps, make_mechanism_problem
 from .mechanisms import Field, Mechanism
 from .result import FitAlternative
@@ -117,25 +118,16 @@ class FittedMechanism:
 
     def to_dict(self) -> dict:
         """JSON-ready (the ``"model"`` entry of fit.json); :meth:`from_dict` rebuilds it."""
-        from ..io.structure_files import structure_to_dict
-
         return {"format": MECHANISM_FORMAT, "mechanism": mechanism_to_dict(self.mechanism),
-                "structure": structure_to_dict(self.cell.structure, T0=self.cell.T0),
-                "parametrization": self.cell.coords.kind,
-                "cell_parameters": {k: (v if isinstance(v, (bool, str)) else float(v))
-                                    for k, v in self.cell.parameters.items()},
+                **cell_to_dict(self.cell),
                 "values": {k: float(v) for k, v in self.values.items()}, "s_m2": self.s, "P_N": self.P,
                 "prestress_Pa": list(self.prestress_pa), "source": self.source}
 
     @classmethod
     def from_dict(cls, obj: dict) -> "FittedMechanism":
-        from ..io.structure_files import structure_from_dict
-
         if not isinstance(obj, dict) or obj.get("format") != MECHANISM_FORMAT:
             raise ValueError(f"not a fitted mechanism (expected format {MECHANISM_FORMAT!r})")
-        sf = structure_from_dict(obj["structure"])
-        cell = equilibrate(sf.structure, obj.get("parametrization", "angles"), T0=sf.T0,
-                           parameters=obj.get("cell_parameters") or {})
+        cell, _ = cell_from_dict(obj)
         return cls(mechanism=mechanism_from_dict(obj["mechanism"]), cell=cell,
                    values={k: float(v) for k, v in obj["values"].items()}, s=obj.get("s_m2"), P=obj.get("P_N"),
                    prestress_pa=tuple(obj.get("prestress_Pa") or ()), source=str(obj.get("source", "")))
