@@ -337,13 +337,11 @@ def _failed_line(table, out_target) -> str:
             f"first: {first['cell']}: {error[:240]}); nothing written, {out_target}/ left as it was")
 
 
-def run_fit(args) -> int:
-    import shutil
-
+def _open_run(args, what: str):
+    """The output set and work directory of a population command, checked before any work: the scheduler is
+    reachable (``--scheduler``) and a ``--resume`` has an unfinished ``what`` to resume."""
     from ..io.outputs import OutputSet
     from ..population import _engine
-    from ..population.run import PopulationFitOptions, fit_population
-    from ..population.sources import read_sources
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     work = _work_dir(args, out.target)
@@ -351,7 +349,17 @@ def run_fit(args) -> int:
         _engine.check_scheduler(args.scheduler)
         reach_scheduler(args.scheduler)
     if args.resume and not work.is_dir():
-        raise ValueError(f"--resume: no unfinished run in {work}")
+        raise ValueError(f"--resume: no unfinished {what} in {work}")
+    return out, work
+
+
+def run_fit(args) -> int:
+    import shutil
+
+    from ..population.run import PopulationFitOptions, fit_population
+    from ..population.sources import read_sources
+
+    out, work = _open_run(args, "run")
     options = PopulationFitOptions(tendons=args.tendons, damping=args.damping, starts=args.starts, hops=args.hops,
                                    tolerance=args.tolerance)
     sources = _with_column_map(read_sources(args.input), data_options_from_args(args))
@@ -486,18 +494,11 @@ def _still_to_do(units: int, parts: int, work: Path, resume: bool) -> int:
 def run_study(args) -> int:
     import shutil
 
-    from ..io.outputs import OutputSet, write_json, write_text
-    from ..population import _engine
+    from ..io.outputs import write_json, write_text
     from ..population.studies import PARTS, monte_carlo_study, sweep_study
     from ..reports.population import study_markdown
 
-    out = OutputSet(args.out, command=args.command_line, flag="--out")
-    work = _work_dir(args, out.target)
-    if args.scheduler is not None:
-        _engine.check_scheduler(args.scheduler)
-        reach_scheduler(args.scheduler)
-    if args.resume and not work.is_dir():
-        raise ValueError(f"--resume: no unfinished study in {work}")
+    out, work = _open_run(args, "study")
     cost = _study_cost(args, work)
     flags = ("--prestress × --heterogeneity × --realizations" if args.study == "sweep" else
              "--draws, --chunk" if args.chunk > 10**5 else "--draws")  # a large chunk is held whole by each worker
