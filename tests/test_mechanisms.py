@@ -183,6 +183,22 @@ def test_fit_model_and_moduli_from_fit_cli(tmp_path, capsys):
     np.testing.assert_allclose(rows[2:, 3], Gl, rtol=1e-9)
 
 
+def test_fit_model_bounds_a_mechanism_parameter_by_name(tmp_path, capsys):
+    """--bound takes a mechanism's parameter names (as its help says): the fitted value obeys the bound,
+    and a name the mechanism does not have is refused before any fitting."""
+    out = tmp_path / "fit"
+    code = cli_main(["fit", "bundled:fabry2001", "--model", "springpot", "--bound", "alpha=0.1:0.3",
+                     "--starts", "1", "--out", str(out)])
+    assert code in (0, 1)  # 1: not within --tolerance; the outputs exist either way
+    alpha = {p["name"]: p for p in json.loads((out / "fit.json").read_text())["parameters"]}["alpha"]
+    assert 0.1 * (1 - 1e-9) <= alpha["value"] <= 0.3 * (1 + 1e-9)
+    capsys.readouterr()
+    assert cli_main(["fit", "bundled:fabry2001", "--model", "springpot", "--bound", "beta=0.1:0.3",
+                     "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "'beta'" in err and len(err.splitlines()) == 1 and not (tmp_path / "x").exists()
+
+
 def test_fit_model_refuses_per_tendon_flags(tmp_path):
     assert cli_main(["fit", "bundled:fabry2001", "--model", "maxwell", "--tendons", "per-family",
                      "--out", str(tmp_path / "x")]) == 2

@@ -96,19 +96,22 @@ def _pair(text: str, flag: str, example: str) -> tuple[str, str]:
 
 def _bound(text):
     kind, value = _pair(text, "--bound", "KIND=LO:HI (e.g. EA=1e-3:1e3)")
-    if kind not in BOUND_UNITS:
-        raise argparse.ArgumentTypeError(f"unknown parameter kind {kind!r}; kinds: {', '.join(BOUND_UNITS)}")
-    unit = BOUND_UNITS[kind]
+    if kind not in BOUND_UNITS and not kind.isidentifier():
+        raise argparse.ArgumentTypeError(f"unknown parameter kind {kind!r}; kinds: {', '.join(BOUND_UNITS)} "
+                                         "(or, with --model, a parameter name of the mechanism)")
+    # a mechanism's parameter names (--model) are checked against the mechanism before any fitting
+    unit = BOUND_UNITS.get(kind, "")
     parts = value.split(":")
     if len(parts) != 2:
-        raise argparse.ArgumentTypeError(f"{kind}: expected LO:HI in {unit}, got {value[:40]!r}")
+        raise argparse.ArgumentTypeError(f"{kind}: expected LO:HI in {unit or 'SI units'}, got {value[:40]!r}")
     try:
-        lo, hi = (number(*BOUND_RANGES[kind], unit)(x) for x in parts)
+        check = number(*BOUND_RANGES[kind], unit) if kind in BOUND_RANGES else number(0.0, None, "", open_lo=True)
+        lo, hi = (check(x) for x in parts)
     except argparse.ArgumentTypeError as err:
         raise argparse.ArgumentTypeError(f"{kind}: {err}") from None
     if not lo < hi:
-        raise argparse.ArgumentTypeError(f"{kind}: the lower bound {lo:g} {unit} must be below the upper bound "
-                                         f"{hi:g} {unit}")
+        u = f" {unit}" if unit else ""
+        raise argparse.ArgumentTypeError(f"{kind}: the lower bound {lo:g}{u} must be below the upper bound {hi:g}{u}")
     return kind, (lo, hi)
 
 
