@@ -27,7 +27,10 @@ drawing function it wants: ``plotter("structure_3d")(self, ax=ax)``.
 :func:`plotter` imports :mod:`tenscell.plotting` on first use; on import, that
 package registers every drawing function it defines
 (:func:`register_plotters`). This is the one place a result reaches
-``plotting/``; ``tests/test_architecture.py`` checks that no other does.
+``plotting/``; ``tests/test_architecture.py`` checks that no other does. A
+result that writes its own report reaches ``reports/`` the same way:
+``reporter("population_markdown")``, filled by :mod:`tenscell.reports` on
+import (:func:`register_reporters`).
 """
 from __future__ import annotations
 
@@ -42,7 +45,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = ["format_repr", "dataframe", "span", "counts", "UNIT_SUFFIXES", "DIMENSIONLESS", "has_unit", "plotter",
-           "register_plotters", "plus_minus", "CORRELATION_THRESHOLD"]
+           "register_plotters", "reporter", "register_reporters", "plus_minus", "CORRELATION_THRESHOLD"]
 
 #: unit suffixes of DataFrame columns (SI, written out without symbols so they are valid identifiers)
 UNIT_SUFFIXES = (
@@ -115,15 +118,31 @@ def plus_minus(value: float, stderr: float | None, unit: str = "", note: str = "
     return f"{shown} +/- {stderr:.{max(digits - 2, 2)}g}{rel}{u}" + (f" {note}" if note else "")
 
 
-#: drawing functions by name; tenscell.plotting fills it when it is imported
-_PLOTTERS: dict[str, Callable[..., Any]] = {}
+#: renderers by later-stage package and name: tenscell.plotting's drawing functions, tenscell.reports'
+#: Markdown renderers; each package fills its own table when it is imported
+_RENDERERS: dict[str, dict[str, Callable[..., Any]]] = {"tenscell.plotting": {}, "tenscell.reports": {}}
+
+
+def _register(package: str, functions: Mapping[str, Callable[..., Any]], what: str) -> None:
+    table = _RENDERERS[package]
+    for name, function in functions.items():
+        if table.setdefault(name, function) is not function:
+            raise ValueError(f"two {what}s are named {name!r}")
+
+
+def _renderer(package: str, name: str, what: str) -> Callable[..., Any]:
+    table = _RENDERERS[package]
+    if name not in table:
+        import_module(package)  # registers every renderer it defines
+    try:
+        return table[name]
+    except KeyError:
+        raise LookupError(f"{package} has no {what} {name!r}") from None
 
 
 def register_plotters(functions: Mapping[str, Callable[..., Any]]) -> None:
     """Make drawing functions available to :func:`plotter` (called by :mod:`tenscell.plotting` on import)."""
-    for name, function in functions.items():
-        if _PLOTTERS.setdefault(name, function) is not function:
-            raise ValueError(f"two drawing functions are named {name!r}")
+    _register("tenscell.plotting", functions, "drawing function")
 
 
 def plotter(name: str) -> Callable[..., Any]:
@@ -131,9 +150,17 @@ def plotter(name: str) -> Callable[..., Any]:
 
     The one way a result's ``plot()`` reaches the plotting layer (module docstring).
     """
-    if name not in _PLOTTERS:
-        import_module("tenscell.plotting")  # registers every drawing function
-    try:
-        return _PLOTTERS[name]
-    except KeyError:
-        raise LookupError(f"tenscell.plotting has no drawing function {name!r}") from None
+    return _renderer("tenscell.plotting", name, "drawing function")
+
+
+def register_reporters(functions: Mapping[str, Callable[..., Any]]) -> None:
+    """Make report renderers available to :func:`reporter` (called by :mod:`tenscell.reports` on import)."""
+    _register("tenscell.reports", functions, "report renderer")
+
+
+def reporter(name: str) -> Callable[..., Any]:
+    """The report renderer ``name`` of :mod:`tenscell.reports` (which is imported on first use).
+
+    The one way a result reaches the reports layer, as :func:`plotter` is for plotting (module docstring).
+    """
+    return _renderer("tenscell.reports", name, "report renderer")

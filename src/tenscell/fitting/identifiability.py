@@ -290,17 +290,7 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
     # an exact gauge only if it moves something and nothing it moves is fixed (a mechanism has none: g = 0)
     gauge = bool(np.any(g != 0) and np.all(free[g != 0]))
     l_index = problem.n_params - 1
-    keep = np.zeros(problem.n_params, dtype=bool)
-    excluded = []
-    for i, p in enumerate(pars):
-        if not free[i]:
-            continue
-        if p.at_bound is not None:
-            excluded.append((p.name, f"{p.at_bound} bound"))
-        elif gauge and i == l_index:
-            excluded.append((p.name, "gauge"))
-        else:
-            keep[i] = True
+    keep, excluded = _kept(pars, free, gauge, l_index)
     gauge_removed = gauge and any(r == "gauge" for _, r in excluded)
     J = problem.jacobian(theta)[:, keep[free]]
     r = problem.residuals(theta)
@@ -315,15 +305,47 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
     rank = int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0 else 0
     chi2 = float(r @ r)
     dof = n - rank
-    if sigma_known:
-        sigma, source = 1.0, "data standard deviations"
-    elif dof > 0:
-        sigma, source = math.sqrt(chi2 / dof), "residuals"
-    else:
-        sigma, source = None, "unknown"
-
-    p = values.size
+    sigma, source = _sigma(sigma_known, chi2, dof)
     V = Vt.T
+    se, null_share, corr = _uncertainties(V, s, rank, values.size, sigma)
+    return Identifiability(
+        names=names, labels=labels, values=values, singular_values=s, rank=rank, rtol=rtol,
+        gauge_removed=gauge_removed, excluded=tuple(excluded),
+        fixed=tuple(problem.names[i] for i in np.flatnonzero(~free)), n_residuals=n, sigma=sigma,
+        sigma_source=source, dof=dof, chi2=chi2, standard_errors=se, null_share=null_share, correlation=corr,
+        combinations=_combinations(V, s, rank, labels, sigma),
+        leverage=np.sum(U[:, :rank] ** 2, axis=1) if U is not None else np.zeros(n),
+    )
+
+
+def _kept(pars, free: np.ndarray, gauge: bool, l_index: int) -> tuple[np.ndarray, list[tuple[str, str]]]:
+    """Which parameters are analysed (free, not at a bound, not L under a gauge), and why the others are not."""
+    keep = np.zeros(len(free), dtype=bool)
+    excluded = []
+    for i, p in enumerate(pars):
+        if not free[i]:
+            continue
+        if p.at_bound is not None:
+            excluded.append((p.name, f"{p.at_bound} bound"))
+        elif gauge and i == l_index:
+            excluded.append((p.name, "gauge"))
+        else:
+            keep[i] = True
+    return keep, excluded
+
+
+def _sigma(sigma_known: bool, chi2: float, dof: int) -> tuple[float | None, str]:
+    """The residuals' standard deviation and where it comes from (None when it cannot be estimated)."""
+    if sigma_known:
+        return 1.0, "data standard deviations"
+    if dof > 0:
+        return math.sqrt(chi2 / dof), "residuals"
+    return None, "unknown"
+
+
+def _uncertainties(V: np.ndarray, s: np.ndarray, rank: int, p: int,
+                   sigma: float | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Standard errors (ln), null-space shares and correlations of the ``p`` analysed parameters."""
     seen, unseen = V[:, :rank], V[:, rank:]
     null_share = np.sqrt(np.sum(unseen**2, axis=1)) if p else np.zeros(0)
     cov_unit = (seen / s[:rank] ** 2) @ seen.T if rank else np.zeros((p, p))  # (JᵀJ)⁺ truncated at the rank
@@ -334,7 +356,12 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
         corr = cov_unit / np.outer(d, d)
     corr[~determinable, :] = np.nan
     corr[:, ~determinable] = np.nan
+    return se, null_share, corr
 
+
+def _combinations(V: np.ndarray, s: np.ndarray, rank: int, labels: tuple[str, ...],
+                  sigma: float | None) -> tuple[Combination, ...]:
+    """The ``rank`` determined combinations of the labels, one per nonzero singular value."""
     combos = []
     for k in range(rank):
         v = V[:, k]
@@ -343,11 +370,4 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
         terms = tuple((lab, float(e / scale)) for lab, e in zip(labels, v) if abs(e / scale) >= 1e-6)
         se_k = None if sigma is None else sigma / (s[k] * scale)
         combos.append(Combination(exponents=terms, singular_value=float(s[k]), standard_error=se_k))
-    return Identifiability(
-        names=names, labels=labels, values=values, singular_values=s, rank=rank, rtol=rtol,
-        gauge_removed=gauge_removed, excluded=tuple(excluded),
-        fixed=tuple(problem.names[i] for i in np.flatnonzero(~free)), n_residuals=n, sigma=sigma,
-        sigma_source=source, dof=dof, chi2=chi2, standard_errors=se, null_share=null_share, correlation=corr,
-        combinations=tuple(combos),
-        leverage=np.sum(U[:, :rank] ** 2, axis=1) if U is not None else np.zeros(n),
-    )
+    return tuple(combos)

@@ -350,44 +350,70 @@ def fit_population(
     SourceError, WorkDirError, ValueError
         Before any fit: nothing to read, a work directory holding another run, bad options.
     """
-    from .._progress import progress_bar
-    from . import _engine
     from .table import PopulationResult
 
     t0 = time.perf_counter()
     options = options or PopulationFitOptions()
+    _check_run_arguments(seed, workers)
+    srcs = tuple(sources) if _is_sources(sources) else read_sources(sources)
+    store, records = _open_store(srcs, work_dir, resume, seed, options, cell)
+    n_reused = len(records)
+    placed: dict = {}
+    run = dict(client=client, workers=workers, scheduler=scheduler, notify=notify, placed=placed)
+    _fit_remaining(srcs, records, store, seed, options, cell, progress, run)
+    ordered = tuple(records[s.cell] for s in srcs)
+    return PopulationResult.from_records(ordered, options=options, seed=int(seed), elapsed_s=time.perf_counter() - t0,
+                                         n_workers=placed.get("workers", 0), n_resumed=n_reused)
+
+
+def _check_run_arguments(seed, workers) -> None:
+    """Raise ValueError for a seed that is not a whole number >= 0 or a bad ``workers``."""
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative whole number, got {seed!r}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 0):
         raise ValueError(f"workers must be a whole number >= 0, got {workers!r}")
-    srcs = tuple(sources) if _is_sources(sources) else read_sources(sources)
+
+
+def _open_store(srcs, work_dir, resume: bool, seed, options: PopulationFitOptions, cell):
+    """The run's work directory (None without one) and the records it already holds for unchanged cells."""
     config = {"seed": int(seed), "options": options.to_dict(),
               "cell": None if cell is None else cell.describe()}
     store = _WorkDir(work_dir) if work_dir is not None else None
     found = store.open(config, resume) if store is not None else {}
     records = {s.cell: found[s.cell] for s in srcs if _done(found.get(s.cell), s)}
+    return store, records
+
+
+def _fit_remaining(srcs, records: dict, store, seed, options, cell, progress, run: dict) -> None:
+    """Fit the cells of ``srcs`` without a record, adding each record to ``records`` (and ``store``) as it completes.
+
+    ``run`` holds :func:`tenscell.population._engine.run_tasks`' ``client``,
+    ``workers``, ``scheduler``, ``notify`` and ``placed``.
+    """
+    from .._progress import progress_bar
+    from . import _engine
+
     todo = [s for s in srcs if s.cell not in records]
-    n_reused = len(records)
     bar = progress_bar(total=len(srcs), desc="fit-population", unit="cell", progress=progress)
-    bar.update(n_reused)
-    placed: dict = {}
+    bar.update(len(records))
     try:
         items = ((s, (s, cell_seed(seed, s.cell), options, cell)) for s in todo)
-        for src, rec in _engine.run_tasks(fit_cell, items, client=client, workers=workers, scheduler=scheduler,
-                                          name="tenscell-fit", warm=_WARM, notify=notify, placed=placed):
+        for src, rec in _engine.run_tasks(fit_cell, items, name="tenscell-fit", warm=_WARM, **run):
             if isinstance(rec, _engine.TaskLost):
-                rec = {"cell": src.cell, "condition": src.condition, "source": src.source, "digest": src.digest,
-                       "seed": cell_seed(seed, src.cell), "status": "worker_lost", "error": str(rec),
-                       "kind": "", "n_points": 0, "time_s": math.nan}
+                rec = _lost_record(src, seed, rec)
             if store is not None:
                 store.write(rec)
             records[src.cell] = rec
             bar.update(1)
     finally:
         bar.close()
-    ordered = tuple(records[s.cell] for s in srcs)
-    return PopulationResult.from_records(ordered, options=options, seed=int(seed), elapsed_s=time.perf_counter() - t0,
-                                         n_workers=placed.get("workers", 0), n_resumed=n_reused)
+
+
+def _lost_record(src: CellSource, seed, lost) -> dict:
+    """The record of a cell whose workers died repeatedly (status ``worker_lost``)."""
+    return {"cell": src.cell, "condition": src.condition, "source": src.source, "digest": src.digest,
+            "seed": cell_seed(seed, src.cell), "status": "worker_lost", "error": str(lost),
+            "kind": "", "n_points": 0, "time_s": math.nan}
 
 
 def _is_sources(obj) -> bool:

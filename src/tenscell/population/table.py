@@ -198,11 +198,12 @@ class PopulationResult:
         """
         from pathlib import Path
 
-        from .._results import plotter
+        from .._results import plotter, reporter
         from ..io.outputs import atomic_path, json_text, write_csv_rows, write_text
-        from ..reports.population import population_markdown
 
-        save = plotter("save")  # drawn by tenscell.plotting, a later stage (tenscell._results)
+        # drawn and rendered by tenscell.plotting and tenscell.reports, later stages (tenscell._results)
+        save = plotter("save")
+        population_markdown = reporter("population_markdown")
 
         d = Path(directory)
         _write_frame(d / "population.csv", self.table, write_csv_rows)

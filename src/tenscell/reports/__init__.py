@@ -13,3 +13,13 @@ __all__ = [
     "fit_markdown", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
 ]
+
+
+def _register() -> None:
+    """Every renderer above, for results that write their own report (:func:`tenscell._results.reporter`)."""
+    from .._results import register_reporters
+
+    register_reporters({name: globals()[name] for name in __all__})
+
+
+_register()
