@@ -383,16 +383,8 @@ def _creep_setup(args):
 
 def run_creep(args) -> int:
     out, t, cell, law, solver, amplitudes = _creep_setup(args)
-    import numpy as np
-
-    from .. import plotting
-    from .._progress import stage
-    from ..dynamics import creep_response, linearize_law
-    from ..io.outputs import write_csv_rows, write_json
-    from ..io.tables import finite
+    from ..dynamics import linearize_law
     from ..laws import LinearizationError
-    from ..timedomain import creep_spectrum, fit_power_law, local_exponent, stress_relaxation
-    from ..linear.modal import continuum_factor
 
     win = args.window or (float(t[0]), float(t[-1]))
     P0 = args.prestress_N
@@ -400,57 +392,118 @@ def run_creep(args) -> int:
         lin, note = linearize_law(cell, law), ""
     except LinearizationError as err:  # beta < 1: only the nonlinear curves exist
         lin, note = None, str(err)
-    curves, expo, fits = {}, {}, {}
+    curves, expo = {}, {}
     summary: dict = {"model": {"cell": cell.describe(), "law": type(law).__name__, "beta": args.beta, "prestress_N": P0,
                          "from_fit": args.from_fit},
                "linear_note": note, "power_law_window_s": [float(win[0]), float(win[1])]}
     tables = {}
     if lin is not None:
-        spec = creep_spectrum(lin)
-        curves["linear"] = finite(spec.compliance(t), "the linear creep compliance")
-        expo["linear"] = spec.exponent(t)
-        rel = stress_relaxation(lin)
-        tables["spectrum.csv"] = (["retardation_time_s", "weight_m_per_N"],
-                                  [[float(a), float(b)] for a, b in zip(spec.times, spec.weights)])
-        tables["relaxation.csv"] = (["t_s", "G_relaxation_Pa"],
-                                    [[float(a), float(b)] for a, b in zip(t, rel.modulus(t))])
-        summary.update({
-            "static_compliance_m_per_N": spec.static,
-            "instantaneous_compliance_m_per_N": spec.instantaneous,
-            "retardation_times_s": spec.times.tolist(),
-            "retardation_weights_m_per_N": spec.weights.tolist(),
-            "relaxation": {"equilibrium_modulus_Pa": continuum_factor(rel.L) * rel.equilibrium, "viscosity_Pa_s": rel.viscosity,
-                           "times_s": rel.times.tolist(), "weights_N_per_m": rel.weights.tolist()},
-        })
-    steps = []
+        curves["linear"], expo["linear"], tables, linear_summary = _linear_creep(lin, t)
+        summary.update(linear_summary)
+    summary["steps"], step_curves, step_expo = _creep_steps(cell, law, amplitudes, t, solver, curves.get("linear"))
+    curves.update(step_curves)
+    expo.update(step_expo)
+    fits, summary["power_law_fits"], fit_lines = _creep_power_laws(t, win, curves, expo)
+    figure = _creep_figure(t, curves, expo, fits.get("linear"), P0)
+    _write_creep(out, t, curves, expo, tables, figure, summary)
+    for line in fit_lines:
+        print(line)
+    if note:
+        print(f"tenscell creep: note: {note}", file=sys.stderr)
+    files = ["creep.csv", "creep.png", *tables, "creep.json"]
+    print(f"tenscell: wrote {', '.join(files)} in {out.target}/", file=sys.stderr)
+    return 0
+
+
+def _linear_creep(lin, t):
+    """The linear model's creep compliance (m/N) and local exponent at times ``t`` (s), its tables and summary."""
+    from ..io.tables import finite
+    from ..linear.modal import continuum_factor
+    from ..timedomain import creep_spectrum, stress_relaxation
+
+    spec = creep_spectrum(lin)
+    curve = finite(spec.compliance(t), "the linear creep compliance")
+    exponent = spec.exponent(t)
+    rel = stress_relaxation(lin)
+    tables = {
+        "spectrum.csv": (["retardation_time_s", "weight_m_per_N"],
+                         [[float(a), float(b)] for a, b in zip(spec.times, spec.weights)]),
+        "relaxation.csv": (["t_s", "G_relaxation_Pa"], [[float(a), float(b)] for a, b in zip(t, rel.modulus(t))]),
+    }
+    summary = {
+        "static_compliance_m_per_N": spec.static,
+        "instantaneous_compliance_m_per_N": spec.instantaneous,
+        "retardation_times_s": spec.times.tolist(),
+        "retardation_weights_m_per_N": spec.weights.tolist(),
+        "relaxation": {"equilibrium_modulus_Pa": continuum_factor(rel.L) * rel.equilibrium, "viscosity_Pa_s": rel.viscosity,
+                       "times_s": rel.times.tolist(), "weights_N_per_m": rel.weights.tolist()},
+    }
+    return curve, exponent, tables, summary
+
+
+def _creep_steps(cell, law, amplitudes, t, solver, linear):
+    """The creep after each force step (N) at times ``t`` (s): (step summaries, compliances (m/N), local exponents).
+
+    ``linear`` is the linear compliance (m/N) each step is compared with, or None; a compliance that is not
+    positive throughout has no local exponent.
+    """
+    import numpy as np
+
+    from .._progress import stage
+    from ..dynamics import creep_response
+    from ..io.tables import finite
+    from ..timedomain import local_exponent
+
+    steps, curves, expo = [], {}, {}
     for n_step, F in enumerate(amplitudes, 1):
         stage(f"creep after a {F:g} N step ({n_step}/{len(amplitudes)})")
         cr = creep_response(cell, law, float(F), t, **solver)
         key = f"step {F:g} N"
         curves[key] = finite(cr.compliance, f"the creep compliance after the {F:g} N step")
         step = {"force_N": float(F), "slack_tendons": cr.simulation.slack_summary()}
-        if lin is not None:
-            step["max_relative_departure_from_linear"] = float(np.abs(cr.compliance / curves["linear"] - 1).max())
+        if linear is not None:
+            step["max_relative_departure_from_linear"] = float(np.abs(cr.compliance / linear - 1).max())
         steps.append(step)
         if np.all(cr.compliance > 0):
             expo[key] = local_exponent(t, cr.compliance)
-    summary["steps"] = steps
+    return steps, curves, expo
+
+
+def _creep_power_laws(t, win, curves: dict, expo: dict):
+    """Power-law fits of the compliances (m/N) over the window ``win`` (s): (fits, their summary, report lines)."""
+    import numpy as np
+
+    from ..timedomain import fit_power_law
+
     inwin = (t >= win[0]) & (t <= win[1])
-    fit_lines = []
+    fits, summary, lines = {}, {}, []
     for k, J in curves.items():
         if np.all(J[inwin] > 0) and inwin.sum() >= 2:
             fits[k] = fit_power_law(t, J, win[0], win[1])
-    summary["power_law_fits"] = {}
     for k, v in fits.items():
         e = expo.get(k)
         rng = [float(e[inwin].min()), float(e[inwin].max())] if e is not None else None
-        summary["power_law_fits"][k] = {"A_m_per_N": v.A, "alpha": v.alpha, "rms_log": v.rms_log, "max_rel": v.max_rel,
-                                        "points": v.n, "local_exponent_range": rng}
-        fit_lines.append(f"{k}: J(t) ~ {v.A:.4g}·t^{v.alpha:.4f} over [{v.t_min:g}, {v.t_max:g}] s "
-                         f"(rms log residual {v.rms_log:.3g})"
-                         + (f"; local exponent in the window {rng[0]:.3g}..{rng[1]:.3g}" if rng else ""))
+        summary[k] = {"A_m_per_N": v.A, "alpha": v.alpha, "rms_log": v.rms_log, "max_rel": v.max_rel,
+                      "points": v.n, "local_exponent_range": rng}
+        lines.append(f"{k}: J(t) ~ {v.A:.4g}·t^{v.alpha:.4f} over [{v.t_min:g}, {v.t_max:g}] s "
+                     f"(rms log residual {v.rms_log:.3g})"
+                     + (f"; local exponent in the window {rng[0]:.3g}..{rng[1]:.3g}" if rng else ""))
+    return fits, summary, lines
+
+
+def _creep_figure(t, curves: dict, expo: dict, linear_fit, P0: float):
+    """The log-log plot of the compliances (m/N) against time (s) for prestress ``P0`` (N)."""
+    from .. import plotting
+
+    return plotting.creep_loglog(t, curves, expo, linear_fit, f"Creep after a force step (P = {P0:g} N)")
+
+
+def _write_creep(out, t, curves: dict, expo: dict, tables: dict, figure, summary: dict) -> None:
+    """Write creep.csv (times in s, compliances in m/N, exponents), the extra tables, creep.png and creep.json."""
+    from .. import plotting
+    from ..io.outputs import write_csv_rows, write_json
+
     keys = list(curves)
-    figure = plotting.creep_loglog(t, curves, expo, fits.get("linear"), f"Creep after a force step (P = {P0:g} N)")
     with out as d:
         write_csv_rows(d / "creep.csv", ["t_s"] + [f"J_{k.replace(' ', '_')}_m_per_N" for k in keys]
                        + [f"exponent_{k.replace(' ', '_')}" for k in expo],
@@ -460,10 +513,3 @@ def run_creep(args) -> int:
             write_csv_rows(d / name, header, rows)
         plotting.save(figure, d / "creep.png")
         write_json(d / "creep.json", summary)
-    for line in fit_lines:
-        print(line)
-    if note:
-        print(f"tenscell creep: note: {note}", file=sys.stderr)
-    files = ["creep.csv", "creep.png", *tables, "creep.json"]
-    print(f"tenscell: wrote {', '.join(files)} in {out.target}/", file=sys.stderr)
-    return 0

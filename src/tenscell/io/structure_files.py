@@ -189,6 +189,32 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
     StructureError
         Naming the offending element.
     """
+    _check_header(obj)
+    lu, fu, tu = _units(obj.get("units", {}))
+    nodes, names = _read_nodes(obj, lu)
+    index = _name_index(names)
+    ref = _node_ref(len(names), index)
+    fixed = [ref(r, "the fixed list") for r in _list(obj.get("fixed", []), "'fixed'")]
+    struts = _read_struts(obj, ref)
+    tendons, families, EA, c, T0 = _read_tendons(obj, ref, lu, fu, tu)
+    groups = _read_groups(obj)
+    if "load" not in obj:
+        raise StructureError("missing 'load': say where the input force acts "
+                             "({\"nodes\": [...], \"weights\": [...], \"direction\": [x, y, z]})")
+    load = _point(obj["load"], "load", ref)
+    probe = _point(obj["probe"], "probe", ref) if "probe" in obj else load
+    name = _text(obj, "name", default_name)
+    description = _text(obj, "description", "")
+    node_names = tuple(nm if nm is not None else str(i) for i, nm in enumerate(names)) if index else ()
+    structure = Structure(
+        nodes=nodes, struts=tuple(struts), tendons=tuple(tendons), families=tuple(families), fixed=tuple(fixed),
+        load=load, probe=probe, equal_tension_groups=tuple(groups), name=name, node_names=node_names,
+    )
+    return StructureFile(structure=structure, EA=np.array(EA), c=np.array(c), T0=T0, description=description)
+
+
+def _check_header(obj) -> None:
+    """StructureError unless ``obj`` is an object of known keys naming this format and version."""
     if not isinstance(obj, dict):
         raise StructureError("the top level must be a JSON object")
     _unknown(obj, _TOP_KEYS, "the top level")
@@ -198,8 +224,10 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
     version = obj.get("version", FORMAT_VERSION)
     if version != FORMAT_VERSION:
         raise StructureError(f"'version' {version!r} is not supported (this tenscell reads version {FORMAT_VERSION})")
-    lu, fu, tu = _units(obj.get("units", {}))
 
+
+def _read_nodes(obj: dict, lu: float) -> tuple[np.ndarray, list]:
+    """The node positions (m, shape (n, 3)) and names (None where unnamed); ``lu`` is the file's length unit (m)."""
     if "nodes" not in obj:
         raise StructureError("missing 'nodes'")
     raw_nodes = obj["nodes"]
@@ -222,6 +250,11 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         xyz.append(_vector(pos, 3, f"node {i}{'' if names[-1] is None else ' ' + repr(names[-1])} position"))
     nodes = np.array(xyz) * lu
     _check_coordinates(nodes, names, lu)
+    return nodes, names
+
+
+def _name_index(names: list) -> dict[str, int]:
+    """Node index by name (named nodes only); StructureError for a name given twice."""
     index: dict[str, int] = {}
     for i, nm in enumerate(names):
         if nm is None:
@@ -229,8 +262,11 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         if nm in index:
             raise StructureError(f"node {i} repeats the name {nm!r} of node {index[nm]}")
         index[nm] = i
-    n = len(xyz)
+    return index
 
+
+def _node_ref(n: int, index: dict[str, int]):
+    """``ref(r, what)``: the node index a file's reference ``r`` (an index or a name) means, among ``n`` nodes."""
     def ref(r, what):
         if isinstance(r, bool):
             raise StructureError(f"{what} refers to node {r!r}; use an index or a node name")
@@ -244,7 +280,11 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
             return index[r]
         raise StructureError(f"{what} refers to node {r!r}; use an index or a node name")
 
-    fixed = [ref(r, "the fixed list") for r in _list(obj.get("fixed", []), "'fixed'")]
+    return ref
+
+
+def _read_struts(obj: dict, ref) -> list[tuple[int, int]]:
+    """The struts as pairs of node indices (each given as a pair or as ``{"nodes": pair}``)."""
     struts = []
     for k, s in enumerate(_list(obj.get("struts", []), "'struts'")):
         pair = s.get("nodes") if isinstance(s, dict) else s
@@ -253,7 +293,11 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         if not isinstance(pair, list) or len(pair) != 2:
             raise StructureError(f"strut {k} must join exactly two nodes, got {pair!r}")
         struts.append((ref(pair[0], f"strut {k}"), ref(pair[1], f"strut {k}")))
+    return struts
 
+
+def _read_tendons(obj: dict, ref, lu: float, fu: float, tu: float):
+    """(pairs, families, EA (N), c (N·s/m), T0 or None) of the tendons; ``lu, fu, tu``: the file's units (m, N, s)."""
     tendons, families, EA, c, T0 = [], [], [], [], []
     raw_t = _list(obj.get("tendons", []), "'tendons'")
     for j, t in enumerate(raw_t):
@@ -272,42 +316,42 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
         c.append(_in_range(_positive(t.get("c", 1.0 / (fu * tu / lu)), f"tendon {j}: c") * fu * tu / lu, "c",
                            f"tendon {j}: c"))
         T0.append(t.get("T0"))
+    return tendons, families, EA, c, _self_stress(T0, families)
+
+
+def _self_stress(T0: list, families: list) -> np.ndarray | None:
+    """The tendons' self-stress (dimensionless) if every tendon gives one, None if none does."""
     have_T0 = [v is not None for v in T0]
     if any(have_T0) and not all(have_T0):
         missing = have_T0.index(False)
         raise StructureError(f"tendon {missing} has no 'T0' although other tendons do; give all or none")
-    T0a = None
-    if raw_t and all(have_T0):
-        # any scale, but inside the library's window: the norm of a T0 of 1e300 overflows (and reads as zero)
-        T0a = np.array([_finite(v, f"tendon {j}: T0") for j, v in enumerate(T0)])
-        for k, v in enumerate(T0a.tolist()):
-            if v:
-                _in_window(abs(v), f"tendon {k}: |T0|")
-        _check_tensions(T0a, families)
+    if not T0 or not all(have_T0):
+        return None
+    # any scale, but inside the library's window: the norm of a T0 of 1e300 overflows (and reads as zero)
+    T0a = np.array([_finite(v, f"tendon {j}: T0") for j, v in enumerate(T0)])
+    for k, v in enumerate(T0a.tolist()):
+        if v:
+            _in_window(abs(v), f"tendon {k}: |T0|")
+    _check_tensions(T0a, families)
+    return T0a
 
+
+def _read_groups(obj: dict) -> list[tuple]:
+    """The equal-tension groups, each a tuple of tendon indices."""
     groups = []
     for g, grp in enumerate(_list(obj.get("equal_tension_groups", []), "'equal_tension_groups'")):
         if not isinstance(grp, list) or not all(isinstance(v, int) and not isinstance(v, bool) for v in grp):
             raise StructureError(f"equal-tension group {g} must be a list of tendon indices")
         groups.append(tuple(grp))
+    return groups
 
-    if "load" not in obj:
-        raise StructureError("missing 'load': say where the input force acts "
-                             "({\"nodes\": [...], \"weights\": [...], \"direction\": [x, y, z]})")
-    load = _point(obj["load"], "load", ref)
-    probe = _point(obj["probe"], "probe", ref) if "probe" in obj else load
-    name = obj.get("name", default_name)
-    if not isinstance(name, str):
-        raise StructureError(f"'name' must be a string, got {name!r}")
-    description = obj.get("description", "")
-    if not isinstance(description, str):
-        raise StructureError(f"'description' must be a string, got {description!r}")
-    node_names = tuple(nm if nm is not None else str(i) for i, nm in enumerate(names)) if index else ()
-    structure = Structure(
-        nodes=nodes, struts=tuple(struts), tendons=tuple(tendons), families=tuple(families), fixed=tuple(fixed),
-        load=load, probe=probe, equal_tension_groups=tuple(groups), name=name, node_names=node_names,
-    )
-    return StructureFile(structure=structure, EA=np.array(EA), c=np.array(c), T0=T0a, description=description)
+
+def _text(obj: dict, key: str, default: str) -> str:
+    """The string under ``key`` (``default`` when absent); StructureError for any other type."""
+    value = obj.get(key, default)
+    if not isinstance(value, str):
+        raise StructureError(f"'{key}' must be a string, got {value!r}")
+    return value
 
 
 #: largest distance of a node from the origin (m): the --L flag's upper bound (tenscell._ranges). Beyond it,
