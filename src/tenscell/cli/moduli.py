@@ -42,11 +42,7 @@ def run(args) -> int:
         resp = frequency_response(cell, args.freq, [P], EA=EA, c=c)
         header, block = moduli_table(resp)
         rows.extend(check_finite_rows(block, "G', G''", "(--prestress, --EA, --c, --L, --freq)"))
-    out = sys.stdout
-    out.write(",".join(header) + "\n")
-    for P, f, gs, gl in rows:
-        out.write(f"{P:.10g},{f:.10g},{gs:.10g},{gl:.10g}\n")
-    out.flush()
+    _write_rows(header, rows)
     return 0
 
 
@@ -66,9 +62,9 @@ def _run_from_fit(args) -> int:
     if len(prestresses) * len(args.freq) > MAX_GRID_POINTS:
         raise ValueError(f"--prestress × --freq is {len(prestresses) * len(args.freq):,} points; at most "
                          f"{MAX_GRID_POINTS:,} per run")
-    for P in prestresses[:1]:
+    for P in prestresses:
         try:
-            model.prestress(P)  # a prestress this fit cannot map: one line, before any computation
+            model.prestress(P)  # every prestress this fit cannot map: one line, before any computation
         except ValueError as err:
             raise ValueError(f"--prestress with --from-fit {args.from_fit}: {err}") from None
     rows = []
@@ -82,9 +78,14 @@ def _run_from_fit(args) -> int:
         rows.extend(check_finite_rows(block, "G', G''", "(--from-fit, --prestress, --freq)"))
     header = ["prestress_Pa" if getattr(model, "s", None) is not None else "prestress_N", "frequency_Hz",
               "G_storage_Pa", "G_loss_Pa"]
+    _write_rows(header, rows)
+    return 0
+
+
+def _write_rows(header, rows) -> None:
+    """The moduli table on standard output: the header, then (prestress, f, G', G'') rows to 10 digits."""
     out = sys.stdout
     out.write(",".join(header) + "\n")
-    for P, fi, gs, gl in rows:
-        out.write(f"{P:.10g},{fi:.10g},{gs:.10g},{gl:.10g}\n")
+    for P, f, gs, gl in rows:
+        out.write(f"{P:.10g},{f:.10g},{gs:.10g},{gl:.10g}\n")
     out.flush()
-    return 0

@@ -31,7 +31,7 @@ from ..model.equilibrium import Cell
 from .fitted import cell_from_dict, cell_to_dict
 from .mechanism_problem import MechanismProblem, _layout, _maps, make_mechanism_problem
 from .mechanisms import Field, Mechanism
-from .result import FitAlternative
+from .result import FitAlternative, inside_noise, noise_rms
 
 __all__ = ["MechanismFit", "FittedMechanism", "fit_mechanism", "load_any_fit", "MECHANISM_FORMAT",
            "noise_rms"]
@@ -40,19 +40,6 @@ __all__ = ["MechanismFit", "FittedMechanism", "fit_mechanism", "load_any_fit", "
 MECHANISM_FORMAT = "tenscell-fitted-mechanism"
 #: alternatives whose RMS is within this factor of the best (or the tolerance) "fit as well"
 AS_WELL = 1.1
-
-
-def noise_rms(datasets) -> list[float | None]:
-    """Per data set, the RMS of the stated standard deviations of log10 G', G'' (or of log10 J for creep data),
-    in decades; None for a data set without them."""
-    out: list[float | None] = []
-    for d in datasets:
-        if getattr(d, "kind", None) == "creep":  # creep data: the sd of log10 J
-            out.append(float(np.sqrt(np.mean(1.0 / d.weights**2))) if d.has_sd else None)
-            continue
-        w = np.concatenate([d.weights_storage, d.weights_loss])
-        out.append(None if d.G_storage_sd is None or d.G_loss_sd is None else float(np.sqrt(np.mean(1.0 / w**2))))
-    return out
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -381,7 +368,7 @@ def fit_mechanism(data, model, cell: Cell | None = None, *, starts: int = 4, see
     return MechanismFit(
         mechanism=problem.mechanism, problem=problem, theta=theta, parameters=problem.parameters(theta),
         datasets=datasets, rms_log10_error=rms, dataset_rms=per_set, noise=noise, tolerance=float(tolerance),
-        converged=all(r <= tolerance or (n is not None and r <= n) for r, n in zip(per_set, noise)),
+        converged=all(r <= tolerance or inside_noise(r, n) for r, n in zip(per_set, noise)),
         message=_verdict(per_set, noise, tolerance, len(chains), best, stop),
         alternatives=tuple(FitAlternative(start=ch.start, rms_log10_error=ch.rms, parameters=problem.parameters(ch.theta))
                            for ch in sorted(chains, key=lambda c: (c.rms, c.start))
@@ -395,7 +382,7 @@ def _verdict(per_set, noise, tolerance, n_starts, best, stop) -> str:
     parts = []
     for k, (r, n) in enumerate(zip(per_set, noise)):
         head = f"data set {k}: rms {r:.4g}"
-        if n is not None and r <= n:
+        if inside_noise(r, n):
             parts.append(f"{head}, inside the data's noise ({n:.3g} decades)")
         elif r <= tolerance:
             parts.append(f"{head} <= tolerance {tolerance:g}")

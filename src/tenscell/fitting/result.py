@@ -22,7 +22,29 @@ if TYPE_CHECKING:
     from .problem import FitProblem
 
 __all__ = ["FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "CreepFit", "FitResult", "model_curve",
-           "frequency_slopes", "prestress_slopes", "data_axis"]
+           "frequency_slopes", "prestress_slopes", "data_axis", "noise_rms", "inside_noise"]
+
+def noise_rms(datasets) -> list[float | None]:
+    """Per data set, the RMS of the stated standard deviations of log10 G', G'' (or of log10 J for creep data),
+    in decades; None for a data set without them."""
+    out: list[float | None] = []
+    for d in datasets:
+        if getattr(d, "kind", None) == "creep":  # creep data: the sd of log10 J
+            out.append(float(np.sqrt(np.mean(1.0 / d.weights**2))) if d.has_sd else None)
+            continue
+        w = np.concatenate([d.weights_storage, d.weights_loss])
+        out.append(None if d.G_storage_sd is None or d.G_loss_sd is None else float(np.sqrt(np.mean(1.0 / w**2))))
+    return out
+
+
+def inside_noise(rms: float, noise: float | None) -> bool:
+    """A data set's fit is inside its own noise: its RMS (decades) at most the RMS of its stated sd (None: not stated).
+
+    The one rule by which a fit that misses its tolerance still has nothing left to explain (per-tendon reports and
+    mechanism fits alike).
+    """
+    return noise is not None and rms <= noise
+
 
 _MODEL_LABEL = {"uniform": "homogeneous", "per-family": "per family", "per-tendon": "heterogeneous"}
 

@@ -12,8 +12,7 @@ import math
 import numpy as np
 
 from ..fitting.prestress import CELL_ELASTICITY
-from ..fitting.mechanism_fit import noise_rms
-from ..fitting.result import FitResult, frequency_slopes, prestress_slopes
+from ..fitting.result import FitResult, frequency_slopes, inside_noise, noise_rms, prestress_slopes
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
 from .._results import CORRELATION_THRESHOLD, plus_minus
@@ -42,7 +41,7 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
     verdict = "**converged**" if result.converged else "**NOT converged**"
     noise = noise_rms(result.datasets)
     per_set = [f.rms_log10_error for f in result.fits]
-    if not result.converged and all(n is not None and r <= n for r, n in zip(per_set, noise)):
+    if not result.converged and all(inside_noise(r, n) for r, n in zip(per_set, noise)):
         # the data say how well they can be fitted: a fit inside their noise has nothing left to explain
         verdict = "**inside the data's noise** (the tolerance is not met, but the data cannot tell a better fit)"
     below = [n for n in noise if n is not None and result.tolerance < n]
