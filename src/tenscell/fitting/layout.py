@@ -301,14 +301,17 @@ def prestress_varies(datasets) -> bool:
 class ProblemLayout:
     """The parameter and residual layout every fit problem shares (what the search and the reports read).
 
-    A problem holds ``names``, the log-space ``lower``/``upper`` bounds, the boolean ``free`` mask, the
+    A problem holds ``names`` (with ``units`` and ``descriptions``), the log-space ``lower``/``upper`` bounds, the boolean ``free`` mask, the
     fixed log-values ``fixed_log`` (free entries overwritten by ``theta``), the data's ``omega``,
-    ``y_obs``, ``dataset_index`` and ``sources``, and its prestress ``group_map``.
+    ``y_obs``, ``weights``, ``dataset_index`` and ``sources``, its ``residuals(theta)``, and its prestress ``group_map``.
     :class:`tenscell.fitting.problem.FitProblem` and
     :class:`tenscell.fitting.mechanism_problem.MechanismProblem` both are one.
     """
 
     names: tuple
+    units: tuple
+    descriptions: tuple
+    weights: np.ndarray
     free: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
@@ -368,3 +371,28 @@ class ProblemLayout:
         """Positions of data set ``dataset``'s moduli residuals: its G' rows then its G'' rows."""
         pts = np.flatnonzero(self.dataset_index == dataset)
         return np.concatenate([pts, self.n_points + pts])
+
+    def residuals(self, theta) -> np.ndarray:
+        """The weighted log10 residuals at free log-parameters ``theta``: each kind of problem computes its own."""
+        raise NotImplementedError
+
+    def rms(self, theta) -> float:
+        """RMS of the unweighted log10 residuals of all data sets (decades)."""
+        r = self.residuals(theta) / self.weights
+        return float(np.sqrt(np.mean(r**2)))
+
+    def dataset_rms(self, theta) -> np.ndarray:
+        """RMS of the unweighted log10 residuals of each data set (decades), shape (n_datasets,)."""
+        r = self.residuals(theta) / self.weights
+        return np.array([math.sqrt(float(np.mean(r[self.rows(k)] ** 2))) for k in range(self.n_datasets)])
+
+    def parameters(self, theta) -> tuple:
+        """The parameters as :class:`tenscell.fitting.FitParameter` records (SI units)."""
+        from .result import FitParameter
+
+        vals = self.values(theta)
+        lo, hi = np.exp(self.lower), np.exp(self.upper)
+        return tuple(
+            FitParameter(name=n, value=float(v), lower=float(a), upper=float(b), unit=u, vary=bool(fr), description=d)
+            for n, v, a, b, u, fr, d in zip(self.names, vals, lo, hi, self.units, self.free, self.descriptions)
+        )

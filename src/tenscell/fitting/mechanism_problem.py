@@ -33,7 +33,6 @@ from .heterogeneity import DISTRIBUTIONS, assignments
 from .mechanisms import KINDS, Field, Mechanism
 from .layout import ProblemLayout, _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
 from .problem import _PENALTY
-from .result import FitParameter
 
 __all__ = ["MechanismProblem", "make_mechanism_problem", "MechanismEvaluation"]
 
@@ -304,26 +303,9 @@ class MechanismProblem(ProblemLayout):
             s = np.std(np.log10(Ga.real), axis=0), np.std(np.log10(Ga.imag), axis=0)
         return float(np.nanmax(s[0])), float(np.nanmax(s[1]))
 
-    def rms(self, theta) -> float:
-        r = self.residuals(theta) / self.weights
-        return float(np.sqrt(np.mean(r**2)))
-
-    def dataset_rms(self, theta) -> np.ndarray:
-        r = self.residuals(theta) / self.weights
-        return np.array([math.sqrt(float(np.mean(r[self.rows(k)] ** 2))) for k in range(self.n_datasets)])
-
     def feasible(self, theta) -> bool:
         """No activity constraints: always True."""
         return True
-
-    def parameters(self, theta) -> tuple:
-        """The parameters as :class:`FitParameter` records (SI units)."""
-        vals = self.values(theta)
-        lo, hi = np.exp(self.lower), np.exp(self.upper)
-        return tuple(FitParameter(name=n, value=float(v), lower=float(a), upper=float(b), unit=u, vary=bool(fr),
-                                  description=d)
-                     for n, v, a, b, u, fr, d in zip(self.names, vals, lo, hi, self.units, self.free,
-                                                     self.descriptions))
 
     def stiffness_spread(self, theta) -> float:
         """Largest spread log10(max/min) over the tendons of any stiffness field (stiffnesses, springpot moduli), decades."""

@@ -74,7 +74,6 @@ from ..model.equilibrium import Cell
 from .derivatives import _Evaluation, evaluate
 from .layout import (DAMPING_MODES, ProblemLayout, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
                      prestress_varies, required_points)
-from .result import FitParameter
 
 __all__ = ["TENDON_MODES", "DAMPING_MODES", "FitProblem", "make_problem", "required_points", "as_datasets"]
 
@@ -285,16 +284,6 @@ class FitProblem(ProblemLayout):
         """Central finite-difference Jacobian of :meth:`residuals` (the slow reference), shape (2N, n_free)."""
         return _central(self.residuals, theta, step)
 
-    def rms(self, theta) -> float:
-        """RMS of the unweighted log10 residuals of all data sets (decades)."""
-        r = self.residuals(theta)
-        return float(np.sqrt(np.mean((r / self.weights) ** 2)))
-
-    def dataset_rms(self, theta) -> np.ndarray:
-        """RMS of the unweighted log10 residuals of each data set (decades), shape (n_datasets,)."""
-        r = self.residuals(theta) / self.weights
-        return np.array([math.sqrt(float(np.mean(r[self.rows(k)] ** 2))) for k in range(self.n_datasets)])
-
     # -- the prestress share and its penalty ---------------------------------------------
     def prestress_share(self, theta) -> np.ndarray:
         """Prestress share of the static stiffness at each prestress group, shape (groups,); NaN if unstable."""
@@ -426,14 +415,6 @@ class FitProblem(ProblemLayout):
         return np.concatenate([[mid], sigma, theta[self.n_ea:]])
 
     # -- records ----------------------------------------------------------------------
-    def parameters(self, theta) -> tuple:
-        """The parameters as :class:`FitParameter` records."""
-        vals = self.values(theta)
-        lo, hi = np.exp(self.lower), np.exp(self.upper)
-        return tuple(
-            FitParameter(name=n, value=float(v), lower=float(a), upper=float(b), unit=u, vary=bool(fr), description=d)
-            for n, v, a, b, u, fr, d in zip(self.names, vals, lo, hi, self.units, self.free, self.descriptions)
-        )
 
     def gauge(self) -> np.ndarray:
         """The exact strut-length gauge in log-parameter space, shape (n_params,).
