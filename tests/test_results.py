@@ -45,7 +45,19 @@ BUILDERS = {
     "StructureFile": lambda cell, lin, tmp: _structure_file(tmp, cell),
     "FormFindingResult": lambda cell, lin, tmp: tc.model.find_form(tc.model.expanded_octahedron(), force_density=1.0),
     "RheologyData": lambda cell, lin, tmp: tc.bundled("stamenovic2002"),
+    "EnsembleResult": lambda cell, lin, tmp: _ensemble(cell),
 }
+
+
+def _ensemble(cell):
+    from tenscell.fitting.mechanism_fit import FittedMechanism
+    from tenscell.fitting.mechanisms import MECHANISMS
+    from tenscell.population import mechanism_ensemble
+
+    model = FittedMechanism(MECHANISMS["voigt-lognormal-damping"], cell, {"EA_actin": 1.0, "EA_intermediate_filament": 0.2,
+                                                                           "c": 0.3, "c_decades": 1.0}, s=1e-3,
+                            prestress_pa=(1000.0,))
+    return mechanism_ensemble(model, np.logspace(-1, 2, 7), [500.0, 2000.0], K=20, workers=0, progress=False)
 
 
 @pytest.fixture(scope="module", params=sorted(BUILDERS))

@@ -27,7 +27,7 @@ FIT = ["fit", "DATA"]
 #: command prefix (enough to be valid) -> numeric flags -> values that are valid for it
 NUMERIC_FLAGS = {
     ("moduli",): {"--prestress": (), "--P": (), "--freq": (), "--alpha-deg": ("negative", "zero"),
-                  "--delta-deg": (), "--EA": (), "--c": (), "--L": ()},
+                  "--delta-deg": (), "--EA": (), "--c": (), "--L": (), "--ensemble": (), "--workers": ("zero",)},
     tuple(FIT): {"--starts": (), "--seed": ("zero",), "--jobs": (), "--tolerance": (), "--baseline-starts": (),
                  "--max-points": (), "--min-prestress-share": (), "--max-decades": (),
                  "--min-prestress-elasticity": (), "--bound": (), "--fix": (), "--holdout": (), "--prestress": (),
@@ -43,7 +43,8 @@ NUMERIC_FLAGS = {
     ("study", "compactness", "DATA"): {"--decades": (), "--starts": (), "--jobs": (), "--tolerance": (),
                                        "--prestress": (), "--temperature": ("negative", "zero")},
     ("study", "mechanisms", "DATA"): {"--hops": ("zero",), "--starts": (), "--jobs": (), "--tolerance": (),
-                                      "--seed": ("zero",), "--prestress": (), "--temperature": ("negative", "zero")},
+                                      "--seed": ("zero",), "--prestress": (), "--temperature": ("negative", "zero"),
+                                      "--ensemble": ("zero",), "--workers": ("zero",)},
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
     ("synth-population", "--out", "OUT"): {"--cells": (), "--noise": ("zero",), "--spread": ("zero",), "--freq": (),

@@ -3,9 +3,12 @@ from __future__ import annotations
 
 import sys
 
-from ._args import MAX_GRID_POINTS, add_model_options, add_prestress, frequencies, grid_cost
+from ._args import MAX_GRID_POINTS, add_model_options, add_prestress, frequencies, grid_cost, integer
+from .population import add_cluster_options
 
 DEFAULT_FREQ = "0.01:1000:61"
+#: most assignments of --ensemble (tenscell.population.ensemble.MAX_K; the parser imports no numpy)
+ENSEMBLE_MAX_K = 100_000
 
 
 def register(sub) -> None:
@@ -17,10 +20,22 @@ def register(sub) -> None:
     p.add_argument("--freq", type=frequencies(), default=frequencies()(DEFAULT_FREQ), metavar="F",
                    help=f"frequencies (Hz): comma list or a:b:n log-spaced (default {DEFAULT_FREQ})")
     add_model_options(p)
+    e = p.add_argument_group("ensemble (with --from-fit of a mechanism whose tendon values are drawn from a "
+                             "distribution)")
+    e.add_argument("--ensemble", type=integer(2, ENSEMBLE_MAX_K), default=None, metavar="K",
+                   help="evaluate the fitted mechanism over K assignments of its tendon values (the fit averaged "
+                        "a few) and write the mean G', G'' with the spread between assignments (sd, standard "
+                        "error, 5-95%% band) and the fit's own average; runs on the population engine")
+    add_cluster_options(e)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    if args.ensemble is None and (args.workers is not None or args.scheduler is not None):
+        raise ValueError(f"{'--workers' if args.workers is not None else '--scheduler'} applies to --ensemble")
+    if args.ensemble is not None and args.from_fit is None:
+        raise ValueError("--ensemble needs --from-fit: the fit.json of a mechanism whose tendon values are drawn "
+                         "from a distribution")
     if args.from_fit is not None:
         return _run_from_fit(args)
     if args.prestress is None:
@@ -67,8 +82,10 @@ def _run_from_fit(args) -> int:
             model.prestress(P)  # every prestress this fit cannot map: one line, before any computation
         except ValueError as err:
             raise ValueError(f"--prestress with --from-fit {args.from_fit}: {err}") from None
-    rows = []
     f = np.asarray(args.freq, dtype=float)
+    if args.ensemble is not None:
+        return _run_ensemble(args, model, f, prestresses)
+    rows = []
     for P in prestresses:
         Gs, Gl = model.moduli(f, P)
         label = float(P) if P is not None else (model.default_prestress_pa if hasattr(model, "default_prestress_pa")
@@ -82,10 +99,55 @@ def _run_from_fit(args) -> int:
     return 0
 
 
+def _ensemble_cost(model, K: int, n_points: int, parallel: int | None):
+    """What ``--ensemble K`` costs: one assignment at one point timed here (a chunk of a few assignments)."""
+    import numpy as np
+
+    from ..fitting.mechanism_fit import bare_problem
+    from ..population.ensemble import ensemble_chunk
+    from ._cost import Cost, measure
+
+    k, w = 8, 2 * np.pi * np.logspace(-1, 1, 32)  # 256 stacked solves: the per-solve cost of a real chunk
+    pb = bare_problem(model.mechanism, model.cell).assignments_subset(0, min(k, model.mechanism.K))
+    phi = np.log([model.values[n] for n in pb.names])
+    P = model.prestress(None)
+    per = measure(lambda: ensemble_chunk(pb, phi, w, [P]), max_calls=5) / (pb.field_maps[0][1].shape[0] * w.size)
+    # every member is held (16 bytes) and the statistics take a few copies of it
+    return Cost("solve", K * n_points, per, parallel, memory_bytes=K * n_points * 16 * 4,
+                detail=f"({K:,} assignments × {n_points:,} prestress-frequency points)")
+
+
+def _run_ensemble(args, model, f, prestresses) -> int:
+    """``--ensemble K``: the fitted mechanism over K assignments, the mean, spread and the fit's average on stdout."""
+    from ..io.tables import check_finite_rows
+    from ..population.ensemble import check_ensemble, mechanism_ensemble
+    from ._cost import announce, check
+    from .population import _notifier, parallel_of, reach_scheduler
+
+    try:
+        model, K, workers, _ = check_ensemble(model, args.ensemble, args.workers)
+    except ValueError as err:
+        raise ValueError(f"--ensemble with --from-fit {args.from_fit}: {err}") from None
+    if args.scheduler is not None:
+        reach_scheduler(args.scheduler)
+    announce(check(_ensemble_cost(model, K, len(prestresses) * f.size, parallel_of(args)), "--ensemble",
+                   hint="fewer assignments or points, or give a --scheduler with more workers"))
+    pres = None if prestresses == [None] else prestresses
+    result = mechanism_ensemble(model, f, pres, K=K, workers=workers, scheduler=args.scheduler,
+                                notify=_notifier("moduli"))
+    df = result.to_dataframe()
+    rows = check_finite_rows((tuple(float(v) for v in row) for row in df.itertuples(index=False)),
+                             "the ensemble's G', G''", "(--from-fit, --prestress, --freq, --ensemble)")
+    _write_rows(list(df.columns), list(rows))
+    print(f"tenscell moduli: {result.K} assignments ({result.n_failed} not a stable cell), seed {result.seed}; "
+          f"{result.elapsed_s:.1f} s on {result.workers or 'no'} Dask worker(s)", file=sys.stderr)
+    return 0
+
+
 def _write_rows(header, rows) -> None:
-    """The moduli table on standard output: the header, then (prestress, f, G', G'') rows to 10 digits."""
+    """The moduli table on standard output: the header, then rows of numbers to 10 digits."""
     out = sys.stdout
     out.write(",".join(header) + "\n")
-    for P, f, gs, gl in rows:
-        out.write(f"{P:.10g},{f:.10g},{gs:.10g},{gl:.10g}\n")
+    for row in rows:
+        out.write(",".join(f"{v:.10g}" for v in row) + "\n")
     out.flush()

@@ -6,6 +6,11 @@ from pathlib import Path
 
 from ._args import add_data_options, add_out, data_options_from_args, integer, number, number_list, path
 from .fit import stated_prestress
+from .moduli import ENSEMBLE_MAX_K
+from .population import add_cluster_options
+
+#: assignments of the study's ensemble unless --ensemble says otherwise (tenscell.population.ensemble.DEFAULT_K)
+STUDY_ENSEMBLE_K = 1000
 
 def _study_no_if(out: Path, log, args=None) -> None:
     from .. import plotting
@@ -147,14 +152,36 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     datasets = args.datasets  # read and checked before the study began (run)
     names = None if args.mechanisms is None else [m.strip() for m in args.mechanisms.split(",") if m.strip()]
     mech = 12 if names is None else len(names)
+    K = STUDY_ENSEMBLE_K if args.ensemble is None else args.ensemble
     s = mechanisms_study(datasets, mechanisms=names, starts=args.starts, hops=args.hops, seed=args.seed,
-                         tolerance=args.tolerance, jobs=jobs_for(mech, args.jobs))
+                         tolerance=args.tolerance, jobs=jobs_for(mech, args.jobs), ensemble=K or None,
+                         workers=args.workers, scheduler=args.scheduler, progress=False,
+                         notify=lambda line: log(f"ensemble: {line}"))
     write_csv_rows(out / "mechanisms.csv", list(STUDY_COLUMNS), study_table_rows(s))
     plotting.save(mechanisms_figure(s, datasets), out / "mechanisms.png")
     report = mechanisms_markdown(s)
     write_text(out / "mechanisms.md", report)
     print(report.split("## The answer")[0].split("\n\n", 2)[-1], flush=True)
-    log("mechanisms.csv, mechanisms.png, mechanisms.md")
+    written = "mechanisms.csv, mechanisms.png, mechanisms.md"
+    if s.ensemble is not None:
+        _write_ensemble(out, s.ensemble)
+        written += ", ensemble.csv, ensemble.png, ensemble.md"
+    elif K:
+        log("no ensemble: none of the mechanisms fitted draws a tendon property from a distribution")
+    log(written)
+
+
+def _write_ensemble(out: Path, ensemble) -> None:
+    """The best distributed mechanism's ensemble: its table, figure and Markdown."""
+    from .. import plotting
+    from ..io.outputs import write_csv_rows, write_text
+    from ..reports.ensemble import ensemble_markdown
+
+    df = ensemble.to_dataframe()
+    write_csv_rows(out / "ensemble.csv", list(df.columns), (tuple(map(float, r)) for r in df.itertuples(index=False)))
+    plotting.save(ensemble.plot(), out / "ensemble.png")
+    write_text(out / "ensemble.md", ensemble_markdown(
+        ensemble, f"Ensemble of `{ensemble.mechanism}`, the distributed mechanism with the lowest BIC"))
 
 
 #: studies that fit data files given on the command line (not part of `reproduce`'s variants stage)
@@ -187,6 +214,9 @@ _STUDY_OPTIONS = {
     "tolerance": (0.01, "--tolerance", ("compactness", "mechanisms")),
     "mechanisms": (None, "--mechanisms", ("mechanisms",)),
     "hops": (10, "--hops", ("mechanisms",)),
+    "ensemble": (None, "--ensemble", ("mechanisms",)),
+    "workers": (None, "--workers", ("mechanisms",)),
+    "scheduler": (None, "--scheduler", ("mechanisms",)),
 }
 
 
@@ -226,6 +256,11 @@ def register(sub) -> None:
     m.add_argument("--mechanisms", metavar="NAMES", default=None,
                    help="comma list of mechanisms (default all; see `tenscell fit --model`)")
     m.add_argument("--hops", type=integer(0, 10_000), default=10, help="basin-hopping moves per start")
+    m.add_argument("--ensemble", type=integer(0, ENSEMBLE_MAX_K), default=None, metavar="K",
+                   help=f"evaluate the distributed mechanism with the lowest BIC over K assignments of its tendon "
+                        f"values at the data's prestresses and frequencies (ensemble.csv, .png, .md; default "
+                        f"{STUDY_ENSEMBLE_K}; 0: none; 1 is refused: one assignment has no spread)")
+    add_cluster_options(m)
     add_data_options(p)
     p.set_defaults(func=run)
 
@@ -241,6 +276,19 @@ def _fitted_paper_cell(path) -> dict:
                          f"cell is {model.cell.describe()}")
     return {"alpha": float(p["alpha"]), "delta": float(p["delta"]), "L": model.L, "P": model.prestress(),
             "EA": model.EA, "c": model.c}
+
+
+def _check_ensemble_options(args) -> None:
+    """--ensemble 1 (no spread) and --workers/--scheduler without an ensemble are refused before any fit."""
+    if args.ensemble == 1:
+        raise ValueError("--ensemble: 1 assignment has no spread between assignments; give K >= 2, or 0 for none")
+    if args.ensemble == 0 and (args.workers is not None or args.scheduler is not None):
+        raise ValueError(f"{'--workers' if args.workers is not None else '--scheduler'} applies to the study's "
+                         "ensemble, and --ensemble 0 has none")
+    if args.scheduler is not None:
+        from .population import reach_scheduler
+
+        reach_scheduler(args.scheduler)
 
 
 def run(args) -> int:
@@ -261,6 +309,8 @@ def run(args) -> int:
         bad = [m for m in args.mechanisms.split(",") if m.strip() and m.strip() not in mechanism_names()]
         if bad:
             raise ValueError(f"--mechanisms: unknown mechanism {bad[0]!r}; known: {', '.join(mechanism_names())}")
+    if args.name == "mechanisms":
+        _check_ensemble_options(args)
     if args.from_fit is not None:
         if args.name != "sensitivity":
             raise ValueError(f"--from-fit applies to study sensitivity, not to study {args.name}")

@@ -20,6 +20,7 @@ assignments (decades, per point) is reported.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -292,6 +293,19 @@ class MechanismProblem(ProblemLayout):
         if out is None:
             return np.full(self.n_points, np.nan), np.full(self.n_points, np.nan)
         return out.G.real, out.G.imag
+
+    def assignments_subset(self, lo: int, hi: int) -> "MechanismProblem":
+        """The same problem restricted to assignments ``lo .. hi-1`` (a slice of every field's and shape's map).
+
+        Each assignment's moduli depend only on its own row of the maps, so the moduli of a subset are those
+        rows of :attr:`MechanismEvaluation.G_assign`: an ensemble can be evaluated in pieces, anywhere.
+        """
+        K = self.field_maps[0][1].shape[0]
+        if not (0 <= lo < hi <= K):
+            raise ValueError(f"assignments {lo}..{hi - 1}: outside the problem's {K} assignments")
+        fields = tuple((name, D[lo:hi], const[lo:hi]) for name, D, const in self.field_maps)
+        shapes = tuple((name, idx, dist, u[lo:hi]) for name, idx, dist, u in self.shape_maps)
+        return dataclasses.replace(self, field_maps=fields, shape_maps=shapes)
 
     def assignment_spread(self, theta) -> tuple[float, float]:
         """Largest spread (decades) of G' and of G'' between the K assignments over the data points."""

@@ -1,4 +1,4 @@
-"""Figures of cell populations: parameter distributions per condition, population moduli bands.
+"""Figures of cell populations: parameter distributions per condition, population moduli bands, ensembles.
 
 Nothing here computes physics: the functions draw a population table
 (:attr:`tenscell.population.PopulationResult.table`) or result.
@@ -11,9 +11,9 @@ import warnings
 import matplotlib.pyplot as plt
 import numpy as np
 
-from ._style import colors, label_moduli, legend_outside, new_panels, styled
+from ._style import colors, label_moduli, legend_outside, new_axes, new_panels, styled
 
-__all__ = ["parameter_distributions", "population_moduli"]
+__all__ = ["parameter_distributions", "population_moduli", "ensemble_moduli"]
 
 _LABELS = {
     "EA_actin_N": "EA actin (N)", "EA_intermediate_filament_N": "EA IF (N)", "c_Ns_per_m": "c (N·s/m)",
@@ -122,3 +122,44 @@ def population_moduli(result, ax=None, title: str | None = "Population moduli: m
     label_moduli(axes, "f (Hz)")
     legend_outside(axes[0])
     return np.asarray(axes)
+
+
+@styled
+def ensemble_moduli(result, ax=None, title: str | None = None):
+    """An ensemble's mean G′ (solid) and G″ (dashed) with their 5–95 % band, and the fit's own average (circles).
+
+    Against frequency (one colour per prestress), or against prestress when the ensemble has one frequency.
+
+    Parameters
+    ----------
+    result : tenscell.population.EnsembleResult
+    ax : Axes, optional
+
+    Returns
+    -------
+    Axes
+    """
+    ax = new_axes(ax)
+    mean, (lo, hi), ref = result.mean, result.band(), result.reference
+    by_prestress = result.frequency_hz.size == 1 and result.prestress.size > 1
+    if by_prestress:  # one curve against prestress: transpose the (nP, nf) grids
+        x, mean, lo, hi, ref = result.prestress, mean.T, lo.T, hi.T, ref.T
+        labels = [f"{f:.3g} Hz" for f in result.frequency_hz]
+    else:
+        x = result.frequency_hz
+        labels = [f"{p:.4g} {result.prestress_unit}" for p in result.prestress]
+    palette = colors(max(len(labels), 1))
+    for i, label in enumerate(labels):
+        for part, style in ((np.real, "-"), (np.imag, "--")):
+            ax.fill_between(x, part(lo[i]), part(hi[i]), color=palette[i], alpha=0.2, lw=0)
+            ax.plot(x, part(mean[i]), style, color=palette[i],
+                    label=f"{label}: {'G′' if part is np.real else 'G″'} mean" if len(labels) < 6 or i == 0 else None)
+            ax.plot(x, part(ref[i]), "o", ms=3, mfc="none", color=palette[i])
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel(f"prestress ({result.prestress_unit})" if by_prestress else "f (Hz)")
+    ax.set_ylabel("G′, G″ (Pa)")
+    ax.set_title(title if title is not None else f"{result.mechanism}: {result.K} assignments, 5–95 % band;\n"
+                 f"circles: the fit's {result.reference_K}-assignment average", fontsize="small")
+    ax.legend(fontsize="x-small")
+    return ax

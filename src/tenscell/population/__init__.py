@@ -5,7 +5,9 @@
 * :mod:`~tenscell.population.run` — :func:`fit_population`: one fit per cell on a Dask cluster (or in
   this process), written cell by cell, resumable;
 * :mod:`~tenscell.population.table` — the tidy per-cell table, per-condition summaries, recovery;
-* :mod:`~tenscell.population.studies` — Monte Carlo and parameter sweeps streamed to chunked Parquet.
+* :mod:`~tenscell.population.studies` — Monte Carlo and parameter sweeps streamed to chunked Parquet;
+* :mod:`~tenscell.population.ensemble` — :func:`mechanism_ensemble`: a fitted distributed mechanism over
+  thousands of assignments of its tendon values (mean G′, G″ and the spread between assignments).
 
 Dask is imported only when a cluster is used, so ``import tenscell`` stays light.
 """
@@ -20,11 +22,12 @@ _EXPORTS = {
     "fit_population": "run", "PopulationFitOptions": "run", "fit_cell": "run", "cell_seed": "run",
     "PopulationResult": "table", "recovery": "table", "condition_summary": "table",
     "monte_carlo_study": "studies", "sweep_study": "studies", "read_study": "studies",
+    "mechanism_ensemble": "ensemble", "EnsembleResult": "ensemble",
 }
 
 __all__ = [  # the keys of _EXPORTS (a literal list, so that tools can read it)
-    "CellSource", "Condition", "PopulationFitOptions", "PopulationResult", "SyntheticPopulation", "cell_seed",
-    "condition_summary", "fit_cell", "fit_population", "monte_carlo_study", "parse_condition", "read_sources",
+    "CellSource", "Condition", "EnsembleResult", "PopulationFitOptions", "PopulationResult", "SyntheticPopulation", "cell_seed",
+    "condition_summary", "fit_cell", "fit_population", "mechanism_ensemble", "monte_carlo_study", "parse_condition", "read_sources",
     "read_study", "recovery", "sweep_study", "synth_population",
 ]
 

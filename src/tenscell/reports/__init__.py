@@ -4,6 +4,7 @@ Nothing here computes physics; every number printed comes from a result object
 that the run produced from its own inputs.
 """
 from .compactness import compactness_markdown
+from .ensemble import ensemble_markdown
 from .fit import fit_markdown
 from .population import population_markdown, study_markdown
 from .sensitivity import sensitivity_markdown
@@ -12,6 +13,7 @@ from .studies import no_if_markdown, references_markdown, semiflexible_markdown,
 __all__ = [
     "fit_markdown", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
+    "ensemble_markdown",
 ]
 
 

@@ -68,6 +68,7 @@ class MechanismRow:
     converged: bool
     elapsed_s: float
     curves: dict = field(default_factory=dict, compare=False)  # data set -> (x, G', G'') for the figure
+    model: object = field(default=None, compare=False)  # the fitted mechanism (FittedMechanism), None per-tendon
 
     @property
     def determined_share(self) -> float:
@@ -88,6 +89,7 @@ class MechanismStudy:
     holdout: tuple | None  # (f_min, f_max) Hz held out of the frequency sweep, or None
     elapsed_s: float
     options: dict
+    ensemble: object = None  # EnsembleResult of the best distributed mechanism (tenscell.population.ensemble)
 
     @property
     def winner(self) -> MechanismRow:
@@ -241,12 +243,14 @@ def evaluate_mechanism(name: str, datasets, opts: dict, holdout) -> MechanismRow
         name=name, description=desc, n_free=n_free, stiffness_spread=_spread(result), rms=rms, aic=aic, bic=bic,
         n_determined=n_det, n_analysed=n_an, at_bound=at_bound, ripple=ripple, slope_range=srange,
         holdout_rms=held_rms, alternatives_spread=_alternatives_spread(result), assignment_spread=spread_assign,
-        converged=bool(result.converged), elapsed_s=time.monotonic() - t0, curves=curves)
+        converged=bool(result.converged), elapsed_s=time.monotonic() - t0, curves=curves,
+        model=result.model() if hasattr(result, "mechanism") else None)
 
 
 def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 10, seed: int = 0,
                      tolerance: float = 0.01, holdout_decades: float | None = 2.0, jobs: int = 1,
-                     progress: bool | None = None) -> MechanismStudy:
+                     ensemble: int | None = None, workers: int | None = None, scheduler: str | None = None,
+                     progress: bool | None = None, notify=None) -> MechanismStudy:
     """Fit every mechanism to the same data and score them (module docstring).
 
     Parameters
@@ -261,6 +265,11 @@ def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 
         training-window score; None skips it.
     jobs : int
         Worker processes over the mechanisms (:mod:`tenscell._parallel`).
+    ensemble : int, optional
+        Evaluate the distributed mechanism with the lowest BIC over this many assignments at the data's
+        prestresses and frequencies (:func:`tenscell.population.mechanism_ensemble`); None or 0 skips it.
+    workers, scheduler, notify
+        Where the ensemble's chunks run (as for :func:`~tenscell.population.mechanism_ensemble`).
     """
     from .._parallel import starmap
     from .._progress import progress_bar
@@ -284,5 +293,21 @@ def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 
         rows = starmap(evaluate_mechanism, [(n, datasets, opts, holdout) for n in order], jobs=jobs,
                        on_done=lambda i, r: bar.update(1))
     by_name = {r.name: r for r in rows}
+    ens = _best_ensemble(rows, datasets, ensemble, workers, scheduler, progress, notify) if ensemble else None
     return MechanismStudy(rows=tuple(by_name[n] for n in names), sources=tuple(d.source for d in datasets),
-                          holdout=holdout, elapsed_s=time.monotonic() - t0, options=dict(opts, jobs=jobs))
+                          holdout=holdout, elapsed_s=time.monotonic() - t0, options=dict(opts, jobs=jobs),
+                          ensemble=ens)
+
+
+def _best_ensemble(rows, datasets, K: int, workers, scheduler, progress, notify):
+    """The ensemble of the distributed mechanism with the lowest BIC at the data's prestresses and frequencies."""
+    from ..population.ensemble import mechanism_ensemble
+
+    distributed = [r for r in rows if r.model is not None and r.model.mechanism.heterogeneous]
+    if not distributed:
+        return None
+    model = min(distributed, key=lambda r: r.bic).model
+    f = np.unique(np.concatenate([d.frequency_hz for d in datasets]))
+    prestress = sorted(set(model.prestress_pa)) if model.s is not None else None
+    return mechanism_ensemble(model, f, prestress, K=K, workers=workers, scheduler=scheduler, progress=progress,
+                              notify=notify)
