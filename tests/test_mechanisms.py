@@ -227,7 +227,8 @@ def test_per_tendon_report_judges_against_the_stated_noise():
                          G_storage_sd=d.G_storage, G_loss_sd=d.G_loss, source="with sd")
     r = fit(noisy, tendons="per-family", damping="per-family", starts=1, hops=1, tolerance=1e-6, progress=False)
     md = fit_markdown(r)
-    assert not r.converged and max(f.rms_log10_error for f in r.fits) < 1 / math.log(10)
+    # inside the noise: converged by the one rule (fitting.result.accepted), the tolerance itself not met
+    assert r.converged and not r.tolerance_met and max(f.rms_log10_error for f in r.fits) < 1 / math.log(10)
     assert "inside the data's noise" in md and "NOT converged" not in md
     assert "below the data's own noise" in md
 

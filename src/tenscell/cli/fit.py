@@ -40,7 +40,8 @@ def register(sub) -> None:
                     "others by one prestress scale; otherwise its prestress is a fitted, reported parameter. "
                     "bundled:NAME reads a data set shipped with tenscell (fabry2001, stamenovic2002). "
                     "Writes fit.json, fit.csv, fit.png and report.md into --out. Exit status 0 if every data "
-                    "set's RMS of the log10 errors reached --tolerance, 1 if not, 2 for bad input.")
+                    "set's RMS of the log10 errors reached --tolerance or lies inside the data's own noise (their "
+                    "sd columns), 1 if not, 2 for bad input.")
     p.add_argument("data", nargs="+", help="file(s) of measured moduli or creep compliance, or bundled:NAME")
     p.add_argument("--prestress", action="append", type=stated_prestress, metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
@@ -440,7 +441,7 @@ def run(args) -> int:
     with out as d:
         for ext, name in FIT_FILES.items():
             outputs[ext](d / name)
-    verdict = "converged" if result.converged else "NOT converged"
+    verdict = result.verdict
     each = "; ".join(f"{Path(f.data.source).name} {f.rms_log10_error:.5f}" for f in result.fits)
     print(f"tenscell fit: rms log10 error {each} (tolerance {result.tolerance:g}): {verdict}; "
           f"homogeneous baseline {baseline.rms_log10_error:.5f}; {result.elapsed_s:.1f} s; wrote {out.target}/",

@@ -31,7 +31,7 @@ from ..model.equilibrium import Cell
 from .fitted import cell_from_dict, cell_to_dict
 from .mechanism_problem import MechanismProblem, _layout, _maps, make_mechanism_problem
 from .mechanisms import Field, Mechanism
-from .result import FitAlternative, inside_noise, noise_rms
+from .result import FitAlternative, accepted, inside_noise, noise_rms, verdict_text
 
 __all__ = ["MechanismFit", "FittedMechanism", "fit_mechanism", "load_any_fit", "MECHANISM_FORMAT",
            "noise_rms"]
@@ -191,7 +191,8 @@ class MechanismFit:
         Per data set, the RMS of its stated standard deviations in log10 G (decades), None without sd columns.
     tolerance : float
     converged : bool
-        Every data set within ``tolerance`` or within its stated noise.
+        Every data set within ``tolerance`` or within its stated noise (:func:`~tenscell.fitting.result.accepted`);
+        :attr:`tolerance_met` says whether the tolerance itself was met.
     message : str
     alternatives : tuple of FitAlternative
         Other starts that fit as well (RMS within ``AS_WELL`` × the best), best first.
@@ -219,13 +220,23 @@ class MechanismFit:
     def __repr__(self) -> str:
         per = ", ".join(f"{r:.3g}" for r in self.dataset_rms)
         return format_repr(f"MechanismFit {self.mechanism.name}: {self.n_free} free parameters",
-                           f"rms per data set {per} decades; {'converged' if self.converged else 'NOT converged'}",
+                           f"rms per data set {per} decades; {self.verdict}",
                            self.message)
 
     @property
     def n_free(self) -> int:
         """Free parameters of the fit."""
         return self.problem.n_free
+
+    @property
+    def tolerance_met(self) -> bool:
+        """Every data set's RMS within :attr:`tolerance`; :attr:`converged` also accepts one inside its noise."""
+        return all(r <= self.tolerance for r in self.dataset_rms)
+
+    @property
+    def verdict(self) -> str:
+        """``"converged"``, ``"inside the data's noise (tolerance not met)"`` or ``"NOT converged"``."""
+        return verdict_text(self.converged, self.tolerance_met)
 
     def value(self, name: str) -> float:
         """A parameter's value (SI units)."""
@@ -309,7 +320,8 @@ class MechanismFit:
             "sources": list(self.problem.sources), "n_free_parameters": self.n_free,
             "n_residuals": self.problem.n_residuals, "rms_log10_error": self.rms_log10_error,
             "rms_log10_error_per_dataset": list(self.dataset_rms), "noise_rms_log10_per_dataset": list(self.noise),
-            "tolerance": self.tolerance, "converged": self.converged, "message": self.message,
+            "tolerance": self.tolerance, "converged": self.converged, "tolerance_met": self.tolerance_met,
+            "message": self.message,
             "stiffness_spread_decades": self.stiffness_spread,
             "assignment_spread_decades": list(self.assignment_spread), "assignments_K": self.mechanism.K,
             "AIC": aic, "BIC": bic,
@@ -368,7 +380,7 @@ def fit_mechanism(data, model, cell: Cell | None = None, *, starts: int = 4, see
     return MechanismFit(
         mechanism=problem.mechanism, problem=problem, theta=theta, parameters=problem.parameters(theta),
         datasets=datasets, rms_log10_error=rms, dataset_rms=per_set, noise=noise, tolerance=float(tolerance),
-        converged=all(r <= tolerance or inside_noise(r, n) for r, n in zip(per_set, noise)),
+        converged=accepted(per_set, noise, tolerance),
         message=_verdict(per_set, noise, tolerance, len(chains), best, stop),
         alternatives=tuple(FitAlternative(start=ch.start, rms_log10_error=ch.rms, parameters=problem.parameters(ch.theta))
                            for ch in sorted(chains, key=lambda c: (c.rms, c.start))
@@ -383,7 +395,8 @@ def _verdict(per_set, noise, tolerance, n_starts, best, stop) -> str:
     for k, (r, n) in enumerate(zip(per_set, noise)):
         head = f"data set {k}: rms {r:.4g}"
         if inside_noise(r, n):
-            parts.append(f"{head}, inside the data's noise ({n:.3g} decades)")
+            met = f" <= tolerance {tolerance:g}" if r <= tolerance else f" > tolerance {tolerance:g} (not met)"
+            parts.append(f"{head}{met}, inside the data's noise ({n:.3g} decades)")
         elif r <= tolerance:
             parts.append(f"{head} <= tolerance {tolerance:g}")
         else:

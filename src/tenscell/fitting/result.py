@@ -22,7 +22,8 @@ if TYPE_CHECKING:
     from .problem import FitProblem
 
 __all__ = ["FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "CreepFit", "FitResult", "model_curve",
-           "frequency_slopes", "prestress_slopes", "data_axis", "noise_rms", "inside_noise"]
+           "frequency_slopes", "prestress_slopes", "data_axis", "noise_rms", "inside_noise", "accepted", "verdict_text",
+           "noise_note"]
 
 def noise_rms(datasets) -> list[float | None]:
     """Per data set, the RMS of the stated standard deviations of log10 G', G'' (or of log10 J for creep data),
@@ -44,6 +45,36 @@ def inside_noise(rms: float, noise: float | None) -> bool:
     mechanism fits alike).
     """
     return noise is not None and rms <= noise
+
+
+def accepted(rms_per_set, noise, tolerance: float) -> bool:
+    """The verdict's rule: every data set's RMS (decades) within ``tolerance`` or inside its own stated noise.
+
+    What ``converged`` means for every fit (per-tendon and mechanism alike): a data set inside its noise has nothing
+    left that the data could tell apart, whether or not the optimizer reached a tolerance set below that noise.
+    """
+    return all(r <= tolerance or inside_noise(r, n) for r, n in zip(rms_per_set, noise))
+
+
+def verdict_text(converged: bool, tolerance_met: bool) -> str:
+    """``"converged"``, ``"inside the data's noise (tolerance not met)"`` or ``"NOT converged"``."""
+    if tolerance_met:
+        return "converged"
+    return "inside the data's noise (tolerance not met)" if converged else "NOT converged"
+
+
+def noise_note(rms_per_set, noise, tolerance: float) -> str:
+    """Words for a fit that misses its tolerance: which data sets lie inside their stated noise, and that the
+    tolerance is below that noise ("" when every data set met the tolerance)."""
+    missed = [(k, r, n) for k, (r, n) in enumerate(zip(rms_per_set, noise)) if r > tolerance]
+    if not missed:
+        return ""
+    if all(inside_noise(r, n) for _, r, n in missed):
+        worst = max(n for _, _, n in missed)
+        return (f"every data set that misses the tolerance lies inside its stated noise (RMS of the sd up to "
+                f"{worst:.3g} decades): the tolerance {tolerance:g} is below the data's noise, which cannot confirm it")
+    above = [f"data set {k}: rms {r:.4g} above its noise {n:.3g}" for k, r, n in missed if n is not None]
+    return "; ".join(above)
 
 
 _MODEL_LABEL = {"uniform": "homogeneous", "per-family": "per family", "per-tendon": "heterogeneous"}
@@ -342,7 +373,8 @@ class FitResult:
     tolerance : float
         The RMS every data set had to reach.
     converged : bool
-        True if every data set's RMS is within ``tolerance``.
+        True if every data set's RMS is within ``tolerance`` or inside the data set's stated noise
+        (:func:`accepted`); :attr:`tolerance_met` says whether the tolerance itself was met.
     message : str
         What happened, in words (including why the search stopped).
     datasets : tuple of RheologyData
@@ -394,6 +426,17 @@ class FitResult:
     stop_reason: str = ""
 
     # -- accessors ------------------------------------------------------------------
+    @property
+    def tolerance_met(self) -> bool:
+        """Every data set's RMS is within :attr:`tolerance` (what the optimizer aimed at); :attr:`converged` also
+        accepts a data set inside its stated noise."""
+        return bool(self.problem.dataset_rms(self.theta).max() <= self.tolerance)
+
+    @property
+    def verdict(self) -> str:
+        """``"converged"``, ``"inside the data's noise (tolerance not met)"`` or ``"NOT converged"``."""
+        return verdict_text(self.converged, self.tolerance_met)
+
     @cached_property
     def time_to_tolerance_s(self) -> float | None:
         """Seconds from the start of the fit until some start first had every data set within the tolerance.
@@ -670,7 +713,7 @@ class FitResult:
             f"{len(self.datasets)} data set(s), {sum(d.n for d in self.datasets)} points, "
             f"{self.problem.n_free} free parameters",
             f"rms log10 error {self.rms_log10_error:.4g} (tolerance {self.tolerance:g}): "
-            f"{'converged' if self.converged else 'NOT converged'}; per data set: {sets}",
+            f"{self.verdict}; per data set: {sets}",
             f"stiffness spread {dec:.1f} decades; prestress share of the static stiffness "
             f"{np.nanmin(share):.3g} to {np.nanmax(share):.3g}",
             f"{self.starts} start(s), seed {self.seed}, {self.elapsed_s:.1f} s; stopped: {self.stop_reason}",
@@ -735,6 +778,8 @@ class FitResult:
             "datasets": [f.to_dict() for f in self.fits],
             "tolerance": self.tolerance,
             "converged": self.converged,
+            "tolerance_met": self.tolerance_met,
+            "noise_rms_log10_per_dataset": noise_rms(self.datasets),
             "message": self.message,
             "stop_reason": self.stop_reason,
             "time_s": self.elapsed_s,
@@ -788,7 +833,7 @@ class FitResult:
             f"    model:              {self.cell.describe()}; stiffness {self.tendons}, damping {self.damping}",
             f"    free parameters:    {self.problem.n_free} (residuals: {self.problem.n_residuals})",
             f"    rms log10 error:    {self.rms_log10_error:.5f} (tolerance {self.tolerance:g}): "
-            + ("converged" if self.converged else "NOT converged"),
+            + self.verdict,
             f"    starts:             {self.starts} (seed {self.seed}), {self.n_evaluations} model evaluations, "
             f"{self.elapsed_s:.1f} s",
             f"    stiffness spread:   {lo:.3g} .. {hi:.3g} N ({dec:.1f} decades)" + self._interior_text(),

@@ -42,7 +42,7 @@ from .._parallel import Workers
 from .._progress import progress_bar
 from ..model.equilibrium import Cell
 from .problem import _LN10, _PENALTY, FitProblem, as_datasets, make_problem
-from .result import FitAlternative, FitResult
+from .result import FitAlternative, FitResult, accepted, noise_note, noise_rms
 from .._threads import limited
 from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
 
@@ -471,7 +471,8 @@ def _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin) -> 
     r = problem.residuals(theta) / problem.weights
     rms = float(np.sqrt(np.mean(r**2)))
     per_set = problem.dataset_rms(theta)
-    converged = bool(per_set.max() <= tolerance)
+    noise = noise_rms(datasets)
+    converged = accepted(per_set, noise, tolerance)
     cutoff = max(tolerance, 1.5 * rms)
     alternatives = tuple(
         FitAlternative(start=ch.start, rms_log10_error=ch.rms, parameters=problem.parameters(ch.theta))
@@ -480,8 +481,10 @@ def _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin) -> 
     )
     history, history_theta = _merged_history(chains)
     which = "" if len(datasets) == 1 else " on every data set"
-    verdict = (f"reached rms {per_set.max():.4g} <= tolerance {tolerance:g}{which}" if converged
+    verdict = (f"reached rms {per_set.max():.4g} <= tolerance {tolerance:g}{which}" if per_set.max() <= tolerance
                else f"did not reach the tolerance{which}: rms {per_set.max():.4g} > {tolerance:g}")
+    note = noise_note(per_set, noise, tolerance)
+    verdict += f"; {note}" if note else ""
     message = (f"{verdict} (best of {len(chains)} start(s), start {best.start} after {best.hops} hop(s); "
                f"search stopped: {stop}; optimizer: {best.message})")
     return FitResult(

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from ..fitting.prestress import CELL_ELASTICITY
-from ..fitting.result import FitResult, frequency_slopes, inside_noise, noise_rms, prestress_slopes
+from ..fitting.result import FitResult, frequency_slopes, noise_rms, prestress_slopes
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
 from .._results import CORRELATION_THRESHOLD, plus_minus
@@ -38,12 +38,12 @@ def _data_slopes(data: RheologyData):
 def section_summary(result: FitResult, baseline=None) -> list[str]:
     """What was fitted to what, the verdict, the search."""
     pr = result.problem
-    verdict = "**converged**" if result.converged else "**NOT converged**"
     noise = noise_rms(result.datasets)
-    per_set = [f.rms_log10_error for f in result.fits]
-    if not result.converged and all(inside_noise(r, n) for r, n in zip(per_set, noise)):
+    verdict = "**converged**" if result.tolerance_met else "**NOT converged**"
+    if result.converged and not result.tolerance_met:
         # the data say how well they can be fitted: a fit inside their noise has nothing left to explain
-        verdict = "**inside the data's noise** (the tolerance is not met, but the data cannot tell a better fit)"
+        verdict = ("**inside the data's noise** (the optimizer's tolerance is not met, but every data set that misses "
+                   "it lies within its stated noise: the data cannot tell a better fit)")
     below = [n for n in noise if n is not None and result.tolerance < n]
     if below:
         verdict += (f"; the tolerance {num(result.tolerance)} is below the data's own noise (RMS of the stated sd "

@@ -18,7 +18,7 @@ def mechanism_fit_markdown(result) -> str:
     out = [f"# Fit of mechanism `{result.mechanism.name}`", "", result.mechanism.description + ".", "",
            f"Data: {', '.join(f'`{s}`' for s in result.problem.sources)}. {result.n_free} free parameters, "
            f"{result.problem.n_residuals} residuals. AIC {num(aic)}, BIC {num(bic)}.", "",
-           f"**{'Converged' if result.converged else 'Not converged'}**: {result.message}.", ""]
+           f"**{result.verdict[0].upper() + result.verdict[1:]}**: {result.message}.", ""]
     if not result.sigma_known:
         out += ["The data state no standard deviations: the fit is judged against the tolerance only, and the "
                 "standard errors below assume residuals of the size the fit left.", ""]
