@@ -173,3 +173,31 @@ def test_study_refuses_bad_ensemble_flags_before_any_fit(tmp_path, capsys):
         assert "--ensemble" in err or "--workers" in err
         assert len(err.splitlines()) == 1
     assert cli_main(["study", "sensitivity", "--ensemble", "20", "--out", str(tmp_path / "s")]) == 2
+
+
+def test_the_command_line_limits_are_the_librarys():
+    # the parser imports no numpy, so it keeps its own copies of the limits: they must agree
+    from tenscell.cli.moduli import ENSEMBLE_MAX_K
+    from tenscell.cli.study import STUDY_ENSEMBLE_K
+
+    assert ENSEMBLE_MAX_K == ens.MAX_K and STUDY_ENSEMBLE_K == ens.DEFAULT_K
+
+
+def test_the_study_evaluates_the_distributed_mechanism_with_the_lowest_bic():
+    from tenscell.io.data import bundled
+    from tenscell.studies.mechanisms import mechanisms_study
+
+    data = [bundled("fabry2001")]
+    s = mechanisms_study(data, mechanisms=["voigt-compact", "voigt-lognormal-damping", "voigt-lognormal-stiffness"],
+                         starts=1, hops=0, holdout_decades=None, ensemble=40, workers=0, progress=False)
+    distributed = [r for r in s.rows if r.name != "voigt-compact"]
+    best = min(distributed, key=lambda r: r.bic)
+    assert s.ensemble is not None and s.ensemble.mechanism == best.name and s.ensemble.K == 40
+    # at the data's frequencies and the fit's own prestress (no data set states one: model prestress, N)
+    np.testing.assert_array_equal(s.ensemble.frequency_hz, np.unique(data[0].frequency_hz))
+    assert s.ensemble.prestress_unit == "N"
+    Gs, Gl = best.model.moduli(s.ensemble.frequency_hz)
+    np.testing.assert_allclose(s.ensemble.reference[0], Gs + 1j * Gl, rtol=1e-12)
+    none = mechanisms_study(data, mechanisms=["voigt-compact"], starts=1, hops=0, holdout_decades=None, ensemble=40,
+                            progress=False)
+    assert none.ensemble is None  # nothing distributed: nothing to draw

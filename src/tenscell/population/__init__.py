@@ -26,9 +26,9 @@ _EXPORTS = {
 }
 
 __all__ = [  # the keys of _EXPORTS (a literal list, so that tools can read it)
-    "CellSource", "Condition", "EnsembleResult", "PopulationFitOptions", "PopulationResult", "SyntheticPopulation", "cell_seed",
-    "condition_summary", "fit_cell", "fit_population", "mechanism_ensemble", "monte_carlo_study", "parse_condition", "read_sources",
-    "read_study", "recovery", "sweep_study", "synth_population",
+    "CellSource", "Condition", "EnsembleResult", "PopulationFitOptions", "PopulationResult", "SyntheticPopulation",
+    "cell_seed", "condition_summary", "fit_cell", "fit_population", "mechanism_ensemble", "monte_carlo_study",
+    "parse_condition", "read_sources", "read_study", "recovery", "sweep_study", "synth_population",
 ]
 
 
