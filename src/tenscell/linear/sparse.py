@@ -6,14 +6,12 @@ for large structures) or CHOLMOD's own (AMD). A symmetric matrix is positive def
 factorization exists, so one factorization both proves positive definiteness
 and serves every solve (the Lanczos runs of :mod:`tenscell.linear.krylov`).
 
-Why CHOLMOD: measured on this project's 3D lattices (``bench/bench_scale.py``),
-analysis + factorization + one solve of the 11,520-coordinate stiffness takes
-0.17–0.27 s, against 0.65–0.94 s for SuperLU with a hand-written
-nested-dissection ordering and 0.8–1.0 s for ``cholespy`` (all three agree to
-1e-14); on the 32,076-coordinate lattice 0.8–1.0 s against 2.9–4.0 s and
-4.0–6.5 s. cvxopt ships CHOLMOD in binary wheels, so it is a plain dependency.
-The SuperLU + nested-dissection path it replaces lives on in
-``bench/_superlu_nd.py`` as the benchmark's baseline.
+Why CHOLMOD: measured on this project's 3D lattices (``bench/bench_scale.py``
+before this ordering existed), analysis + factorization + one solve of the
+11,520-coordinate stiffness took 0.17–0.27 s against 0.65–0.94 s for SuperLU
+with a hand-written nested-dissection ordering and 0.8–1.0 s for
+``cholespy`` (all three agree to 1e-14). cvxopt ships CHOLMOD in binary
+wheels; it is the ``large`` extra (structures above 1,500 coordinates).
 """
 from __future__ import annotations
 
