@@ -201,3 +201,13 @@ def test_the_study_evaluates_the_distributed_mechanism_with_the_lowest_bic():
     none = mechanisms_study(data, mechanisms=["voigt-compact"], starts=1, hops=0, holdout_decades=None, ensemble=40,
                             progress=False)
     assert none.ensemble is None  # nothing distributed: nothing to draw
+
+
+def test_the_study_refuses_a_bad_ensemble_before_any_fit(monkeypatch):
+    from tenscell.io.data import bundled
+    from tenscell.studies import mechanisms as study
+
+    monkeypatch.setattr("tenscell._parallel.starmap", lambda *a, **k: pytest.fail("fits started"))  # the fits' pool
+    for kwargs in ({"ensemble": 1}, {"ensemble": 50, "workers": -1}):
+        with pytest.raises(ValueError, match="K \\(assignments\\)|workers"):
+            study.mechanisms_study([bundled("fabry2001")], mechanisms=["voigt-lognormal-damping"], **kwargs)

@@ -12,6 +12,7 @@ from .population import add_cluster_options
 #: assignments of the study's ensemble unless --ensemble says otherwise (tenscell.population.ensemble.DEFAULT_K)
 STUDY_ENSEMBLE_K = 1000
 
+
 def _study_no_if(out: Path, log, args=None) -> None:
     from .. import plotting
     from ..studies.no_if import no_if_study
@@ -155,8 +156,7 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     K = STUDY_ENSEMBLE_K if args.ensemble is None else args.ensemble
     s = mechanisms_study(datasets, mechanisms=names, starts=args.starts, hops=args.hops, seed=args.seed,
                          tolerance=args.tolerance, jobs=jobs_for(mech, args.jobs), ensemble=K or None,
-                         workers=args.workers, scheduler=args.scheduler, progress=False,
-                         notify=lambda line: log(f"ensemble: {line}"))
+                         workers=args.workers, scheduler=args.scheduler, notify=lambda line: log(f"ensemble: {line}"))
     write_csv_rows(out / "mechanisms.csv", list(STUDY_COLUMNS), study_table_rows(s))
     plotting.save(mechanisms_figure(s, datasets), out / "mechanisms.png")
     report = mechanisms_markdown(s)

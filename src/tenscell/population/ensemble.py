@@ -253,11 +253,15 @@ def _fitted_mechanism(model):
     return model
 
 
+def check_counts(K, workers=None) -> tuple[int, int | None]:
+    """``(K, workers)`` checked: K assignments in 2..MAX_K, workers None or >= 0 (ValueError in one line)."""
+    return _whole("K (assignments)", K, 2, MAX_K), None if workers is None else _whole("workers", workers, 0)
+
+
 def check_ensemble(model, K, workers=None, seed=None):
     """``(FittedMechanism, K, workers, seed)`` checked (ValueError in one line naming the argument), before any work."""
     model = _fitted_mechanism(model)
-    K = _whole("K (assignments)", K, 2, MAX_K)
-    workers = None if workers is None else _whole("workers", workers, 0)
+    K, workers = check_counts(K, workers)
     seed = model.mechanism.seed if seed is None else _whole("seed", seed, 0)
     return model, K, workers, seed
 

@@ -276,6 +276,10 @@ def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 
     from ..fitting.problem import as_datasets
 
     t0 = time.monotonic()
+    if ensemble:  # bad K or workers: refused before any fit
+        from ..population.ensemble import check_counts
+
+        check_counts(ensemble, workers)
     datasets = as_datasets(datasets)
     names = tuple(mechanisms) if mechanisms is not None else (PER_TENDON_VOIGT, *MECHANISMS)
     for n in names:
