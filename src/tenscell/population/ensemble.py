@@ -274,7 +274,10 @@ def mechanism_ensemble(model, f_hz, prestress_pa=None, *, K: int = DEFAULT_K, se
     Parameters
     ----------
     model : FittedMechanism or MechanismFit
-        A mechanism with at least one field drawn from a distribution.
+        A mechanism with at least one field drawn from a distribution: a fit's, or any mechanism at values
+        of your own, ``FittedMechanism(MECHANISMS["voigt-lognormal-damping"], paper_cell(), values, P=1.0)``
+        (values: SI units, by the names of ``bare_problem(mechanism, cell).names``; ``P`` the model
+        prestress in N, or ``s`` in m² to take prestresses in Pa).
     f_hz : array_like
         Frequencies (Hz), > 0.
     prestress_pa : float or sequence of float, optional
