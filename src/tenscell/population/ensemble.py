@@ -34,6 +34,7 @@ import numpy as np
 
 from .._checks import positive_array
 from .._results import dataframe, format_repr, plotter
+from .studies import _whole
 
 __all__ = ["EnsembleResult", "mechanism_ensemble", "DEFAULT_K", "MAX_K", "CHUNK"]
 
@@ -230,14 +231,6 @@ def ensemble_chunk(problem, phi, omega, P_N) -> np.ndarray:
 # ---------------------------------------------------------------------------------------
 # the entry point
 # ---------------------------------------------------------------------------------------
-def _whole(name: str, value, lo: int, hi: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo or \
-            (hi is not None and value > hi):
-        upto = f" and <= {hi:,}" if hi is not None else ""
-        raise ValueError(f"{name} must be a whole number >= {lo}{upto}, got {value!r}")
-    return int(value)
-
-
 def _fitted_mechanism(model):
     """The FittedMechanism of ``model`` (itself, or a MechanismFit's); ValueError for anything else."""
     from ..fitting.mechanism_fit import FittedMechanism, MechanismFit

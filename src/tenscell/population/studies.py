@@ -156,9 +156,10 @@ def _chunks(n: int, size: int) -> list[tuple[int, int]]:
     return [(lo, min(lo + size, n)) for lo in range(0, n, size)]
 
 
-def _whole(name, v, lo):
-    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
-        raise ValueError(f"{name} must be a whole number >= {lo}, got {v!r}")
+def _whole(name, v, lo, hi=None):
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo or (hi is not None and v > hi):
+        upto = f" and <= {hi:,}" if hi is not None else ""
+        raise ValueError(f"{name} must be a whole number >= {lo}{upto}, got {v!r}")
     return int(v)
 
 
