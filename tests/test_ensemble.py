@@ -177,7 +177,7 @@ def test_study_refuses_bad_ensemble_flags_before_any_fit(tmp_path, capsys):
 
 def test_the_command_line_limits_are_the_librarys():
     # the parser imports no numpy, so it keeps its own copies of the limits: they must agree
-    from tenscell.cli.moduli import ENSEMBLE_MAX_K
+    from tenscell.cli._args import ENSEMBLE_MAX_K
     from tenscell.cli.study import STUDY_ENSEMBLE_K
 
     assert ENSEMBLE_MAX_K == ens.MAX_K and STUDY_ENSEMBLE_K == ens.DEFAULT_K
@@ -211,3 +211,32 @@ def test_the_study_refuses_a_bad_ensemble_before_any_fit(monkeypatch):
     for kwargs in ({"ensemble": 1}, {"ensemble": 50, "workers": -1}):
         with pytest.raises(ValueError, match="K \\(assignments\\)|workers"):
             study.mechanisms_study([bundled("fabry2001")], mechanisms=["voigt-lognormal-damping"], **kwargs)
+
+
+def test_fit_model_with_an_ensemble_writes_it_beside_the_fit(tmp_path):
+    out = tmp_path / "fit"
+    code = cli_main(["fit", "bundled:stamenovic2002", "--model", "voigt-lognormal-damping", "--starts", "1",
+                     "--ensemble", "30", "--out", str(out)])
+    assert code in (0, 1)  # 1: not within --tolerance (one start); the outputs exist either way
+    from tenscell.fitting import load_any_fit
+
+    model = load_any_fit(out / "fit.json")
+    table = np.loadtxt(out / "ensemble.csv", delimiter=",", skiprows=1)
+    header = (out / "ensemble.csv").read_text().splitlines()[0].split(",")
+    # at the data's 8 stated prestresses (Pa) and one frequency; the fit's average is the model's moduli
+    assert header[0] == "prestress_Pa" and table.shape[0] == 8
+    i = header.index("G_storage_fit_average_Pa")
+    Gs = [model.moduli([0.1], p)[0][0] for p in table[:, 0]]
+    np.testing.assert_allclose(table[:, i], Gs, rtol=1e-12)
+    assert "30 assignments" in (out / "ensemble.md").read_text() and (out / "ensemble.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("argv, word", [
+    (["--model", "voigt-compact", "--ensemble", "20"], "no ensemble"),
+    (["--model", "voigt-lognormal-damping", "--ensemble", "1"], "--ensemble"),
+    (["--ensemble", "20"], "--ensemble"),  # the per-tendon fit
+])
+def test_fit_refuses_an_ensemble_it_cannot_have_before_fitting(argv, word, tmp_path, capsys):
+    assert cli_main(["fit", "bundled:fabry2001", *argv, "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert word in err and len(err.splitlines()) == 1 and not (tmp_path / "x").exists()

@@ -32,6 +32,8 @@ __all__ = [
 #: most (prestress, frequency) points one command evaluates: each point costs a complex
 #: solve and a CSV row; 10^6 rows are ~50 MB of CSV, 0.4 GB of memory and ~20 s.
 MAX_GRID_POINTS = 1_000_000
+#: most assignments of an ensemble (--ensemble; tenscell.population.ensemble.MAX_K: the parser imports no numpy)
+ENSEMBLE_MAX_K = 100_000
 #: measured cost of one (P, f) point of `tenscell moduli` (10^6 points: 370 MB, 19 s on the 2-core machine)
 _BYTES_PER_POINT, _SECONDS_PER_POINT = 400, 2e-5
 

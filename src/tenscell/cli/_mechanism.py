@@ -35,6 +35,7 @@ def run_mechanism_fit(args, read_datasets) -> int:
     fixed = dict(args.fix or ())
     bounds = dict(args.bound or ())
     make_mechanism_problem(datasets, args.model, bounds=bounds, fixed=fixed)  # bad input: before any fitting
+    _check_ensemble(args)
     jobs = jobs_for(args.starts, args.jobs)
     stage(f"fitting mechanism {args.model} to {sum(d.n for d in datasets)} points: {args.starts} start(s), "
           f"{jobs} process(es)")
@@ -43,12 +44,50 @@ def run_mechanism_fit(args, read_datasets) -> int:
     doc = result.to_dict()
     report = mechanism_fit_markdown(result)
     png = _figure_png(result)
+    ensemble = None
+    if args.ensemble:
+        from ..population.ensemble import ensemble_at_data
+
+        ensemble = ensemble_at_data(result.model(), datasets, args.ensemble,
+                                    notify=lambda line: stage(f"ensemble: {line}"))
     with out as d:
         write_json(d / "fit.json", doc)
         write_text(d / "report.md", report)
         (d / "fit.png").write_bytes(png)
-    print(f"tenscell: {result.message}; wrote {out.target}/ ({', '.join(MECHANISM_FILES)})", file=sys.stderr)
+        if ensemble is not None:
+            write_ensemble(d, ensemble, f"Ensemble of the fitted `{args.model}`")
+    files = MECHANISM_FILES + (ENSEMBLE_FILES if ensemble is not None else ())
+    print(f"tenscell: {result.message}; wrote {out.target}/ ({', '.join(files)})", file=sys.stderr)
     return 0 if result.converged else 1
+
+
+def _check_ensemble(args) -> None:
+    """``--ensemble K``: a mechanism drawn from a distribution, and K >= 2 (or 0: none), before any fitting."""
+    if not args.ensemble:
+        return
+    from ..fitting.mechanisms import mechanism
+
+    if args.ensemble == 1:
+        raise ValueError("--ensemble: 1 assignment has no spread between assignments; give K >= 2, or 0 for none")
+    if not mechanism(args.model).heterogeneous:
+        raise ValueError(f"--ensemble: mechanism {args.model} draws no tendon property from a distribution: every "
+                         "assignment is the same cell, so it has no ensemble")
+
+
+#: the files an ensemble adds to an output set (`fit --model ... --ensemble K`, `study mechanisms`)
+ENSEMBLE_FILES = ("ensemble.csv", "ensemble.png", "ensemble.md")
+
+
+def write_ensemble(out: Path, ensemble, title: str) -> None:
+    """An ensemble's table, figure and Markdown into the directory ``out`` (of an open output set)."""
+    from .. import plotting
+    from ..io.outputs import write_csv_rows, write_text
+    from ..reports.ensemble import ensemble_markdown
+
+    df = ensemble.to_dataframe()
+    write_csv_rows(out / "ensemble.csv", list(df.columns), (tuple(map(float, r)) for r in df.itertuples(index=False)))
+    plotting.save(ensemble.plot(), out / "ensemble.png")
+    write_text(out / "ensemble.md", ensemble_markdown(ensemble, title))
 
 
 def _figure_png(result) -> bytes:

@@ -6,7 +6,7 @@ import contextlib
 import time
 from pathlib import Path
 
-from ._args import RANGES, add_data_options, add_out, data_options_from_args, integer, number
+from ._args import ENSEMBLE_MAX_K, RANGES, add_data_options, add_out, data_options_from_args, integer, number
 
 #: the fit's parametrizations (the same tuples as tenscell.fitting.TENDON_MODES / DAMPING_MODES,
 #: written out so that building the parser does not import the fitting code; a test checks they agree)
@@ -52,6 +52,11 @@ def register(sub) -> None:
     p.add_argument("--model", choices=MECHANISM_NAMES, default=None,
                    help="fit a mechanism instead of the per-tendon Voigt cell (tenscell.fitting.mechanisms; "
                         "writes fit.json, report.md, fit.png; --fix/--bound take its parameter names or kinds)")
+    p.add_argument("--ensemble", type=integer(0, ENSEMBLE_MAX_K), default=0, metavar="K",
+                   help="with --model of a mechanism whose tendon values are drawn from a distribution: evaluate "
+                        "the fitted mechanism over K assignments at the data's prestresses and frequencies "
+                        "(ensemble.csv, .png, .md: mean, spread between assignments, the fit's own average; "
+                        "0: none; more with `tenscell moduli --from-fit FIT --ensemble K --workers N`)")
     add_constraints(p)
     add_data_options(p)
     p.add_argument("--bound", action="append", type=_bound, metavar="KIND=LO:HI", default=None,
@@ -395,6 +400,9 @@ def run(args) -> int:
         from ._mechanism import run_mechanism_fit
 
         return run_mechanism_fit(args, read_datasets)
+    if args.ensemble:
+        raise ValueError("--ensemble applies to --model of a mechanism whose tendon values are drawn from a "
+                         "distribution, not to the per-tendon fit")
     check_contradictions(args)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping),

@@ -3,12 +3,10 @@ from __future__ import annotations
 
 import sys
 
-from ._args import MAX_GRID_POINTS, add_model_options, add_prestress, frequencies, grid_cost, integer
+from ._args import ENSEMBLE_MAX_K, MAX_GRID_POINTS, add_model_options, add_prestress, frequencies, grid_cost, integer
 from .population import add_cluster_options
 
 DEFAULT_FREQ = "0.01:1000:61"
-#: most assignments of --ensemble (tenscell.population.ensemble.MAX_K; the parser imports no numpy)
-ENSEMBLE_MAX_K = 100_000
 
 
 def register(sub) -> None:

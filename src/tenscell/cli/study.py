@@ -4,9 +4,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._args import add_data_options, add_out, data_options_from_args, integer, number, number_list, path
+from ._args import ENSEMBLE_MAX_K, add_data_options, add_out, data_options_from_args, integer, number, number_list, path
 from .fit import stated_prestress
-from .moduli import ENSEMBLE_MAX_K
 from .population import add_cluster_options
 
 #: assignments of the study's ensemble unless --ensemble says otherwise (tenscell.population.ensemble.DEFAULT_K)
@@ -164,24 +163,14 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     print(report.split("## The answer")[0].split("\n\n", 2)[-1], flush=True)
     written = "mechanisms.csv, mechanisms.png, mechanisms.md"
     if s.ensemble is not None:
-        _write_ensemble(out, s.ensemble)
-        written += ", ensemble.csv, ensemble.png, ensemble.md"
+        from ._mechanism import ENSEMBLE_FILES, write_ensemble
+
+        write_ensemble(out, s.ensemble, f"Ensemble of `{s.ensemble.mechanism}`, the distributed mechanism with the "
+                                        "lowest BIC")
+        written += ", " + ", ".join(ENSEMBLE_FILES)
     elif K:
         log("no ensemble: none of the mechanisms fitted draws a tendon property from a distribution")
     log(written)
-
-
-def _write_ensemble(out: Path, ensemble) -> None:
-    """The best distributed mechanism's ensemble: its table, figure and Markdown."""
-    from .. import plotting
-    from ..io.outputs import write_csv_rows, write_text
-    from ..reports.ensemble import ensemble_markdown
-
-    df = ensemble.to_dataframe()
-    write_csv_rows(out / "ensemble.csv", list(df.columns), (tuple(map(float, r)) for r in df.itertuples(index=False)))
-    plotting.save(ensemble.plot(), out / "ensemble.png")
-    write_text(out / "ensemble.md", ensemble_markdown(
-        ensemble, f"Ensemble of `{ensemble.mechanism}`, the distributed mechanism with the lowest BIC"))
 
 
 #: studies that fit data files given on the command line (not part of `reproduce`'s variants stage)

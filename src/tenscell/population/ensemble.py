@@ -36,7 +36,7 @@ from .._checks import positive_array
 from .._results import dataframe, format_repr, plotter
 from .studies import _whole
 
-__all__ = ["EnsembleResult", "mechanism_ensemble", "DEFAULT_K", "MAX_K", "CHUNK"]
+__all__ = ["EnsembleResult", "mechanism_ensemble", "ensemble_at_data", "DEFAULT_K", "MAX_K", "CHUNK"]
 
 #: assignments of an ensemble unless told (issue 18: "large ensembles", 200–2000)
 DEFAULT_K = 1000
@@ -326,6 +326,16 @@ def mechanism_ensemble(model, f_hz, prestress_pa=None, *, K: int = DEFAULT_K, se
     return EnsembleResult(mechanism=model.mechanism.name, frequency_hz=f, prestress=shown, prestress_unit=unit,
                           members=members, reference=reference, reference_K=model.mechanism.K, seed=seed,
                           workers=int(placed.get("workers", 0)), elapsed_s=time.perf_counter() - t0)
+
+
+def ensemble_at_data(model, datasets, K: int = DEFAULT_K, **where) -> EnsembleResult:
+    """:func:`mechanism_ensemble` at the data's frequencies and prestresses: every prestress of the fit's data in
+    Pa (stated or fitted), or the fit's own model prestress P when no data set stated one. ``where``: ``seed``,
+    ``client``, ``workers``, ``scheduler``, ``progress``, ``notify``."""
+    model = _fitted_mechanism(model)
+    f = np.unique(np.concatenate([np.asarray(d.frequency_hz, dtype=float) for d in datasets]))
+    prestress = sorted(set(model.prestress_pa)) if model.s is not None else None
+    return mechanism_ensemble(model, f, prestress, K=K, **where)
 
 
 def _complex(moduli) -> np.ndarray:

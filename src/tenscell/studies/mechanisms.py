@@ -27,10 +27,14 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..fitting.mechanisms import MECHANISMS, PER_TENDON_VOIGT
+
+if TYPE_CHECKING:
+    from ..population.ensemble import EnsembleResult
 
 __all__ = ["MechanismRow", "MechanismStudy", "mechanisms_study", "GOALS", "SLOPE_GRID_PER_DECADE"]
 
@@ -89,7 +93,7 @@ class MechanismStudy:
     holdout: tuple | None  # (f_min, f_max) Hz held out of the frequency sweep, or None
     elapsed_s: float
     options: dict
-    ensemble: object = None  # EnsembleResult of the best distributed mechanism (tenscell.population.ensemble)
+    ensemble: EnsembleResult | None = None  # the best distributed mechanism's (tenscell.population.ensemble)
 
     @property
     def winner(self) -> MechanismRow:
@@ -305,13 +309,10 @@ def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 
 
 def _best_ensemble(rows, datasets, K: int, workers, scheduler, progress, notify):
     """The ensemble of the distributed mechanism with the lowest BIC at the data's prestresses and frequencies."""
-    from ..population.ensemble import mechanism_ensemble
+    from ..population.ensemble import ensemble_at_data
 
     distributed = [r for r in rows if r.model is not None and r.model.mechanism.heterogeneous]
     if not distributed:
         return None
-    model = min(distributed, key=lambda r: r.bic).model
-    f = np.unique(np.concatenate([d.frequency_hz for d in datasets]))
-    prestress = sorted(set(model.prestress_pa)) if model.s is not None else None
-    return mechanism_ensemble(model, f, prestress, K=K, workers=workers, scheduler=scheduler, progress=progress,
-                              notify=notify)
+    return ensemble_at_data(min(distributed, key=lambda r: r.bic).model, datasets, K, workers=workers,
+                            scheduler=scheduler, progress=progress, notify=notify)
