@@ -153,7 +153,8 @@ def ensemble_moduli(result, ax=None, title: str | None = None):
         for part, style in ((np.real, "-"), (np.imag, "--")):
             ax.fill_between(x, part(lo[i]), part(hi[i]), color=palette[i], alpha=0.2, lw=0)
             ax.plot(x, part(mean[i]), style, color=palette[i],
-                    label=f"{label}: {'G′' if part is np.real else 'G″'} mean" if len(labels) < 6 or i == 0 else None)
+                    label=f"{label}: {'G′' if part is np.real else 'G″'} mean"
+                    if len(labels) < 6 or i in (0, len(labels) - 1) else None)  # many: the first and the last
             ax.plot(x, part(ref[i]), "o", ms=3, mfc="none", color=palette[i])
     ax.set_xscale("log")
     ax.set_yscale("log")
