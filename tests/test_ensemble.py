@@ -240,3 +240,29 @@ def test_fit_refuses_an_ensemble_it_cannot_have_before_fitting(argv, word, tmp_p
     assert cli_main(["fit", "bundled:fabry2001", *argv, "--out", str(tmp_path / "x")]) == 2
     err = capsys.readouterr().err.strip()
     assert word in err and len(err.splitlines()) == 1 and not (tmp_path / "x").exists()
+
+
+def test_an_assignment_that_is_not_a_stable_cell_is_left_out_and_counted(monkeypatch):
+    """One member whose K(ω) cannot be solved: its row is NaN, n_failed counts it, the statistics use the rest."""
+    from tenscell.fitting.mechanism_problem import MechanismProblem
+
+    ref = mechanism_ensemble(_model(), F, PRESTRESS, K=12, workers=0, progress=False)
+    bad_u = {}
+    original = MechanismProblem.evaluate
+
+    def failing(self, phi, omega, P, jac, dP=None):
+        u = self.shape_maps[0][3]
+        if any(np.array_equal(row, bad_u["row"]) for row in u):  # the stack holding assignment 5 fails as a whole
+            return None
+        return original(self, phi, omega, P, jac, dP)
+
+    from tenscell.fitting.mechanism_fit import bare_problem
+
+    full = bare_problem(dataclasses.replace(_model().mechanism, assignments=12), paper_cell())
+    bad_u["row"] = full.shape_maps[0][3][5]
+    monkeypatch.setattr(MechanismProblem, "evaluate", failing)
+    r = mechanism_ensemble(_model(), F, PRESTRESS, K=12, workers=0, progress=False)
+    assert r.n_failed == 1 and np.all(np.isnan(r.members[5])) and not r.stable[5]
+    keep = np.arange(12) != 5
+    np.testing.assert_allclose(r.members[keep], ref.members[keep], rtol=1e-13)  # the others, solved one by one
+    np.testing.assert_allclose(r.mean.real, ref.members[keep].real.mean(axis=0), rtol=1e-13)
