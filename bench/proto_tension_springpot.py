@@ -14,7 +14,6 @@ Run: PYTHONPATH=src python bench/proto_tension_springpot.py [starts] [variants..
 """
 from __future__ import annotations
 
-import math
 import sys
 import time
 from dataclasses import dataclass
