@@ -1,14 +1,18 @@
 """Prototype (issue 18, helper mech): springpot tendons whose coefficient and/or exponent depend on the tension.
 
-Not part of the package: the laws are defined here, registered into ``tenscell.laws`` and
-``tenscell.fitting.mechanisms.MECHANISMS`` at run time, and scored by the study's own
-``evaluate_mechanism`` (same metrics as ``tenscell study mechanisms``).
+The two variants that are not in the package (their laws defined here) are registered into
+``tenscell.laws`` and ``tenscell.fitting.mechanisms.MECHANISMS`` at run time; the third is the
+package's ``TensionSpringpot`` with beta free (held at 1000 it is the built-in
+``springpot-tension+visc``). Each is scored by the study's own ``evaluate_mechanism`` (same
+metrics as ``tenscell study mechanisms``), with its parameters, their local standard errors
+(ln) and the other starts that fit as well.
 
 Variants (T = the tendon's tension P·T0_j, N; z = iω·t1, t1 = 1 s):
 
 * ``sp-tscaled+visc``  k* = (EA + T)/l + ((kappa + beta·T)/l)·z^alpha             (cross-bridges: modulus ∝ tension)
 * ``sp-texp+visc``     k* = (EA + T)/l + ((kappa + beta·T)/l)·z^(alpha·exp(−T/T_alpha))  (exponent falls with tension)
-* ``sp-two+visc``      k* = (EA + T)/l + (kappa/l)·z^alpha + (beta·T/l)·z^alpha_T  (passive network + active part)
+* ``sp-two+visc``      k* = (EA + T)/l + (kappa/l)·z^alpha + (beta·T/l)·z^alpha_T  (passive network + active part;
+  ``tenscell.laws.TensionSpringpot``)
 
 Run: PYTHONPATH=src python bench/proto_tension_springpot.py [starts] [variants...]
 """
@@ -25,20 +29,16 @@ import tenscell.laws as laws
 from tenscell.fitting import mechanism_problem as mp
 from tenscell.fitting import mechanisms as mm
 from tenscell.laws.base import Parameter, angular_frequencies
-from tenscell.laws.viscoelastic import SPRINGPOT_TIME, _DynamicSpring
+from tenscell.laws.viscoelastic import Springpot, _DynamicSpring, _log_iw
 
 
 def _zpow(w, a):
-    """z^a and log z, z = iω·t1, shapes (n_omega, m)."""
-    a = np.asarray(a, dtype=float)
-    with np.errstate(divide="ignore"):
-        logz = np.log(np.where(w > 0, w * SPRINGPOT_TIME, 1.0)) + 0.5j * np.pi
-    mag = (w * SPRINGPOT_TIME)[:, None] ** a
-    return mag * np.exp(0.5j * np.pi * a), np.broadcast_to(logz[:, None], mag.shape)
+    """z^a and log z, z = iω·t1, shapes (n_omega, m) and (n_omega, 1) (the package's helpers)."""
+    return Springpot._power(w, a), _log_iw(w)
 
 
 @dataclass(frozen=True, eq=False)
-class TensionSpringpot(_DynamicSpring):
+class ScaledSpringpot(_DynamicSpring):
     EA: Any
     kappa: Any
     beta: Any
@@ -108,44 +108,11 @@ class TensionExpSpringpot(_DynamicSpring):
         return dT, np.stack([inv, zp / l, (T / l) * zp, g * e, g * (a * T / Ta**2)])
 
 
-@dataclass(frozen=True, eq=False)
-class TwoSpringpot(_DynamicSpring):
-    EA: Any
-    kappa: Any
-    alpha: Any
-    beta: Any
-    alpha_T: Any
-    l0: Any = None
-    parameters: ClassVar = (Parameter("EA", "N"), Parameter("kappa", "N", True), Parameter("alpha", ""),
-                            Parameter("beta", "", True), Parameter("alpha_T", ""))
-
-    def __post_init__(self):
-        self._validate()
-
-    def complex_stiffness(self, l, T, omega):
-        l, T = self._check(l, T)
-        w = angular_frequencies(omega)
-        z0, _ = _zpow(w, np.broadcast_to(self.alpha, l.shape))
-        z1, _ = _zpow(w, np.broadcast_to(self.alpha_T, l.shape))
-        return self._spring_tangent(l, T) + (self.kappa / l) * z0 + (self.beta * T / l) * z1
-
-    def complex_stiffness_derivatives(self, l, T, omega):
-        l, T = self._check(l, T)
-        w = angular_frequencies(omega)
-        z0, lz = _zpow(w, np.broadcast_to(self.alpha, l.shape))
-        z1, _ = _zpow(w, np.broadcast_to(self.alpha_T, l.shape))
-        inv = np.broadcast_to((1.0 / l).astype(complex), z0.shape).copy()
-        b = np.broadcast_to(self.beta, l.shape)
-        dT = inv + (b / l) * z1
-        return dT, np.stack([inv, z0 / l, (self.kappa / l) * z0 * lz, (T / l) * z1, (b * T / l) * z1 * lz])
-
-
 F = mm.Field
-mm.KINDS["ratio"] = ("", False)
-mm.KINDS["tension"] = ("N", True)
+mm.KINDS["tension"] = ("N", True)  # prototype only
 VARIANTS = {
     "sp-tscaled+visc": mm.Mechanism(
-        "sp-tscaled+visc", "TensionSpringpot",
+        "sp-tscaled+visc", "ScaledSpringpot",
         (F("EA", "stiffness", "shared"), F("kappa", "coefficient"), F("beta", "ratio", "shared"),
          F("alpha", "exponent", "shared")), viscosity=True,
         description="springpot tendons with a modulus kappa + beta·T (per family kappa), one exponent, cytoplasm"),
@@ -154,15 +121,17 @@ VARIANTS = {
         (F("EA", "stiffness", "shared"), F("kappa", "coefficient", "shared"), F("beta", "ratio", "shared"),
          F("alpha", "exponent", "shared"), F("T_alpha", "tension", "shared")), viscosity=True,
         description="springpot tendons, modulus kappa + beta·T, exponent alpha·exp(−T/T_alpha), cytoplasm"),
+    # the package's springpot-tension+visc with beta free
     "sp-two+visc": mm.Mechanism(
-        "sp-two+visc", "TwoSpringpot",
+        "sp-two+visc", "TensionSpringpot",
         (F("EA", "stiffness", "shared"), F("kappa", "coefficient", "shared"), F("alpha", "exponent", "shared"),
          F("beta", "ratio", "shared"), F("alpha_T", "exponent", "shared")), viscosity=True,
         description="passive springpot (kappa, alpha) + tension-scaled springpot (beta·T, alpha_T), cytoplasm"),
 }
 # the data bound beta only from below (a profile with beta fixed: BIC -145 at 1, -217 at 30, -260 at 100, -267.0 to
 # -267.5 from 300 to 3000): fix it at a physiological l/δ (tendon µm / cross-bridge nm scale), 1000
-for _n, _base in (("sp-two-b1000+visc", "sp-two+visc"), ("sp-texp-b1000+visc", "sp-texp+visc")):
+# (sp-two with beta held at 1000 is the package's springpot-tension+visc)
+for _n, _base in (("sp-texp-b1000+visc", "sp-texp+visc"),):
     _m = VARIANTS[_base]
     VARIANTS[_n] = mm.Mechanism(_n, _m.law, tuple(F("beta", "ratio", "fixed", value=1000.0) if f.law_parameter == "beta"
                                                  else f for f in _m.fields), viscosity=True,
@@ -170,14 +139,12 @@ for _n, _base in (("sp-two-b1000+visc", "sp-two+visc"), ("sp-texp-b1000+visc", "
 
 
 def register():
-    for cls in (TensionSpringpot, TensionExpSpringpot, TwoSpringpot):
+    for cls in (ScaledSpringpot, TensionExpSpringpot):
         setattr(laws, cls.__name__, cls)
-    mm.KINDS["ratio"] = ("", False)
-    mm.KINDS["tension"] = ("N", True)
     orig = mp._bounds_of
 
     def bounds_of(kind, S, w_m, G_loss):
-        if kind == "ratio":
+        if kind == "ratio":  # the prototype's runs (the package's default is 1e-3 to 1e5)
             return 1e-4, 1e4
         if kind == "tension":
             return 1e-6 * S, 1e4 * S
@@ -216,7 +183,7 @@ def main(argv):
 
     sm._fit = keep
     starts = int(argv[0]) if argv else 8
-    names = argv[1:] or ["springpot+visc", *VARIANTS]
+    names = argv[1:] or ["springpot+visc", *VARIANTS, "springpot-tension+visc"]
     ds = (bundled("stamenovic2002"), bundled("fabry2001"))
     fmax = float(ds[1].frequency_hz.max())
     holdout = (fmax / 100 * 1.0001, fmax)
