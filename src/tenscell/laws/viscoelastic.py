@@ -443,7 +443,8 @@ class TensionSpringpot(_DynamicSpring):
         return self._spring_tangent(l, T) + (self.kappa / l) * pw + (self.beta * T / l) * pw_T
 
     def complex_stiffness_derivatives(self, l, T, omega):
-        """``∂k*/∂T = (1 + beta·(iω·t1)^α_T)/l``; by EA, kappa, α, beta, α_T (module docstring of :class:`Springpot`)."""
+        """``∂k*/∂T = (1 + beta·(iω·t1)^α_T)/l``; by EA, kappa, α, beta, α_T in turn: ``1/l``, ``(iω·t1)^α/l``,
+        ``(kappa/l)(iω·t1)^α·log(iω·t1)``, ``(T/l)(iω·t1)^α_T``, ``(beta·T/l)(iω·t1)^α_T·log(iω·t1)``."""
         l, T = self._check(l, T)
         w = angular_frequencies(omega)
         pw, pw_T = self._powers(l, w)
