@@ -114,6 +114,23 @@ def test_jacobian_matches_finite_differences(name, joint):
     assert np.all(np.abs(J - Jfd).max(axis=0) <= 1e-5 * scale + 1e-9)
 
 
+
+def test_jacobian_with_a_free_tension_modulus_matches_finite_differences(joint):
+    """springpot-tension+visc holds beta; a user's mechanism that fits it (kind "ratio", default bounds 1e-3 to
+    1e5) gets its exact derivative too (∂k*/∂beta = (T/l)(iω·t1)^α_T, through the prestress as well)."""
+    base = MECHANISMS["springpot-tension+visc"]
+    from tenscell.fitting.mechanisms import Field
+
+    free = Mechanism("free-beta", base.law, tuple(Field("beta", "ratio", "shared") if f.law_parameter == "beta" else f
+                                                   for f in base.fields), viscosity=True)
+    pb = make_mechanism_problem(joint, free)
+    i = pb.names.index("beta")
+    assert np.exp([pb.lower[i], pb.upper[i]]) == pytest.approx([1e-3, 1e5])
+    theta = pb.initial_guess(np.random.default_rng(3))
+    J, Jfd = pb.jacobian(theta), pb.jacobian_fd(theta, 1e-5)
+    scale = np.maximum(np.abs(Jfd).max(axis=0), 1e-12)  # as in the test above
+    assert np.all(np.abs(J - Jfd).max(axis=0) <= 1e-5 * scale + 1e-9)
+
 def test_names_agree_with_the_quick_parser():
     from tenscell.cli.fit import MECHANISM_NAMES
 
