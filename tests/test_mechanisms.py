@@ -184,6 +184,12 @@ def test_tension_springpot_fits_both_bundled_data_sets(joint):
     assert r.value("alpha_T") < r.value("alpha")  # the exponent falls as the (active) prestress rises
     again = FittedMechanism.from_dict(json.loads(json.dumps(r.model().to_dict())))
     np.testing.assert_allclose(again.moduli(f, 1000.0), r.model().moduli(f, 1000.0), rtol=1e-12)
+    # beta is held, not fitted: the report says so and does not count it
+    from tenscell.reports.mechanisms import mechanism_fit_markdown
+
+    report = mechanism_fit_markdown(r)
+    assert "Held, not fitted" in report and "`beta` = 1000" in report and "7 free parameters" in report
+
 
 def test_a_fit_inside_the_noise_is_converged():
     values = {"EA_actin": 0.5, "EA_intermediate_filament": 0.05, "c_actin": 0.2, "c_intermediate_filament": 3.0}
