@@ -253,6 +253,7 @@ def test_study_mechanisms_cli(tmp_path):
     assert len(rows) == 3 and rows[0].startswith("mechanism,free_parameters")
     md = (out / "mechanisms.md").read_text()
     assert "## The answer" in md and "## The goals" in md and (out / "mechanisms.png").stat().st_size > 0
+    assert "generated from published laws" in md  # bundled data are not measurements, and the report says so
     assert cli_main(["study", "mechanisms", "bundled:fabry2001", "--mechanisms", "nope",
                      "--out", str(tmp_path / "n")]) == 2
 
