@@ -97,6 +97,8 @@ def test_reports_show_the_errors(prestress_fit, frequency_fit):
     lines = md.split("straight lines over the data's prestress range")[1].splitlines()
     fitted = next(line for line in lines if line.startswith("| fitted model"))
     assert fitted.count("+/-") == 4
+    data_row = next(line for line in lines if line.startswith("| data (least squares)"))
+    assert data_row.count("+/-") == 4  # the data's own line: ordinary least-squares errors
     row = next(line for line in md.split("for each prestress of the data")[1].splitlines() if line.startswith("| 0"))
     assert row.count("+/-") == 4 and "(of P/L²)" in row
     creep = md.split("## Creep of the fitted cell")[1].split("## ")[0] if "## Creep of the fitted cell" in md else \

@@ -36,11 +36,23 @@ def _parameter(result: FitResult, name: str, unit: str = "", digits: int = 4) ->
     raise ValueError(f"no parameter named {name!r}")
 
 
-def _data_slopes(data: RheologyData):
+def _data_slopes(data: RheologyData) -> list[str]:
+    """Least-squares lines of the data's G' and G'' against prestress: dG'/dP, G'(0), dG''/dP, G''(0) (Pa), each
+    with its ordinary least-squares standard error (from the scatter about the line; none for 2 points)."""
+    from scipy.stats import linregress
+
     assert data.prestress is not None, "a prestress sweep"
-    a1, b1 = np.polyfit(data.prestress, data.G_storage, 1)
-    a2, b2 = np.polyfit(data.prestress, data.G_loss, 1)
-    return float(a1), float(b1), float(a2), float(b2)
+    out = []
+    for G in (data.G_storage, data.G_loss):
+        if data.n < 3 or np.unique(data.prestress).size < 3:
+            a, b = np.polyfit(data.prestress, G, 1)
+            out += [plus_minus(float(a), None, "", "(a line through 2 prestresses)", 4),
+                    plus_minus(float(b), None, "", "(a line through 2 prestresses)", 4)]
+            continue
+        fit = linregress(data.prestress, G)
+        out += [plus_minus(float(fit.slope), float(fit.stderr), "", "", 4),
+                plus_minus(float(fit.intercept), float(fit.intercept_stderr), "", "", 4)]
+    return out
 
 
 def section_summary(result: FitResult, baseline=None) -> list[str]:
@@ -142,7 +154,7 @@ def section_shape(result: FitResult, baseline=None) -> list[str]:
 def _prestress_lines(result: FitResult, baseline, f, head: str) -> list[str]:
     """The straight lines of G', G'' against prestress: the data's, the fitted model's (with standard errors)."""
     key = f"prestress_lines[{f.index}]"
-    rows: list[tuple[str, ...]] = [("data", *(num(v) for v in _data_slopes(f.data))),
+    rows: list[tuple[str, ...]] = [("data (least squares)", *_data_slopes(f.data)),
                                    ("fitted model", *(result.derived.text(key, i) for i in range(4)))]
     if baseline is not None and not baseline.joint:
         rows.append(("homogeneous baseline", *(baseline.derived.text("prestress_lines[0]", i) for i in range(4))))
