@@ -45,6 +45,19 @@ def test_a_roller_supported_file_gives_the_api_structure(tmp_path):
     assert lin_free.K0.shape[0] == 18 and lin_free.basis is not None
 
 
+def test_show_counts_the_rigid_motions_supports_hold():
+    """A held direction removes one rigid-body motion at most: 3 + 2 + 1 hold all six, 3 + 1 leave two, none six
+    (what rigid_body_modes finds from the coordinates, independently)."""
+    from tenscell.model.formfinding import rigid_body_modes
+    from tenscell.summary import summarize
+
+    free = pin_jointed(snelson_prism(1.0, 1.0))
+    EA = np.where(np.array(free.families) == "strut", 1e4, 1.0)
+    for s, k in ((_rollers(), 0), (dataclasses.replace(free, fixed=(0,), supports=((1, "z"),)), 2), (free, 6)):
+        summary, cell, _ = summarize(s, P=1.0, EA=EA)
+        assert summary.rigid_body_dof == k == rigid_body_modes(cell.coords).shape[1], s.supports
+
+
 def test_supports_by_name_and_as_objects(tmp_path):
     obj = structure_to_dict(_rollers())
     for i, nd in enumerate(obj["nodes"]):
