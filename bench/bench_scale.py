@@ -2,45 +2,46 @@
 
 Each row builds a block lattice of 6-strut modules (``tenscell.model.lattice_cell``: node-sharing
 modules, assembled self-stress), linearizes it (with the positive-definiteness check) and computes
-G', G'' at 100 frequencies from 10⁻² to 10³ Hz — the library's own sparse path: CHOLMOD
-(cvxopt) factors K0 once for the check and K0 + σC0 once for a shifted Lanczos run. In the same
-process, the previous path ("old"): SuperLU with the hand-written nested-dissection ordering
-(``bench/_superlu_nd.py``) for the same two factorizations and the same Lanczos run.
+G', G'' at 100 frequencies from 10⁻² to 10³ Hz — the library's sparse path: CHOLMOD (cvxopt) on
+the geometric nested-dissection ordering (``tenscell.linear.ordering``, computed once per model),
+one factorization of K0 for the check and one of K0 + σC0 for a shifted Lanczos run. In the same
+process, on the same cell, the baseline: the previous path, the same two factorizations and the
+same Lanczos run with CHOLMOD's own ordering (AMD).
 
-Printed: times (build, linearize+check, moduli, total), factorizations per model, the old/new
-ratio of linearize+moduli, the largest difference of the answers, the growth exponent of the
-library's total time for 2·10³–10⁵ coordinates, the 10⁴-node lattice's time, and creep plus
-relaxation of the 1,896-coordinate lattice against the old dense path (generalized eigensolves of
-the dense matrices: one for the creep spectrum, one again inside stress_relaxation).
+Printed: times (build, linearize+check, moduli, total), fill of the factor of K0 with each ordering,
+the baseline/library ratio of linearize+moduli, the Lanczos stage against its memory-streaming floor
+(every step reads the factor twice: 2 × 8 bytes × fill at the bandwidth measured in this run), the
+largest difference of the answers, the growth exponent of the library's total time for 2·10³–10⁵
+coordinates, the 10⁴-node lattice's time, the peak memory of the process after the 10⁵-coordinate
+lattice, and creep plus relaxation of the 1,896-coordinate lattice against the old dense path
+(generalized eigensolves of the dense matrices: one for the creep spectrum, one again inside
+stress_relaxation).
 
-Usage: python bench/bench_scale.py [--full]   (--full adds the 1.1·10⁵-coordinate lattice, ~2 min)
+Usage: python bench/bench_scale.py [--quick]   (--quick leaves out the 1.1·10⁵-coordinate lattice)
 """
 from __future__ import annotations
 
 import argparse
 import os
+import resource
+import subprocess
 import sys
 import time
 
 import numpy as np
 import scipy.linalg
-import scipy.sparse as sp
 
 import tenscell
 import tenscell.linear.modal as modal
+import tenscell.linear.ordering as ordering
 from tenscell import _threads
 from tenscell.io.structure_files import member_values
-from tenscell.linear.krylov import LanczosRun, converge, default_shift
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import _superlu_nd  # noqa: E402  (the previous factorization, kept as the baseline)
 
 SHAPES = [(5, 4, 4), (6, 6, 6), (8, 8, 8), (11, 11, 12), (13, 13, 13)]
-FULL_SHAPES = [(17, 17, 17)]
+LARGE_SHAPES = [(17, 17, 17)]  # 106,641 coordinates
 HEADLINE = (11, 11, 12)  # 10 934 nodes
 CREEP_SHAPE = (5, 4, 4)  # 1 896 coordinates
 F = np.logspace(-2, 3, 100)
-W = 2 * np.pi * F
 P, C = 1000.0, 1.0
 
 
@@ -54,48 +55,70 @@ class _Counter:
     def __init__(self):
         self.n, self.real = 0, modal.factorize_spd
 
-    def __call__(self, A, what="the matrix"):
+    def __call__(self, A, what="the matrix", perm=None):
         self.n += 1
-        return self.real(A, what)
+        return self.real(A, what, perm)
 
 
-def _old_moduli(cell, lin):
-    """The previous path: SuperLU + nested dissection for the check and for K0 + σC0, the same Lanczos."""
-    pts = _superlu_nd.coordinate_locations(cell.coords)
-    K, Cm = sp.csc_matrix(lin.K0), sp.csc_matrix(lin.C0)
+def bandwidth() -> float:
+    """Read bandwidth of this machine (bytes/s) on an array far larger than the caches: best of 5 sums."""
+    a = np.ones(32_000_000)
+    best = np.inf
+    for _ in range(5):
+        t = time.perf_counter()
+        a.sum()
+        best = min(best, time.perf_counter() - t)
+    return a.nbytes / best
+
+
+def _linearize_moduli(cell):
     t0 = time.perf_counter()
-    _superlu_nd.factorize_spd(K, what="K0", points=pts)  # linearize(check=True)
+    lin = tenscell.linearize(cell, P=P, EA=_EA(cell), c=C)
     t1 = time.perf_counter()
-    sigma = default_shift(F)
-    Ks = (K + sigma * Cm).tocsc()
-    factor = _superlu_nd.factorize_spd(Ks, points=pts)
-    run = LanczosRun(factor, Ks.tocsr(), Cm.tocsr(), -lin.H0, sigma, min(cell.n, 2000))
-    converge(run, lambda r: float(r.compliance(1j * W)[1].max()), 1e-12, "compliance")
-    J = run.compliance(1j * W)[0]
+    Gp, Gpp = tenscell.moduli(lin, F)
     t2 = time.perf_counter()
-    return J, t1 - t0, t2 - t1, factor.fill
+    return lin, Gp + 1j * Gpp, t1 - t0, t2 - t1
 
 
-def run(shape):
+def _lanczos(lin):
+    """Lanczos steps the moduli took (0 for a dense model)."""
+    runs = [r for rs in lin.pencil._runs.values() for r in rs]
+    return sum(r.steps for r in runs)
+
+
+def run(shape, bw):
     t0 = time.perf_counter()
     cell = tenscell.model.lattice_cell(*shape)
-    t1 = time.perf_counter()
+    build = time.perf_counter() - t0
     count = _Counter()
     modal.factorize_spd = count
     try:
-        lin = tenscell.linearize(cell, P=P, EA=_EA(cell), c=C)
-        t2 = time.perf_counter()
-        Gp, Gpp = tenscell.moduli(lin, F)
-        t3 = time.perf_counter()
+        lin, G, t_lin, t_mod = _linearize_moduli(cell)
     finally:
         modal.factorize_spd = count.real
-    G = Gp + 1j * Gpp
-    row = {"shape": shape, "nodes": cell.structure.n_nodes, "dof": cell.n, "build": t1 - t0, "linearize": t2 - t1,
-           "moduli": t3 - t2, "total": t3 - t0, "factorizations": count.n,
-           "steps": max((r.steps for runs in lin.pencil._runs.values() for r in runs), default=0)}
-    J_old, t_check, t_mod, fill = _old_moduli(cell, lin)
-    row.update(old_linearize=t_check, old_moduli=t_mod, old_fill=fill,
-               diff=float(np.max(np.abs(modal.modulus(J_old, lin.L) - G) / np.abs(G))))
+    steps = _lanczos(lin)
+    solve = floor = float("nan")
+    if lin.pencil.sparse:  # the Lanczos stage's unit of work: one solve with the shifted factor, timed alone
+        factor = lin.pencil.factor(next(iter(lin.pencil._runs)))
+        b = np.ones(factor.n)
+        t = time.perf_counter()
+        for _ in range(5):
+            factor.solve(b)
+        solve = (time.perf_counter() - t) / 5
+        floor = 2 * 8 * factor.fill / bw
+    fill = lin.pencil.cholesky.fill if lin.pencil.sparse else 0
+    row = {"shape": shape, "nodes": cell.structure.n_nodes, "dof": cell.n, "build": build, "linearize": t_lin,
+           "moduli": t_mod, "total": build + t_lin + t_mod, "factorizations": count.n, "steps": steps, "fill": fill,
+           "solve": solve, "solve_floor": floor, "ordered": lin.pencil.ordering is not None}
+    # the baseline: the previous path, CHOLMOD's AMD, on the same cell
+    saved = ordering.MIN_SIZE
+    ordering.MIN_SIZE = 10 ** 12
+    try:
+        lin_b, G_b, b_lin, b_mod = _linearize_moduli(cell)
+    finally:
+        ordering.MIN_SIZE = saved
+    row.update(base_linearize=b_lin, base_moduli=b_mod, base_fill=lin_b.pencil.cholesky.fill if lin.pencil.sparse else 0,
+               diff=float(np.max(np.abs(G_b - G) / np.abs(G))))
     return row
 
 
@@ -120,48 +143,86 @@ def creep_relaxation():
             "relaxation_times": rel.times.size, "error_estimate": spec.error_estimate}
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--full", action="store_true", help="add the 1.1e5-coordinate lattice (about 2 minutes more)")
-    args = ap.parse_args(argv)
-    print(f"# tenscell bench_scale: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start; "
-          f"BLAS threads {_threads.thread_count()}; 100 frequencies 1e-2..1e3 Hz; EA = 1 N (tendons), 1e3 N (struts), "
-          f"c = {C:g} N·s/m, P = {P:g} N")
-    head = (f"{'modules':>9} {'nodes':>7} {'dof':>7} {'build':>7} {'linear.':>7} {'moduli':>7} {'total':>7} "
-            f"{'fact.':>5} {'steps':>5} {'old lin':>8} {'old mod':>8} {'old/new':>8} {'max|ΔG|/G':>10}")
-    print(head)
-    print(f"{'':>9} {'':>7} {'':>7} {'(s)':>7} {'(s)':>7} {'(s)':>7} {'(s)':>7} {'':>5} {'':>5} {'(s)':>8} {'(s)':>8}")
-    rows = []
+def memory_probe(shape) -> None:
+    """Build, linearize and compute the moduli of one lattice in this (fresh) process; print its peak memory."""
     with _threads.limited():
-        run((2, 2, 2))  # warm-up: first-call imports and caches, not timed
-        for shape in SHAPES + (FULL_SHAPES if args.full else []):
-            r = run(shape)
-            rows.append(r)
-            new, old = r["linearize"] + r["moduli"], r["old_linearize"] + r["old_moduli"]
-            print(f"{'x'.join(map(str, shape)):>9} {r['nodes']:7d} {r['dof']:7d} {r['build']:7.2f} {r['linearize']:7.2f} "
-                  f"{r['moduli']:7.2f} {r['total']:7.2f} {r['factorizations']:5d} {r['steps']:5d} "
-                  f"{r['old_linearize']:8.2f} {r['old_moduli']:8.2f} {old / new:7.2f}x {r['diff']:10.1e}", flush=True)
-        cr = creep_relaxation()
-    print("# linear.: linearize with the positive-definiteness check (CHOLMOD factor of K0); moduli: the factor of "
-          "K0 + σC0 and the Lanczos run; fact.: sparse factorizations per model")
-    print("# old: SuperLU + nested dissection for the same two factorizations and the same Lanczos run; "
-          "old/new: ratio of linearize + moduli; max|ΔG|/G: the two answers' largest relative difference")
+        cell = tenscell.model.lattice_cell(*shape)
+        _linearize_moduli(cell)
+    print(f"{cell.n} {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0:.0f}")
+
+
+def peak_memory(shape) -> tuple[int, float]:
+    """(coordinates, peak MB) of the library's path on one lattice, measured in a fresh process: the benchmark's
+    own process keeps the high-water mark of everything run before (the AMD baselines included)."""
+    out = subprocess.run([sys.executable, os.path.abspath(__file__), "--memory-probe", "x".join(map(str, shape))],
+                         capture_output=True, text=True, check=True).stdout.split()
+    return int(out[0]), float(out[1])
+
+
+def _print_row(r):
+    new, base = r["linearize"] + r["moduli"], r["base_linearize"] + r["base_moduli"]
+    print(f"{'x'.join(map(str, r['shape'])):>9} {r['nodes']:7d} {r['dof']:7d} {r['build']:7.2f} {r['linearize']:7.2f} "
+          f"{r['moduli']:7.2f} {r['total']:7.2f} {r['factorizations']:5d} {r['steps']:5d} "
+          f"{r['fill'] / 1e6:7.2f} {r['base_fill'] / 1e6:8.2f} {r['base_linearize'] + r['base_moduli']:8.2f} "
+          f"{base / new:7.2f}x {r['solve'] * 1e3:7.1f} {r['solve'] / r['solve_floor']:6.1f}x {r['diff']:10.1e}",
+          flush=True)
+
+
+def _summary(rows, cr):
     big = rows[-1]
-    print(f"ratio old/new (linearize + moduli) at dof={big['dof']}: "
-          f"{(big['old_linearize'] + big['old_moduli']) / (big['linearize'] + big['moduli']):.2f}x; "
-          f"end to end (with the build): {(big['build'] + big['old_linearize'] + big['old_moduli']) / big['total']:.2f}x")
+    print(f"ratio AMD/nested dissection (linearize + moduli) at dof={big['dof']}: "
+          f"{(big['base_linearize'] + big['base_moduli']) / (big['linearize'] + big['moduli']):.2f}x; fill "
+          f"{big['base_fill'] / big['fill']:.2f}x less")
     fit = [r for r in rows if r["dof"] >= 1500]
     expo = np.polyfit(np.log([r["dof"] for r in fit]), np.log([r["total"] for r in fit]), 1)[0]
-    expo_old = np.polyfit(np.log([r["dof"] for r in fit]),
-                          np.log([r["build"] + r["old_linearize"] + r["old_moduli"] for r in fit]), 1)[0]
     for r in rows:
         if r["shape"] == HEADLINE:
             print(f"lattice nodes={r['nodes']} dof={r['dof']} frequencies={len(F)} seconds={r['total']:.2f} "
-                  f"(issue 21 goal <= 1.5 s build included, quiet machine; issue 9: <= 3 s)")
-    print(f"growth exponent, dof {fit[0]['dof']}..{fit[-1]['dof']}: {expo:.2f} (old path {expo_old:.2f}; issue 21 goal <= 1.2; issue 9: <= 1.4)")
+                  f"(build {r['build']:.2f} + linearize {r['linearize']:.2f} + moduli {r['moduli']:.2f}; "
+                  "issue 21 goal <= 1.5 s on a quiet machine)")
+            print(f"Lanczos solve at dof={r['dof']}: {r['solve'] * 1e3:.1f} ms per step, "
+                  f"{r['solve'] / r['solve_floor']:.1f}x its streaming floor "
+                  f"({r['solve_floor'] * 1e3:.1f} ms: the factor read twice at the measured bandwidth); "
+                  f"{r['steps']} steps")
+    print(f"growth exponent, dof {fit[0]['dof']}..{fit[-1]['dof']}: {expo:.2f} (issue 21 goal <= 1.2)")
+    dof, mb = peak_memory(big["shape"])
+    print(f"peak memory of a fresh process that builds, linearizes and computes G', G'' of the {dof}-coordinate "
+          f"lattice: {mb:.0f} MB (issue 21 goal <= 2048 MB at 1e5 coordinates)")
     print(f"creep + relaxation, {cr['dof']}-coordinate lattice: library {cr['new']:.3f} s (sparse, "
           f"{cr['modes']} Ritz modes, estimated error {cr['error_estimate']:.1e}), old dense path {cr['old']:.2f} s: "
           f"ratio {cr['old'] / cr['new']:.0f}x (goal >= 30x); max |ΔJ(t)|/J(t) {cr['diff']:.1e}")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="leave out the 1.1e5-coordinate lattice (about 40 s less)")
+    ap.add_argument("--memory-probe", metavar="NXxNYxNZ", help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.memory_probe:
+        memory_probe(tuple(int(k) for k in args.memory_probe.split("x")))
+        return 0
+    bw = bandwidth()
+    print(f"# tenscell bench_scale: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start; "
+          f"BLAS threads {_threads.thread_count()}; read bandwidth {bw / 1e9:.1f} GB/s; 100 frequencies "
+          f"1e-2..1e3 Hz; EA = 1 N (tendons), 1e3 N (struts), c = {C:g} N·s/m, P = {P:g} N")
+    print(f"{'modules':>9} {'nodes':>7} {'dof':>7} {'build':>7} {'linear.':>7} {'moduli':>7} {'total':>7} "
+          f"{'fact.':>5} {'steps':>5} {'fill ND':>7} {'fill AMD':>8} {'AMD l+m':>8} {'AMD/ND':>8} {'solve':>7} "
+          f"{'/floor':>7} {'max|ΔG|/G':>10}")
+    print(f"{'':>9} {'':>7} {'':>7} {'(s)':>7} {'(s)':>7} {'(s)':>7} {'(s)':>7} {'':>5} {'':>5} {'(1e6)':>7} "
+          f"{'(1e6)':>8} {'(s)':>8} {'':>8} {'(ms)':>7}")
+    rows = []
+    with _threads.limited():
+        run((2, 2, 2), bw)  # warm-up: first-call imports and caches, not timed
+        for shape in SHAPES + ([] if args.quick else LARGE_SHAPES):
+            rows.append(run(shape, bw))
+            _print_row(rows[-1])
+        cr = creep_relaxation()
+    print("# linear.: linearize with the positive-definiteness check (CHOLMOD factor of K0); moduli: the factor of "
+          "K0 + σC0 and the Lanczos run; fact.: sparse factorizations per model; fill: nonzeros of the factor of K0")
+    print("# AMD: the previous path (CHOLMOD's own ordering) for the same two factorizations and the same Lanczos "
+          "run; AMD/ND: its linearize + moduli over the library's; solve: one solve with the shifted factor; "
+          "/floor: over 2 × 8 B × fill / bandwidth; max|ΔG|/G: the two answers' largest relative difference")
+    _summary(rows, cr)
     return 0
 
 

@@ -16,7 +16,7 @@ DAMPING_MODES = ("uniform", "per-family")
 #: a test checks they agree)
 MECHANISM_NAMES = ("voigt-per-tendon", "voigt-compact", "voigt-compact+visc", "voigt-lognormal-damping",
                    "voigt-lognormal-stiffness", "voigt-trap-damping+visc", "maxwell", "maxwell+visc", "sls",
-                   "sls-trap+visc", "springpot", "springpot+visc")
+                   "sls-trap+visc", "springpot", "springpot+visc", "springpot-tension+visc")
 
 #: the files of one fit: extension -> name in `tenscell fit --out`
 FIT_FILES = {"json": "fit.json", "csv": "fit.csv", "md": "report.md", "png": "fit.png"}

@@ -29,6 +29,7 @@ from .modal import (
     NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
 )
 from .._threads import hot_path
+from .ordering import coordinate_locations
 from .rigid import deformation_basis, unresisted_share
 
 __all__ = [
@@ -138,9 +139,19 @@ class LinearModel:
     def pencil(self) -> Pencil:
         """The pencil (K0, C0) with its decompositions, each computed once for this model (:mod:`tenscell.linear.modal`);
         for a free-standing structure the pencil on the complement of its rigid-body motions (``basis``)."""
+        points = self._locations() if sp.issparse(self.K0) and self.basis is None else None
         pencil = Pencil(self.K0, self.C0, -np.asarray(self.H0), self.D0,
-                        describe=f"{self.cell.describe()} at P={self.P:.6g}", hint=_STABILITY_HINT)
+                        describe=f"{self.cell.describe()} at P={self.P:.6g}", hint=_STABILITY_HINT, points=points)
         return pencil if self.basis is None else pencil.restricted(self.basis)
+
+    def _locations(self) -> np.ndarray:
+        """A location (m) for each row of K0: the coordinates' nodes, and each internal variable's tendon midpoint."""
+        x = coordinate_locations(self.cell.coords)
+        if self.realization is None:
+            return x
+        s = self.cell.structure
+        ends = np.asarray(s.tendons, dtype=np.int64)[np.asarray(self.realization.tendon)]
+        return np.vstack([x, s.nodes[ends].mean(axis=1)])
 
     @property
     def notes(self) -> tuple[str, ...]:

@@ -62,6 +62,7 @@ import scipy.sparse.linalg as spla
 from ..model.equilibrium import weighted_gram
 from .krylov import DEFAULT_BAND_HZ, LanczosRun, converge, default_shift
 from .._errors import NotPositiveDefiniteError
+from . import ordering
 from .sparse import factorize_spd
 from .._threads import hot_path
 
@@ -193,7 +194,7 @@ def _ritz_is_zero(tau: np.ndarray) -> np.ndarray:
 
 
 # ---- positive definiteness: one criterion ---------------------------------------------------------
-def positive_definite_factor(M, *, what: str = "K0", describe: str = "the model", hint: str = ""):
+def positive_definite_factor(M, *, what: str = "K0", describe: str = "the model", hint: str = "", perm=None):
     """The Cholesky factor of a symmetric matrix, which exists exactly when it is positive definite.
 
     The one criterion of positive definiteness in tenscell (a stable
@@ -213,10 +214,13 @@ def positive_definite_factor(M, *, what: str = "K0", describe: str = "the model"
         If ``M`` is not positive definite; the message names ``what`` and
         ``describe`` and gives the smallest eigenvalue (dense) or the failed
         pivot's column (sparse), then ``hint``.
+
+    ``perm`` (sparse only) is the fill-reducing ordering to factor with
+    (default CHOLMOD's AMD).
     """
     if sp.issparse(M):
         try:
-            return factorize_spd(M, what=what)
+            return factorize_spd(M, what=what, perm=perm)
         except NotPositiveDefiniteError as err:
             detail = f"a pivot of its sparse Cholesky factorization is <= 0, at column {err.column}"
     else:
@@ -251,10 +255,16 @@ class Pencil:
         What the model is, for messages (e.g. ``"paper cell (...) at P=1000"``).
     hint : str
         Advice appended to the not-positive-definite message.
+    points : ndarray, shape (n, 3), optional
+        A location (m) for each coordinate. For a large sparse pencil they give
+        the fill-reducing ordering (:mod:`tenscell.linear.ordering`) that every
+        factorization of the pencil shares; without them CHOLMOD orders each
+        factorization by AMD.
     """
 
-    def __init__(self, K0, C0, load, probe, *, describe: str = "the model", hint: str = ""):
+    def __init__(self, K0, C0, load, probe, *, describe: str = "the model", hint: str = "", points=None):
         self.K0, self.C0 = K0, C0
+        self.points = points
         self.load = np.asarray(load, dtype=float)
         self.probe = np.asarray(probe, dtype=float)
         self.describe, self.hint = describe, hint
@@ -280,7 +290,21 @@ class Pencil:
         NotPositiveDefiniteError
             If K0 is not positive definite.
         """
-        return positive_definite_factor(self.K0, what="K0", describe=self.describe, hint=self.hint)
+        return positive_definite_factor(self.K0, what="K0", describe=self.describe, hint=self.hint,
+                                        perm=self.ordering)
+
+    @cached_property
+    def ordering(self) -> np.ndarray | None:
+        """The fill-reducing permutation shared by the factors of K0 and of every ``K0 + σC0`` (sparse), or None.
+
+        Geometric nested dissection on the union of the patterns of K0 and C0
+        when the pencil is sparse, has :data:`~tenscell.linear.ordering.MIN_SIZE`
+        coordinates or more and knows their locations; None (CHOLMOD's AMD) otherwise.
+        """
+        if not self.sparse or self.points is None or self.n < ordering.MIN_SIZE:
+            return None
+        pattern = abs(sp.csr_matrix(self.K0)) + abs(sp.csr_matrix(self.C0))
+        return ordering.nested_dissection(pattern, self.points)
 
     def check(self) -> None:
         """Raise :class:`NotPositiveDefiniteError` unless K0 is positive definite (factors K0 once)."""
@@ -397,7 +421,7 @@ class Pencil:
         if shift not in self._factors:
             Ks = self.shifted(shift).tocsc()
             try:
-                self._factors[shift] = factorize_spd(Ks, what=f"K0 + {shift:g}·C0")
+                self._factors[shift] = factorize_spd(Ks, what=f"K0 + {shift:g}·C0", perm=self.ordering)
             except NotPositiveDefiniteError as err:
                 raise NotPositiveDefiniteError(
                     f"K0 + {shift:g}·C0 is not positive definite for {self.describe} (a pivot of its sparse Cholesky "

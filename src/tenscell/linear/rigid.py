@@ -22,19 +22,10 @@ from .modal import complement_basis
 __all__ = ["deformation_basis", "unresisted_share", "solve_full", "resolvent_full"]
 
 
-def _held_by_supports(structure) -> bool:
-    """Three fixed nodes not on one line hold every rigid-body motion (nothing to remove, nothing to compute)."""
-    fixed = structure.nodes[list(structure.fixed)]
-    if len(fixed) < 3:
-        return False
-    span = fixed - fixed[0]
-    return bool(np.linalg.matrix_rank(span, tol=1e-9 * max(float(np.abs(span).max()), 1e-300)) >= 2)
-
-
 def deformation_basis(cell) -> np.ndarray | None:
     """Orthonormal basis ``N`` (n, n − k) of the coordinates orthogonal to the cell's ``k`` rigid-body motions,
     or None when its supports hold it (k = 0)."""
-    if _held_by_supports(cell.structure):
+    if cell.structure.held_by_fixed_nodes:  # three fixed nodes not on one line: nothing to remove
         return None
     from ..model.formfinding import rigid_body_modes
 

@@ -1,21 +1,21 @@
 """Sparse Cholesky factorization for large structures (internal): CHOLMOD, through cvxopt.
 
-``P A Pᵀ = L Lᵀ`` by CHOLMOD's supernodal Cholesky with its fill-reducing
-ordering (AMD). A symmetric matrix is positive definite exactly when this
+``P A Pᵀ = L Lᵀ`` by CHOLMOD's supernodal Cholesky, with a given fill-reducing
+ordering (the geometric nested dissection of :mod:`tenscell.linear.ordering`
+for large structures) or CHOLMOD's own (AMD). A symmetric matrix is positive definite exactly when this
 factorization exists, so one factorization both proves positive definiteness
 and serves every solve (the Lanczos runs of :mod:`tenscell.linear.krylov`).
 
-Why CHOLMOD: measured on this project's 3D lattices (``bench/bench_scale.py``),
-analysis + factorization + one solve of the 11,520-coordinate stiffness takes
-0.17–0.27 s, against 0.65–0.94 s for SuperLU with a hand-written
-nested-dissection ordering and 0.8–1.0 s for ``cholespy`` (all three agree to
-1e-14); on the 32,076-coordinate lattice 0.8–1.0 s against 2.9–4.0 s and
-4.0–6.5 s. cvxopt ships CHOLMOD in binary wheels, so it is a plain dependency.
-The SuperLU + nested-dissection path it replaces lives on in
-``bench/_superlu_nd.py`` as the benchmark's baseline.
+Why CHOLMOD: measured on this project's 3D lattices (``bench/bench_scale.py``
+before this ordering existed), analysis + factorization + one solve of the
+11,520-coordinate stiffness took 0.17–0.27 s against 0.65–0.94 s for SuperLU
+with a hand-written nested-dissection ordering and 0.8–1.0 s for
+``cholespy`` (all three agree to 1e-14). cvxopt ships CHOLMOD in binary
+wheels; it is the ``large`` extra (structures above 1,500 coordinates).
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 from functools import cached_property
 
 import numpy as np
@@ -38,9 +38,10 @@ class SparseCholesky:
     right-hand sides, one vector or an ``(n, k)`` block.
     """
 
-    def __init__(self, factor, n: int, matrix=None):
+    def __init__(self, factor, n: int, matrix=None, perm=None):
         self._factor = factor
         self._matrix = matrix
+        self._perm = perm
         self.n = n
 
     def solve(self, b: np.ndarray) -> np.ndarray:
@@ -60,7 +61,7 @@ class SparseCholesky:
         from cvxopt import cholmod
 
         # CHOLMOD converts a factor in place to hand it out, so read it from a throwaway one
-        F = cholmod.symbolic(self._matrix)
+        F = _symbolic(self._matrix, self._perm)
         cholmod.numeric(self._matrix, F)
         return len(cholmod.getfactor(F))
 
@@ -73,7 +74,40 @@ def _to_cvxopt(A):
     return spmatrix(low.data.astype(float), low.row.astype(np.int64), low.col.astype(np.int64), (n, n))
 
 
-def factorize_spd(A, what: str = "the matrix") -> SparseCholesky:
+@contextmanager
+def _given_ordering_only():
+    """CHOLMOD told to use the caller's permutation as it is.
+
+    By default CHOLMOD compares a given permutation with AMD and keeps the one
+    with less fill, which on some matrices discards the nested dissection. cvxopt
+    reads its module-level ``options`` at each call, so the setting is made for
+    this call and restored (tenscell factors in one thread per process).
+    """
+    from cvxopt import cholmod
+
+    before = cholmod.options.get("nmethods")
+    cholmod.options["nmethods"] = 1
+    try:
+        yield
+    finally:
+        if before is None:
+            del cholmod.options["nmethods"]
+        else:
+            cholmod.options["nmethods"] = before
+
+
+def _symbolic(M, perm):
+    """CHOLMOD's symbolic analysis of M with the permutation ``perm`` (or AMD when None)."""
+    cvx = require("cvxopt")
+    from cvxopt import cholmod
+
+    if perm is None:
+        return cholmod.symbolic(M)
+    with _given_ordering_only():
+        return cholmod.symbolic(M, p=cvx.matrix(np.asarray(perm, dtype=int), tc="i"))
+
+
+def factorize_spd(A, what: str = "the matrix", perm: np.ndarray | None = None) -> SparseCholesky:
     """Cholesky-factor a sparse symmetric matrix, proving it positive definite.
 
     Parameters
@@ -82,6 +116,10 @@ def factorize_spd(A, what: str = "the matrix") -> SparseCholesky:
         Symmetric; only its lower triangle is read.
     what : str
         Name of the matrix in the error message.
+    perm : ndarray of int, shape (n,), optional
+        Fill-reducing permutation (row ``i`` of the factored matrix is row
+        ``perm[i]`` of A), e.g. :func:`tenscell.linear.ordering.nested_dissection`;
+        default CHOLMOD's AMD.
 
     Raises
     ------
@@ -92,7 +130,7 @@ def factorize_spd(A, what: str = "the matrix") -> SparseCholesky:
 
     n = A.shape[0]
     M = _to_cvxopt(A)
-    F = cholmod.symbolic(M)
+    F = _symbolic(M, perm)
     try:
         cholmod.numeric(M, F)
     except ArithmeticError as err:
@@ -101,4 +139,4 @@ def factorize_spd(A, what: str = "the matrix") -> SparseCholesky:
             f"{what} is not positive definite (its Cholesky factorization meets a pivot <= 0 at column {col} "
             "of the reordered matrix)", col,
         ) from None
-    return SparseCholesky(F, n, M)
+    return SparseCholesky(F, n, M, perm)

@@ -173,12 +173,13 @@ def make_coordinates(structure: Structure, kind: str = "angles") -> Coordinates:
     free = np.array([[a not in held.get(int(p), "") for a in "xyz"] for p in points], dtype=bool).reshape(-1, 3)
     sizes = free.sum(axis=1)
     pstart = pos + np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(int) if points.size else np.zeros(0, int)
-    for i, p in enumerate(points.tolist()):
-        node_index[p, : sizes[i]] = pstart[i] + np.arange(sizes[i])
-        q0 += s.nodes[p][free[i]].tolist()
-        labels += [f"{x}(node {p})" for x, f in zip("XYZ", free[i]) if f]
+    # point nodes, vectorized (10⁴-node lattices): node p's free axes take pstart[p], pstart[p] + 1, ...
+    first = np.arange(3) < sizes[:, None]
+    node_index[np.repeat(points, sizes), np.nonzero(first)[1]] = pos + np.arange(int(sizes.sum()))
+    q0a = np.concatenate([np.array(q0, dtype=float), s.nodes[points][free]])
+    axis_of = np.nonzero(free)
+    labels += [f"{'XYZ'[a]}(node {p})" for p, a in zip(points[axis_of[0]].tolist(), axis_of[1].tolist())]
     pos += int(sizes.sum())
-    q0a = np.array(q0, dtype=float)
     tendon_nodes = np.asarray(s.tendons, dtype=int).reshape(-1, 2)
     for a in (q0a, node_index, starts, anchored, frame, pstart, tendon_nodes, free):
         a.setflags(write=False)

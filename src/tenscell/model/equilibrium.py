@@ -151,10 +151,12 @@ def assemble_hessian(geom: MemberGeometry, weights: np.ndarray, sparse: bool | N
     if used.size < index.shape[1]:  # block slots no member uses (e.g. a point node's two spare ones): drop them first
         index, hess = index[:, used], hess[:, used[:, None], used]
     m, w = index.shape
-    blocks = hess * np.asarray(weights, dtype=float)[:, None, None]
-    r = np.broadcast_to(index[:, :, None], (m, w, w)).ravel()
-    c = np.broadcast_to(index[:, None, :], (m, w, w)).ravel()
-    data = blocks.ravel()
+    data = (hess * np.asarray(weights, dtype=float)[:, None, None]).ravel()
+    # entry (j, a, b) sits at (index[j, a], index[j, b]); int32 and contiguous repeats: half the memory traffic
+    # of raveling broadcast int64 views (10⁴-node lattices: 2·10⁶ entries)
+    idx = index.astype(np.int32) if geom.n < 2 ** 31 else index
+    r = np.repeat(idx, w, axis=1).ravel()
+    c = np.tile(idx, (1, w)).ravel()
     if np.any(index < 0):
         keep = (r >= 0) & (c >= 0)
         r, c, data = r[keep], c[keep], data[keep]

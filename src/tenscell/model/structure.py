@@ -21,6 +21,7 @@ Conventions
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -356,6 +357,18 @@ class Structure:
             return np.zeros(0)
         s = np.asarray(self.struts)
         return np.linalg.norm(self.nodes[s[:, 1]] - self.nodes[s[:, 0]], axis=1)
+
+    @cached_property
+    def held_by_fixed_nodes(self) -> bool:
+        """Whether three fixed nodes not on one line hold every rigid-body motion (computed once: every
+        linearization asks)."""
+        fixed = self.nodes[list(self.fixed)]
+        if len(fixed) < 3:
+            return False
+        span = fixed - fixed[0]
+        far = span[int(np.argmax(np.einsum("ij,ij->i", span, span)))]
+        size = float(far @ far)
+        return bool(size > 0 and np.linalg.norm(np.cross(span, far), axis=1).max() > 1e-9 * size)
 
     def is_anchored(self, k: int) -> bool:
         """Whether strut ``k`` is anchored by a ball joint at its tail."""
