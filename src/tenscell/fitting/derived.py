@@ -1,0 +1,141 @@
+"""Numbers a fit's report derives from the fitted parameters, each with its standard error.
+
+The report of a fit shows more than the parameters: the model's log-log
+slopes, its straight lines against prestress, the prestress elasticities and
+share, the predicted creep and its exponent, the spread of the stiffnesses.
+Each is a function ``g(θ)`` of the fitted ln-parameters, so each has the
+first-order (delta-method) standard error
+
+    se(g)² = ∇gᵀ Σ ∇g,    Σ = σ²·(JᵀJ)⁺,
+
+with Σ the covariance of the analysed ln-parameters that also gives their own
+standard errors (:meth:`tenscell.fitting.identifiability.Identifiability.propagate`).
+The gradient ``∇g`` is a **central finite difference** in each analysed
+ln-parameter with step :data:`STEP` (every quantity is recomputed at ``θ ± h eₖ``
+by the same functions the report uses; no second copy of the physics). A
+quantity the data do not determine (its gradient reaches a combination the data
+do not see), or whose errors cannot be estimated (σ unknown), has no standard
+error and says so ("not determined"). With the strut-length gauge removed L is
+held at its fitted value, as for the parameters, and a gauge-dependent quantity
+(a prestress in N, a stiffness in N) carries the error of its gauge-invariant
+combination (P/L², EA/L²), which its note names.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .._results import plus_minus
+
+if TYPE_CHECKING:
+    from .result import FitResult
+
+__all__ = ["DerivedQuantities", "derived_quantities", "STEP"]
+
+#: step (ln units: 1e-4 is a 0.01 % change) of the central differences. The truncation error is about
+#: STEP² ≈ 1e-8 of the gradient, the rounding error about 1e-13/STEP ≈ 1e-9 (the moduli come from
+#: eigensolves good to ~1e-13): both far below any standard error worth printing
+STEP = 1e-4
+
+#: quantities in N at the fitted L and the gauge-invariant combination whose error they carry
+_GAUGE_NOTES = {"reference_prestress_N": "(of P/L²)", "creep_prestress_N": "(of P/L²)",
+                "stiffness_spread": "(of EA/L²)"}
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class DerivedQuantities:
+    """Derived numbers with their standard errors (delta method, finite-difference gradients).
+
+    Attributes
+    ----------
+    values : dict of str to ndarray
+        Each quantity's values at the fitted parameters (for the report's, keys and units in
+        :func:`tenscell.fitting.result.report_quantities`).
+    stderr : dict of str to ndarray
+        Their standard errors in the same units; NaN where not determined.
+    notes : dict of str to tuple of str
+        Per value: "" or why there is no error / which combination the error is of.
+    """
+
+    values: dict
+    stderr: dict
+    notes: dict
+
+    def error(self, key: str, i: int = 0) -> tuple[float | None, str]:
+        """``(standard error or None, note)`` of value ``i`` of quantity ``key``."""
+        se = float(self.stderr[key][i])
+        return (se if math.isfinite(se) else None), self.notes[key][i]
+
+    def text(self, key: str, i: int = 0, unit: str = "", digits: int = 4) -> str:
+        """Value ``i`` of ``key`` as ``"value +/- stderr (percent) unit"`` (lmfit's convention) or
+        ``"value +/- not determined (why)"``."""
+        se, note = self.error(key, i)
+        return plus_minus(float(self.values[key][i]), se, unit, note, digits)
+
+    def to_dict(self) -> dict:
+        """JSON-ready: per quantity, its values, standard errors (null when not determined) and notes."""
+        return {k: {"value": [float(x) for x in v],
+                    "stderr": [float(e) if math.isfinite(e) else None for e in self.stderr[k]],
+                    "note": list(self.notes[k])} for k, v in self.values.items()}
+
+
+def _at(result: FitResult, theta: np.ndarray) -> FitResult:
+    """The fit with its free ln-parameters moved to ``theta`` (its derived properties recomputed on use)."""
+    return dataclasses.replace(result, theta=theta, parameters=result.problem.parameters(theta))
+
+
+def derived_quantities(result: FitResult, quantities, step: float = STEP) -> DerivedQuantities:
+    """The values of ``quantities(result)`` with their delta-method standard errors.
+
+    Parameters
+    ----------
+    result : FitResult
+    quantities : callable
+        ``FitResult -> dict of str to array``, e.g. :func:`tenscell.fitting.result.report_quantities` (the
+        numbers of the fit report).
+    step : float
+        Central-difference step in each analysed ln-parameter (see :data:`STEP`).
+
+    Returns
+    -------
+    DerivedQuantities
+        Gradients by central finite differences (2 evaluations of ``quantities`` per analysed
+        parameter), errors by :meth:`~tenscell.fitting.identifiability.Identifiability.propagate`.
+    """
+    ident = result.identifiability()
+    values = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in quantities(result).items()}
+    names = list(result.problem.names)
+    free_index = np.cumsum(np.asarray(result.problem.free, dtype=bool)) - 1
+    grads = {k: np.full((v.size, ident.n_analysed), np.nan) for k, v in values.items()}
+    failed = False
+    for j, name in enumerate(ident.names):
+        i = int(free_index[names.index(name)])
+        try:
+            sides = []
+            for sign in (1.0, -1.0):
+                theta = np.array(result.theta, dtype=float)
+                theta[i] += sign * step
+                sides.append(quantities(_at(result, theta)))
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+            failed = True  # the model cannot be evaluated next to the optimum (e.g. at a stability edge)
+            continue
+        for k in values:
+            grads[k][:, j] = (np.asarray(sides[0][k], dtype=float).ravel()
+                              - np.asarray(sides[1][k], dtype=float).ravel()) / (2 * step)
+    stderr, notes = {}, {}
+    for k, v in values.items():
+        errs = []
+        for row in range(v.size):
+            se, note = ident.propagate(grads[k][row]) if not failed else (
+                None, "(the model cannot be evaluated next to the optimum)")
+            if se is not None and ident.gauge_removed and k in _GAUGE_NOTES and not (
+                    k == "stiffness_spread" and row == 2):
+                note = _GAUGE_NOTES[k]
+            errs.append((math.nan if se is None else se, note))
+        stderr[k] = np.array([e for e, _ in errs])
+        notes[k] = tuple(n for _, n in errs)
+    return DerivedQuantities(values=values, stderr=stderr, notes=notes)
