@@ -155,3 +155,18 @@ def test_the_data_lines_errors_are_ordinary_least_squares():
         for j, (value, err) in enumerate(((ref.slope, ref.stderr), (ref.intercept, ref.intercept_stderr))):
             shown = text[2 * k + j]
             assert f"{value:.4g}" in shown and f"{err:.2g}" in shown, (shown, value, err)
+
+
+def test_a_worker_computing_half_the_gradient_changes_nothing(prestress_fit):
+    """The fit command hands half of the moved parameter vectors to its worker process: same numbers (the same
+    evaluations, in another process: identical up to the last bits of a different BLAS call order)."""
+    from tenscell._parallel import background
+    from tenscell.fitting.derived import derived_quantities
+    from tenscell.fitting.result import report_quantities
+
+    alone = prestress_fit.derived
+    with background() as worker:
+        shared = derived_quantities(prestress_fit, report_quantities, executor=worker)
+    for key, se in alone.stderr.items():
+        np.testing.assert_allclose(shared.stderr[key], se, rtol=1e-9, equal_nan=True, err_msg=key)
+        assert shared.notes[key] == alone.notes[key]

@@ -92,7 +92,21 @@ def _at(result: FitResult, theta: np.ndarray) -> FitResult:
     return dataclasses.replace(result, theta=theta, parameters=result.problem.parameters(theta))
 
 
-def derived_quantities(result: FitResult, quantities, step: float = STEP) -> DerivedQuantities:
+def _moved(result: FitResult, quantities, columns, step: float):
+    """``quantities`` at θ + step·e_i for each free-parameter index i of ``columns`` (a list of dicts), or None
+    when the model cannot be evaluated there. Module-level: a worker process runs a share of the columns."""
+    out = []
+    for i in columns:
+        theta = np.array(result.theta, dtype=float)
+        theta[i] += step
+        try:
+            out.append(quantities(_at(result, theta)))
+        except (ValueError, ArithmeticError, np.linalg.LinAlgError):
+            return None  # the model cannot be evaluated next to the optimum (e.g. at a stability edge)
+    return out
+
+
+def derived_quantities(result: FitResult, quantities, step: float = STEP, executor=None) -> DerivedQuantities:
     """The values of ``quantities(result)`` with their delta-method standard errors.
 
     Parameters
@@ -100,9 +114,12 @@ def derived_quantities(result: FitResult, quantities, step: float = STEP) -> Der
     result : FitResult
     quantities : callable
         ``FitResult -> dict of str to array``, e.g. :func:`tenscell.fitting.result.report_quantities` (the
-        numbers of the fit report).
+        numbers of the fit report); module-level when ``executor`` is given (it is pickled).
     step : float
         Forward-difference step in each analysed ln-parameter (see :data:`STEP`).
+    executor : object with ``submit``, optional
+        A worker (e.g. :func:`tenscell._parallel.background`) that evaluates half of the moved parameter
+        vectors while this process evaluates the other half; the result does not depend on it.
 
     Returns
     -------
@@ -114,19 +131,17 @@ def derived_quantities(result: FitResult, quantities, step: float = STEP) -> Der
     values = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in quantities(result).items()}
     names = list(result.problem.names)
     free_index = np.cumsum(np.asarray(result.problem.free, dtype=bool)) - 1
+    columns = [int(free_index[names.index(name)]) for name in ident.names]
+    half = len(columns) // 2 if executor is not None else 0
+    task = executor.submit(_moved, result, quantities, columns[:half], step) if half else None
+    mine = _moved(result, quantities, columns[half:], step)
+    theirs = task.result() if task is not None else []
+    failed = mine is None or theirs is None
     grads = {k: np.full((v.size, ident.n_analysed), np.nan) for k, v in values.items()}
-    failed = False
-    for j, name in enumerate(ident.names):
-        i = int(free_index[names.index(name)])
-        try:
-            theta = np.array(result.theta, dtype=float)
-            theta[i] += step
-            side = quantities(_at(result, theta))
-        except (ValueError, ArithmeticError, np.linalg.LinAlgError):
-            failed = True  # the model cannot be evaluated next to the optimum (e.g. at a stability edge)
-            continue
-        for k in values:
-            grads[k][:, j] = (np.asarray(side[k], dtype=float).ravel() - values[k].ravel()) / step
+    if not failed:
+        for j, side in enumerate([*theirs, *mine]):
+            for k in values:
+                grads[k][:, j] = (np.asarray(side[k], dtype=float).ravel() - values[k].ravel()) / step
     stderr, notes = {}, {}
     for k, v in values.items():
         errs = []

@@ -659,6 +659,15 @@ class FitResult:
 
         return derived_quantities(self, report_quantities)
 
+    def compute_derived(self, executor=None):
+        """:attr:`derived`, computed now with half of its model evaluations in ``executor`` (a worker with
+        ``submit``, e.g. the fit command's) and kept; the numbers do not depend on it."""
+        if "derived" not in self.__dict__:
+            from .derived import derived_quantities
+
+            self.__dict__["derived"] = derived_quantities(self, report_quantities, executor=executor)
+        return self.__dict__["derived"]
+
     def correlations(self, threshold: float = CORRELATION_THRESHOLD) -> list[tuple[str, str, float]]:
         """``(a, b, ρ)`` for pairs of determined parameters with ``|ρ| >= threshold``, strongest first."""
         return self.identifiability().strong_correlations(threshold)
