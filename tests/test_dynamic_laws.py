@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import tenscell
-from tenscell.laws import Maxwell, Springpot, StandardLinearSolid, Voigt, family_laws
+from tenscell.laws import Maxwell, Springpot, StandardLinearSolid, TensionSpringpot, Voigt, family_laws
 from tenscell.laws.viscoelastic import springpot_prony
 from tenscell.linear.dynamic import (
     dynamic_complex_modulus, dynamic_compliance, dynamic_moduli, dynamic_stiffness_static,
@@ -40,6 +40,9 @@ DYNAMIC = {
     "sls": StandardLinearSolid(EA=EA, EA_arm=RNG.uniform(0.5, 5.0, CELL.m), c=C),
     "springpot": Springpot(EA=EA, kappa=RNG.uniform(0.1, 2.0, CELL.m), alpha=RNG.uniform(0.1, 0.9, CELL.m)),
     "mixed": family_laws(CELL, {"actin": Maxwell(EA=1.5, c=0.3)}, default=Springpot(EA=0.8, kappa=0.5, alpha=0.25)),
+    # beta·T ~ 0.2 at P0: the active part comparable to the passive one (the derivative in T is not swamped)
+    "tension-springpot": TensionSpringpot(EA=EA, kappa=RNG.uniform(0.1, 2.0, CELL.m), alpha=RNG.uniform(0.1, 0.9, CELL.m),
+                                          beta=RNG.uniform(1e-3, 1e-2, CELL.m), alpha_T=RNG.uniform(0.1, 0.9, CELL.m)),
 }
 
 
@@ -54,6 +57,9 @@ def _draw(kind, rng, m=CELL.m):
         return Maxwell(EA=lu(-1, 2), c=lu(-2, 1))
     if kind == "sls":
         return StandardLinearSolid(EA=lu(-1, 2), EA_arm=lu(-1, 2), c=lu(-2, 1))
+    if kind == "tension-springpot":
+        return TensionSpringpot(EA=lu(-1, 2), kappa=lu(-2, 1), alpha=rng.uniform(0.02, 0.98, m), beta=lu(-5, -2),
+                                alpha_T=rng.uniform(0.02, 0.98, m))
     return Springpot(EA=lu(-1, 2), kappa=lu(-2, 1), alpha=rng.uniform(0.02, 0.98, m))
 
 
@@ -94,7 +100,7 @@ def test_complex_stiffness_derivative_in_tension(name):
     assert _rel(dT, fd) < 1e-7
 
 
-@pytest.mark.parametrize("name", ["maxwell", "sls", "springpot"])
+@pytest.mark.parametrize("name", ["maxwell", "sls", "springpot", "tension-springpot"])
 def test_complex_stiffness_derivatives_in_every_parameter(name):
     """∂k*/∂θ_j for every parameter and two tendons, against central differences with relative step 1e-5.
 
@@ -121,7 +127,7 @@ def test_complex_stiffness_derivatives_in_every_parameter(name):
 
 
 # ---- 2. passivity ---------------------------------------------------------------------------------------
-@pytest.mark.parametrize("kind", ["maxwell", "sls", "springpot"])
+@pytest.mark.parametrize("kind", ["maxwell", "sls", "springpot", "tension-springpot"])
 def test_passivity_for_random_draws(kind):
     """Im k* ≥ 0, Re k* non-decreasing in ω for every tendon, and the cell's G'' ≥ 0, at all ω, for 8 draws.
 
@@ -196,7 +202,7 @@ def _kk_storage(wg, G2, w, G2w):
 
 
 @pytest.mark.parametrize("name,eta", [("maxwell", 0.0), ("sls", 0.0), ("springpot", 0.0), ("mixed", 0.0),
-                                      ("maxwell", 0.3), ("springpot", 0.3)])
+                                      ("tension-springpot", 0.0), ("maxwell", 0.3), ("springpot", 0.3)])
 def test_kramers_kronig(name, eta):
     """G' of the cell (with a cytoplasm η, whose iωη is KK-neutral) from its G'' to the quadrature's accuracy.
 
@@ -244,6 +250,8 @@ def _scaled(law, lam, time):
             kw[n] = lam * v
         elif n == "kappa":
             kw[n] = v * lam ** np.asarray(law.alpha) if time else lam ** 2 * v
+        elif n == "beta" and time:  # a modulus per unit tension: unchanged by the strut-length scaling
+            kw[n] = v * lam ** np.asarray(law.alpha_T)
         elif n in ("EA", "EA_arm") and not time:
             kw[n] = lam ** 2 * v
     return dataclasses.replace(law, **kw)
@@ -315,6 +323,32 @@ def test_springpot_tends_to_voigt_as_alpha_tends_to_one():
     assert errs[1] < 1e-3 and errs[0] / errs[1] == pytest.approx(10, rel=0.05)
 
 
+def test_tension_springpot_identities():
+    """beta = 0 is the Springpot (EA, kappa, α); α_T = α is the Springpot (EA, kappa + beta·T, α): exact (round-off).
+    A wrong T in the active term, or its exponent swapped with the passive one, fails either."""
+    law = DYNAMIC["tension-springpot"]
+    import dataclasses
+
+    k = dataclasses.replace(law, beta=0.0).complex_stiffness(L_, T_, W)
+    assert _rel(k, Springpot(EA=EA, kappa=law.kappa, alpha=law.alpha).complex_stiffness(L_, T_, W)) < 1e-14
+    same = dataclasses.replace(law, alpha_T=law.alpha)
+    pot = Springpot(EA=EA, kappa=law.kappa + law.beta * T_, alpha=law.alpha)
+    assert _rel(same.complex_stiffness(L_, T_, W), pot.complex_stiffness(L_, T_, W)) < 1e-14
+    assert _rel(dynamic_complex_modulus(CELL, same, P0, [0.1, 10.0]), dynamic_complex_modulus(CELL, pot, P0, [0.1, 10.0])) < 1e-12
+
+
+def test_tension_springpot_exponent_falls_with_the_prestress():
+    """With α_T < α the cell's loss tangent at 1 Hz falls as P rises (the active part takes over), and tends to
+    tan(α_T·π/2) when the active springpot dominates every other term (beta·T ≫ EA, kappa, T)."""
+    law = TensionSpringpot(EA=1e-3, kappa=1.0, alpha=0.3, beta=1e4, alpha_T=0.15)
+    tan = [float(G.imag / G.real) for G in (dynamic_complex_modulus(CELL, law, P, [1 / (2 * math.pi)])[0]
+                                            for P in (1e-7, 1e-3, 1e-1, 1e1, 1e5))]
+    assert np.all(np.diff(tan) < 0)
+    # P = 1e-7: beta·T ≤ 2.3e-4, EA = 1e-3 beside kappa = 1; P = 1e5: T/l, kappa/l ≤ 1e-4 of beta·T/l
+    assert tan[0] == pytest.approx(math.tan(0.15 * math.pi), rel=5e-3)
+    assert tan[-1] == pytest.approx(math.tan(0.075 * math.pi), rel=5e-3)
+
+
 # ---- 7. realizations ------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("name", ["maxwell", "sls"])
 def test_maxwell_and_sls_realizations_are_exact(name):
@@ -352,10 +386,11 @@ def test_springpot_prony_series_meets_its_tolerance(alpha, tol):
     assert np.max(np.abs(series - exact) / np.abs(exact)) <= 1.05 * tol
 
 
-def test_springpot_realization_within_tolerance_and_statically_exact():
+@pytest.mark.parametrize("name", ["springpot", "tension-springpot"])
+def test_springpot_realization_within_tolerance_and_statically_exact(name):
     """Realized tendons within tol of k* over the band; the realized pencil's J within tol of the exact J;
     the static compliance exact (the series has no spring term)."""
-    law, tol = DYNAMIC["springpot"], 1e-3
+    law, tol = DYNAMIC[name], 1e-3
     R = law.realization(L_, T_, (1e-2, 1e3), tol)
     w = 2 * np.pi * np.logspace(-2, 3, 501)
     k = law.complex_stiffness(L_, T_, w)

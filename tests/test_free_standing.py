@@ -108,3 +108,79 @@ def test_rollers_are_the_free_structure_with_the_held_directions_removed():
         dataclasses.replace(free, supports=((0, "xyz"),))
     with pytest.raises(StructureError, match="must be some of"):
         dataclasses.replace(free, supports=((0, "w"),))
+
+
+# ---- the analyses downstream of linearize: elasticities, the linear steady state, the time domain -------------
+#: central differences of ln G with relative step 1e-5: truncation ~1e-10, rounding ~1e-16/1e-5 amplified by the
+#: restricted pencil's condition number (< 1e4 here: EA/P = 50, one decade of tensions) ~1e-7; 1e-6 sits above both
+#: and far below a missing projection (which changes G by O(1) or fails outright)
+FD_STEP, FD_RTOL = 1e-5, 1e-6
+
+
+@pytest.mark.parametrize("build", [lambda: snelson_prism(1.0, 1.0), expanded_octahedron])
+def test_elasticities_of_free_standing_structures(build):
+    """Exact elasticities through the restricted pencil: each equals a central difference of ln G', ln G'' from
+    tc.moduli, and together they obey Euler's rule (G is homogeneous of degree 1 in P, every EA and every c)."""
+    from tenscell.sensitivity import analytic_elasticities
+
+    cell = equilibrate(build())  # default parametrization: the octahedron's vertical struts need the local chart
+    f = np.array([0.1, 1.0, 10.0])
+    EA = np.linspace(40.0, 60.0, cell.m)
+    c = np.linspace(1.0, 2.0, cell.m)
+    lin = tc.linearize(cell, P=1.0, EA=EA, c=c)
+    assert lin.basis is not None
+    el = analytic_elasticities(lin, f)
+    total = el.complex.sum(axis=0)
+    np.testing.assert_allclose(total.real, 1.0, rtol=0, atol=1e-9)  # Euler: Σ θ ∂lnG/∂θ = 1
+
+    def G(P=1.0, EA=EA, c=c):
+        Gs, Gl = tc.moduli(tc.linearize(cell, P=P, EA=EA, c=c), f)
+        return np.log(Gs), np.log(Gl)
+
+    checks = {"P": lambda s: G(P=1.0 + s), "EA[0]": lambda s: G(EA=EA * np.r_[1 + s, np.ones(cell.m - 1)]),
+              f"c[{cell.m - 1}]": lambda s: G(c=c * np.r_[np.ones(cell.m - 1), 1 + s])}
+    for name, at in checks.items():
+        (sp, lp), (sm, lm) = at(FD_STEP), at(-FD_STEP)
+        k = el.index(name)
+        np.testing.assert_allclose(el.storage[k], (sp - sm) / (2 * FD_STEP), rtol=FD_RTOL, atol=1e-9, err_msg=name)
+        np.testing.assert_allclose(el.loss[k], (lp - lm) / (2 * FD_STEP), rtol=FD_RTOL, atol=1e-9, err_msg=name)
+
+
+def test_linear_steady_state_and_the_time_domain_of_a_free_standing_structure():
+    from tenscell.dynamics import linear_steady_state, oscillatory_response
+    from tenscell.dynamics.loads import SineForce
+    from tenscell.linear.rigid import solve_full
+    from tenscell.model.formfinding import rigid_body_modes
+
+    cell = equilibrate(snelson_prism(1.0, 1.0))
+    lin = tc.linearize(cell, P=1.0, EA=50.0, c=1.0)
+    f = 2.0
+    x = solve_full(lin, 2j * np.pi * f, -lin.H0)
+    R = rigid_body_modes(cell.coords)
+    assert np.abs(R.T @ x).max() <= 1e-12 * np.abs(x).max()  # no rigid-body motion in the response
+    J = tc.compliance(lin, [f])[0]
+    assert lin.D0 @ x == pytest.approx(J, rel=1e-12)  # the same solve as the compliance, lifted back
+    load = SineForce(1e-3, f)
+    q = linear_steady_state(lin, load)
+    np.testing.assert_allclose(q - cell.q0, (x * load.phasor).real, rtol=0, atol=1e-15)
+    with pytest.raises(tc.dynamics.SimulationError) as info:
+        oscillatory_response(cell, lin.tendon_law, 1e-3, f, cycles=2)
+    msg = str(info.value)
+    assert "\n" not in msg and "free-standing" in msg and "6 rigid-body motion(s)" in msg
+
+
+def test_auto_parametrization_falls_back_for_vertical_struts():
+
+    auto = equilibrate(expanded_octahedron())
+    local = equilibrate(expanded_octahedron(), parametrization="local")
+    assert auto.coords.kind == "local" and "vertical" in auto.coords.note and "note: strut(s) 0, 1" in repr(auto)
+    np.testing.assert_array_equal(auto.T0, local.T0)
+    f = [0.1, 1.0]
+    np.testing.assert_array_equal(tc.moduli(tc.linearize(auto, P=10.0, EA=5.0, c=1.0), f)[1],
+                                  tc.moduli(tc.linearize(local, P=10.0, EA=5.0, c=1.0), f)[1])
+    # what the fallback avoids: the paper's angles are singular at a vertical strut (α moves nothing)
+    with pytest.raises(tc.linear.NotPositiveDefiniteError):
+        tc.linearize(equilibrate(expanded_octahedron(), parametrization="angles"), P=10.0, EA=5.0, c=1.0)
+    # structures without a vertical strut keep the paper's angles and their coordinate names
+    paper = equilibrate(tc.paper_cell().structure)
+    assert paper.coords.kind == "angles" and paper.coords.note == "" and paper.coords.labels[0] == "delta[0]"

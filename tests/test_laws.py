@@ -37,6 +37,7 @@ from tenscell.laws import (
     StandardLinearSolid,
     StiffeningFilament,
     TendonLaw,
+    TensionSpringpot,
     Voigt,
     family_laws,
     stiffening_law,
@@ -112,6 +113,8 @@ DYNAMIC_LAWS = {
     "maxwell": Maxwell(EA=EA, c=C),
     "sls": StandardLinearSolid(EA=EA, EA_arm=RNG.uniform(0.5, 5.0, CELL.m), c=C),
     "springpot": Springpot(EA=EA, kappa=RNG.uniform(0.1, 2.0, CELL.m), alpha=RNG.uniform(0.1, 0.9, CELL.m)),
+    "tension-springpot": TensionSpringpot(EA=EA, kappa=RNG.uniform(0.1, 2.0, CELL.m), alpha=0.3, beta=5e-3,
+                                          alpha_T=RNG.uniform(0.1, 0.9, CELL.m)),
     "dynamic-by-family": family_laws(CELL, {"actin": Maxwell(EA=1.5, c=0.3)},
                                      default=Springpot(EA=0.8, kappa=0.5, alpha=0.25)),
 }

@@ -452,3 +452,14 @@ def test_creep_with_many_output_times_announces_a_lower_bound(capsys, here, monk
     monkeypatch.setattr(dyn, "measure", lambda fn, **kw: 1.0)
     refused(["creep", "--amplitude", "0.1,1", "--points", "50000", "--out", "o"], capsys, here, "--amplitude × --points",
             "estimated 28 h", "100,000 output times", "at least")
+
+
+# ---- data files after options ---------------------------------------------------------------------
+def test_data_files_may_follow_options(capsys, here):
+    """`study NAME --flag V DATA`: the files after the options reach the command (argparse alone left them
+    unrecognized), which then judges them: here a mechanism that does not exist, named in the one line."""
+    err = refused(["study", "mechanisms", "--mechanisms", "nope", "m.csv", "--out", "o"], capsys, here, "nope")
+    assert "unrecognized" not in err
+    # files on both sides of the options keep the order typed; a stray option is still refused by the parser
+    err = refused(["study", "no-if", "--draws", "3", "m.csv"], capsys, here, "takes no data files", "m.csv")
+    refused(["study", "mechanisms", "m.csv", "--no-such-flag"], capsys, here, "--no-such-flag")

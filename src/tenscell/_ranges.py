@@ -34,10 +34,12 @@ RANGES: dict[str, tuple[float, float, str]] = {
 _FLAGS = {"prestress": "--prestress", "EA": "--EA", "c": "--c", "L": "--L", "frequency": "--freq"}
 
 
-def range_problem(quantity: str, value: float, unit: str | None = None) -> str | None:
+def range_problem(quantity: str, value: float, unit: str | None = None, scale: float = 1.0) -> str | None:
     """None if ``value`` lies in the range of ``quantity``; else what is wrong, in words.
 
-    ``unit`` overrides the table's unit in the message (a data file's prestress is in Pa).
+    ``value`` is in the table's unit. ``unit`` overrides the table's unit in the message (a data file's
+    prestress is in Pa); with ``scale``, the value of one ``unit`` in the table's unit (1e6 for MPa against
+    Pa, 1/2π for rad/s against Hz), the value and the bounds are stated in ``unit``, as the user typed them.
     E.g. ``"1e+300 Hz is outside [1e-12, 1e+12] Hz, the range tenscell accepts for a frequency (as for --freq)"``.
     """
     lo, hi, default_unit = RANGES[quantity]
@@ -45,4 +47,5 @@ def range_problem(quantity: str, value: float, unit: str | None = None) -> str |
         return None
     u = default_unit if unit is None else unit
     flag = f" (as for {_FLAGS[quantity]})" if quantity in _FLAGS else ""
-    return f"{value:g} {u} is outside [{lo:g}, {hi:g}] {u}, the range tenscell accepts for a {quantity}{flag}"
+    return (f"{value / scale:g} {u} is outside [{lo / scale:g}, {hi / scale:g}] {u}, the range tenscell accepts "
+            f"for a {quantity}{flag}")

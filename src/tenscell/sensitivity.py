@@ -42,6 +42,7 @@ from ._results import dataframe, format_repr
 from ._threads import hot_path
 from .linear.linearize import LinearModel, linearize
 from .linear.modal import modulus
+from .linear.rigid import resolvent_full
 from .response import compliance
 from .model.shapes import paper_cell
 from .model.structure import STRUT
@@ -200,8 +201,11 @@ def analytic_elasticities(lin: LinearModel, f_hz=SENSITIVITY_FREQUENCIES) -> Ela
         return _dynamic_elasticities(lin, f)
     dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M)  # noqa: E731
     Kp, A = dense(lin.Kp), dense(lin.cell.A)
-    X = lin.pencil.resolvent(w, -lin.H0)  # the model's one modal decomposition (tenscell.linear.modal)
-    Y = lin.pencil.resolvent(w, lin.D0)  # Z = K0 + iωC0 is symmetric: Z⁻ᵀD0 = Z⁻¹D0
+    # the model's one modal decomposition (tenscell.linear.modal); for a free-standing structure on the complement
+    # N of its rigid-body motions, lifted back (x = N x̃): N does not depend on the law or P, so every formula
+    # below holds on the lifted vectors
+    X = resolvent_full(lin, w, -lin.H0)
+    Y = resolvent_full(lin, w, lin.D0)  # Z = K0 + iωC0 is symmetric: Z⁻ᵀD0 = Z⁻¹D0
     J = X @ lin.D0
     prod = (Y @ A) * (X @ A)  # (nf, m): (yᵀa_j)(a_jᵀx)
     cell, l = lin.cell, lin.cell.lengths
@@ -239,6 +243,10 @@ def _dynamic_elasticities(lin: LinearModel, f: np.ndarray) -> Elasticities:
     """
     from .linear.dynamic import _solves
 
+    if lin.basis is not None:  # the per-frequency solves of linear.dynamic work on the full, singular K(ω)
+        raise ValueError(f"exact elasticities of a law with internal dynamics ({type(lin.law).__name__}) are not "
+                         f"available for a free-standing structure ({lin.cell.describe()}): hold it with fixed nodes "
+                         "or supports, or use a law without internal variables")
     cell, law, w = lin.cell, lin.law, 2 * np.pi * f
     l, T = cell.lengths, lin.P * cell.T0
     dT, dk = law.complex_stiffness_derivatives(l, T, w)

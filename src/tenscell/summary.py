@@ -125,16 +125,21 @@ class StructureSummary:
 
 
 def _rigid_dof(structure: Structure) -> int:
+    """Rigid-body motions v = t + ω × p the fixed nodes and the per-direction supports leave free (0 to 6)."""
     x = structure.nodes
-    f = list(structure.fixed)
-    if not f:
+    held = [(i, a) for i in structure.fixed for a in range(3)]
+    held += [(i, "xyz".index(a)) for i, axes in structure.supports for a in axes]
+    if not held:
         return 6
-    xf = x[f] - x[f].mean(axis=0)
+    nodes = sorted({i for i, _ in held})
+    centre = x[nodes].mean(axis=0)
     rows = []
-    for p in xf:  # v = t + ω × p = 0 at every fixed node
+    for i, a in held:  # e_a·(t + ω × p) = 0 for every held direction a of node i
+        p = x[i] - centre
         P = np.array([[0, p[2], -p[1]], [-p[2], 0, p[0]], [p[1], -p[0], 0]])
-        rows.append(np.hstack([np.eye(3), P]))
-    return int(6 - np.linalg.matrix_rank(np.vstack(rows), tol=1e-9 * max(1.0, np.abs(xf).max())))
+        rows.append(np.hstack([np.eye(3), P])[a])
+    scale = max(1.0, float(np.abs(x[nodes] - centre).max()))
+    return int(6 - np.linalg.matrix_rank(np.vstack(rows), tol=1e-9 * scale))
 
 
 def summarize(target, P: float = 1000.0, EA=1.0, c=1.0, parametrization: str = "local"):

@@ -95,6 +95,22 @@ def main(argv=None) -> int:
     return status
 
 
+def _parse(parser, argv):
+    """The parsed command line; data files may also follow options (``study NAME --draws 3 DATA``).
+
+    argparse fills a command's trailing ``data`` positional (nargs="*") as soon as it meets the positional before it,
+    so files typed after an option come back unrecognized: they are appended to ``data`` in the order typed.
+    Anything else unrecognized is refused by argparse as usual (one line, status 2).
+    """
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        if isinstance(getattr(args, "data", None), list) and not any(e.startswith("-") for e in extra):
+            args.data = [*args.data, *extra]
+        else:
+            parser.parse_args(argv)  # reports the unrecognized arguments and exits with status 2
+    return args
+
+
 def _run(argv, started: float, transcript: "_Transcript") -> int:
     # The command writes files and never opens windows; the library itself never chooses a backend.
     os.environ.setdefault("MPLBACKEND", "Agg")
@@ -106,7 +122,7 @@ def _run(argv, started: float, transcript: "_Transcript") -> int:
     args = None
     try:
         try:
-            args = build_parser().parse_args(argv)
+            args = _parse(build_parser(), argv)
         except SystemExit as stop:  # --help, --version, or a flag refused by the parser (one line, status 2)
             return stop.code if isinstance(stop.code, int) else 2
         args.command_line = command_line(argv)

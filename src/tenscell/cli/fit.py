@@ -16,7 +16,7 @@ DAMPING_MODES = ("uniform", "per-family")
 #: a test checks they agree)
 MECHANISM_NAMES = ("voigt-per-tendon", "voigt-compact", "voigt-compact+visc", "voigt-lognormal-damping",
                    "voigt-lognormal-stiffness", "voigt-trap-damping+visc", "maxwell", "maxwell+visc", "sls",
-                   "sls-trap+visc", "springpot", "springpot+visc")
+                   "sls-trap+visc", "springpot", "springpot+visc", "springpot-tension+visc")
 
 #: the files of one fit: extension -> name in `tenscell fit --out`
 FIT_FILES = {"json": "fit.json", "csv": "fit.csv", "md": "report.md", "png": "fit.png"}
@@ -440,11 +440,13 @@ def run(args) -> int:
         result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,
                                    args.tolerance, args.baseline_starts, worker=worker, warm_plotting=True, **space)
         timing = clock.timing(result)
+        timing["outputs_started_s"] = clock.now()
+        # the report's ± need one model evaluation per parameter: half of them in the worker, before the figure
+        result.compute_derived(worker)
         figure = worker.submit(fit_png, result, baseline, title)
         from ..fitting.models import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
-        timing["outputs_started_s"] = clock.now()
         outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure)
     with out as d:
         for ext, name in FIT_FILES.items():

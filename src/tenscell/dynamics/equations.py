@@ -193,10 +193,7 @@ class EquationsOfMotion:
         try:
             self.state(0.0, np.zeros(self.n), np.ones(self.m, dtype=bool))
         except SimulationError as err:
-            raise SimulationError(
-                f"{cell.describe()}: {err}. The massless equations need a positive definite damping matrix "
-                "C(q) = Σ dT/dl'·a aᵀ (for the cell without intermediate filaments C0 is singular)"
-            ) from None
+            raise SimulationError(_undamped_message(cell, err)) from None
 
     # -- geometry helpers
     @staticmethod
@@ -429,3 +426,17 @@ class EquationsOfMotion:
         return self._apply(fac, rhs)[:n]
 
 
+def _undamped_message(cell, err) -> str:
+    """Why the massless equations cannot start: a free-standing structure (rigid-body motions no tendon damps),
+    said in one line, or a part of the structure without damping."""
+    from ..linear.rigid import deformation_basis
+
+    N = deformation_basis(cell)
+    if N is not None:
+        k = cell.n - N.shape[1]
+        return (f"{cell.describe()} is free-standing: its supports leave {k} rigid-body motion(s) free, which no "
+                "tendon resists or damps, so the massless nonlinear equations cannot determine them; hold it (fixed "
+                "nodes or per-direction supports) for the time domain, or use its linear response (tenscell.moduli, "
+                "tenscell.dynamics.linear_steady_state), from which the rigid-body motions are removed")
+    return (f"{cell.describe()}: {err}. The massless equations need a positive definite damping matrix "
+            "C(q) = Σ dT/dl'·a aᵀ (for the cell without intermediate filaments C0 is singular)")

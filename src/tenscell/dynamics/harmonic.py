@@ -17,6 +17,7 @@ from .._checks import positive_array, positive_scalar
 from .._progress import progress_bar
 from ..laws import LinearizationError, TendonLaw
 from ..linear.linearize import LinearModel, linearize_law
+from ..linear.rigid import solve_full
 from ..model.equilibrium import Cell
 from .integration import _concat, simulate
 from .loads import SineDisplacement, SineForce
@@ -34,7 +35,7 @@ def linear_steady_state(lin: LinearModel, loading) -> np.ndarray:
     if not isinstance(loading, (SineForce, SineDisplacement)):
         raise ValueError("a periodic steady state needs a SineForce or SineDisplacement loading")
     w = loading.omega
-    x = lin.pencil.solve_at(1j * w, -lin.H0)
+    x = solve_full(lin, 1j * w, -lin.H0)  # a free-standing structure: on the complement of its rigid-body motions
     Fhat = loading.phasor if loading.controls == "force" else loading.phasor / (lin.D0 @ x)
     return np.asarray(lin.cell.q0) + (x * Fhat).real
 

@@ -138,6 +138,10 @@ class Identifiability:
         the seen left singular vectors; they sum to the rank): the fitted
         model at residual i has the standard error ``σ·sqrt(leverage_i)`` in
         weighted units (:meth:`tenscell.fitting.FitResult.model_standard_errors`).
+    directions : ndarray, shape (p, p), optional
+        Right singular vectors of the Jacobian (columns, in the order of
+        :attr:`singular_values`, then the unseen ones): what :meth:`propagate`
+        needs for the covariance of a derived quantity.
     """
 
     names: tuple
@@ -159,6 +163,7 @@ class Identifiability:
     correlation: np.ndarray
     combinations: tuple
     leverage: np.ndarray | None = None
+    directions: np.ndarray | None = None
 
     @property
     def n_analysed(self) -> int:
@@ -198,6 +203,31 @@ class Identifiability:
         if not math.isfinite(se):
             return None, "(not determined: in a combination the data do not see)"
         return se, (f"(of {self.labels[i]})" if self.labels[i] != name else "")
+
+    def propagate(self, gradient) -> tuple[float | None, str]:
+        """Standard error of a quantity g derived from the parameters, and a note (first order, the delta method).
+
+        ``se(g)² = ∇gᵀ Σ ∇g`` with ``Σ = σ²·(JᵀJ)⁺`` the covariance of the analysed ln-parameters (the one
+        behind :attr:`standard_errors`), ``∇g = ∂g/∂θ`` (shape (p,), over :attr:`names`, θ their natural logs;
+        the caller computes it, exactly or by finite differences). By the rule of :attr:`standard_errors`, g is
+        not determined when more than :data:`NULL_SHARE` of its gradient lies in the combinations the data do
+        not see. Returns ``(None, note)`` then, or when σ is unknown or the directions were not kept.
+        """
+        g = np.asarray(gradient, dtype=float).reshape(-1)
+        if self.directions is None or g.size != self.n_analysed:
+            return None, "(not available: no covariance of these parameters)"
+        if not np.all(np.isfinite(g)):
+            return None, "(its gradient is not finite)"
+        norm = float(np.linalg.norm(g))
+        if norm == 0.0:  # set by fixed parameters or ones at a bound alone: a constraint, not an estimate
+            return None, "(set by fixed parameters or bounds alone: not an estimate)"
+        c = self.directions.T @ g
+        if float(np.linalg.norm(c[self.rank:])) > NULL_SHARE * norm:
+            return None, "(depends on a combination the data do not see)"
+        if self.sigma is None:
+            return None, "(σ unknown: as many seen combinations as residuals)"
+        s = self.singular_values[:self.rank]
+        return float(self.sigma * np.sqrt(np.sum((c[:self.rank] / s) ** 2))), ""
 
     def strong_correlations(self, threshold: float = 0.9) -> list[tuple[str, str, float]]:
         """``(label_a, label_b, ρ)`` for determined pairs with ``|ρ| >= threshold``, strongest first."""
@@ -315,6 +345,7 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
         sigma_source=source, dof=dof, chi2=chi2, standard_errors=se, null_share=null_share, correlation=corr,
         combinations=_combinations(V, s, rank, labels, sigma),
         leverage=np.sum(U[:, :rank] ** 2, axis=1) if U is not None else np.zeros(n),
+        directions=V,
     )
 
 

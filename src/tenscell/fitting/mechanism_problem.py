@@ -82,6 +82,8 @@ def _bounds_of(kind: str, S: float, w_m: float, G_loss: float) -> tuple[float, f
         return 1e-6 / w_m, 1e6 / w_m
     if kind == "exponent":
         return 0.01, 0.99
+    if kind == "ratio":  # TensionSpringpot's beta: from the geometric prestress stiffness dominating to negligible
+        return 1e-3, 1e5
     if kind == "decades":
         return 0.01, 4.0
     if kind == "tail":  # a trap model's tail exponent: below 0.5 the m·K values span > 6 decades per stratum

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 from .heterogeneity import DISTRIBUTIONS
 
-__all__ = ["Field", "Mechanism", "MECHANISMS", "mechanism", "KINDS", "PER_TENDON_VOIGT"]
+__all__ = ["Field", "Mechanism", "MECHANISMS", "mechanism", "KINDS", "PER_TENDON_VOIGT", "ACTIVE_BETA"]
 
 #: what a parameter kind is, for bounds and starts: (unit, scales G when all scalable ones scale together)
 KINDS = {
@@ -37,9 +37,16 @@ KINDS = {
     "decades": ("decades", False),
     "tail": ("", False),
     "viscosity": ("Pa·s", True),
+    "ratio": ("", False),  # a dimensionless modulus per unit tension (TensionSpringpot's beta)
 }
 #: the layouts of a law parameter over the tendons
 LAYOUTS = ("family", "shared", "fixed")
+#: TensionSpringpot's beta in ``springpot-tension+visc``: active axial stiffness at 1 rad/s per unit of tension over
+#: length, about l/δ (tendon length l of micrometres, cross-bridges bearing force over δ of nanometres). The
+#: bundled data bound it only from below (a profile with beta held: BIC −186 at 10, −217 at 30, −260 at 100, −267.0
+#: to −267.5 from 300 to 3000; bench/proto_tension_springpot.py): above about 300 the geometric prestress stiffness
+#: T/l is negligible beside the active one and only beta·s is determined, so it is held in that plateau
+ACTIVE_BETA = 1000.0
 #: the name of the paper's per-tendon Voigt fit (the existing :func:`tenscell.fitting.fit`), not a Mechanism
 PER_TENDON_VOIGT = "voigt-per-tendon"
 
@@ -164,6 +171,12 @@ def _builtin() -> dict[str, Mechanism]:
         Mechanism("springpot+visc", "Springpot",
                   (Field("EA", "stiffness"), Field("kappa", "coefficient"), Field("alpha", "exponent", "shared")),
                   viscosity=True, description="springpot tendons per family, one exponent, cytoplasm viscosity"),
+        Mechanism("springpot-tension+visc", "TensionSpringpot",
+                  (Field("EA", "stiffness", "shared"), Field("kappa", "coefficient", "shared"),
+                   Field("alpha", "exponent", "shared"), Field("beta", "ratio", "fixed", value=ACTIVE_BETA),
+                   Field("alpha_T", "exponent", "shared")), viscosity=True,
+                  description="passive springpot tendons plus an active springpot whose modulus is proportional to "
+                              "the tension (beta = 1000), its own exponent, cytoplasm viscosity"),
     ]
     return {m.name: m for m in mechs}
 

@@ -22,8 +22,8 @@ if TYPE_CHECKING:
     from .problem import FitProblem
 
 __all__ = ["FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "CreepFit", "FitResult", "model_curve",
-           "frequency_slopes", "prestress_slopes", "data_axis", "noise_rms", "inside_noise", "accepted", "verdict_text",
-           "noise_note"]
+           "frequency_slopes", "prestress_slopes", "report_quantities", "data_axis", "noise_rms", "inside_noise",
+           "accepted", "verdict_text", "noise_note"]
 
 def noise_rms(datasets) -> list[float | None]:
     """Per data set, the RMS of the stated standard deviations of log10 G', G'' (or of log10 J for creep data),
@@ -156,7 +156,7 @@ FIT_NULL_MEANS = (
     "time_to_tolerance_s, timing.tolerance_met_s: the tolerance was never met; prestress_Pa / prestress_fitted_Pa: "
     "the data set states no prestress / its prestress is not a fitted parameter; kind: a joint fit; seed, "
     "constraints: not set; parameters[].at_bound: not at a bound; tendon_stiffness_spread_not_at_bounds: every "
-    "stiffness is at a bound. A null anywhere else is a computed number that is not finite: its value is listed "
+    "stiffness is at a bound; derived.*.stderr: not determined (derived.*.note says why). A null anywhere else is a computed number that is not finite: its value is listed "
     "under non_finite")
 
 #: largest prestress × frequency grid that FitResult.moduli evaluates in one batch (else per prestress)
@@ -693,6 +693,24 @@ class FitResult:
         sigma = np.nan if ident.sigma is None else ident.sigma
         return sigma * np.sqrt(np.clip(h, 0.0, None)) / np.asarray(self.problem.weights, dtype=float)[:n]
 
+    @cached_property
+    def derived(self):
+        """The numbers the report derives from the parameters (slopes, prestress elasticities and share,
+        predicted creep, stiffness spread), each with its standard error: a
+        :class:`~tenscell.fitting.derived.DerivedQuantities` (delta method, finite-difference gradients)."""
+        from .derived import derived_quantities
+
+        return derived_quantities(self, report_quantities)
+
+    def compute_derived(self, executor=None):
+        """:attr:`derived`, computed now with half of its model evaluations in ``executor`` (a worker with
+        ``submit``, e.g. the fit command's) and kept; the numbers do not depend on it."""
+        if "derived" not in self.__dict__:
+            from .derived import derived_quantities
+
+            self.__dict__["derived"] = derived_quantities(self, report_quantities, executor=executor)
+        return self.__dict__["derived"]
+
     def correlations(self, threshold: float = CORRELATION_THRESHOLD) -> list[tuple[str, str, float]]:
         """``(a, b, ρ)`` for pairs of determined parameters with ``|ρ| >= threshold``, strongest first."""
         return self.identifiability().strong_correlations(threshold)
@@ -803,6 +821,7 @@ class FitResult:
                 None if self.stiffness_spread_interior is None else dict(
                     zip(("min_N", "max_N", "decades"), self.stiffness_spread_interior))),
             "prestress_activity": self.prestress.to_dict(),
+            "derived": self.derived.to_dict(),
             # a start the search never ran (an earlier one met the target first) has no RMS: null, not inf
             "start_rms": [r if math.isfinite(r) else None for r in self.start_rms],
             "alternatives": [a.to_dict() for a in self.alternatives],
@@ -825,7 +844,6 @@ class FitResult:
 
     def report(self) -> str:
         """A readable plain-text report (in the spirit of lmfit's ``fit_report``)."""
-        lo, hi, dec = self.stiffness_spread
         lines = [
             "[[Fit statistics]]",
             *(f"    data {f.index}:             {f.data.source} ({f.data.n} points, {f.axis} sweep): "
@@ -836,7 +854,9 @@ class FitResult:
             + self.verdict,
             f"    starts:             {self.starts} (seed {self.seed}), {self.n_evaluations} model evaluations, "
             f"{self.elapsed_s:.1f} s",
-            f"    stiffness spread:   {lo:.3g} .. {hi:.3g} N ({dec:.1f} decades)" + self._interior_text(),
+            f"    stiffness spread:   {self.derived.text('stiffness_spread', 0, 'N', 3)} .. "
+            f"{self.derived.text('stiffness_spread', 1, 'N', 3)} ({self.derived.text('stiffness_spread', 2, 'decades', 3)})"
+            + self._interior_text(),
             f"    message:            {self.message}",
             "[[Parameters]] (value +/- standard error, in the unit shown; see identifiability())",
         ]
@@ -943,3 +963,45 @@ def prestress_slopes(result: FitResult, n: int = 100, dataset: int | None = None
     a1, b1 = np.polyfit(curve.x, curve.G_storage, 1)
     a2, b2 = np.polyfit(curve.x, curve.G_loss, 1)
     return float(a1), float(b1), float(a2), float(b2)
+
+
+def report_quantities(result: FitResult) -> dict[str, np.ndarray]:
+    """Every number the fit report derives from the fitted parameters, as flat arrays.
+
+    Keys: ``frequency_slopes[k]`` (G' slope min, max, G'' slope min, max over 1000 frequencies spanning
+    frequency sweep k; dimensionless), ``creep_slopes[k]`` (min, max of d ln J/d ln t at creep data set k's
+    times), ``prestress_lines[k]`` (dG'/dP, G'(0) in Pa, dG''/dP, G''(0) in Pa over prestress sweep k),
+    ``prestress_share`` and ``prestress_storage`` (min, max over the data points of the share of the static
+    stiffness carried by P·Kp and of ∂lnG'/∂lnP), ``reference_prestress_N`` (N), ``reference_storage``,
+    ``reference_loss``, ``reference_share`` (per prestress at the reference frequency), ``creep_A`` (1/Pa),
+    ``creep_alpha``, ``creep_J`` (1/Pa) and ``creep_exponent`` (at the predicted creep's times),
+    ``creep_prestress_N`` (N, the prestress the creep is predicted at),
+    ``creep_window_slope`` (min, max of the G' slope over the frequencies 1/(2πt) of the creep window), and
+    ``stiffness_spread`` (min EA, max EA in N, decades).
+    """
+    out: dict[str, np.ndarray] = {}
+    for f in result.fits:
+        d = f.data
+        if f.axis == "frequency":
+            _, s1, s2 = frequency_slopes(result, float(d.frequency_hz.min()), float(d.frequency_hz.max()), 1000,
+                                         dataset=f.index)
+            out[f"frequency_slopes[{f.index}]"] = np.array([s1.min(), s1.max(), s2.min(), s2.max()])
+        elif f.axis == "time":
+            expo = np.gradient(np.log(f.J_model), np.log(d.time_s)) if d.n > 1 else np.zeros(1)
+            out[f"creep_slopes[{f.index}]"] = np.array([expo.min(), expo.max()])
+        else:
+            out[f"prestress_lines[{f.index}]"] = np.array(prestress_slopes(result, dataset=f.index))
+    pa = result.prestress
+    summary = pa.to_dict()
+    out["prestress_share"] = np.array([summary["share_min"], summary["share_max"]])
+    out["prestress_storage"] = np.array([summary["dlnGstorage_dlnP"]["min"], summary["dlnGstorage_dlnP"]["max"]])
+    for name in ("prestress_N", "storage", "loss", "share"):
+        out[f"reference_{name}"] = np.asarray(getattr(pa, f"reference_{name}"), dtype=float)
+    creep = result.predicted_creep()
+    out.update(creep_A=np.array([creep.A]), creep_alpha=np.array([creep.alpha]), creep_J=creep.J,
+               creep_exponent=creep.exponent, creep_prestress_N=np.array([creep.prestress_N]))
+    lo, hi = creep.window
+    _, s1, _ = frequency_slopes(result, 1 / (2 * math.pi * hi), 1 / (2 * math.pi * lo), 200)
+    out["creep_window_slope"] = np.array([s1.min(), s1.max()])
+    out["stiffness_spread"] = np.array(result.stiffness_spread)
+    return out

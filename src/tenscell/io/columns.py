@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 import numpy as np
 
 from .._errors import TenscellError
+from .._ranges import RANGES, range_problem
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -187,6 +188,11 @@ _QUANTITIES = {
     "compliance_sd": "compliance_unit",
 }
 _UNIT_FIELDS = ("frequency_unit", "modulus_unit", "phase_unit", "prestress_unit", "time_unit", "compliance_unit")
+# quantity -> the quantity of the one ranges table (tenscell._ranges) its values must lie in (SI); the phase has
+# its own range (below 90°) and tan δ none
+_RANGE_OF = {"frequency": "frequency", "storage": "modulus", "loss": "modulus", "magnitude": "modulus",
+             "storage_sd": "modulus", "loss_sd": "modulus", "prestress": "prestress", "time": "time",
+             "compliance": "compliance", "compliance_sd": "compliance"}
 _NAMES = {"frequency": "frequency", "storage": "G'", "loss": "G''", "magnitude": "|G|", "phase": "phase",
           "loss_tangent": "loss tangent", "prestress": "prestress", "storage_sd": "SD of G'", "loss_sd": "SD of G''",
           "time": "time", "compliance": "creep compliance", "compliance_sd": "SD of J"}
@@ -328,7 +334,51 @@ def _columns(table: _Table, cmap: ColumnMap, resolved: Mapping[str, tuple[int, s
                 i = int(over[0])
                 raise _error(table, f"phase {raw[i]:g} {unit} must be below {top:g} {unit} (G' > 0)", i, column)
         out[quantity] = raw * _factor(quantity, unit, cmap)
+    _check_ranges(table, cmap, resolved, out)
     return out
+
+
+def _check_ranges(table: _Table, cmap: ColumnMap, resolved: Mapping[str, tuple[int, str]],
+                  si: Mapping[str, np.ndarray]) -> None:
+    """Every value in the range of its quantity (:data:`tenscell._ranges.RANGES`), else DataError naming the
+    first offending row, the user's header and the value and range in the user's unit."""
+    first = None
+    for quantity, (j, unit) in resolved.items():
+        if quantity not in _RANGE_OF:
+            continue
+        lo, hi, _ = RANGES[_RANGE_OF[quantity]]
+        bad = np.flatnonzero((si[quantity] < lo) | (si[quantity] > hi))
+        if bad.size and (first is None or bad[0] < first[0]):
+            first = (int(bad[0]), quantity, j, unit)
+    if first is None:
+        return
+    i, quantity, j, unit = first
+    factor = _factor(quantity, unit, cmap)
+    if unit == "ratio":
+        problem = (f"ratio {si[quantity][i] / factor:g} × geometric_factor {factor:g} Pa = "
+                   f"{range_problem('modulus', si[quantity][i])}")
+    else:
+        # a data file's prestress is in Pa (the table's N for the flag): the same numbers
+        problem = str(range_problem(_RANGE_OF[quantity], si[quantity][i], unit or None, factor))
+    raise _error(table, problem, i, table.names[j].strip())
+
+
+def _check_formed(table: _Table, cmap: ColumnMap, resolved: Mapping[str, tuple[int, str]],
+                  v: Mapping[str, np.ndarray]) -> None:
+    """G' and G'' formed from another pair of columns (|G| with the phase, one modulus with tan δ) inside the
+    modulus range, else DataError naming the row, the columns they came from, and the user's modulus unit."""
+    given = [q for q in ("storage", "loss", "magnitude", "phase", "loss_tangent") if q in resolved]
+    unit = next(resolved[q][1] for q in given if q in ("storage", "loss", "magnitude"))
+    factor = _factor("storage", unit, cmap)
+    lo, hi, _ = RANGES["modulus"]
+    for quantity in ("storage", "loss"):
+        bad = np.flatnonzero((v[quantity] < lo) | (v[quantity] > hi))
+        if bad.size:
+            i = int(bad[0])
+            cols = " and ".join(repr(table.names[resolved[q][0]].strip()) for q in given)
+            shown = "Pa" if unit == "ratio" else unit
+            raise _error(table, f"{_NAMES[quantity]} formed from columns {cols}: " + str(range_problem(
+                "modulus", v[quantity][i], shown, 1.0 if unit == "ratio" else factor)), i)
 
 
 def _factor(quantity: str, unit: str, cmap: ColumnMap) -> float:
@@ -383,6 +433,8 @@ def parse(table: _Table, cmap: ColumnMap, min_points: int) -> Parsed:
         how += f"; moduli = {cmap.geometric_factor:g} Pa × ratio"
     if cmap.layout != "creep":
         v["storage"], v["loss"] = _moduli(v, cmap.layout)
+        if cmap.layout != "storage+loss":
+            _check_formed(table, cmap, resolved, v)
     return Parsed(cmap.layout, v, table.source, (*table.comments, *notes, f"imported by tenscell: {how}"),
                   tuple(table.where))
 

@@ -12,6 +12,7 @@ described in ``docs/structure-format.md``; in short::
       "units": {"length": "um", "force": "pN", "time": "s"},
       "nodes": [{"name": "A", "xyz": [0, 0, 0]}, [1, 0, 0], ...],
       "fixed": ["A"],
+      "supports": [{"node": 4, "axes": "z"}],
       "struts": [["A", "C"], [2, 3]],
       "tendons": [{"nodes": ["C", 3], "family": "actin", "EA": 1.0, "c": 1.0}, ...],
       "load":  {"nodes": [2, 3], "weights": [0.5, 0.5], "direction": [0, 0, 1]},
@@ -23,14 +24,18 @@ to SI on reading (m, N, s); :func:`save_structure` always writes SI.
 
 Every error is a :class:`~tenscell.model.structure.StructureError` (a ValueError)
 whose message starts with the file name and names the offending element,
-e.g. ``"cell.json: tendon 17 joins node 4 to itself"``.
+e.g. ``"cell.json: tendon 17 joins node 4 to itself"``; an entry of the
+``supports`` list is also named by its line, e.g.
+``"cell.json, line 12: supports entry 1: node 4 is listed twice"``.
 """
 from __future__ import annotations
 
 import json
+import re
 import sys
 import math
 from dataclasses import dataclass
+from json.scanner import make_scanner
 from typing import Any
 from pathlib import Path
 
@@ -38,7 +43,7 @@ import numpy as np
 
 from .._ranges import RANGES, range_problem
 from .outputs import write_text
-from ..model.structure import Point, Structure, StructureError, member_values
+from ..model.structure import Point, Structure, StructureError, check_support, member_values
 
 __all__ = [
     "StructureFile",
@@ -66,12 +71,21 @@ FORCE_UNITS = {"N": 1.0, "mN": 1e-3, "uN": 1e-6, "µN": 1e-6, "nN": 1e-9, "pN": 
 TIME_UNITS = {"s": 1.0, "ms": 1e-3}
 
 _TOP_KEYS = {
-    "format", "version", "name", "description", "units", "nodes", "fixed", "struts", "tendons",
+    "format", "version", "name", "description", "units", "nodes", "fixed", "supports", "struts", "tendons",
     "equal_tension_groups", "load", "probe",
 }
 _NODE_KEYS = {"name", "xyz"}
 _TENDON_KEYS = {"nodes", "family", "EA", "c", "T0"}
 _POINT_KEYS = {"nodes", "weights", "direction"}
+_SUPPORT_KEYS = {"node", "axes"}
+
+
+class _EntryError(StructureError):
+    """A StructureError about item ``index`` of the top-level list ``key``: the file reader adds its line."""
+
+    def __init__(self, message: str, key: str, index: int):
+        super().__init__(message)
+        self.key, self.index = key, index
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -172,6 +186,9 @@ def load_structure_file(path) -> StructureFile:
                              "digits; not a structure file") from None
     try:
         return structure_from_dict(obj, default_name=path.stem)
+    except _EntryError as err:
+        line = _item_line(text, err.key, err.index)
+        raise StructureError(f"{path.name}{'' if line is None else f', line {line}'}: {err}") from None
     except StructureError as err:
         raise StructureError(f"{path.name}: {err}") from None
     except (ValueError, TypeError, OverflowError, RecursionError) as err:
@@ -196,6 +213,7 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
     ref = _node_ref(len(names), index)
     fixed = [ref(r, "the fixed list") for r in _list(obj.get("fixed", []), "'fixed'")]
     struts = _read_struts(obj, ref)
+    supports = _read_supports(obj, ref, len(names), fixed, struts)
     tendons, families, EA, c, T0 = _read_tendons(obj, ref, lu, fu, tu)
     groups = _read_groups(obj)
     if "load" not in obj:
@@ -208,7 +226,7 @@ def structure_from_dict(obj, default_name: str = "structure") -> StructureFile:
     node_names = tuple(nm if nm is not None else str(i) for i, nm in enumerate(names)) if index else ()
     structure = Structure(
         nodes=nodes, struts=tuple(struts), tendons=tuple(tendons), families=tuple(families), fixed=tuple(fixed),
-        load=load, probe=probe, equal_tension_groups=tuple(groups), name=name, node_names=node_names,
+        supports=tuple(supports), load=load, probe=probe, equal_tension_groups=tuple(groups), name=name, node_names=node_names,
     )
     return StructureFile(structure=structure, EA=np.array(EA), c=np.array(c), T0=T0, description=description)
 
@@ -294,6 +312,90 @@ def _read_struts(obj: dict, ref) -> list[tuple[int, int]]:
             raise StructureError(f"strut {k} must join exactly two nodes, got {pair!r}")
         struts.append((ref(pair[0], f"strut {k}"), ref(pair[1], f"strut {k}")))
     return struts
+
+
+def _read_supports(obj: dict, ref, n: int, fixed: list, struts: list) -> list[tuple[int, str]]:
+    """The per-direction supports as ``(node, axes)`` pairs, each entry ``{"node": r, "axes": "z"}`` or
+    ``[r, "z"]``, checked by the rules of :class:`Structure` (:func:`~tenscell.model.structure.check_support`).
+
+    An error is an :class:`_EntryError` naming the entry, so that the file reader can give its line.
+    """
+    on_strut = {i for pair in struts for i in pair}
+    seen: dict[int, int] = {}
+    out = []
+    for k, item in enumerate(_list(obj.get("supports", []), "'supports'")):
+        where = f"supports entry {k}"
+        try:
+            if isinstance(item, dict):
+                _unknown(item, _SUPPORT_KEYS, where)
+                raw = (item.get("node"), item.get("axes"))
+            elif isinstance(item, list) and len(item) == 2:
+                raw = (item[0], item[1])
+            else:
+                raise StructureError(f"{where} must be {{\"node\": ..., \"axes\": \"z\"}} or [node, \"z\"], "
+                                     f"got {item!r}")
+            if not isinstance(raw[1], str):
+                raise StructureError(f"{where}: 'axes' must be a string of the held directions such as \"z\" "
+                                     f"or \"xy\", got {raw[1]!r}")
+            try:
+                node, axes = check_support((ref(raw[0], where), raw[1]), n, set(fixed), on_strut)
+            except StructureError as err:
+                raise StructureError(f"{where}: {str(err).removeprefix('supports: ')}") from None
+            if node in seen:
+                raise StructureError(f"{where}: node {node} is listed twice (also in entry {seen[node]})")
+        except StructureError as err:
+            raise _EntryError(str(err), "supports", k) from None
+        seen[node] = k
+        out.append((node, axes))
+    return out
+
+
+def _item_line(text: str, key: str, index: int) -> int | None:
+    """The line (from 1) where item ``index`` of the top-level list ``key`` starts in a JSON text, or None.
+
+    Walks the top-level object with the standard library's own JSON scanner (the text has already been parsed,
+    so it is valid JSON); the last occurrence of a repeated key counts, as for :func:`json.loads`.
+    """
+    scan = make_scanner(json.JSONDecoder())  # type: ignore[arg-type]  # typeshed types the context oddly
+    found = None
+    i = _skip(text, 0) + 1  # past the '{'
+    try:
+        while True:
+            name, i = scan(text, _skip(text, i))
+            i = _skip(text, _skip(text, i) + 1)  # past the ':'
+            if name == key and text[i] == "[":
+                found = _list_item_start(text, i, index, scan)
+            _, i = scan(text, i)
+            i = _skip(text, i)
+            if text[i] != ",":
+                break
+            i += 1
+    except (StopIteration, IndexError, ValueError):
+        pass
+    return None if found is None else text.count("\n", 0, found) + 1
+
+
+def _list_item_start(text: str, i: int, index: int, scan) -> int | None:
+    """Offset of item ``index`` of the JSON list that opens at offset ``i`` (None if it is shorter)."""
+    i += 1
+    for k in range(index + 1):
+        i = _skip(text, i)
+        if text[i] == "]":
+            return None
+        if k == index:
+            return i
+        _, i = scan(text, i)
+        i = _skip(text, i) + 1  # past the ','
+    return None
+
+
+_WHITESPACE = re.compile(r"[ \t\n\r]*")
+
+
+def _skip(text: str, i: int) -> int:
+    """The offset of the first non-whitespace character (JSON's whitespace) at or after ``i``."""
+    m = _WHITESPACE.match(text, i)
+    return i if m is None else m.end()
 
 
 def _read_tendons(obj: dict, ref, lu: float, fu: float, tu: float):
@@ -515,6 +617,7 @@ def structure_to_dict(structure: Structure, EA=None, c=None, T0=None, descriptio
         "units": {"length": "m", "force": "N", "time": "s"},
         "nodes": nodes,
         "fixed": [label(i) for i in s.fixed],
+        **({"supports": [[label(i), axes] for i, axes in s.supports]} if s.supports else {}),
         "struts": [[label(a), label(b)] for a, b in s.struts],
         "tendons": tendons,
         "load": point(s.load),

@@ -53,9 +53,9 @@ Laws
 :class:`LinearSpring`
     ``T = k(l − l0) + c·l'``: a spring given by its stiffness in N/m (the law
     behind :func:`tenscell.linear.linearize.linearize_tangent`).
-:class:`Maxwell`, :class:`StandardLinearSolid`, :class:`Springpot`
+:class:`Maxwell`, :class:`StandardLinearSolid`, :class:`Springpot`, :class:`TensionSpringpot`
     tendons with dynamics of their own (filament turnover, a Zener solid, a
-    fractional element): ``dynamic = True``, an exact frequency-dependent
+    fractional element, a passive and a tension-scaled active fractional element): ``dynamic = True``, an exact frequency-dependent
     tangent ``complex_stiffness(l, T, ω)`` and its derivatives, no constant
     (k, c) (:mod:`tenscell.laws.viscoelastic`).
 :class:`CompositeLaw`
@@ -88,7 +88,8 @@ from .composite import CompositeLaw, family_laws
 from .constructors import power_dashpot_law, rest_lengths, stiffening_law, voigt_law
 from .filaments import StiffeningFilament
 from .springs import DEFAULT_VELOCITY_SCALE, LinearSpring, PowerDashpot, Voigt
-from .viscoelastic import DEFAULT_REALIZATION_BAND_HZ, SPRINGPOT_TIME, Maxwell, Springpot, StandardLinearSolid, springpot_prony
+from .viscoelastic import (DEFAULT_REALIZATION_BAND_HZ, SPRINGPOT_TIME, Maxwell, Springpot, StandardLinearSolid,
+                           TensionSpringpot, springpot_prony)
 
 
 __all__ = [
@@ -102,6 +103,7 @@ __all__ = [
     "Maxwell",
     "StandardLinearSolid",
     "Springpot",
+    "TensionSpringpot",
     "SPRINGPOT_TIME",
     "Realization",
     "springpot_prony",

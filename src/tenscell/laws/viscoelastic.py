@@ -1,4 +1,5 @@
-"""Tendons with dynamics of their own: :class:`Maxwell`, :class:`StandardLinearSolid`, :class:`Springpot`.
+"""Tendons with dynamics of their own: :class:`Maxwell`, :class:`StandardLinearSolid`, :class:`Springpot`,
+:class:`TensionSpringpot`.
 
 The paper's Voigt tendon has one stiffness and one damping at every
 frequency. The laws here have an internal state (a dashpot's extension, or a
@@ -22,12 +23,14 @@ law                               k*(ω)                                        
 (EA, EA_arm, c)                   ``τ = c·l/EA_arm``
 :class:`Springpot` (EA, kappa,    ``(EA + T)/l + (kappa/l)·(iω·t1)^α``, ``t1 = 1 s``   ``(EA + T)/l``      grows as ω^α
 alpha)
+:class:`TensionSpringpot` (EA,    ``(EA + T)/l + (kappa/l)·(iω·t1)^α``                 ``(EA + T)/l``      grows as ω^max(α,α_T)
+kappa, alpha, beta, alpha_T)      ``+ (beta·T/l)·(iω·t1)^α_T``
 ================================  ===================================================  ==================  =================
 
 Scaling (exact, and tested): the strut-length scaling ``(P, EA, c, L) →
 (λ²P, λ²EA, λc, λL)`` with ``EA_arm → λ²EA_arm`` and ``kappa → λ²kappa``
-scales every ``k*`` by λ at the same ω; the time scaling ``c → λc`` (and
-``kappa → λ^α·kappa``) at ``f → f/λ`` leaves ``k*`` unchanged.
+scales every ``k*`` by λ at the same ω (``beta`` unchanged); the time scaling ``c → λc`` (and
+``kappa → λ^α·kappa``, ``beta → λ^α_T·beta``) at ``f → f/λ`` leaves ``k*`` unchanged.
 
 None of these laws has a constant pair (k, c) nor a tension ``T(l, l')``
 without internal state: :meth:`tangent_at_rest`, :meth:`tension` and
@@ -47,7 +50,7 @@ import scipy.optimize
 from .base import DEFAULT_REALIZATION_TOL, DynamicLawError, Parameter, Realization, _refs, angular_frequencies
 from .springs import _SpringEA
 
-__all__ = ["Maxwell", "StandardLinearSolid", "Springpot", "SPRINGPOT_TIME", "DEFAULT_REALIZATION_BAND_HZ",
+__all__ = ["Maxwell", "StandardLinearSolid", "Springpot", "TensionSpringpot", "SPRINGPOT_TIME", "DEFAULT_REALIZATION_BAND_HZ",
            "springpot_prony"]
 
 #: the reference time t1 of :class:`Springpot` (s): kappa is the springpot's axial modulus at ω = 1/t1 = 1 rad/s
@@ -350,11 +353,9 @@ class Springpot(_DynamicSpring):
         l, T = self._check(l, T)
         w = angular_frequencies(omega)
         pw = self._power(w, np.broadcast_to(self.alpha, l.shape))
-        with np.errstate(divide="ignore"):
-            log_iw = np.log(np.where(w > 0, w * SPRINGPOT_TIME, 1.0)) + 0.5j * np.pi
         inv = np.broadcast_to((1.0 / l).astype(complex), (w.size, l.size)).copy()
         # at ω = 0, (iω)^α·log(iω) → 0: pw is 0 there, so the product is 0
-        return inv, np.stack([inv, pw / l, (self.kappa / l) * pw * log_iw[:, None]])
+        return inv, np.stack([inv, pw / l, (self.kappa / l) * pw * _log_iw(w)])
 
     def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
         """The spring ``(EA + T)/l`` with the springpot as a Prony series (:func:`springpot_prony`) per exponent.
@@ -365,21 +366,122 @@ class Springpot(_DynamicSpring):
         dashpot above it and relaxes below it.
         """
         l, T = self._check(l, T)
-        lo_hi = _band(band_hz)
-        alpha = np.broadcast_to(self.alpha, l.shape)
-        kappa_l = np.broadcast_to(self.kappa, l.shape) / l
-        c = np.zeros(l.size)
-        tendon, arm_k, arm_c = [], [], []
-        err = 0.0
+        return _springpot_realization(self._spring_tangent(l, T), [(self.kappa / l, self.alpha)], band_hz, tol)
+
+
+
+def _log_iw(w) -> np.ndarray:
+    """``log(iω·t1)``, shape (n_omega, 1); 0·log 0 is taken as 0 where it multiplies ``(iω·t1)^α`` (ω = 0)."""
+    with np.errstate(divide="ignore"):
+        return (np.log(np.where(w > 0, w * SPRINGPOT_TIME, 1.0)) + 0.5j * np.pi)[:, None]
+
+
+@dataclass(frozen=True, eq=False)
+class TensionSpringpot(_DynamicSpring):
+    """A passive springpot and an active one whose modulus is proportional to the tendon's tension.
+
+    ``k*(ω) = (EA + T)/l + (kappa/l)·(iω·t1)^α + (beta·T/l)·(iω·t1)^α_T``, ``t1 = 1 s``.
+
+    The passive part (``kappa``, α) is the cross-linked network's own power
+    law; the active part is the contractile machinery: the more tension a
+    tendon carries, the more force-bearing cross-bridges, so its modulus is
+    ``beta·T`` (``beta`` dimensionless: the active axial stiffness at ω = 1
+    rad/s per unit of tension over length; about l/δ for a tendon of length l
+    whose cross-bridges carry force over a distance δ), with its own exponent
+    α_T. When α_T < α the tendon's effective exponent falls as its tension
+    rises (as measured in airway smooth muscle cells: Stamenović et al., J Appl
+    Physiol 96:1600, 2004). Exact identities: ``beta = 0`` is
+    :class:`Springpot` ``(EA, kappa, α)``, and α_T = α is :class:`Springpot`
+    ``(EA, kappa + beta·T, α)``.
+
+    Scaling: under the strut-length scaling ``(P, EA, kappa, L) → (λ²P,
+    λ²EA, λ²kappa, λL)`` beta is unchanged (``beta·T/l`` scales as λ like
+    every k*); under the time scaling ``f → f/λ``, ``kappa → λ^α·kappa`` and
+    ``beta → λ^α_T·beta``.
+
+    Parameters
+    ----------
+    EA : float or ndarray, shape (m,)
+        Axial stiffness of the spring (N), > 0; it carries the prestress (Eq. 11).
+    kappa : float or ndarray, shape (m,)
+        The passive springpot's modulus at ω = 1 rad/s (N), ≥ 0.
+    alpha : float or ndarray, shape (m,)
+        The passive exponent (dimensionless), 0 < α ≤ 1.
+    beta : float or ndarray, shape (m,)
+        The active springpot's modulus at ω = 1 rad/s per unit tension (dimensionless), ≥ 0.
+    alpha_T : float or ndarray, shape (m,)
+        The active exponent (dimensionless), 0 < α_T ≤ 1.
+    l0 : ndarray, shape (m,), optional
+        Rest lengths of the spring (m).
+    """
+
+    EA: Any
+    kappa: Any
+    alpha: Any
+    beta: Any
+    alpha_T: Any
+    l0: Any = None
+    parameters: ClassVar = (Parameter("EA", "N"), Parameter("kappa", "N", True), Parameter("alpha", ""),
+                            Parameter("beta", "", True), Parameter("alpha_T", ""))
+
+    def __post_init__(self):
+        self._validate()
+        for name in ("alpha", "alpha_T"):
+            if np.any(np.asarray(getattr(self, name)) > 1.0):
+                raise ValueError(f"{name} (springpot exponent) must be in (0, 1] (dimensionless), "
+                                 f"got {getattr(self, name)!r}")
+
+    def _powers(self, l, w):
+        return (Springpot._power(w, np.broadcast_to(self.alpha, l.shape)),
+                Springpot._power(w, np.broadcast_to(self.alpha_T, l.shape)))
+
+    def complex_stiffness(self, l, T, omega) -> np.ndarray:
+        """``(EA + T)/l + (kappa/l)·(iω·t1)^α + (beta·T/l)·(iω·t1)^α_T`` (N/m), shape (n_omega, m)."""
+        l, T = self._check(l, T)
+        w = angular_frequencies(omega)
+        pw, pw_T = self._powers(l, w)
+        return self._spring_tangent(l, T) + (self.kappa / l) * pw + (self.beta * T / l) * pw_T
+
+    def complex_stiffness_derivatives(self, l, T, omega):
+        """``∂k*/∂T = (1 + beta·(iω·t1)^α_T)/l``; by EA, kappa, α, beta, α_T in turn: ``1/l``, ``(iω·t1)^α/l``,
+        ``(kappa/l)(iω·t1)^α·log(iω·t1)``, ``(T/l)(iω·t1)^α_T``, ``(beta·T/l)(iω·t1)^α_T·log(iω·t1)``."""
+        l, T = self._check(l, T)
+        w = angular_frequencies(omega)
+        pw, pw_T = self._powers(l, w)
+        log_iw = _log_iw(w)
+        inv = np.broadcast_to((1.0 / l).astype(complex), pw.shape).copy()
+        active = (self.beta * T / l) * pw_T
+        dT = inv + (np.broadcast_to(self.beta, l.shape) / l) * pw_T
+        return dT, np.stack([inv, pw / l, (self.kappa / l) * pw * log_iw, (T / l) * pw_T, active * log_iw])
+
+    def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
+        """The spring ``(EA + T)/l`` with both springpots as Prony series (:func:`springpot_prony`), as for :class:`Springpot`."""
+        l, T = self._check(l, T)
+        return _springpot_realization(self._spring_tangent(l, T),
+                                      [(self.kappa / l, self.alpha), (self.beta * T / l, self.alpha_T)], band_hz, tol)
+
+def _springpot_realization(k, terms, band_hz, tol) -> Realization:
+    """The spring ``k`` (N/m, per tendon) in parallel with springpots ``(coef_j/l_j)·(iω·t1)^α_j`` as Prony series.
+
+    ``terms``: (coefficient over length (N/m), exponent) pairs, each a scalar or an (m,) array; every
+    (term, exponent) pair gets the arms of :func:`springpot_prony` scaled by its coefficient. The error is the
+    series' largest relative error (so at most that in each springpot part of k*).
+    """
+    m = k.size
+    lo_hi = _band(band_hz)
+    c = np.zeros(m)
+    tendon, arm_k, arm_c = [], [], []
+    err = 0.0
+    for coef, alpha in terms:
+        coef, alpha = np.broadcast_to(coef, (m,)), np.broadcast_to(alpha, (m,))
         for a in np.unique(alpha):
             js = np.flatnonzero(alpha == a)
             g_d, tau, g, e = springpot_prony(float(a), lo_hi, float(tol))
             err = max(err, e)
-            c[js] = g_d * kappa_l[js]
+            c[js] += g_d * coef[js]
             tendon.append(np.repeat(js, tau.size))
-            arm_k.append(np.outer(kappa_l[js], g).ravel())
-            arm_c.append(np.outer(kappa_l[js], g * tau).ravel())
-        keep = np.concatenate(arm_k) > 0  # kappa = 0 tendons have no arms
-        return Realization(k=self._spring_tangent(l, T), c=c, tendon=np.concatenate(tendon)[keep],
-                           arm_k=np.concatenate(arm_k)[keep], arm_c=np.concatenate(arm_c)[keep], error=err,
-                           band_hz=lo_hi)
+            arm_k.append(np.outer(coef[js], g).ravel())
+            arm_c.append(np.outer(coef[js], g * tau).ravel())
+    keep = np.concatenate(arm_k) > 0  # tendons with a zero coefficient have no arms
+    return Realization(k=k, c=c, tendon=np.concatenate(tendon)[keep], arm_k=np.concatenate(arm_k)[keep],
+                       arm_c=np.concatenate(arm_c)[keep], error=err, band_hz=lo_hi)

@@ -19,7 +19,7 @@ import numpy as np
 
 from .modal import complement_basis
 
-__all__ = ["deformation_basis", "unresisted_share"]
+__all__ = ["deformation_basis", "unresisted_share", "solve_full", "resolvent_full"]
 
 
 def deformation_basis(cell) -> np.ndarray | None:
@@ -41,3 +41,25 @@ def unresisted_share(vector, N: np.ndarray) -> float:
         return 0.0
     kept = float(np.linalg.norm(N.T @ v))
     return float(np.sqrt(max(0.0, 1.0 - (kept / norm) ** 2)))
+
+
+def solve_full(lin, shift: complex, rhs) -> np.ndarray:
+    """``(K0 + s·C0)⁻¹ rhs`` in the model's full coordinates, through its pencil (:meth:`Pencil.solve_at`).
+
+    For a free-standing model (``lin.basis`` = N) the solve on the complement of the rigid-body motions, lifted
+    back: ``N (NᵀK0N + s·NᵀC0N)⁻¹ Nᵀ rhs`` (the part of ``rhs`` along the rigid-body motions is resisted by
+    nothing and left out, as for every compliance).
+    """
+    N = lin.basis
+    if N is None:
+        return lin.pencil.solve_at(shift, rhs)
+    return N @ lin.pencil.solve_at(shift, N.T @ np.asarray(rhs))
+
+
+def resolvent_full(lin, w, rhs) -> np.ndarray:
+    """``(K0 + iωC0)⁻¹ rhs`` for every ω (rad/s), shape (nf, n), in the full coordinates (:meth:`Pencil.resolvent`;
+    for a free-standing model on the complement of the rigid-body motions, lifted back as in :func:`solve_full`)."""
+    N = lin.basis
+    if N is None:
+        return lin.pencil.resolvent(w, rhs)
+    return lin.pencil.resolvent(w, np.asarray(rhs, dtype=float) @ N) @ N.T

@@ -23,6 +23,11 @@ Two direction parametrizations are offered:
     ``u = w/|w|`` with ``w = u_ref + θ1 e1 + θ2 e2`` and ``e1, e2 ⊥ u_ref``
     (θ dimensionless, zero at the reference).
 
+``"auto"``
+    ``"angles"`` unless a strut lies within :data:`VERTICAL_SIN` (sin δ) of
+    the z axis, where the angles are singular (α moves nothing); then
+    ``"local"``, and :attr:`Coordinates.note` says so in one line.
+
 Both give the same physics; the test suite checks that the compliance is the
 same in either chart.
 """
@@ -34,9 +39,14 @@ import numpy as np
 
 from .structure import Structure
 
-__all__ = ["Coordinates", "NodeKinematics", "make_coordinates", "kinematics", "positions", "PARAMETRIZATIONS"]
+__all__ = ["Coordinates", "NodeKinematics", "make_coordinates", "kinematics", "positions", "PARAMETRIZATIONS",
+           "VERTICAL_SIN"]
 
-PARAMETRIZATIONS = ("angles", "local")
+PARAMETRIZATIONS = ("angles", "local", "auto")
+#: "auto" leaves the paper's angles for the local chart when a strut has sin δ below this (within 0.57° of
+#: vertical): ∂u/∂α = sin δ, so the stiffness in α scales as sin²δ (1e-4 of the other terms here) and vanishes
+#: at δ = 0, where K0 is singular whatever the structure
+VERTICAL_SIN = 1e-2
 _W = 5  # widest coordinate block a node depends on (a free strut)
 
 
@@ -74,6 +84,7 @@ class Coordinates:
     point_start: np.ndarray  # first coordinate of each point node
     tendon_nodes: np.ndarray  # (m, 2) node pairs of the working tendons, as an array once
     point_axes: np.ndarray | None = None  # (n_points, 3) bool: the free directions of each point node (rollers)
+    note: str = ""  # why "auto" chose the local chart, if it did
 
     def __repr__(self) -> str:
         return f"<Coordinates: {self.n} {self.kind!r} coordinates of {self.structure.name!r}>"
@@ -110,16 +121,17 @@ def make_coordinates(structure: Structure, kind: str = "angles") -> Coordinates:
     Parameters
     ----------
     structure : Structure
-    kind : {"angles", "local"}
+    kind : {"angles", "local", "auto"}
         Direction parametrization of the struts (see module docstring).
 
     Returns
     -------
     Coordinates
-        With ``q0`` reproducing the structure's reference node positions.
+        With ``q0`` reproducing the structure's reference node positions; ``kind`` the chart used.
     """
     if kind not in PARAMETRIZATIONS:
         raise ValueError(f"parametrization must be one of {PARAMETRIZATIONS}, got {kind!r}")
+    kind, note = _chart(structure) if kind == "auto" else (kind, "")
     s = structure
     ns = len(s.struts)
     struts = np.asarray(s.struts, dtype=int).reshape(ns, 2)
@@ -174,8 +186,23 @@ def make_coordinates(structure: Structure, kind: str = "angles") -> Coordinates:
     return Coordinates(
         structure=s, kind=kind, n=pos, q0=q0a, node_index=node_index, labels=tuple(labels),
         strut_start=starts, anchored=anchored, lengths=lengths, frame=frame, point_start=pstart,
-        tendon_nodes=tendon_nodes, point_axes=None if free.all() else free,
+        tendon_nodes=tendon_nodes, point_axes=None if free.all() else free, note=note,
     )
+
+
+def _chart(s: Structure) -> tuple[str, str]:
+    """``("angles", "")``, or ``("local", why)`` when a strut is vertical within :data:`VERTICAL_SIN`."""
+    if not s.struts:
+        return "angles", ""
+    S = np.asarray(s.struts, dtype=int)
+    u = (s.nodes[S[:, 1]] - s.nodes[S[:, 0]]) / s.strut_lengths[:, None]
+    sin_delta = np.hypot(u[:, 0], u[:, 1])
+    vertical = np.flatnonzero(sin_delta < VERTICAL_SIN)
+    if not vertical.size:
+        return "angles", ""
+    which = ", ".join(map(str, vertical[:5].tolist())) + (" …" if vertical.size > 5 else "")
+    return "local", (f"strut(s) {which} vertical: the paper's angles δ, α are singular there, so the struts' "
+                     "directions use the local chart (parametrization='local'; the same physics)")
 
 
 def _frame(u: np.ndarray) -> np.ndarray:

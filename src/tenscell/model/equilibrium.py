@@ -444,6 +444,7 @@ class Cell:
             f"{self.n} coordinates ({self.coords.kind}, {'sparse' if self.sparse else 'dense'})",
             f"self-stress T0 {span(self.T0)} (tensions P·T0 N), self-stress space dimension {dim}",
             f"strut length L = {self.L:.4g} m (continuum factor 0.5/L)",
+            *((f"note: {self.coords.note}",) if self.coords.note else ()),
         )
 
     def to_dataframe(self):
@@ -477,7 +478,7 @@ def _show_parameter(key: str, value) -> str:
 
 def equilibrate(
     structure: Structure,
-    parametrization: str = "angles",
+    parametrization: str = "auto",
     *,
     T0: np.ndarray | None = None,
     parameters: dict | None = None,
@@ -488,8 +489,10 @@ def equilibrate(
     ----------
     structure : Structure
         Its node positions are the reference configuration q0.
-    parametrization : {"angles", "local"}
-        Strut direction coordinates (see :mod:`tenscell.model.coordinates`).
+    parametrization : {"auto", "angles", "local"}
+        Strut direction coordinates (see :mod:`tenscell.model.coordinates`); ``"auto"``: the paper's
+        angles, or the local chart when a strut is vertical (where the angles are singular), which the
+        cell's ``repr`` notes (``cell.coords.note``).
     T0 : ndarray, optional
         A self-stress to use instead of the computed one; it is checked
         (``A T0 = 0``, cables in tension) and normalized. Without it, the

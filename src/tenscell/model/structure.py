@@ -159,23 +159,35 @@ def _check_supports(supports, n: int, fixed: set, S: np.ndarray) -> tuple[tuple[
     out: dict[int, str] = {}
     on_strut = set(S.ravel().tolist())
     for item in supports:
-        try:
-            node, axes = int(item[0]), str(item[1]).lower()
-        except (TypeError, ValueError, IndexError):
-            raise StructureError(f"supports: expected (node, axes) pairs such as (3, 'z'), got {item!r}") from None
-        if not 0 <= node < n:
-            raise StructureError(_unknown_node("supports", node, n))
-        if not axes or set(axes) - set("xyz") or len(set(axes)) != len(axes):
-            raise StructureError(f"supports: node {node}: axes {axes!r} must be some of 'x', 'y', 'z', each once")
-        if len(axes) == 3 or node in fixed:
-            raise StructureError(f"supports: node {node} is held in every direction; list it among the fixed nodes")
-        if node in on_strut:
-            raise StructureError(f"supports: node {node} is the end of a rigid strut; a strut end is held fully "
-                                 "(fixed) or not at all (use pin_jointed() for elastic struts on rollers)")
+        node, axes = check_support(item, n, fixed, on_strut)
         if node in out:
             raise StructureError(f"supports: node {node} is listed twice")
-        out[node] = "".join(a for a in "xyz" if a in axes)
+        out[node] = axes
     return tuple(sorted(out.items()))
+
+
+def check_support(item, n: int, fixed: set, on_strut: set) -> tuple[int, str]:
+    """One support ``(node, axes)`` checked and normalized (axes in x-y-z order); StructureError otherwise.
+
+    The rules shared by :class:`Structure` and structure files: a point node among ``n``, not fixed, not the
+    end of a rigid strut (``on_strut``), held in one or two of the directions x, y, z, each named once.
+    """
+    try:
+        node, axes = int(item[0]), str(item[1]).lower()
+    except (TypeError, ValueError, IndexError):
+        raise StructureError(f"supports: expected (node, axes) pairs such as (3, 'z'), got {item!r}") from None
+    if not 0 <= node < n:
+        raise StructureError(_unknown_node("supports", node, n))
+    if not axes or set(axes) - set("xyz") or len(set(axes)) != len(axes):
+        raise StructureError(f"supports: node {node}: axes {axes!r} must be some of 'x', 'y', 'z', each once")
+    if len(axes) == 3 or node in fixed:
+        raise StructureError(f"supports: node {node} is held in every direction; list it among the fixed nodes")
+    if node in on_strut:
+        # a strut end's position is a nonlinear function of the strut's coordinates (its angles): holding one
+        # direction of it is a constraint on them, not a coordinate removed, which these coordinates cannot express
+        raise StructureError(f"supports: node {node} is the end of a rigid strut; a strut end is held fully "
+                             "(fixed) or not at all (use pin_jointed() for elastic struts on rollers)")
+    return node, "".join(a for a in "xyz" if a in axes)
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ import math
 import numpy as np
 
 from ..fitting.prestress import CELL_ELASTICITY
-from ..fitting.result import FitResult, frequency_slopes, noise_rms, prestress_slopes
+from ..fitting.result import FitResult, noise_rms
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
 from .._results import CORRELATION_THRESHOLD, plus_minus
@@ -28,11 +28,32 @@ def _name(source: str) -> str:
     return source.replace("\\", "/").rsplit("/", 1)[-1]
 
 
-def _data_slopes(data: RheologyData):
+def _parameter(result: FitResult, name: str, unit: str = "", digits: int = 4) -> str:
+    """Parameter ``name`` as ``"value +/- stderr unit"`` (lmfit's convention) or with why it has no error."""
+    for p, (se, note) in zip(result.parameters, result.standard_errors):
+        if p.name == name:
+            return plus_minus(p.value, se, unit, note, digits)
+    raise ValueError(f"no parameter named {name!r}")
+
+
+def _data_slopes(data: RheologyData) -> list[str]:
+    """Least-squares lines of the data's G' and G'' against prestress: dG'/dP, G'(0), dG''/dP, G''(0) (Pa), each
+    with its ordinary least-squares standard error (from the scatter about the line; none for 2 points).
+
+    numpy's ``polyfit(..., cov=True)`` scales the covariance by the residual sum of squares over n − 2, as
+    ``scipy.stats.linregress`` does; importing scipy.stats would cost the fit command 0.6 s."""
     assert data.prestress is not None, "a prestress sweep"
-    a1, b1 = np.polyfit(data.prestress, data.G_storage, 1)
-    a2, b2 = np.polyfit(data.prestress, data.G_loss, 1)
-    return float(a1), float(b1), float(a2), float(b2)
+    out = []
+    for G in (data.G_storage, data.G_loss):
+        if data.n < 3 or np.unique(data.prestress).size < 3:
+            a, b = np.polyfit(data.prestress, G, 1)
+            out += [plus_minus(float(a), None, "", "(a line through 2 prestresses)", 4),
+                    plus_minus(float(b), None, "", "(a line through 2 prestresses)", 4)]
+            continue
+        (slope, intercept), cov = np.polyfit(data.prestress, G, 1, cov=True)
+        out += [plus_minus(float(slope), float(np.sqrt(cov[0, 0])), "", "", 4),
+                plus_minus(float(intercept), float(np.sqrt(cov[1, 1])), "", "", 4)]
+    return out
 
 
 def section_summary(result: FitResult, baseline=None) -> list[str]:
@@ -52,8 +73,8 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
     lines = [f"- Data: {len(result.datasets)} data set(s), {sum(d.n for d in result.datasets)} points:"]
     for f in result.fits:
         at = (f", measured at {num(f.prestress_pa)} Pa (stated)" if f.prestress_pa is not None else
-              f", prestress not stated: fitted {num(f.prestress_fitted_pa)} Pa" if f.prestress_fitted_pa is not None
-              else "")
+              f", prestress not stated: fitted {_parameter(result, f'P_data[{f.index}]', 'Pa')}"
+              if f.prestress_fitted_pa is not None else "")
         what = "creep compliance J(t)" if f.axis == "time" else f"{f.axis} sweep"
         lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {what}{at}.")
         lines += [f"     Thinned: {note}." for note in binning_notes(f.data)]
@@ -82,11 +103,11 @@ def section_datasets(result: FitResult, baseline=None) -> list[str]:
                                          "within tolerance"), rows)]
     if "s" in result.problem.names:
         out.append(f"One prestress scale links the data sets: model prestress (N) = s × prestress (Pa), "
-                   f"s = {num(result.value('s'))} m².")
+                   f"s = {_parameter(result, 's', 'm²')}.")
     unknown = [f for f in result.fits if f.prestress_fitted_pa is not None]
     for f in unknown:
         out.append(f"Data set {f.index} does not state its prestress; the fit places it at "
-                   f"{num(f.prestress_fitted_pa)} Pa on the scale of the others (a fitted parameter, not a "
+                   f"{_parameter(result, f'P_data[{f.index}]', 'Pa')} on the scale of the others (a fitted parameter, not a "
                    "measurement).")
     return out + [""]
 
@@ -102,43 +123,56 @@ def section_baseline(result: FitResult, baseline=None) -> list[str]:
 
 
 def section_shape(result: FitResult, baseline=None) -> list[str]:
-    """Slopes of the fitted model: log-log in frequency, straight lines in prestress."""
-    out = ["## Shape of the fitted model", ""]
+    """Slopes of the fitted model: log-log in frequency, straight lines in prestress, each with its standard error
+    (:attr:`FitResult.derived`)."""
+    q = result.derived
+    out = ["## Shape of the fitted model", "",
+           "Each number derived from the fitted parameters carries its standard error (delta method through the "
+           "parameters' covariance, `fit.json` `derived`).", ""]
     for f in result.fits:
         d = f.data
         head = f"Data set {f.index} (`{_name(d.source)}`): " if result.joint else ""
         if f.axis == "frequency":
-            f_lo, f_hi = float(d.frequency_hz.min()), float(d.frequency_hz.max())
-            _, s1, s2 = frequency_slopes(result, f_lo, f_hi, 1000, dataset=f.index)
-            line = (f"{head}local log-log slopes on 1000 frequencies from {num(f_lo)} to {num(f_hi)} Hz: "
-                    f"G' {s1.min():.3f} to {s1.max():.3f}; G'' {s2.min():.3f} to {s2.max():.3f}.")
+            key = f"frequency_slopes[{f.index}]"
+            line = (f"{head}local log-log slopes on 1000 frequencies from {num(d.frequency_hz.min())} to "
+                    f"{num(d.frequency_hz.max())} Hz: G' {q.text(key, 0, digits=3)} to {q.text(key, 1, digits=3)}; "
+                    f"G'' {q.text(key, 2, digits=3)} to {q.text(key, 3, digits=3)}.")
             if baseline is not None and not baseline.joint:
-                _, b1, _ = frequency_slopes(baseline, f_lo, f_hi, 1000)
-                line += f" Homogeneous baseline: G' slope {b1.min():.3f} to {b1.max():.3f}."
+                line += (f" Homogeneous baseline: G' slope {baseline.derived.text('frequency_slopes[0]', 0, digits=3)}"
+                         f" to {baseline.derived.text('frequency_slopes[0]', 1, digits=3)}.")
             out.append(line)
         elif f.axis == "time":
-            expo = np.gradient(np.log(f.J_model), np.log(d.time_s)) if d.n > 1 else np.zeros(1)
+            key = f"creep_slopes[{f.index}]"
             out.append(f"{head}local log-log slope of the fitted creep compliance at the data's times "
-                       f"{num(d.time_s.min())}–{num(d.time_s.max())} s: {expo.min():.3f} to {expo.max():.3f}.")
+                       f"{num(d.time_s.min())}–{num(d.time_s.max())} s: {q.text(key, 0, digits=3)} to "
+                       f"{q.text(key, 1, digits=3)}.")
         else:
-            a1, b1, a2, b2 = prestress_slopes(result, dataset=f.index)
-            da1, db1, da2, db2 = _data_slopes(d)
-            rows: list[tuple[str, ...]] = [("data", num(da1), num(db1), num(da2), num(db2)), ("fitted model", num(a1), num(b1), num(a2),
-                                                                       num(b2))]
-            if baseline is not None and not baseline.joint:
-                rows.append(("homogeneous baseline", *(num(v) for v in prestress_slopes(baseline))))
-            out += [f"{head}straight lines over the data's prestress range:", "",
-                    table(("", "dG'/dP", "G'(0) (Pa)", "dG''/dP", "G''(0) (Pa)"), rows)]
-            out.append("The fitted model's lines (and its loss tangent η = G''/G' along them) restate the trend "
-                       "of the data it was fitted to: a check of the fit, not a prediction.")
+            out += _prestress_lines(result, baseline, f, head)
         out.append("")
     return out
+
+
+def _prestress_lines(result: FitResult, baseline, f, head: str) -> list[str]:
+    """The straight lines of G', G'' against prestress: the data's, the fitted model's (with standard errors)."""
+    key = f"prestress_lines[{f.index}]"
+    rows: list[tuple[str, ...]] = [("data (least squares)", *_data_slopes(f.data)),
+                                   ("fitted model", *(result.derived.text(key, i) for i in range(4)))]
+    if baseline is not None and not baseline.joint:
+        rows.append(("homogeneous baseline", *(baseline.derived.text("prestress_lines[0]", i) for i in range(4))))
+    return [f"{head}straight lines over the data's prestress range:", "",
+            table(("", "dG'/dP", "G'(0) (Pa)", "dG''/dP", "G''(0) (Pa)"), rows),
+            "The fitted model's lines (and its loss tangent η = G''/G' along them) restate the trend of the data "
+            "it was fitted to: a check of the fit, not a prediction."]
 
 
 def section_prestress(result: FitResult, baseline=None) -> list[str]:
     """Is the prestress doing anything? Elasticities and share, with the verdict in words."""
     pa = result.prestress
-    out = ["## Is the prestress doing anything?", "", pa.verdict(), ""]
+    q = result.derived
+    out = ["## Is the prestress doing anything?", "", pa.verdict(),
+           f"With standard errors: the share of the static stiffness runs from {q.text('prestress_share', 0, digits=3)}"
+           f" to {q.text('prestress_share', 1, digits=3)}, ∂lnG'/∂lnP from {q.text('prestress_storage', 0, digits=3)}"
+           f" to {q.text('prestress_storage', 1, digits=3)}.", ""]
     if pa.min_share_bound is not None:
         out += [f"This fit was required to keep the prestress share of the static stiffness at or above "
                 f"{num(pa.min_share_bound)} (a one-sided penalty; the values below are the ones reached).", ""]
@@ -146,10 +180,9 @@ def section_prestress(result: FitResult, baseline=None) -> list[str]:
         out += [f"This fit was required to keep ∂lnG'/∂lnP at {num(pa.elasticity_bound_frequency_hz)} Hz at or "
                 f"above {num(pa.min_elasticity_bound)} at every prestress of the data (a one-sided penalty; the "
                 "values below are the ones reached).", ""]
-    rows = []
-    for k, P, a, b, s in zip(pa.reference_dataset, pa.reference_prestress_N, pa.reference_storage,
-                             pa.reference_loss, pa.reference_share):
-        rows.append((k, num(P), num(a, 3), num(b, 3), num(s, 3)))
+    rows = [(k, *(q.text(key, i, digits=d) for key, d in (("reference_prestress_N", 4), ("reference_storage", 3),
+                                                           ("reference_loss", 3), ("reference_share", 3))))
+            for i, k in enumerate(pa.reference_dataset)]
     out += [f"At {num(pa.reference_frequency_hz)} Hz, for each prestress of the data (model P in N at the fitted "
             "strut length):", "",
             table(("data set", "P (N)", "∂lnG'/∂lnP", "∂lnG''/∂lnP", "share of static stiffness carried by P·Kp"),
@@ -164,8 +197,9 @@ def section_prestress(result: FitResult, baseline=None) -> list[str]:
 
 def section_stiffness(result: FitResult, baseline=None) -> list[str]:
     """The spread of the fitted stiffnesses (and the bound on it, if any)."""
-    lo, hi, dec = result.stiffness_spread
-    line = f"Tendon stiffnesses span {num(lo)} to {num(hi)} N: {dec:.1f} decades{result._interior_text()}."
+    q = result.derived
+    line = (f"Tendon stiffnesses span {q.text('stiffness_spread', 0, 'N')} to {q.text('stiffness_spread', 1, 'N')}: "
+            f"{q.text('stiffness_spread', 2, 'decades', 3)}{result._interior_text()}.")
     if any(result.parameters[g].at_bound for g in set(result.problem.ea_groups.tolist())):
         line += (" Stiffnesses sit at their bounds: the span is set by the bound box, not measured by the data.")
     D = result.problem.max_decades
@@ -212,14 +246,19 @@ def section_errors(result: FitResult, baseline=None) -> list[str]:
     """Data, model and log10 error at every point, per data set."""
     out = ["## Errors", ""]
     base_fits = baseline.fits if baseline is not None and len(baseline.datasets) == len(result.datasets) else None
+    se = result.model_standard_errors()  # decades of log10 G' / G'' / J, per residual
+    out.append("Model values with their standard errors (linearized at the optimum, from the parameters' "
+               "covariance: `FitResult.model_standard_errors()`).")
+    out.append("")
     for f in result.fits:
         d = f.data
         if f.axis == "time":
             if result.joint:
                 out += [f"Data set {f.index} (`{_name(d.source)}`):", ""]
+            e = se[result.problem.rows(f.index)]
             out.append(table(["time (s)", "J data (1/Pa)", "J model (1/Pa)", "log10 error"],
-                             [[num(d.time_s[i]), num(d.compliance[i]), num(f.J_model[i]), f"{f.residuals[i]:+.4f}"]
-                              for i in range(d.n)]))
+                             [[num(d.time_s[i]), num(d.compliance[i]), _model_value(f.J_model[i], e[i]),
+                               f"{f.residuals[i]:+.4f}"] for i in range(d.n)]))
             continue
         xname = "prestress (Pa)" if f.axis == "prestress" else "frequency (Hz)"
         head = [xname, "G' data (Pa)", "G' model (Pa)", "log10 error", "G'' data (Pa)", "G'' model (Pa)",
@@ -227,16 +266,26 @@ def section_errors(result: FitResult, baseline=None) -> list[str]:
         if base_fits is not None:
             head += ["G' baseline", "G'' baseline"]
         rows = []
+        e = se[result.problem.rows(f.index)]
+        base_se = baseline.model_standard_errors()[baseline.problem.rows(f.index)] if base_fits is not None else None
         for i in range(d.n):
-            row = [num(f.x[i]), num(d.G_storage[i]), num(f.G_storage_model[i]), f"{f.residuals[i]:+.4f}",
-                   num(d.G_loss[i]), num(f.G_loss_model[i]), f"{f.residuals[d.n + i]:+.4f}"]
-            if base_fits is not None:
-                row += [num(base_fits[f.index].G_storage_model[i]), num(base_fits[f.index].G_loss_model[i])]
+            row = [num(f.x[i]), num(d.G_storage[i]), _model_value(f.G_storage_model[i], e[i]),
+                   f"{f.residuals[i]:+.4f}", num(d.G_loss[i]), _model_value(f.G_loss_model[i], e[d.n + i]),
+                   f"{f.residuals[d.n + i]:+.4f}"]
+            if base_fits is not None and base_se is not None:
+                row += [_model_value(base_fits[f.index].G_storage_model[i], base_se[i]),
+                        _model_value(base_fits[f.index].G_loss_model[i], base_se[d.n + i])]
             rows.append(row)
         if result.joint:
             out += [f"Data set {f.index} (`{_name(d.source)}`):", ""]
         out.append(table(head, rows))
     return out
+
+
+def _model_value(value: float, se_decades: float) -> str:
+    """A model value with its standard error, from that of its log10 (first order: value·ln10·se)."""
+    se = value * math.log(10.0) * se_decades if math.isfinite(se_decades) else None
+    return plus_minus(value, se, "", "" if se is not None else "(σ unknown)", 4)
 
 
 def section_alternatives(result: FitResult, baseline=None) -> list[str]:
@@ -250,7 +299,9 @@ def section_alternatives(result: FitResult, baseline=None) -> list[str]:
         cs = ", ".join(f"{v:.4g}" for k, v in vals.items() if k == "c" or k.startswith("c_"))
         rows.append((a.start, num(a.rms_log10_error, 4), cs, f"{math.log10(ea.max() / ea.min()):.1f}"))
     return ["## Other solutions that fit almost as well", "",
-            table(("start", "RMS log10 error", "c (N·s/m)", "stiffness spread (decades)"), rows)]
+            table(("start", "RMS log10 error", "c (N·s/m)", "stiffness spread (decades)"), rows),
+            "Standard errors are computed at the best fit only: these other optima are shown without them (their "
+            "distance from the best fit is itself a measure of what the data leave open).", ""]
 
 
 #: the report's sections, in order

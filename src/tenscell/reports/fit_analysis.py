@@ -150,7 +150,7 @@ def comparison_section(comparison) -> list[str]:
 POWER_LAW_SPAN = 0.05
 
 
-def creep_section(creep, frequency_slope: tuple | None = None, constrained: bool = False) -> list[str]:
+def creep_section(creep, frequency_slope: tuple | None = None, constrained: bool = False, derived=None) -> list[str]:
     """Predicted creep compliance of the fitted cell and its power-law exponent.
 
     Parameters
@@ -161,37 +161,56 @@ def creep_section(creep, frequency_slope: tuple | None = None, constrained: bool
     constrained : bool
         A frequency sweep of the fit covers those frequencies: the creep then restates what the data
         constrained and is not called a prediction.
+    derived : DerivedQuantities, optional
+        The fit's derived numbers with their standard errors (:attr:`tenscell.fitting.FitResult.derived`):
+        every number below is then shown with its ± (``creep_*`` keys); without it, values alone.
     """
     lo, hi = creep.window
     span = float(creep.exponent.max() - creep.exponent.min())
+    show = _creep_numbers(creep, frequency_slope, derived)
     # a power law is printed only for a curve that is one: a local exponent constant to within POWER_LAW_SPAN
     power = span <= POWER_LAW_SPAN
     title = "Creep of the fitted cell (restates the fitted data)" if constrained else "Predicted creep of the fitted cell"
     out = [f"## {title}", ""]
+    lo_e, hi_e = int(np.argmin(creep.exponent)), int(np.argmax(creep.exponent))
     if power:
-        out.append(f"After a stress step the fitted cell (prestress {num(creep.prestress_N)} N) creeps as "
-                   f"J(t) ≈ {num(creep.A)}·t^**{num(creep.alpha, 3)}** 1/Pa (t in s) over {num(lo)}–{num(hi)} s; the "
-                   f"local exponent d ln J/d ln t runs from {num(creep.exponent.min(), 3)} to "
-                   f"{num(creep.exponent.max(), 3)} (RMS of the ln residuals of the straight line "
-                   f"{num(creep.rms_log, 2)}).")
+        out.append(f"After a stress step the fitted cell (prestress {show('creep_prestress_N', 0, 'N')}) creeps as "
+                   f"J(t) ≈ {show('creep_A', 0, '1/Pa')}·t^**{show('creep_alpha', 0)}** (t in s) over "
+                   f"{num(lo)}–{num(hi)} s; the local exponent d ln J/d ln t runs from "
+                   f"{show('creep_exponent', lo_e)} to {show('creep_exponent', hi_e)} (RMS of the ln residuals of the "
+                   f"straight line {num(creep.rms_log, 2)}).")
     else:
-        out.append(f"After a stress step the fitted cell (prestress {num(creep.prestress_N)} N) creeps over "
-                   f"{num(lo)}–{num(hi)} s with a local exponent d ln J/d ln t from {num(creep.exponent.min(), 3)} "
-                   f"to {num(creep.exponent.max(), 3)}: not a power law over this window (the exponent varies by "
+        out.append(f"After a stress step the fitted cell (prestress {show('creep_prestress_N', 0, 'N')}) creeps over "
+                   f"{num(lo)}–{num(hi)} s with a local exponent d ln J/d ln t from {show('creep_exponent', lo_e)} "
+                   f"to {show('creep_exponent', hi_e)}: not a power law over this window (the exponent varies by "
                    f"{span:.2g}, more than {POWER_LAW_SPAN:g}), so no single exponent is given.")
     if frequency_slope is not None:
         out.append(f"For a power-law material the creep exponent equals the frequency exponent of G′; the fitted "
-                   f"G′ slope over the matching frequencies 1/(2πt) runs from {num(frequency_slope[0], 3)} to "
-                   f"{num(frequency_slope[1], 3)}."
+                   f"G′ slope over the matching frequencies 1/(2πt) runs from {show('creep_window_slope', 0)} to "
+                   f"{show('creep_window_slope', 1)}."
                    + (" That slope was fitted to a frequency sweep covering these frequencies, so this creep "
                       "restates what the data constrained: it is not a prediction." if constrained else ""))
     out.append("")
     pick = np.unique(np.linspace(0, creep.t.size - 1, 7).round().astype(int))
     out.append(table(["t (s)", "J (1/Pa)", "local exponent"],
-                     [(num(creep.t[i], 3), num(creep.J[i]), num(creep.exponent[i], 3)) for i in pick]))
+                     [(num(creep.t[i], 3), show("creep_J", i), show("creep_exponent", i)) for i in pick]))
     out += ["*What this does not show*: the creep of the linear model (small steps); a large step can slacken "
             "tendons (`tenscell creep` simulates it).", ""]
     return out
+
+
+def _creep_numbers(creep, frequency_slope, derived):
+    """``show(key, i, unit="")``: a creep number as text, with its ± when ``derived`` is given."""
+    plain = {"creep_A": [creep.A], "creep_alpha": [creep.alpha], "creep_J": creep.J,
+             "creep_prestress_N": [creep.prestress_N],
+             "creep_exponent": creep.exponent, "creep_window_slope": frequency_slope or (math.nan, math.nan)}
+
+    def show(key: str, i: int, unit: str = "") -> str:
+        if derived is not None:
+            return derived.text(key, i, unit, 3)
+        return num(plain[key][i], 3) + (f" {unit}" if unit else "")
+
+    return show
 
 
 # ---- the sections of tenscell.reports.fit (signature (result, baseline) -> lines) -----------------
@@ -225,13 +244,12 @@ def section_comparison(result, baseline=None, comparison=None) -> list[str]:
 
 
 def section_creep(result, baseline=None) -> list[str]:
-    """Predicted creep of the fitted cell, beside the fitted G′ slope over the matching frequencies."""
-    from ..fitting.result import frequency_slopes
-
+    """Predicted creep of the fitted cell, beside the fitted G′ slope over the matching frequencies, each number
+    with its standard error (:attr:`tenscell.fitting.FitResult.derived`)."""
     creep = result.predicted_creep()
     lo, hi = creep.window
     f_lo, f_hi = 1 / (2 * math.pi * hi), 1 / (2 * math.pi * lo)
-    _, s1, _ = frequency_slopes(result, f_lo, f_hi, 200)
+    q = result.derived
     constrained = any(f.axis == "frequency" and f.data.frequency_hz.min() <= f_hi and f.data.frequency_hz.max() >= f_lo
                       for f in result.fits)
-    return creep_section(creep, (float(s1.min()), float(s1.max())), constrained)
+    return creep_section(creep, tuple(q.values["creep_window_slope"]), constrained, derived=q)

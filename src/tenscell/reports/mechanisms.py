@@ -3,10 +3,17 @@ from __future__ import annotations
 
 import math
 
-from ..fitting.mechanisms import PER_TENDON_VOIGT
+from ..fitting.mechanisms import PER_TENDON_VOIGT, mechanism, mechanism_names
 from ._format import num, table
 
 __all__ = ["mechanism_fit_markdown", "mechanisms_markdown", "study_table_rows", "STUDY_COLUMNS"]
+
+
+def _held(mech, where: str = "") -> str:
+    """'Held, not fitted: ...' for a mechanism's fixed fields, or '' when every law parameter is fitted."""
+    held = [f"`{f.law_parameter}` = {num(f.value)}" for f in mech.fields if f.layout == "fixed"]
+    return (f"Held, not fitted{where} (not counted among the free parameters, and not measured by this fit): "
+            + ", ".join(held) + ".") if held else ""
 
 
 def mechanism_fit_markdown(result) -> str:
@@ -32,6 +39,8 @@ def mechanism_fit_markdown(result) -> str:
                      "n/a" if spread is None or not result.alternatives else f"{spread:.3g}"))
     out += [table(("parameter", "value", "unit", "local standard error", "spread over equally good starts (decades)"),
                   rows)]
+    if _held(result.mechanism):
+        out += [_held(result.mechanism), ""]
     n_alt = len(result.alternatives)
     out += [f"{n_alt} other start(s) fit as well (RMS within 10 % of the best): "
             + ("where their spread exceeds the local error, the data allow several basins and the spread is the "
@@ -95,6 +104,9 @@ def mechanisms_markdown(study) -> str:
            + (f" against {ref.bic:.1f} for the per-tendon fit ({ref.n_free} parameters, spread "
               f"{ref.stiffness_spread:.1f} decades, RMS " + " / ".join(f"{x:.3f}" for x in ref.rms) + ")"
               if ref is not None and ref is not win else "") + ".", ""]
+    held = _held(mechanism(win.name), f" in `{win.name}`") if win.name in mechanism_names() else ""
+    if held:
+        out += [held, ""]
     if win.at_bound:
         out += [f"In the winning fit {', '.join(f'`{n}`' for n in win.at_bound)} sit at a bound: "
                 "the data want them beyond the box, so they are limits, not estimates.", ""]
@@ -110,4 +122,8 @@ def mechanisms_markdown(study) -> str:
             "the fitted curves restate them and are not predictions. Only the held-out column scores a "
             "prediction (outside the training window).",
             "- A parameter at its bound, or not determined within 10 %, is not measured by these data.", ""]
+    if any("(bundled with tenscell)" in str(src) for src in study.sources):
+        out.insert(-1, "- The bundled data sets are generated from published laws (Stamenović 2002's linear relations "
+                       "in the prestress, Fabry 2001's structural-damping law), not raw measurements: a mechanism "
+                       "that fits them reproduces those laws.")
     return "\n".join(out)
