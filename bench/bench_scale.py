@@ -148,7 +148,19 @@ def memory_probe(shape) -> None:
     with _threads.limited():
         cell = tenscell.model.lattice_cell(*shape)
         _linearize_moduli(cell)
-    print(f"{cell.n} {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0:.0f}")
+    print(f"{cell.n} {_high_water_mb():.0f}")
+
+
+def _high_water_mb() -> float:
+    """This process's peak resident memory (MB): VmHWM, which exec resets (ru_maxrss keeps the forking parent's)."""
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # no /proc: may include the parent's
 
 
 def peak_memory(shape) -> tuple[int, float]:
