@@ -274,7 +274,6 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=No
     ``figure`` (optional): a future of the figure's PNG bytes (:func:`fit_png`,
     drawn in a worker process meanwhile); without it the figure is drawn here.
     """
-    from .. import plotting
     from ..io.outputs import write_bytes, write_csv_rows, write_json, write_text
     from ..io.tables import fit_table
     from ..reports.fit import fit_markdown
@@ -291,7 +290,8 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=No
         doc["timing"] = timing
     header, rows = fit_table(result, baseline)
     markdown = fit_markdown(result, baseline, title=title, comparison=comparison)
-    if figure is None:
+    if figure is None:  # drawn here: only then does this process import the plotting stack (0.35 s)
+        from .. import plotting
         from ..plotting.fits import fit_panels
 
         fig = fit_panels(result, baseline=baseline, title=title)

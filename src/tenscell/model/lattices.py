@@ -60,7 +60,6 @@ import math
 
 import numpy as np
 import scipy.linalg
-from scipy.spatial import ConvexHull
 
 from .._checks import positive_scalar
 from .equilibrium import Cell, NotPrestressableError, equilibrate
@@ -110,6 +109,8 @@ def _rectified(n_struts: int) -> np.ndarray:
 
 def _faces(P: np.ndarray) -> list[list[int]]:
     """Faces of a convex polyhedron as vertex cycles (coplanar hull triangles merged)."""
+    from scipy.spatial import ConvexHull  # only sphere cells need it: not on every command's import path
+
     hull = ConvexHull(P)
     groups: dict = {}
     for simplex, eq in zip(hull.simplices, np.round(hull.equations, 9)):
