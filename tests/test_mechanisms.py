@@ -283,3 +283,25 @@ def test_identifiability_of_a_mechanism_has_no_gauge(joint):
     ident = identifiability(pb, theta)
     inside = [p.name for p in pb.parameters(theta) if p.at_bound is None]
     assert list(ident.names) == inside and not ident.gauge_removed
+
+
+def test_the_stiffness_spread_carries_its_standard_error():
+    """voigt-compact's spread is |log10(EA_actin/EA_IF)|: its error is σ of the difference of two ln-parameters
+    over ln 10, from their standard errors and correlation — an independent propagation of the same covariance.
+    The library's forward difference (step 1e-5) of a function linear in the ln-parameters is exact to rounding."""
+    from tenscell.reports.mechanisms import mechanism_fit_markdown
+
+    values = {"EA_actin": 0.5, "EA_intermediate_filament": 0.05, "c_actin": 0.2, "c_intermediate_filament": 3.0}
+    d = _synthetic("voigt-compact", values)
+    noisy = RheologyData(frequency_hz=d.frequency_hz, G_storage=d.G_storage * np.exp(0.02 * np.sin(7 * d.frequency_hz)),
+                         G_loss=d.G_loss, prestress=d.prestress, source="noisy")
+    r = fit_mechanism(noisy, "voigt-compact", starts=1, hops=0, progress=False)
+    ident = r.identifiability()
+    a, b = ident.names.index("EA_actin"), ident.names.index("EA_intermediate_filament")
+    se, rho = ident.standard_errors, ident.correlation
+    expected = np.sqrt(se[a] ** 2 + se[b] ** 2 - 2 * rho[a, b] * se[a] * se[b]) / np.log(10)
+    got, note = r.derived.error("stiffness_spread")
+    assert got is not None and note == ""
+    np.testing.assert_allclose(got, expected, rtol=1e-4)
+    line = next(x for x in mechanism_fit_markdown(r).splitlines() if x.startswith("Tendon-stiffness spread"))
+    assert "+/-" in line and "not determined" not in line

@@ -21,6 +21,7 @@ import dataclasses
 import json
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -171,6 +172,13 @@ def load_any_fit(path):
     return load_fit(path)
 
 
+def mechanism_report_quantities(fit: "MechanismFit") -> dict[str, np.ndarray]:
+    """The numbers a mechanism fit's report derives from its parameters: ``stiffness_spread`` (decades) and
+    ``assignment_spread`` (largest sd of G', G'' between assignments, decades)."""
+    return {"stiffness_spread": np.array([fit.stiffness_spread]),
+            "assignment_spread": np.asarray(fit.assignment_spread, dtype=float)}
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class MechanismFit:
     """The outcome of :func:`fit_mechanism`.
@@ -266,6 +274,15 @@ class MechanismFit:
 
         return identifiability(self.problem, self.theta, sigma_known=self.sigma_known, rtol=rtol)
 
+    @cached_property
+    def derived(self):
+        """The numbers the report derives from the parameters (tendon-stiffness spread, spread of G', G'' between
+        assignments), each with its standard error: a :class:`~tenscell.fitting.derived.DerivedQuantities`
+        (the per-tendon fit's delta method, :func:`~tenscell.fitting.derived.derived_quantities`)."""
+        from .derived import derived_quantities
+
+        return derived_quantities(self, mechanism_report_quantities)
+
     def information_criteria(self) -> tuple[float, float]:
         """(AIC, BIC) of the log10 residuals, ``k`` = free parameters (:func:`.models.information_criteria`)."""
         from .models import information_criteria
@@ -323,6 +340,7 @@ class MechanismFit:
             "tolerance": self.tolerance, "converged": self.converged, "tolerance_met": self.tolerance_met,
             "message": self.message,
             "stiffness_spread_decades": self.stiffness_spread,
+            "derived": self.derived.to_dict(),
             "assignment_spread_decades": list(self.assignment_spread), "assignments_K": self.mechanism.K,
             "AIC": aic, "BIC": bic,
             "parameters": [p.to_dict() for p in self.parameters],

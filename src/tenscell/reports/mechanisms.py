@@ -46,12 +46,13 @@ def mechanism_fit_markdown(result) -> str:
             + ("where their spread exceeds the local error, the data allow several basins and the spread is the "
                "honest uncertainty." if n_alt else "the local standard errors are the only uncertainty measured."),
             ""]
+    q = result.derived
     if result.mechanism.heterogeneous:
-        sp = result.assignment_spread
         out += [f"The moduli are the average over K = {result.mechanism.K} stratified assignments of the "
-                f"distributed property to the tendons; between assignments G' varies by up to {sp[0]:.3g} and G'' "
-                f"by up to {sp[1]:.3g} decades (standard deviation).", ""]
-    out += [f"Tendon-stiffness spread: {result.stiffness_spread:.3g} decades.", ""]
+                f"distributed property to the tendons; between assignments G' varies by up to "
+                f"{q.text('assignment_spread', 0, 'decades', 3)} and G'' by up to "
+                f"{q.text('assignment_spread', 1, 'decades', 3)} (standard deviation).", ""]
+    out += [f"Tendon-stiffness spread: {q.text('stiffness_spread', 0, 'decades', 3)}.", ""]
     return "\n".join(out)
 
 
