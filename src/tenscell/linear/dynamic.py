@@ -45,6 +45,7 @@ from .._checks import positive_array, positive_scalar
 from ..laws.base import TendonLaw, angular_frequencies
 from ..model.equilibrium import Cell
 from .modal import assemble_stiffness, modulus, positive_definite_factor
+from .rigid import deformation_basis
 from .._threads import hot_path
 
 __all__ = ["dynamic_stiffness", "dynamic_compliance", "dynamic_moduli", "dynamic_complex_modulus",
@@ -87,7 +88,13 @@ def _solves(cell: Cell, P: float, k: np.ndarray, both: bool) -> tuple[np.ndarray
     rhs = np.stack([b] if (same or not both) else [b, d], axis=1)  # (n, 1 or 2)
     if not cell.sparse:
         K = dynamic_stiffness(cell, P, k)
-        sol = np.linalg.solve(K, np.broadcast_to(rhs, (k.shape[0],) + rhs.shape).astype(complex))
+        N = deformation_basis(cell)
+        if N is not None:  # free-standing: solve on the complement of the rigid-body motions, lift back
+            Kr = np.einsum("ia,wij,jb->wab", N, K, N)
+            sol = N @ np.linalg.solve(Kr, np.broadcast_to(N.T @ rhs, (k.shape[0], N.shape[1], rhs.shape[1]))
+                                      .astype(complex))
+        else:
+            sol = np.linalg.solve(K, np.broadcast_to(rhs, (k.shape[0],) + rhs.shape).astype(complex))
     else:
         sol = np.empty((k.shape[0],) + rhs.shape, dtype=complex)
         for i in range(k.shape[0]):  # the same assembly as K0, with complex member tangents
@@ -140,7 +147,11 @@ def check_static_stability(cell: Cell, law: TendonLaw, P: float) -> None:
     With passive tendons (``Re k*`` rising, ``Im k* ≥ 0``) a structure whose
     static stiffness is positive definite is stable at every frequency.
     """
-    positive_definite_factor(dynamic_stiffness_static(cell, law, P), what="the static stiffness K(ω→0)",
+    K = dynamic_stiffness_static(cell, law, P)
+    N = None if cell.sparse else deformation_basis(cell)
+    if N is not None:  # free-standing: stability on the complement of the rigid-body motions
+        K = N.T @ K @ N
+    positive_definite_factor(K, what="the static stiffness K(ω→0)",
                              describe=f"{cell.describe()} with {type(law).__name__} tendons at P={P:.6g} N")
 
 

@@ -18,6 +18,7 @@ from functools import cached_property
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 import scipy.sparse as sp
 
 from .._checks import positive_array, positive_scalar
@@ -159,7 +160,7 @@ class LinearModel:
         along them that nothing resists)."""
         if self.basis is None:
             return ()
-        k = self.cell.n - self.basis.shape[1]
+        k = self.K0.shape[0] - self.basis.shape[1]  # internal variables (a realized law) are kept whole
         return (f"{k} rigid-body motion(s) removed: the supports do not hold {self.cell.describe()}; "
                 f"{100 * unresisted_share(self.H0, self.basis):.3g}% of the load vector is along them (a net force "
                 "or moment nothing resists) and is left out",)
@@ -506,9 +507,12 @@ def realize(cell: Cell, law: TendonLaw, P: float, *, band_hz=None, tol: float | 
     else:
         EA = R.k * l - T
     placed = law.at_prestress(cell, P)
+    N = None if sp.issparse(K) else deformation_basis(cell)
+    # free-standing: a rigid-body motion stretches no tendon, so no arm moves with it: the motions are (R, 0)
+    basis = None if N is None else scipy.linalg.block_diag(N, np.eye(R.r))
     lin = LinearModel(cell=cell, P=P, EA=EA, c=R.c, K0=K, C0=C, H0=np.concatenate([-np.asarray(cell.load), z]),
                       D0=np.concatenate([np.asarray(cell.probe), z]), l0=np.asarray(placed.l0, dtype=float),
-                      law=placed, realization=R)
+                      law=placed, realization=R, basis=basis)
     lin = with_cytoplasm(lin, viscosity)
     if check:
         try:
