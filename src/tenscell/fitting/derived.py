@@ -92,6 +92,10 @@ def _at(result: FitResult, theta: np.ndarray) -> FitResult:
     return dataclasses.replace(result, theta=theta, parameters=result.problem.parameters(theta))
 
 
+#: parameters per task handed to a worker (a task it has not started can be taken back)
+_CHUNK = 4
+
+
 def _moved(result: FitResult, quantities, columns, step: float):
     """``quantities`` at θ + step·e_i for each free-parameter index i of ``columns`` (a list of dicts), or None
     when the model cannot be evaluated there. Module-level: a worker process runs a share of the columns."""
@@ -118,8 +122,9 @@ def derived_quantities(result: FitResult, quantities, step: float = STEP, execut
     step : float
         Forward-difference step in each analysed ln-parameter (see :data:`STEP`).
     executor : object with ``submit``, optional
-        A worker (e.g. :func:`tenscell._parallel.background`) that evaluates half of the moved parameter
-        vectors while this process evaluates the other half; the result does not depend on it.
+        A worker (e.g. :func:`tenscell._parallel.background`) that evaluates up to half of the moved parameter
+        vectors, in chunks, while this process evaluates the other half; chunks it has not started by then are
+        evaluated here. The result does not depend on it.
 
     Returns
     -------
@@ -128,15 +133,20 @@ def derived_quantities(result: FitResult, quantities, step: float = STEP, execut
         parameter), errors by :meth:`~tenscell.fitting.identifiability.Identifiability.propagate`.
     """
     ident = result.identifiability()
-    values = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in quantities(result).items()}
     names = list(result.problem.names)
     free_index = np.cumsum(np.asarray(result.problem.free, dtype=bool)) - 1
     columns = [int(free_index[names.index(name)]) for name in ident.names]
     half = len(columns) // 2 if executor is not None else 0
-    task = executor.submit(_moved, result, quantities, columns[:half], step) if half else None
+    # the worker's half in small chunks: any chunk it has not started when this process is done with its own half
+    # (the worker may still be busy with earlier work) is taken back and computed here
+    chunks = [columns[i:min(i + _CHUNK, half)] for i in range(0, half, _CHUNK)]
+    tasks = [executor.submit(_moved, result, quantities, chunk, step) for chunk in chunks] if half else []
+    values = {k: np.atleast_1d(np.asarray(v, dtype=float)) for k, v in quantities(result).items()}
     mine = _moved(result, quantities, columns[half:], step)
-    theirs = task.result() if task is not None else []
-    failed = mine is None or theirs is None
+    parts = [_moved(result, quantities, chunk, step) if task.cancel() else task.result()
+             for chunk, task in zip(chunks, tasks)]
+    theirs = [side for p in parts if p is not None for side in p]
+    failed = mine is None or any(p is None for p in parts)
     grads = {k: np.full((v.size, ident.n_analysed), np.nan) for k, v in values.items()}
     if not failed:
         for j, side in enumerate([*theirs, *mine]):

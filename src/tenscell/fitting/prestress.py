@@ -180,11 +180,11 @@ def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERE
     loss = np.empty(f.size)
     ref = np.empty((2, P_groups.size))
     for g, P in enumerate(P_groups):
-        sel = pr.group_index == g
-        if sel.any():  # a creep data set's group has no moduli points, only the reference
-            storage[sel], loss[sel] = _elasticity_P(result, P, f[sel])
-        a, b = _elasticity_P(result, P, [reference_frequency_hz])
-        ref[:, g] = a[0], b[0]
+        sel = pr.group_index == g  # a creep data set's group has no moduli points, only the reference
+        # the group's points and the reference frequency in one linearization and one elasticity solve
+        a, b = _elasticity_P(result, P, np.append(f[sel], reference_frequency_hz))
+        storage[sel], loss[sel] = a[:-1], b[:-1]
+        ref[:, g] = a[-1], b[-1]
     return PrestressActivity(
         dataset=pr.dataset_index.copy(), frequency_hz=f, prestress_model_N=P_groups[pr.group_index],
         storage=storage, loss=loss, share=share_groups[pr.group_index],
