@@ -33,11 +33,10 @@ from ..model.equilibrium import Cell
 from .heterogeneity import DISTRIBUTIONS, assignments
 from .mechanisms import KINDS, Field, Mechanism
 from .layout import ProblemLayout, _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
-from .problem import _PENALTY
+from .problem import _LN10, _PENALTY, centred_start
 
 __all__ = ["MechanismProblem", "make_mechanism_problem", "MechanismEvaluation"]
 
-_LN10 = math.log(10.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -345,12 +344,9 @@ class MechanismProblem(ProblemLayout):
             phi = self.fixed_log.copy()
             draw = mid + rng.uniform(-0.6, 0.6, mid.size) * half
             phi[self.free] = draw[self.free]
-            out = self._at_data(phi, jac=False)
-            r = self._residuals_from(out) / self.weights
-            if out is None or np.any(np.abs(r) >= _PENALTY):
+            score = centred_start(self, self._at_data(phi, jac=False), phi, scal)
+            if score is None:
                 continue
-            phi[scal] -= float(np.mean(r)) * _LN10
-            score = float(np.sqrt(np.mean((r - np.mean(r)) ** 2)))
             if best is None or score < best[0]:
                 best = (score, phi)
         phi = best[1] if best is not None else self.fixed_log.copy()

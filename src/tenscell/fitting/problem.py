@@ -434,6 +434,21 @@ class FitProblem(ProblemLayout):
         return self._effective(self.full(theta))
 
 
+def centred_start(problem, out, phi: np.ndarray, scalable: np.ndarray) -> float | None:
+    """Score one candidate start the way every search ranks them, and centre it on the data.
+
+    ``out`` is ``problem``'s evaluation at ``phi`` (natural-log parameters). Scaling every stiffness-like
+    parameter (``scalable``) together by k scales G by k exactly, so the mean log10 residual is removed by
+    shifting them (``phi`` is changed in place) and the start is scored by the RMS of what is left (decades).
+    Returns None when the evaluation failed or hit the penalty.
+    """
+    r = problem._residuals_from(out) / problem.weights
+    if out is None or np.any(np.abs(r) >= _PENALTY):
+        return None
+    phi[scalable] -= float(np.mean(r)) * _LN10
+    return float(np.sqrt(np.mean((r - np.mean(r)) ** 2)))
+
+
 def _central(fun, theta, step):
     theta = np.asarray(theta, dtype=float)
     cols = []

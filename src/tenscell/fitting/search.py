@@ -41,7 +41,7 @@ from .._checks import positive_scalar
 from .._parallel import Workers
 from .._progress import progress_bar
 from ..model.equilibrium import Cell
-from .problem import _LN10, _PENALTY, FitProblem, as_datasets, make_problem
+from .problem import _LN10, FitProblem, as_datasets, centred_start, make_problem
 from .result import FitAlternative, FitResult, accepted, noise_note, noise_rms
 from .._threads import limited
 from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
@@ -170,12 +170,9 @@ def _initial_guess(problem: FitProblem, rng: np.random.Generator) -> np.ndarray:
                 trial[ic] = math.log(problem.scale_damping) + lc + c_jitter
             if lp is not None:
                 _prestress_start(problem, trial, p_ref, lp)
-            out = problem._evaluate(trial, jac=False)
-            r = problem._residuals_from(out) / problem.weights
-            if out is None or np.any(np.abs(r) >= _PENALTY):
+            rms = centred_start(problem, problem._evaluate(trial, jac=False), trial, scalable)
+            if rms is None:
                 continue
-            trial[scalable] -= float(np.mean(r)) * _LN10
-            rms = float(np.sqrt(np.mean((r - np.mean(r)) ** 2)))
             if best is None or rms < best[0]:
                 best = (rms, trial)
     if best is None:
