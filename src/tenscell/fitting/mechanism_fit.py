@@ -269,10 +269,19 @@ class MechanismFit:
         return all(n is not None for n in self.noise)
 
     def identifiability(self, rtol: float = 1e-8):
-        """Local rank, standard errors and determined combinations (:mod:`.identifiability`)."""
+        """Local rank, standard errors and determined combinations (:mod:`.identifiability`); the default
+        tolerance's analysis is computed once (the report, fit.json and :attr:`derived` all ask for it)."""
+        if rtol == 1e-8:
+            return self._identifiability
         from .identifiability import identifiability
 
         return identifiability(self.problem, self.theta, sigma_known=self.sigma_known, rtol=rtol)
+
+    @cached_property
+    def _identifiability(self):
+        from .identifiability import identifiability
+
+        return identifiability(self.problem, self.theta, sigma_known=self.sigma_known, rtol=1e-8)
 
     @cached_property
     def derived(self):
