@@ -9,6 +9,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -73,16 +74,25 @@ def test_sparse_model_is_factorized_once_per_matrix(monkeypatch):
     assert len(calls) == 1 and calls[0] != "K0", calls
 
 
-def test_dense_model_is_decomposed_once(monkeypatch):
+@pytest.mark.parametrize("c", [1.0, "decades"])  # C0 whitened by the prestress family; by K0's factor
+def test_dense_model_is_decomposed_once(monkeypatch, c):
     calls = []
-    real = np.linalg.eigh
+    real, real_syevd = np.linalg.eigh, modal._syevd
 
     def counting(a, *args, **kw):
         calls.append(np.shape(a))
         return real(a, *args, **kw)
 
-    lin = tenscell.linearize(tenscell.paper_cell(), 1000.0)
+    def counting_syevd(a, *args, **kw):
+        calls.append(np.shape(a))
+        return real_syevd(a, *args, **kw)
+
     monkeypatch.setattr(modal.np.linalg, "eigh", counting)
+    monkeypatch.setattr(modal, "_syevd", counting_syevd)
+    cell = tenscell.paper_cell()
+    c = np.logspace(-6, 2, cell.m) if c == "decades" else c
+    lin = tenscell.linearize(cell, 1000.0, c=c)
+    assert (lin.pencil.family is None) == (not np.isscalar(c))
     tenscell.moduli(lin, F)
     tenscell.moduli(lin, F[::2])
     creep_spectrum(lin)
@@ -161,8 +171,13 @@ def test_cholmod_detects_indefinite_K0(monkeypatch):
     lin = tenscell.linearize(tenscell.paper_cell(delta=math.radians(44.0)), 1000.0, check=False)
     with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="pivot"):
         _as_sparse(lin).pencil.check()
-    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="smallest eigenvalue"):
-        lin.pencil.check()
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="smallest relaxation rate -"):
+        lin.pencil.check()  # a member of the prestress family: its rates are the check
+    cell = lin.cell
+    own = tenscell.linearize(cell, 1000.0, c=np.logspace(-6, 2, cell.m), check=False)
+    assert own.pencil.family is None  # C0 too ill-conditioned to whiten by: K0's own factor is the check
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="smallest eigenvalue -"):
+        own.pencil.check()
 
 
 # ---- prestress grids ---------------------------------------------------------------------------
@@ -175,6 +190,57 @@ def test_grid_equals_models_and_checks_every_prestress():
     bad = tenscell.paper_cell(delta=math.radians(44.0))
     with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="P=1000"):
         tenscell.frequency_response(bad, F, [1000.0, 2000.0])
+
+
+def test_prestress_loop_is_the_grids_family():
+    """``moduli(linearize(cell, P), f)`` over prestresses whitens C0 once: one family, the grid's numbers, and
+    the modes of the model's own pencil (whitened by K0's factor) to round-off."""
+    cell = tenscell.paper_cell()
+    Ps = np.array([300.0, 1000.0, 4000.0])
+    lins = [tenscell.linearize(cell, P, 2.0, 0.5) for P in Ps]
+    families = {id(lin.pencil.family[0]) for lin in lins}
+    assert len(families) == 1 and [lin.pencil.family[1] for lin in lins] == list(Ps)
+    r = tenscell.frequency_response(cell, F, Ps, EA=2.0, c=0.5)
+    for i, lin in enumerate(lins):
+        J = tenscell.compliance(lin, F)
+        np.testing.assert_allclose(J, r.J[i], rtol=1e-12)
+        own = modal.Pencil(lin.K0, lin.C0, -lin.H0, lin.D0)  # the K0-whitened route
+        np.testing.assert_allclose(J, modal.modal_compliance(own.modes.tau, own.modes.weights, 2 * np.pi * F),
+                                   rtol=1e-11)
+        np.testing.assert_allclose(lin.pencil.modes.tau, own.modes.tau, rtol=1e-11)
+        V = lin.pencil.modes.vectors  # K0-orthonormal, ascending τ, as Pencil.modes promises
+        np.testing.assert_allclose(V.T @ lin.K0 @ V, np.eye(cell.n), atol=1e-11)
+        np.testing.assert_allclose(V.T @ lin.C0 @ V, np.diag(lin.pencil.modes.tau), atol=1e-11 * own.modes.tau.max())
+    assert not lins[0].C0.flags.writeable  # every model of the family shares its C0
+
+
+def test_family_needs_a_well_conditioned_damping():
+    """C0 is whitened once only when its Cholesky pivots span less than FAMILY_PIVOT_RATIO: a damping spread over
+    decades keeps each model's own K0 route, and the grid falls back to it with the same numbers."""
+    cell = tenscell.paper_cell()
+    wide = np.logspace(-6, 2, cell.m)
+    C0 = modal.assemble_damping(cell, wide)
+    d = np.diagonal(np.linalg.cholesky(C0)) ** 2
+    assert d.min() < modal.FAMILY_PIVOT_RATIO * d.max()
+    assert modal.PrestressFamily.build(cell.Kp, cell.Kp, C0, cell.load, cell.probe) is None
+    Ps = np.array([500.0, 2000.0])
+    r = tenscell.frequency_response(cell, F, Ps, c=wide)
+    for i, P in enumerate(Ps):
+        lin = tenscell.linearize(cell, P, c=wide)
+        assert lin.pencil.family is None
+        np.testing.assert_array_equal(r.J[i], tenscell.compliance(lin, F))
+        # the static compliance stays exact through K0's factor
+        np.testing.assert_allclose(lin.pencil.modes.weights.sum(), lin.pencil.static_compliance(), rtol=1e-12)
+
+
+def test_family_member_copies_give_the_same_numbers():
+    lin = tenscell.linearize(tenscell.paper_cell(), 1500.0)
+    J = tenscell.compliance(lin, F)
+    for twin in (copy.deepcopy(lin), pickle.loads(pickle.dumps(lin))):
+        assert twin.pencil.family is not None
+        np.testing.assert_array_equal(tenscell.compliance(twin, F), J)
+    thick = tenscell.linearize(tenscell.paper_cell(), 1500.0, viscosity=0.1)  # another C0: its own route
+    assert thick.pencil.family is None
 
 
 def test_continuum_factor_is_the_papers():
@@ -230,11 +296,15 @@ def test_dense_decompositions_and_analyses_run_with_one_blas_thread(monkeypatch)
         return {i["filepath"]: i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
 
     seen = []
-    real = np.linalg.eigh
+    real, real_syevd = np.linalg.eigh, modal._syevd
 
     def eigh(*a, **kw):
         seen.append(blas_threads())
         return real(*a, **kw)
+
+    def syevd(*a, **kw):  # a member of a prestress family: one LAPACK call per model
+        seen.append(blas_threads())
+        return real_syevd(*a, **kw)
 
     with threadpool_limits(limits=2, user_api="blas"):
         # some bundled BLAS builds (cvxopt's) run one thread whatever is asked: watch those that take two
@@ -242,6 +312,7 @@ def test_dense_decompositions_and_analyses_run_with_one_blas_thread(monkeypatch)
         if not two:
             pytest.skip("no BLAS library here can run two threads")
         monkeypatch.setattr(np.linalg, "eigh", eigh)
+        monkeypatch.setattr(modal, "_syevd", syevd)
         lin = tenscell.linearize(tenscell.paper_cell(), P=1000.0, EA=1.0, c=1.0)
         lin.pencil.modes  # noqa: B018 - called outside any public hot path
         analytic_elasticities(tenscell.linearize(tenscell.paper_cell(), P=500.0, EA=1.0, c=1.0), [0.1])

@@ -41,7 +41,9 @@ def test_analytic_elasticities_match_finite_differences(intermediate_filaments):
     rng = np.random.default_rng(11)
     EA, c, P = rng.uniform(0.3, 3.0, cell.m), rng.uniform(0.3, 3.0, cell.m), 1300.0
     el = S.analytic_elasticities(linearize(cell, P, EA, c), F)
-    h = 1e-6
+    # central differences: truncation ~h², rounding ~ε/h with ε ≈ 1e-14 the compliance's own rounding (C0 whitened
+    # once per cell, cond(C0) ≈ 440 here), so h ≈ ε^(1/3): at h = 1e-5 both stay below 1e-9
+    h = 1e-5
     for j in (0, 5, cell.m - 1):
         for name, vec in (("EA", EA), ("c", c)):
             up, dn = vec.copy(), vec.copy()

@@ -95,6 +95,24 @@ def _blas_libraries():
     return _controller[1]
 
 
+def _limit() -> list:
+    """Set each BLAS library to the hot-path thread count; the ``(library, old count)`` pairs to restore."""
+    n = thread_count()
+    changed = []
+    if n is not None:
+        for lc in _blas_libraries():
+            old = lc.num_threads
+            if old != n:
+                lc.set_num_threads(n)
+                changed.append((lc, old))
+    return changed
+
+
+def _restore(changed: list) -> None:
+    for lc, old in changed:
+        lc.set_num_threads(old)
+
+
 @contextlib.contextmanager
 def limited():
     """Run the block with the hot-path thread count (once, however deeply nested).
@@ -104,31 +122,28 @@ def limited():
     use (about 40 µs, as much as a small model's whole response).
     """
     depth = getattr(_local, "depth", 0)
-    n = thread_count() if depth == 0 else None
-    changed = []
-    if n is not None:
-        for lc in _blas_libraries():
-            old = lc.num_threads
-            if old != n:
-                lc.set_num_threads(n)
-                changed.append((lc, old))
+    changed = _limit() if depth == 0 else []
     _local.depth = depth + 1
     try:
         yield
     finally:
         _local.depth = depth
-        for lc, old in changed:
-            lc.set_num_threads(old)
+        _restore(changed)
 
 
 def hot_path(fn):
-    """Decorator: run ``fn`` under :func:`limited`."""
+    """Decorator: run ``fn`` under :func:`limited` (inlined: a loop of small models pays it per call)."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         if getattr(_local, "depth", 0):
             return fn(*args, **kwargs)
-        with limited():
+        changed = _limit()
+        _local.depth = 1
+        try:
             return fn(*args, **kwargs)
+        finally:
+            _local.depth = 0
+            _restore(changed)
 
     return wrapper

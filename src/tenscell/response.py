@@ -269,6 +269,7 @@ def _from_xarray(cls, ds):
 
 
 @hot_path
+@hot_path
 def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0, *, law=None, viscosity: float = 0.0) -> FrequencyResponse:
     """Compliance and moduli for arrays of prestresses and frequencies in one call.
 

@@ -13,6 +13,7 @@ The relaxation spectrum solves ``K0 v = λ C0 v`` (rates λ in 1/s) with
 from __future__ import annotations
 
 import dataclasses
+import weakref
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
@@ -24,10 +25,11 @@ import scipy.sparse as sp
 from .._checks import positive_array, positive_scalar
 from ..laws import DynamicLawError, LinearSpring, TendonLaw, Voigt
 from ..laws.base import DEFAULT_REALIZATION_TOL, Realization
-from ..model.equilibrium import Cell, tangent_stiffness
+from ..model.equilibrium import Cell, tangent_stiffness, weighted_gram
 from .dynamic import cytoplasm_damping, viscosity_value
 from .modal import (
-    NotPositiveDefiniteError, Pencil, RelaxationSpectrum, assemble_damping, assemble_stiffness, relaxation_spectrum,
+    NotPositiveDefiniteError, Pencil, PrestressFamily, RelaxationSpectrum, assemble_damping, assemble_stiffness,
+    relaxation_spectrum,
 )
 from .._threads import hot_path
 from .ordering import coordinate_locations
@@ -140,9 +142,13 @@ class LinearModel:
     def pencil(self) -> Pencil:
         """The pencil (K0, C0) with its decompositions, each computed once for this model (:mod:`tenscell.linear.modal`);
         for a free-standing structure the pencil on the complement of its rigid-body motions (``basis``)."""
+        return self._new_pencil()
+
+    def _new_pencil(self, family: PrestressFamily | None = None) -> Pencil:
         points = self._locations() if sp.issparse(self.K0) and self.basis is None else None
         pencil = Pencil(self.K0, self.C0, -np.asarray(self.H0), self.D0,
-                        describe=f"{self.cell.describe()} at P={self.P:.6g}", hint=_STABILITY_HINT, points=points)
+                        describe=f"{self.cell.describe()} at P={self.P:.6g}", hint=_STABILITY_HINT, points=points,
+                        family=None if family is None else (family, self.P))
         return pencil if self.basis is None else pencil.restricted(self.basis)
 
     def _locations(self) -> np.ndarray:
@@ -167,11 +173,16 @@ class LinearModel:
 
     def __getstate__(self):
         state = self.__dict__.copy()
-        state.pop("pencil", None)  # factorizations are rebuilt on demand (native factors do not pickle)
+        pencil = state.pop("pencil", None)  # factorizations are rebuilt on demand (native factors do not pickle)
+        if pencil is not None and pencil.family is not None:
+            state["_in_family"] = True  # rebuilt from the same family, so the copy gives the same numbers
         return state
 
     def __setstate__(self, state):
+        in_family = state.pop("_in_family", False)
         self.__dict__.update(state)
+        if in_family:
+            self.__dict__["pencil"] = self._new_pencil(_prestress_family(self.cell, self.EA, self.c))
 
     # ---- notebook conventions (tenscell._results) ---------------------------------
     def __repr__(self) -> str:
@@ -254,18 +265,46 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
 
     Notes
     -----
-    For many prestresses, do not loop ``moduli(linearize(cell, P=P), f)``:
-    ``tenscell.frequency_response(cell, f, P=[...])`` shares everything that
-    does not depend on P and does one batched eigensolve for the whole grid
-    (``bench/bench_sweep.py`` measures both ways against the floor).
+    A loop over prestresses reuses what does not depend on P: on a dense
+    cell its supports hold, the models of one set of tendons belong to one
+    :class:`tenscell.linear.modal.PrestressFamily` (``K0 = P·Kp + Km``, C0
+    whitened once; the cell keeps the family of the tendons it last served),
+    so each model costs one eigensolve and its check is that every
+    relaxation rate is positive. For a whole grid of prestresses,
+    ``tenscell.frequency_response(cell, f, P=[...])`` is still the faster
+    call: one batched eigensolve, and the per-call overhead paid once
+    (``bench/bench_sweep.py`` times both against the floor).
     """
     P = positive_scalar("P (prestress)", P, "N")
     m = cell.m
     EA = positive_array("EA", EA, (m,), "N")
     c = positive_array("c", c, (m,), "N·s/m")
     # validated above: skip the law's own checks on this hot path (parameter sweeps, fits)
-    lin = _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA)
+    lin = _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA, family=_prestress_family(cell, EA, c))
     return with_cytoplasm(lin, viscosity) if viscosity else lin
+
+
+#: the largest dense cell whose family is kept (five n×n matrices of its own, 10 MB at 500 coordinates): beyond it the
+#: eigensolve dominates each model and the family would save little
+_FAMILY_MAX_N = 500
+#: per cell, the prestress family of the tendons it last served. A cache only: a model's numbers do not depend on
+#: whether its family was found here or built anew (weak keys: it lives as long as the cell)
+_families: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _prestress_family(cell: Cell, EA: np.ndarray, c: np.ndarray) -> PrestressFamily | None:
+    """C0 whitened once for every prestress of these Voigt tendons (EA in N, c in N·s/m), for a dense cell its
+    supports hold; None for a sparse or free-standing cell or an ill-conditioned C0 (the model's own K0 path)."""
+    if cell.sparse or cell.n > _FAMILY_MAX_N or deformation_basis(cell) is not None:
+        return None
+    key = (EA.tobytes(), c.tobytes())
+    kept = _families.get(cell)
+    if kept is not None and kept[0] == key:
+        return kept[1]
+    family = PrestressFamily.build(cell.Kp, weighted_gram(cell.A, EA / cell.lengths), assemble_damping(cell, c),
+                                   cell.load, cell.probe)
+    _families[cell] = (key, family)
+    return family
 
 
 @hot_path
@@ -396,10 +435,12 @@ def linearize_law(cell: Cell, law, P: float | None = None, *, check: bool = True
     return _from_law(cell, P, law, check=check, T=T, own=True)
 
 
-def _from_law(cell: Cell, P: float, law, *, check: bool, T=None, EA=None, l0=None, own: bool = False) -> LinearModel:
+def _from_law(cell: Cell, P: float, law, *, check: bool, T=None, EA=None, l0=None, own: bool = False,
+              family: PrestressFamily | None = None) -> LinearModel:
     """The one assembly of (K0, C0) from a law's tangents at tensions ``T`` (default ``P·T0``).
 
-    ``own``: the law is already placed (its rest lengths give ``T``) and is kept as it is.
+    ``own``: the law is already placed (its rest lengths give ``T``) and is kept as it is. ``family``: the
+    :class:`PrestressFamily` of these tendons, whose one whitening of C0 gives the model's modes.
     """
     l = cell.lengths
     TP = P * cell.T0
@@ -411,18 +452,23 @@ def _from_law(cell: Cell, P: float, law, *, check: bool, T=None, EA=None, l0=Non
         l0_law, k, c = law._reference(l, T)
         l0 = l0_law if l0 is None else l0
     k, c = np.asarray(k, dtype=float), np.asarray(c, dtype=float)
-    if not (np.all(np.isfinite(k)) and np.all(np.isfinite(c))):
+    if not np.isfinite(k.sum() + c.sum()):  # a NaN or ±inf in either makes the sum non-finite
         raise ValueError("the tendon law gave a non-finite tangent stiffness or damping at the reference")
-    if T is TP:
+    if T is not TP:  # a self-stress other than P·T0 (several self-stress states): assemble its Hessian term
+        family, K0 = None, tangent_stiffness(cell.geometry, T, k)
+    elif family is not None:  # K0 = P·Kp + Km, and C0, from the family of these tendons
+        K0 = family.stiffness(P)
+    else:
         K0 = assemble_stiffness(cell, P, k)
-    else:  # a self-stress other than P·T0 (several self-stress states): assemble its Hessian term
-        K0 = tangent_stiffness(cell.geometry, T, k)
     placed = law if own else law._placed(l0)
     lin = LinearModel(
-        cell=cell, P=P, EA=EA if EA is not None else k * l - T, c=c, K0=K0, C0=assemble_damping(cell, c),
+        cell=cell, P=P, EA=EA if EA is not None else k * l - T, c=c, K0=K0,
+        C0=assemble_damping(cell, c) if family is None else family.C0,
         H0=-np.asarray(cell.load), D0=np.asarray(cell.probe), l0=np.asarray(l0, dtype=float), law=placed,
         basis=None if sp.issparse(K0) else deformation_basis(cell),  # free-standing: rigid-body motions removed
     )
+    if family is not None:
+        lin.__dict__["pencil"] = lin._new_pencil(family)
     if check:
         lin.pencil.check()
     return lin

@@ -19,8 +19,9 @@ Positive definiteness (:attr:`Pencil.cholesky`)
     ``check=True`` computes it) and it is kept for every later solve.
 
 Dense modal decomposition (:attr:`Pencil.modes`)
-    One Cholesky and one symmetric eigensolve of the whitened pencil (by C0
-    when it is positive definite, else by K0's factor from the check) give
+    One Cholesky and one symmetric eigensolve of the whitened pencil (by K0's
+    factor from the check; by C0's, once for every prestress, for a model of a
+    :class:`PrestressFamily` whose C0 is well-conditioned) give
     ``C0 v = τ K0 v`` with ``VᵀK0V = I`` (τ ≥ 0 in s, τ = 0 for a mode the
     tendons do not damp), and
 
@@ -29,8 +30,9 @@ Dense modal decomposition (:attr:`Pencil.modes`)
     which serves the compliance at every frequency, creep and relaxation at
     every time, the relaxation spectrum ``λ = 1/τ`` and the resolvent
     ``(K0 + iωC0)⁻¹`` of the elasticities. Singular C0 needs no special case.
-    Grids of prestresses use the same identity with C0 whitened once for all
-    P (:func:`prestress_grid_compliance`).
+    Grids of prestresses, and loops of :func:`tenscell.linearize` over
+    prestresses, use the same identity with C0 whitened once for all P (one
+    :class:`PrestressFamily`, kept per cell for the last tendons it served).
 
 Sparse models (:meth:`Pencil.lanczos_runs`)
     Besides the Cholesky of K0 (the check, and static solves), one Cholesky of
@@ -80,6 +82,8 @@ __all__ = [
     "relaxation_spectrum",
     "modal_compliance",
     "prestress_grid_compliance",
+    "PrestressFamily",
+    "FAMILY_PIVOT_RATIO",
     "prestress_grid_modes",
     "ZERO_TIME",
 ]
@@ -157,7 +161,10 @@ def modal_compliance(tau: np.ndarray, rho: np.ndarray, w: np.ndarray) -> np.ndar
     den = np.multiply.outer(tau * tau, w * w)
     den += 1.0
     np.reciprocal(den, out=den)
-    parts = np.stack([rho, rho * tau], axis=-2) @ den
+    weights = np.empty(rho.shape[:-1] + (2, rho.shape[-1]))
+    weights[..., 0, :] = rho
+    np.multiply(rho, tau, out=weights[..., 1, :])
+    parts = weights @ den
     return parts[..., 0, :] - 1j * (w * parts[..., 1, :])
 
 
@@ -170,6 +177,7 @@ def _tri(L: np.ndarray, B: np.ndarray, trans: int = 0) -> np.ndarray:
 
 
 _trtrs = scipy.linalg.lapack.dtrtrs
+_syevd = scipy.linalg.lapack.dsyevd
 
 
 def _whiten(L: np.ndarray, M: np.ndarray) -> np.ndarray:
@@ -260,11 +268,18 @@ class Pencil:
         the fill-reducing ordering (:mod:`tenscell.linear.ordering`) that every
         factorization of the pencil shares; without them CHOLMOD orders each
         factorization by AMD.
+    family : (PrestressFamily, float), optional
+        Dense only: the family this pencil belongs to and its prestress P (N).
+        Its modes then come from the family's one whitening of C0, shared by
+        every P (a loop of :func:`tenscell.linearize` over prestresses), not
+        from a factor of this K0.
     """
 
-    def __init__(self, K0, C0, load, probe, *, describe: str = "the model", hint: str = "", points=None):
+    def __init__(self, K0, C0, load, probe, *, describe: str = "the model", hint: str = "", points=None,
+                 family: tuple[PrestressFamily, float] | None = None):
         self.K0, self.C0 = K0, C0
         self.points = points
+        self.family = family
         self.load = np.asarray(load, dtype=float)
         self.probe = np.asarray(probe, dtype=float)
         self.describe, self.hint = describe, hint
@@ -307,7 +322,15 @@ class Pencil:
         return ordering.nested_dissection(pattern, self.points)
 
     def check(self) -> None:
-        """Raise :class:`NotPositiveDefiniteError` unless K0 is positive definite (factors K0 once)."""
+        """Raise :class:`NotPositiveDefiniteError` unless K0 is positive definite (factors K0 once).
+
+        A pencil of a :class:`PrestressFamily` is checked by its modes instead
+        (every relaxation rate > 0, the grid's criterion): they are what its
+        models are made for, and a factor of K0 would be extra work.
+        """
+        if self.family is not None:
+            self.modes  # noqa: B018 - the family's rates are the check
+            return
         self.cholesky  # noqa: B018 - computing the factor is the check
 
     @hot_path
@@ -387,12 +410,21 @@ class Pencil:
         round-off whatever the conditioning of C0: the static compliance
         (creep J(∞), G'(0)) stays exact for fitted cells whose damping spans
         many decades, and undamped modes get τ = 0 without a special case.
+
+        A pencil of a :class:`PrestressFamily` (a model from
+        :func:`tenscell.linearize` whose C0 is well-conditioned) takes its modes
+        from the family instead: C0 whitened once for every prestress, one
+        eigensolve per P — the same modes to round-off, and the same numbers
+        as :func:`tenscell.frequency_response`'s grid.
         """
         if self.sparse:
             raise ValueError(
                 f"{self.describe} is sparse ({self.n} coordinates): its full modal decomposition is not formed; "
                 "use Pencil.retardation() (Lanczos) instead"
             )
+        if self.family is not None:
+            family, P = self.family
+            return family.modes(P, self.describe, self.hint)
         L = self.cholesky  # the positive-definiteness check
         tau, U = np.linalg.eigh(_whiten(L, np.asarray(self.C0)))
         tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding
@@ -677,12 +709,128 @@ def prestress_grid_modes(Kpt: np.ndarray, Kmt: np.ndarray, P: np.ndarray) -> tup
     return np.linalg.eigh(P[:, None, None] * np.asarray(Kpt) + np.asarray(Kmt))
 
 
+#: C0 is whitened once for a family of prestresses only when the pivots of its Cholesky factor span at most
+#: this ratio (``min d/max d`` with ``d = diag(Lc)²``, roughly 1/cond(C0)): whitening by an ill-conditioned C0
+#: would cost the static compliance the digits that K0's own factor keeps (:attr:`Pencil.modes`)
+FAMILY_PIVOT_RATIO = 1e-4
+
+
+@dataclass(frozen=True, eq=False)
+class PrestressFamily:
+    """The dense pencils ``(P·Kp + Km, C0)`` of one cell with one set of tendons, for every prestress P.
+
+    K0 is affine in P and C0 does not depend on it, so C0 is whitened once
+    (``C0 = Lc Lcᵀ``) and each prestress costs one symmetric eigensolve of
+    ``P·K̃p + K̃m``. The grid (:func:`prestress_grid_compliance`) and a loop of
+    :func:`tenscell.linearize` over prestresses (each model's
+    :attr:`Pencil.modes`) share it, so both give the same modes.
+
+    Build with :meth:`build`, which returns None when C0 is singular or too
+    ill-conditioned to whiten by (:data:`FAMILY_PIVOT_RATIO`).
+
+    Attributes
+    ----------
+    Kp, Km : ndarray, shape (n, n)
+        Prestress stiffness per unit P (N/m per N) and material stiffness (N/m): ``K0 = P·Kp + Km``.
+    C0 : ndarray, shape (n, n)
+        Damping (N·s/m), read-only: every model of the family shares it.
+    Lc : ndarray, shape (n, n)
+        Lower Cholesky factor of C0.
+    Kpt, Kmt : ndarray, shape (n, n)
+        ``Lc⁻¹ Kp Lc⁻ᵀ`` (per unit P) and ``Lc⁻¹ Km Lc⁻ᵀ`` (1/s).
+    bt, dt : ndarray, shape (n,)
+        ``Lc⁻¹ b`` (load, ``b = −H0``) and ``Lc⁻¹ D0`` (probe).
+    """
+
+    Kp: np.ndarray
+    Km: np.ndarray
+    C0: np.ndarray
+    Lc: np.ndarray
+    Kpt: np.ndarray
+    Kmt: np.ndarray
+    bt: np.ndarray
+    dt: np.ndarray
+
+    @classmethod
+    def build(cls, Kp, K_material, C0, load, probe) -> PrestressFamily | None:
+        """The family of ``(P·Kp + K_material, C0)`` (dense, N/m and N·s/m), or None if C0 is not well-conditioned."""
+        C0 = np.array(C0, dtype=float)
+        Lc = _cholesky_or_none(C0)
+        if Lc is None:
+            return None
+        d = np.diagonal(Lc) ** 2
+        if d.min() < FAMILY_PIVOT_RATIO * d.max():
+            return None
+        C0.flags.writeable = False
+        Kp, Km = np.asarray(Kp), np.asarray(K_material)
+        return cls(Kp=Kp, Km=Km, C0=C0, Lc=Lc, Kpt=_whiten(Lc, Kp), Kmt=_whiten(Lc, Km),
+                   bt=_tri(Lc, np.asarray(load, dtype=float)), dt=_tri(Lc, np.asarray(probe, dtype=float)))
+
+    def stiffness(self, P: float) -> np.ndarray:
+        """``K0 = P·Kp + Km`` (N/m) at prestress ``P`` (N)."""
+        return P * self.Kp + self.Km
+
+    def rates(self, P: np.ndarray, describe: str = "the model", hint: str = "") -> tuple[np.ndarray, np.ndarray]:
+        """Relaxation rates λ (1/s, ascending, all > 0) and orthonormal modes U of every prestress ``P`` (N, shape (nP,)).
+
+        Raises
+        ------
+        NotPositiveDefiniteError
+            If K0 is not positive definite at some P (a rate ≤ 0).
+        """
+        lam, U = prestress_grid_modes(self.Kpt, self.Kmt, P)
+        bad = np.flatnonzero(lam[:, 0] <= 0)
+        if bad.size:
+            raise _unstable(P[bad[0]], lam[bad[0], 0], describe, hint)
+        return lam, U
+
+    def modes(self, P: float, describe: str = "the model", hint: str = "") -> Modes:
+        """The modal decomposition of the pencil at prestress ``P`` (N), as :attr:`Pencil.modes` gives it.
+
+        ``τ = 1/λ`` ascending, K0-orthonormal vectors ``Lc⁻ᵀu/√λ``, weights ``(d̃·u)(b̃·u)/λ``.
+
+        Raises
+        ------
+        NotPositiveDefiniteError
+            If K0 is not positive definite at P: the family's check, the same as the grid's.
+        """
+        # one P: LAPACK's syevd directly (the batched call's overhead is a fifth of a 24×24 eigensolve)
+        lam, U, info = _syevd(P * self.Kpt + self.Kmt, lower=1)
+        if info != 0:  # pragma: no cover - a symmetric eigensolve of a finite matrix converges
+            raise np.linalg.LinAlgError(f"symmetric eigensolve failed (info={info})")
+        if not lam[0] > 0:
+            raise _unstable(P, lam[0], describe, hint)
+        r = 1.0 / lam  # τ, descending: the results are reversed views, ascending in τ
+        V = _tri(self.Lc, U, trans=1)
+        V *= np.sqrt(r)
+        return Modes(tau=r[::-1], vectors=V[:, ::-1], weights=((self.dt @ U) * (self.bt @ U) * r)[::-1])
+
+    @hot_path
+    def compliance(self, P: np.ndarray, w: np.ndarray, describe: str = "the model") -> np.ndarray:
+        """``J(iω)`` (m/N), shape (nP, nf), at prestresses ``P`` (N) and ω (rad/s): one batched eigensolve,
+        the modal sum in blocks of prestresses that stay in cache."""
+        lam, U = self.rates(P, describe)
+        tau = 1.0 / lam
+        rho = (self.dt @ U) * (self.bt @ U) * tau  # residues r = (d̃·u)(b̃·u) in rate form; ρ = r/λ
+        J = np.empty((P.size, w.size), dtype=complex)
+        for i in range(0, P.size, _GRID_BLOCK):
+            J[i: i + _GRID_BLOCK] = modal_compliance(tau[i: i + _GRID_BLOCK], rho[i: i + _GRID_BLOCK], w)
+        return J
+
+
+def _unstable(P: float, rate: float, describe: str, hint: str) -> NotPositiveDefiniteError:
+    return NotPositiveDefiniteError(
+        f"K0 is not positive definite for {describe} at P={P:.6g} (smallest relaxation rate {rate:.3g} 1/s): "
+        "the reference is not a stable equilibrium." + (f" {hint}" if hint else "")
+    )
+
+
 @hot_path
 def prestress_grid_compliance(Kp, K_material, C0, load, probe, P: np.ndarray, w: np.ndarray,
                               describe: str = "the model") -> np.ndarray | None:
     """``J(iω)`` (m/N) of the dense pencils ``(P·Kp + K_material, C0)`` for many prestresses at once.
 
-    C0 is the same for every P, so it is whitened once (``C0 = Lc Lcᵀ``);
+    C0 is the same for every P, so it is whitened once (:class:`PrestressFamily`);
     one batched symmetric eigensolve of ``P·K̃p + K̃m`` gives every P's rates
     λ (their positivity is the positive-definiteness check of each K0), and
     the modal sum runs in blocks of prestresses that stay in cache.
@@ -690,29 +838,12 @@ def prestress_grid_compliance(Kp, K_material, C0, load, probe, P: np.ndarray, w:
     Returns
     -------
     ndarray of complex, shape (nP, nf), or None
-        None when C0 is singular (use the per-model path).
+        None when C0 is singular or ill-conditioned (use the per-model path).
 
     Raises
     ------
     NotPositiveDefiniteError
         If K0 is not positive definite at some P.
     """
-    Lc = _cholesky_or_none(np.asarray(C0))
-    if Lc is None:
-        return None
-    Kpt, Kmt = _whiten(Lc, np.asarray(Kp)), _whiten(Lc, np.asarray(K_material))
-    bt = _tri(Lc, np.asarray(load, dtype=float))
-    dt = _tri(Lc, np.asarray(probe, dtype=float))
-    lam, U = prestress_grid_modes(Kpt, Kmt, P)
-    bad = np.flatnonzero(lam[:, 0] <= 0)
-    if bad.size:
-        raise NotPositiveDefiniteError(
-            f"K0 is not positive definite for {describe} at P={P[bad[0]]:.6g} (smallest relaxation rate "
-            f"{lam[bad[0], 0]:.3g} 1/s): the reference is not a stable equilibrium"
-        )
-    tau = 1.0 / lam
-    rho = (dt @ U) * (bt @ U) * tau  # residues r = (d̃·u)(b̃·u) in rate form; ρ = r/λ
-    J = np.empty((P.size, w.size), dtype=complex)
-    for i in range(0, P.size, _GRID_BLOCK):
-        J[i: i + _GRID_BLOCK] = modal_compliance(tau[i: i + _GRID_BLOCK], rho[i: i + _GRID_BLOCK], w)
-    return J
+    family = PrestressFamily.build(Kp, K_material, C0, load, probe)
+    return None if family is None else family.compliance(np.asarray(P, dtype=float), w, describe)

@@ -423,6 +423,10 @@ class Cell:
 
     def describe(self) -> str:
         """A short description with the cell's parameters."""
+        return self._description
+
+    @cached_property
+    def _description(self) -> str:  # every linear model's messages name its cell: format it once
         return _label(self.structure.name, self.parameters)
 
     # a read-only mapping does not pickle: carry it as a dict (cells go to worker processes, fits come back)
