@@ -12,7 +12,7 @@ Printed: times (build, linearize+check, moduli, total), fill of the factor of K0
 the baseline/library ratio of linearize+moduli, the Lanczos stage against its memory-streaming floor
 (every step reads the factor twice: 2 × 8 bytes × fill at the bandwidth measured in this run), the
 largest difference of the answers, the growth exponent of the library's total time for 2·10³–10⁵
-coordinates, the 10⁴-node lattice's time, the peak memory of the process after the 10⁵-coordinate
+coordinates (a lattice done in under a second is timed three times, each from a fresh build, best kept), the 10⁴-node lattice's time, the peak memory of the process after the 10⁵-coordinate
 lattice, and creep plus relaxation of the 1,896-coordinate lattice against the old dense path
 (generalized eigensolves of the dense matrices: one for the creep spectrum, one again inside
 stress_relaxation).
@@ -86,7 +86,9 @@ def _lanczos(lin):
     return sum(r.steps for r in runs)
 
 
-def run(shape, bw):
+def _pipeline(shape):
+    """Build, linearize and compute the moduli of a fresh lattice: (cell, build s, lin, G, linearize s, moduli s,
+    sparse factorizations)."""
     t0 = time.perf_counter()
     cell = tenscell.model.lattice_cell(*shape)
     build = time.perf_counter() - t0
@@ -96,6 +98,22 @@ def run(shape, bw):
         lin, G, t_lin, t_mod = _linearize_moduli(cell)
     finally:
         modal.factorize_spd = count.real
+    return cell, build, lin, G, t_lin, t_mod, count.n
+
+
+#: a lattice whose pipeline takes less than this (s) is timed this many times, each from a fresh build, and the
+#: best kept: single sub-second timings are what the growth exponent's fit is most sensitive to
+SHORT_S, SHORT_REPEATS = 1.0, 3
+
+
+def run(shape, bw):
+    best = _pipeline(shape)
+    if sum(best[i] for i in (1, 4, 5)) < SHORT_S:
+        for _ in range(SHORT_REPEATS - 1):
+            again = _pipeline(shape)
+            if sum(again[i] for i in (1, 4, 5)) < sum(best[i] for i in (1, 4, 5)):
+                best = again
+    cell, build, lin, G, t_lin, t_mod, n_factorizations = best
     steps = _lanczos(lin)
     solve = floor = float("nan")
     if lin.pencil.sparse:  # the Lanczos stage's unit of work: one solve with the shifted factor, timed alone
@@ -108,7 +126,7 @@ def run(shape, bw):
         floor = 2 * 8 * factor.fill / bw
     fill = lin.pencil.cholesky.fill if lin.pencil.sparse else 0
     row = {"shape": shape, "nodes": cell.structure.n_nodes, "dof": cell.n, "build": build, "linearize": t_lin,
-           "moduli": t_mod, "total": build + t_lin + t_mod, "factorizations": count.n, "steps": steps, "fill": fill,
+           "moduli": t_mod, "total": build + t_lin + t_mod, "factorizations": n_factorizations, "steps": steps, "fill": fill,
            "solve": solve, "solve_floor": floor, "ordered": lin.pencil.ordering is not None}
     # the baseline: the previous path, CHOLMOD's AMD, on the same cell (its Kp already assembled by the run above:
     # the ratio understates the library's gain; below MIN_SIZE both paths are the same)
@@ -197,7 +215,10 @@ def _summary(rows, cr):
                   f"{r['solve'] / r['solve_floor']:.1f}x its streaming floor "
                   f"({r['solve_floor'] * 1e3:.1f} ms: the factor read twice at the measured bandwidth); "
                   f"{r['steps']} steps")
-    print(f"growth exponent, dof {fit[0]['dof']}..{fit[-1]['dof']}: {expo:.2f} (issue 21 goal <= 1.2)")
+    fill_expo = np.polyfit(np.log([r["dof"] for r in fit]), np.log([max(r["fill"], 1) for r in fit]), 1)[0]
+    print(f"growth exponent, dof {fit[0]['dof']}..{fit[-1]['dof']}: {expo:.2f} (issue 21 goal <= 1.2, "
+          f"{'met' if expo <= 1.2 else 'not met'}); the factor's fill (nested dissection from 5,000 coordinates) grows with exponent "
+          f"{fill_expo:.2f} over the same lattices, and every Lanczos step reads the factor twice")
     dof, mb = peak_memory(big["shape"])
     print(f"peak memory of a fresh process that builds, linearizes and computes G', G'' of the {dof}-coordinate "
           f"lattice: {mb:.0f} MB (issue 21 goal <= 2048 MB at 1e5 coordinates)")
