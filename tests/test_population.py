@@ -434,6 +434,18 @@ def test_small_work_runs_here_and_says_so(population):
     assert len(lines) == 1  # workers=0 is the user's choice: nothing to announce
 
 
+def test_batch_sizes_shrink_toward_the_end():
+    """Guided batches: every item once, none above the batch, never growing, and the last tasks small enough that
+    no worker thread is left running a full batch alone."""
+    for n, batch, threads in ((199, 11, 2), (23, 4, 1), (5, 50, 8), (10**4, 10, 2), (1, 3, 2)):
+        sizes = _engine.batch_sizes(n, batch, threads)
+        assert sum(sizes) == n and max(sizes) <= batch and min(sizes) >= 1
+        assert all(a >= b for a, b in zip(sizes, sizes[1:]))
+        left = n - np.cumsum([0, *sizes[:-1]])
+        assert all(k <= max(1, -(-int(r) // (2 * threads))) for k, r in zip(sizes, left))
+    assert _engine.batch_sizes(199, 11, 2)[:10] == [11] * 10 and _engine.batch_sizes(199, 11, 2)[-1] == 1
+
+
 def test_batched_stream_yields_every_item_once(client):
     """Items batched into Dask tasks come back once each, with their own tags (any batch size)."""
     items = [(i, (i, 2)) for i in range(23)]

@@ -32,7 +32,7 @@ from typing import Any, Callable, Iterable, Iterator
 from .._errors import TenscellError
 from .._parallel import usable_cpus
 
-__all__ = ["cluster", "stream", "run_tasks", "cluster_pays", "batch_size", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
+__all__ = ["cluster", "stream", "run_tasks", "cluster_pays", "batch_size", "batch_sizes", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
            "WorkDirError"]
 
 
@@ -330,6 +330,23 @@ def run_tasks(fn: Callable, items: Iterable[tuple[object, tuple]], *, client=Non
         yield from stream(c, fn, rest, name=name, batch=batch_size(len(rest), task_s, n_threads(c)))
 
 
+def batch_sizes(n_items: int, batch: int, n_threads: int) -> list[int]:
+    """Items per Dask task, in the order of submission: ``batch`` each, shrinking toward the end.
+
+    Guided self-scheduling: no task holds more than ``1/(2·n_threads)`` of the
+    items not yet handed out, so the last tasks are small and the workers
+    finish together, rather than one idling while another runs a full last
+    batch (up to :data:`TASK_SECONDS` of a run).
+    """
+    sizes, left = [], int(n_items)
+    per = 2 * max(1, int(n_threads))
+    while left > 0:
+        k = max(1, min(int(batch), -(-left // per)))
+        sizes.append(k)
+        left -= k
+    return sizes
+
+
 def _run_batch(fn: Callable, arglists: list) -> list:
     """One Dask task: ``fn(*args)`` for each of ``arglists``, in order."""
     return [fn(*args) for args in arglists]
@@ -339,7 +356,8 @@ def stream(client, fn: Callable, items: Iterable[tuple[object, tuple]], *, windo
            name: str = "tenscell", batch: int = 1) -> Iterator[tuple[Any, Any]]:
     """Run ``fn(*args)`` for each ``(tag, args)`` of ``items``; yield ``(tag, result)`` as each completes.
 
-    Items go to the cluster ``batch`` at a time (one Dask task each); at most
+    Items go to the cluster ``batch`` at a time (one Dask task each; for a
+    list, fewer toward the end, :func:`batch_sizes`); at most
     ``window`` tasks are in the cluster at a time (default: 8 per worker
     thread, at least 32), refilled as results arrive. A task given up by Dask
     after repeated worker deaths yields a :class:`TaskLost` as the result of
@@ -357,12 +375,13 @@ def stream(client, fn: Callable, items: Iterable[tuple[object, tuple]], *, windo
     from distributed.scheduler import KilledWorker
 
     window = window or max(32, 8 * n_threads(client))
+    sizes = iter(batch_sizes(len(items), batch, n_threads(client))) if isinstance(items, (list, tuple)) else None
     it = iter(items)
     pending: dict = {}
     done = as_completed()
 
     def submit_next() -> bool:
-        group = list(itertools.islice(it, max(1, int(batch))))
+        group = list(itertools.islice(it, max(1, int(batch) if sizes is None else next(sizes, 1))))
         if not group:
             return False
         fut = client.submit(_run_batch, fn, [args for _, args in group], pure=False,
