@@ -13,6 +13,7 @@ same cell and the same moduli to rounding.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from dataclasses import dataclass
@@ -40,9 +41,14 @@ def scaled_cell(cell: Cell, L: float) -> Cell:
     has the same G′, G″ (the strut-length gauge).
     """
     L = positive_scalar("L", L, "m")
-    lam = L / cell.strut_length
-    if lam == 1.0:
+    if L / cell.strut_length == 1.0:
         return cell
+    return _scaled(cell, L)
+
+
+@functools.lru_cache(maxsize=2)  # the fit report's uncertainties move every parameter but L: one cell, many times
+def _scaled(cell: Cell, L: float) -> Cell:
+    lam = L / cell.strut_length
     st = dataclasses.replace(cell.structure, nodes=np.asarray(cell.structure.nodes) * lam)
     params = dict(cell.parameters)
     if "L" in params:
