@@ -49,6 +49,21 @@ def test_snelson_prism(R, H):
     assert np.all(Gs > 0) and np.all(Gl > 0)  # a passive, stable structure once the rigid motions are out
 
 
+def test_rigid_body_modes_are_found_once_per_cell(monkeypatch):
+    """Every model of a free-standing cell (a prestress loop) shares one basis, computed once and read-only."""
+    import tenscell.model.formfinding as ff
+
+    calls = []
+    real = ff.rigid_body_modes
+    monkeypatch.setattr(ff, "rigid_body_modes", lambda coords: calls.append(1) or real(coords))
+    cell = equilibrate(snelson_prism(1.0, 1.0), parametrization="local")
+    lins = [tc.linearize(cell, P=P, EA=50.0, c=1.0) for P in (0.5, 1.0, 2.0)]
+    assert len(calls) == 1 and all(lin.basis is lins[0].basis for lin in lins)
+    assert not lins[0].basis.flags.writeable
+    other = equilibrate(snelson_prism(0.7, 1.3), parametrization="local")
+    assert tc.linearize(other, P=1.0, EA=50.0, c=1.0).basis.shape == lins[0].basis.shape and len(calls) == 2
+
+
 def test_expanded_octahedron():
     cell = equilibrate(expanded_octahedron(), parametrization="local")
     lin = tc.linearize(cell, P=10.0, EA=5.0, c=1.0)

@@ -15,6 +15,8 @@ nothing and left out; :func:`unresisted_share` says how much of it there is.
 """
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from .modal import complement_basis
@@ -22,15 +24,25 @@ from .modal import complement_basis
 __all__ = ["deformation_basis", "unresisted_share", "solve_full", "resolvent_full"]
 
 
+#: per cell, its basis (a cache: it depends on the cell's reference alone; weak keys, it lives as long as the cell)
+_bases: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def deformation_basis(cell) -> np.ndarray | None:
     """Orthonormal basis ``N`` (n, n − k) of the coordinates orthogonal to the cell's ``k`` rigid-body motions,
-    or None when its supports hold it (k = 0)."""
+    or None when its supports hold it (k = 0). Computed once per cell (read-only: every model of the cell shares it)."""
     if cell.structure.held_by_fixed_nodes:  # three fixed nodes not on one line: nothing to remove
         return None
+    if cell in _bases:
+        return _bases[cell]
     from ..model.formfinding import rigid_body_modes
 
     R = rigid_body_modes(cell.coords)
-    return complement_basis(R, cell.n) if R.shape[1] else None
+    N = complement_basis(R, cell.n) if R.shape[1] else None
+    if N is not None:
+        N.flags.writeable = False
+    _bases[cell] = N
+    return N
 
 
 def unresisted_share(vector, N: np.ndarray) -> float:
