@@ -160,7 +160,7 @@ def modal_compliance(tau: np.ndarray, rho: np.ndarray, w: np.ndarray) -> np.ndar
     tau, rho = np.asarray(tau), np.asarray(rho)
     den = np.multiply.outer(tau * tau, w * w)
     den += 1.0
-    np.reciprocal(den, out=den)
+    np.divide(1.0, den, out=den)  # the same correctly rounded 1/x as np.reciprocal, which numpy does not vectorize (2× slower)
     weights = np.empty(rho.shape[:-1] + (2, rho.shape[-1]))
     weights[..., 0, :] = rho
     np.multiply(rho, tau, out=weights[..., 1, :])
