@@ -95,55 +95,44 @@ def _blas_libraries():
     return _controller[1]
 
 
-def _limit() -> list:
-    """Set each BLAS library to the hot-path thread count; the ``(library, old count)`` pairs to restore."""
-    n = thread_count()
-    changed = []
-    if n is not None:
-        for lc in _blas_libraries():
-            old = lc.num_threads
-            if old != n:
-                lc.set_num_threads(n)
-                changed.append((lc, old))
-    return changed
-
-
-def _restore(changed: list) -> None:
-    for lc, old in changed:
-        lc.set_num_threads(old)
-
-
-@contextlib.contextmanager
-def limited():
-    """Run the block with the hot-path thread count (once, however deeply nested).
+class limited:
+    """Context manager: run the block with the hot-path thread count (once, however deeply nested).
 
     Sets each BLAS library's thread count directly (a few C calls) rather
     than through ``threadpool_limits``, which inspects the process at every
-    use (about 40 µs, as much as a small model's whole response).
+    use (about 40 µs, as much as a small model's whole response). A class
+    rather than a generator: a loop of small models enters it per call.
     """
-    depth = getattr(_local, "depth", 0)
-    changed = _limit() if depth == 0 else []
-    _local.depth = depth + 1
-    try:
-        yield
-    finally:
-        _local.depth = depth
-        _restore(changed)
+
+    __slots__ = ("_depth", "_changed")
+
+    def __enter__(self):
+        self._depth = depth = getattr(_local, "depth", 0)
+        self._changed = changed = []
+        n = thread_count() if depth == 0 else None
+        if n is not None:
+            for lc in _blas_libraries():
+                old = lc.num_threads
+                if old != n:
+                    lc.set_num_threads(n)
+                    changed.append((lc, old))
+        _local.depth = depth + 1
+        return self
+
+    def __exit__(self, *exc) -> None:
+        _local.depth = self._depth
+        for lc, old in self._changed:
+            lc.set_num_threads(old)
 
 
 def hot_path(fn):
-    """Decorator: run ``fn`` under :func:`limited` (inlined: a loop of small models pays it per call)."""
+    """Decorator: run ``fn`` under :func:`limited`."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
         if getattr(_local, "depth", 0):
             return fn(*args, **kwargs)
-        changed = _limit()
-        _local.depth = 1
-        try:
+        with limited():
             return fn(*args, **kwargs)
-        finally:
-            _local.depth = 0
-            _restore(changed)
 
     return wrapper
