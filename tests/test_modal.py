@@ -74,8 +74,9 @@ def test_sparse_model_is_factorized_once_per_matrix(monkeypatch):
     assert len(calls) == 1 and calls[0] != "K0", calls
 
 
-@pytest.mark.parametrize("c", [1.0, "decades"])  # C0 whitened by the prestress family; by K0's factor
-def test_dense_model_is_decomposed_once(monkeypatch, c):
+@pytest.mark.parametrize("c, viscosity", [(1.0, 0.0), ("decades", 0.0), (1.0, 0.1)])  # C0 whitened by the
+# prestress family; by K0's factor; a cytoplasm's own C0 (the family is not asked for it)
+def test_dense_model_is_decomposed_once(monkeypatch, c, viscosity):
     calls = []
     real, real_syevd = np.linalg.eigh, modal._syevd
 
@@ -91,8 +92,8 @@ def test_dense_model_is_decomposed_once(monkeypatch, c):
     monkeypatch.setattr(modal, "_syevd", counting_syevd)
     cell = tenscell.paper_cell()
     c = np.logspace(-6, 2, cell.m) if c == "decades" else c
-    lin = tenscell.linearize(cell, 1000.0, c=c)
-    assert (lin.pencil.family is None) == (not np.isscalar(c))
+    lin = tenscell.linearize(cell, 1000.0, c=c, viscosity=viscosity)
+    assert (lin.pencil.family is None) == (not np.isscalar(c) or viscosity > 0)
     tenscell.moduli(lin, F)
     tenscell.moduli(lin, F[::2])
     creep_spectrum(lin)

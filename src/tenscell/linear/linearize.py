@@ -280,7 +280,9 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     EA = positive_array("EA", EA, (m,), "N")
     c = positive_array("c", c, (m,), "N·s/m")
     # validated above: skip the law's own checks on this hot path (parameter sweeps, fits)
-    lin = _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA, family=_prestress_family(cell, EA, c))
+    # a cytoplasm adds to C0: that model is not a member of the tendons' family (its pencil is its own)
+    family = None if viscosity else _prestress_family(cell, EA, c)
+    lin = _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA, family=family)
     return with_cytoplasm(lin, viscosity) if viscosity else lin
 
 
