@@ -1,7 +1,7 @@
 """Prototype (issue 18, helper mech): springpot tendons whose coefficient and/or exponent depend on the tension.
 
 The two variants that are not in the package (their laws defined here) are registered into
-``tenscell.laws`` and ``tenscell.fitting.mechanisms.MECHANISMS`` at run time; the third is the
+``tenscell.laws`` and ``tenscell.fitting.models.mechanism.MECHANISMS`` at run time; the third is the
 package's ``TensionSpringpot`` with beta free (held at 1000 it is the built-in
 ``springpot-tension+visc``). Each is scored by the study's own ``evaluate_mechanism`` (same
 metrics as ``tenscell study mechanisms``), with its parameters, their local standard errors
@@ -157,7 +157,7 @@ def register():
 def fd_check(name):
     """Exact Jacobian of the mechanism problem against central differences at a random point."""
     from tenscell.io import bundled
-    from tenscell.fitting.mechanism_problem import make_mechanism_problem
+    from tenscell.fitting.models.mechanism_problem import make_mechanism_problem
 
     pb = make_mechanism_problem([bundled("stamenovic2002"), bundled("fabry2001")], name)
     th = pb.initial_guess(np.random.default_rng(1))

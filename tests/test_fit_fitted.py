@@ -137,7 +137,7 @@ def test_fit_json_rebuilds_the_fitted_cell_to_rounding(small_fits, tmp_path):
 
 
 def test_report_has_identifiability_comparison_and_creep_sections(small_fits):
-    from tenscell.fitting.models import compare_models
+    from tenscell.fitting.scores import compare_models
     from tenscell.reports.fit import fit_markdown
 
     freq, pres = small_fits

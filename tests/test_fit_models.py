@@ -1,4 +1,4 @@
-"""The structural-damping law, AIC/BIC and held-out error (tenscell.fitting.models)."""
+"""The structural-damping law, AIC/BIC and held-out error (tenscell.fitting.scores)."""
 from __future__ import annotations
 
 import math
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import scipy.stats
 
-from tenscell.fitting.models import (PHI0, StructuralDampingProblem, compare_models, fit_structural_damping,
+from tenscell.fitting.scores import (PHI0, StructuralDampingProblem, compare_models, fit_structural_damping,
                                      information_criteria, split_holdout, structural_damping_moduli)
 from tenscell.io.data import DataError, RheologyData, bundled
 

@@ -16,7 +16,7 @@ from threadpoolctl import threadpool_limits
 import tenscell
 from tenscell import fitting
 from tenscell.cli import main as cli_main
-from tenscell.fitting.problem import _central
+from tenscell.fitting.models.voigt import _central
 from tenscell.fitting.search import _initial_guess
 from tenscell.io.data import DataError, RheologyData, bundled, write_csv
 from tenscell.reports.fit import fit_markdown

@@ -9,10 +9,10 @@ import pytest
 
 from tenscell import paper_cell
 from tenscell.cli import main as cli_main
-from tenscell.fitting.heterogeneity import DISTRIBUTIONS, assignments
+from tenscell.fitting.models.heterogeneity import DISTRIBUTIONS, assignments
 from tenscell.fitting.mechanism_fit import FittedMechanism, bare_problem, fit_mechanism, load_any_fit
-from tenscell.fitting.mechanism_problem import make_mechanism_problem
-from tenscell.fitting.mechanisms import MECHANISMS, Mechanism, mechanism, mechanism_names
+from tenscell.fitting.models.mechanism_problem import make_mechanism_problem
+from tenscell.fitting.models.mechanism import MECHANISMS, Mechanism, mechanism, mechanism_names
 from tenscell.io.data import RheologyData, bundled
 from tenscell.linear.linearize import linearize
 from tenscell.response import moduli
@@ -119,7 +119,7 @@ def test_jacobian_with_a_free_tension_modulus_matches_finite_differences(joint):
     """springpot-tension+visc holds beta; a user's mechanism that fits it (kind "ratio", default bounds 1e-3 to
     1e5) gets its exact derivative too (∂k*/∂beta = (T/l)(iω·t1)^α_T, through the prestress as well)."""
     base = MECHANISMS["springpot-tension+visc"]
-    from tenscell.fitting.mechanisms import Field
+    from tenscell.fitting.models.mechanism import Field
 
     free = Mechanism("free-beta", base.law, tuple(Field("beta", "ratio", "shared") if f.law_parameter == "beta" else f
                                                    for f in base.fields), viscosity=True)

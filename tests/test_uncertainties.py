@@ -9,7 +9,7 @@ import scipy.optimize
 
 import tenscell
 from tenscell._results import CORRELATION_THRESHOLD, plus_minus
-from tenscell.fitting.models import fit_structural_damping, structural_damping_moduli
+from tenscell.fitting.scores import fit_structural_damping, structural_damping_moduli
 
 DATA = Path(__file__).parent / "data"
 

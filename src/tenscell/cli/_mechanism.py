@@ -18,7 +18,7 @@ def run_mechanism_fit(args, read_datasets) -> int:
     from .._parallel import jobs_for
     from .._progress import stage
     from ..fitting.mechanism_fit import fit_mechanism
-    from ..fitting.mechanism_problem import make_mechanism_problem
+    from ..fitting.models.mechanism_problem import make_mechanism_problem
     from ..io.outputs import OutputSet, write_json, write_text
     from ..io.thinning import bin_datasets
     from ..reports.mechanisms import mechanism_fit_markdown
@@ -65,7 +65,7 @@ def _check_ensemble(args) -> None:
     """``--ensemble K``: a mechanism drawn from a distribution, and K >= 2 (or 0: none), before any fitting."""
     if not args.ensemble:
         return
-    from ..fitting.mechanisms import mechanism
+    from ..fitting.models.mechanism import mechanism
 
     if args.ensemble == 1:
         raise ValueError("--ensemble: 1 assignment has no spread between assignments; give K >= 2, or 0 for none")

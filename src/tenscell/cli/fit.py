@@ -50,7 +50,7 @@ def register(sub) -> None:
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform",
                    help="damping c: one for all (as in the paper) or per family")
     p.add_argument("--model", choices=MECHANISM_NAMES, default=None,
-                   help="fit a mechanism instead of the per-tendon Voigt cell (tenscell.fitting.mechanisms; "
+                   help="fit a mechanism instead of the per-tendon Voigt cell (tenscell.fitting.models.mechanism; "
                         "writes fit.json, report.md, fit.png; --fix/--bound take its parameter names or kinds)")
     p.add_argument("--ensemble", type=integer(0, ENSEMBLE_MAX_K), default=0, metavar="K",
                    help="with --model of a mechanism whose tendon values are drawn from a distribution: evaluate "
@@ -282,7 +282,7 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=No
     doc["baseline"] = {k: v for k, v in baseline.to_dict().items()
                        if k in ("tendons", "damping", "rms_log10_error", "converged", "time_s", "parameters")}
     if comparison is None:
-        from ..fitting.models import compare_models
+        from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline)
     doc["model_comparison"] = comparison.to_dict()
@@ -420,7 +420,7 @@ def run(args) -> int:
         if not hasattr(datasets[0], "frequency_hz"):
             raise ValueError(f"--holdout applies to a frequency sweep of G', G''; {args.data[0]} holds creep "
                              "compliance J(t)")
-        from ..fitting.models import split_holdout
+        from ..fitting.scores import split_holdout
 
         try:
             train, held = split_holdout(datasets[0], *args.holdout)
@@ -444,7 +444,7 @@ def run(args) -> int:
         # the report's ± need one model evaluation per parameter: half of them in the worker, before the figure
         result.compute_derived(worker)
         figure = worker.submit(fit_png, result, baseline, title)
-        from ..fitting.models import compare_models
+        from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
         outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure)

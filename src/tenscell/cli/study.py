@@ -293,7 +293,7 @@ def run(args) -> int:
         if args.name not in names and getattr(args, dest) != default:
             raise ValueError(f"{flag} applies to study {' and '.join(names)}, not to study {args.name}")
     if args.name == "mechanisms" and args.mechanisms is not None:
-        from ..fitting.mechanisms import mechanism_names
+        from ..fitting.models.mechanism import mechanism_names
 
         bad = [m for m in args.mechanisms.split(",") if m.strip() and m.strip() not in mechanism_names()]
         if bad:

@@ -4,7 +4,7 @@ from __future__ import annotations
 import functools
 
 from . import search
-from .mechanisms import PER_TENDON_VOIGT
+from .models.mechanism import PER_TENDON_VOIGT
 
 __all__ = ["fit"]
 
@@ -27,7 +27,7 @@ def fit(data, cell=None, *, model=None, **options):
 
 _MODEL_DOC = """    model : str or Mechanism, optional
         Fit a mechanism instead of the per-tendon Voigt cell (a name of
-        :data:`tenscell.fitting.mechanisms.MECHANISMS` or a spec): delegates to
+        :data:`tenscell.fitting.models.mechanism.MECHANISMS` or a spec): delegates to
         :func:`tenscell.fitting.mechanism_fit.fit_mechanism` with the search
         options above and returns a
         :class:`~tenscell.fitting.mechanism_fit.MechanismFit`; ``tendons``,

@@ -2,7 +2,7 @@
 
 :func:`fit_mechanism` runs the same multi-start search as the per-tendon fit
 (:func:`tenscell.fitting.search.run_search`) on a
-:class:`~tenscell.fitting.mechanism_problem.MechanismProblem`. The result
+:class:`~tenscell.fitting.models.mechanism_problem.MechanismProblem`. The result
 reports, beside the local standard errors of
 :func:`~tenscell.fitting.identifiability.identifiability`, the spread of the
 parameters over the other starts that fit as well (RMS within
@@ -30,8 +30,8 @@ from .._checks import positive_scalar
 from .._results import dataframe, format_repr
 from ..model.equilibrium import Cell
 from .fitted import cell_from_dict, cell_to_dict
-from .mechanism_problem import MechanismProblem, _layout, _maps, make_mechanism_problem
-from .mechanisms import Field, Mechanism
+from .models.mechanism_problem import MechanismProblem, _layout, _maps, make_mechanism_problem
+from .models.mechanism import Field, Mechanism
 from .result import FitAlternative, accepted, inside_noise, noise_rms, verdict_text
 
 __all__ = ["MechanismFit", "FittedMechanism", "fit_mechanism", "load_any_fit", "MECHANISM_FORMAT",
@@ -294,7 +294,7 @@ class MechanismFit:
 
     def information_criteria(self) -> tuple[float, float]:
         """(AIC, BIC) of the log10 residuals, ``k`` = free parameters (:func:`.models.information_criteria`)."""
-        from .models import information_criteria
+        from .scores import information_criteria
 
         aic, bic, _ = information_criteria(self.problem.residuals(self.theta), self.n_free,
                                            sigma_known=self.sigma_known, weights=self.problem.weights)
@@ -379,14 +379,14 @@ def fit_mechanism(data, model, cell: Cell | None = None, *, starts: int = 4, see
                   polish: float = 0.2, polish_effort: float = 0.5, bounds: dict | None = None,
                   fixed: dict | None = None, max_points: int | None = 100,
                   progress: bool | None = None) -> MechanismFit:
-    """Fit a mechanism (a name of :data:`~tenscell.fitting.mechanisms.MECHANISMS` or a spec) to data.
+    """Fit a mechanism (a name of :data:`~tenscell.fitting.models.mechanism.MECHANISMS` or a spec) to data.
 
     Options as for :func:`tenscell.fitting.fit`; ``bounds`` and ``fixed`` as
-    for :func:`~tenscell.fitting.mechanism_problem.make_mechanism_problem`.
+    for :func:`~tenscell.fitting.models.mechanism_problem.make_mechanism_problem`.
     """
     from ..io.thinning import bin_datasets
     from ..model.shapes import paper_cell
-    from .problem import as_datasets
+    from .models.voigt import as_datasets
     from .search import _best, run_search
 
     t_begin = time.monotonic()

@@ -19,7 +19,7 @@ from ..response import compliance, frequency_response, log_slope
 if TYPE_CHECKING:
     from ..io.creep_data import CreepData
     from .prestress import PrestressActivity
-    from .problem import FitProblem
+    from .models.voigt import FitProblem
 
 __all__ = ["FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "CreepFit", "FitResult", "model_curve",
            "frequency_slopes", "prestress_slopes", "report_quantities", "data_axis", "noise_rms", "inside_noise",

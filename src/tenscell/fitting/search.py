@@ -41,7 +41,7 @@ from .._checks import positive_scalar
 from .._parallel import Workers
 from .._progress import progress_bar
 from ..model.equilibrium import Cell
-from .problem import _LN10, FitProblem, as_datasets, centred_start, make_problem
+from .models.voigt import _LN10, FitProblem, as_datasets, centred_start, make_problem
 from .result import FitAlternative, FitResult, accepted, noise_note, noise_rms
 from .._threads import limited
 from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
@@ -354,7 +354,7 @@ def fit(data, cell: Cell | None = None, *, tendons: str = "per-tendon", damping:
         A frequency or prestress sweep (see :mod:`tenscell.io.data`), or several
         data sets fitted jointly by one parameter set; a frequency sweep that
         states its prestress (``data.with_prestress(P_Pa)``) is linked to the
-        others by one prestress scale (see :mod:`tenscell.fitting.problem`).
+        others by one prestress scale (see :mod:`tenscell.fitting.models.voigt`).
     cell : Cell, optional
         Reference cell; default :func:`tenscell.paper_cell` (strut length 1 m).
     tendons : {"per-tendon", "per-family", "uniform"}
@@ -420,7 +420,7 @@ def run_search(problem, *, starts: int = 4, seed: int | None = 0, jobs: int = 1,
 
     ``problem`` is a :class:`FitProblem`, or any object with its residual and
     Jacobian interface that brings its own ``initial_guess(rng)`` and
-    ``perturb(theta, rng)`` (:class:`tenscell.fitting.mechanism_problem.MechanismProblem`).
+    ``perturb(theta, rng)`` (:class:`tenscell.fitting.models.mechanism_problem.MechanismProblem`).
     ``t_begin`` (``time.monotonic()``) is the moment the history's times count from (default: now).
     """
     t_begin = time.monotonic() if t_begin is None else t_begin

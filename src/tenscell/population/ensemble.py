@@ -1,8 +1,8 @@
 """Large ensembles of a distributed mechanism on the population engine: its mean moduli and their spread.
 
 A mechanism whose tendon properties are drawn from a distribution
-(:mod:`tenscell.fitting.heterogeneity`) is fitted through the average of its
-moduli over a few stratified assignments (K = 8, :class:`~tenscell.fitting.mechanisms.Mechanism`):
+(:mod:`tenscell.fitting.models.heterogeneity`) is fitted through the average of its
+moduli over a few stratified assignments (K = 8, :class:`~tenscell.fitting.models.mechanism.Mechanism`):
 an estimate of the moduli's expectation over every way of assigning the
 drawn values to the tendons. :func:`mechanism_ensemble` evaluates a fitted
 mechanism over many more assignments (K = 200–2000, up to :data:`MAX_K`) and
@@ -19,7 +19,7 @@ is timed here and, without ``workers``, decides whether a local Dask cluster
 pays for its start-up (else every chunk runs here); chunks are batched into
 Dask tasks of about two seconds. The numbers depend only on the model, the
 grid, K and the seed: the assignments are drawn here before any task runs
-(:func:`tenscell.fitting.heterogeneity.assignments`), chunk boundaries are
+(:func:`tenscell.fitting.models.heterogeneity.assignments`), chunk boundaries are
 fixed, and each chunk is a pure function of its rows — ``workers=0`` and a
 cluster give the same numbers.
 """

@@ -323,7 +323,7 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
         The homogeneous fit (``tendons="uniform"``) of the same data.
     title : str, optional
     comparison : ModelComparison, optional
-        From :func:`tenscell.fitting.models.compare_models` (e.g. with held-out
+        From :func:`tenscell.fitting.scores.compare_models` (e.g. with held-out
         data); computed from ``result`` and ``baseline`` when not given.
     """
     if title is None:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-from ..fitting.mechanisms import PER_TENDON_VOIGT, mechanism, mechanism_names
+from ..fitting.models.mechanism import PER_TENDON_VOIGT, mechanism, mechanism_names
 from ._format import num, table
 
 __all__ = ["mechanism_fit_markdown", "mechanisms_markdown", "study_table_rows", "STUDY_COLUMNS"]

@@ -4,7 +4,7 @@ The paper fits Fabry's power law with tendon stiffnesses spread over 8–9
 decades, calls that unrealistic and conjectures that more compact
 distributions could also fit. This study answers it for any data: for each
 bound ``D`` on the spread ``log10(max EA / min EA)`` it fits the model with
-``max_decades=D`` (an exact constraint; see :mod:`tenscell.fitting.problem`)
+``max_decades=D`` (an exact constraint; see :mod:`tenscell.fitting.models.voigt`)
 and records the best RMS reached. Bounds are scanned from the widest to the
 narrowest, each fit warm-started from the previous one (its stiffnesses
 compressed to the new bound) besides fresh starts, so the front is what a

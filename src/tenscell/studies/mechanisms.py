@@ -1,11 +1,11 @@
 """Which mechanism explains the cells: every mechanism fitted to the same data, scored on the same table.
 
 For each mechanism (the paper's per-tendon Voigt fit and every entry of
-:data:`tenscell.fitting.mechanisms.MECHANISMS`) the study fits the data sets
+:data:`tenscell.fitting.models.mechanism.MECHANISMS`) the study fits the data sets
 jointly and records
 
 * the free parameters, the tendon-stiffness spread (decades), the RMS of the
-  log10 errors per data set, AIC and BIC (:func:`tenscell.fitting.models.information_criteria`);
+  log10 errors per data set, AIC and BIC (:func:`tenscell.fitting.scores.information_criteria`);
 * how many free parameters the data determine within 10 % (local standard
   error of the ln-parameter ≤ 0.1, :mod:`tenscell.fitting.identifiability`),
   and how far the other starts that fit as well spread them;
@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..fitting.mechanisms import MECHANISMS, PER_TENDON_VOIGT
+from ..fitting.models.mechanism import MECHANISMS, PER_TENDON_VOIGT
 
 if TYPE_CHECKING:
     from ..population.ensemble import EnsembleResult
@@ -194,7 +194,7 @@ def _identifiability_counts(result) -> tuple[int, int, tuple]:
 
 def _scores(result) -> tuple[tuple, float, float, int]:
     """(rms per data set, AIC, BIC, free parameters) of a fit of either kind."""
-    from ..fitting.models import information_criteria
+    from ..fitting.scores import information_criteria
 
     if hasattr(result, "dataset_rms"):  # a MechanismFit
         aic, bic = result.information_criteria()
@@ -223,7 +223,7 @@ def _spread(result) -> float:
 
 def evaluate_mechanism(name: str, datasets, opts: dict, holdout) -> MechanismRow:
     """Fit one mechanism and score it (a worker's task; see the module docstring)."""
-    from ..fitting.models import split_holdout
+    from ..fitting.scores import split_holdout
 
     t0 = time.monotonic()
     result = _fit(datasets, name, opts)
@@ -277,7 +277,7 @@ def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 
     """
     from .._parallel import starmap
     from .._progress import progress_bar
-    from ..fitting.problem import as_datasets
+    from ..fitting.models.voigt import as_datasets
 
     t0 = time.monotonic()
     if ensemble:  # bad K or workers: refused before any fit

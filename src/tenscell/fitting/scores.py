@@ -138,7 +138,7 @@ class StructuralDampingProblem:
 
     def jacobian_fd(self, theta, step: float = 1e-6) -> np.ndarray:
         """Central finite differences of :meth:`residuals` (the reference for tests)."""
-        from .problem import _central
+        from .models.voigt import _central
 
         return _central(self.residuals, theta, step)
 

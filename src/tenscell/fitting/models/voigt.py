@@ -1,9 +1,9 @@
 """The fitting problem: a cell's linear model against data, a parameter layout, residuals and their analytic Jacobian.
 
 The second of the fit's three layers (lmfit's parameters → problem →
-minimizer): :mod:`~tenscell.fitting.layout` lays the parameters out,
+minimizer): :mod:`~tenscell.fitting.parameters` lays the parameters out,
 :class:`FitProblem` holds the plain arrays and computes residuals, penalties
-and Jacobians from the model of :mod:`~tenscell.fitting.derivatives`, and
+and Jacobians from the model of :mod:`~tenscell.fitting.models.voigt_kernel`, and
 :func:`tenscell.fitting.fit` (:mod:`~tenscell.fitting.search`) searches.
 
 Parameters and units
@@ -68,11 +68,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from .._results import format_repr
-from ..linear.whitening import rescaled_basis, unit_damping_basis, whitened_basis
-from ..model.equilibrium import Cell
-from .derivatives import _Evaluation, evaluate
-from .layout import (DAMPING_MODES, ProblemLayout, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
+from ..._results import format_repr
+from ...linear.whitening import rescaled_basis, unit_damping_basis, whitened_basis
+from ...model.equilibrium import Cell
+from .voigt_kernel import _Evaluation, evaluate
+from ..parameters import (DAMPING_MODES, ProblemLayout, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
                      prestress_varies, required_points)
 
 __all__ = ["TENDON_MODES", "DAMPING_MODES", "FitProblem", "make_problem", "required_points", "as_datasets"]
@@ -549,7 +549,7 @@ def make_problem(
         Unknown modes, bad bounds, fixed values or options, a cell with
         singular damping, or too few data points (:func:`required_points`).
     """
-    from ..model.shapes import paper_cell
+    from ...model.shapes import paper_cell
 
     datasets = as_datasets(data)
     options = check_options(min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz)

@@ -2,7 +2,7 @@
 
 For parameters ``φ`` (natural logs), each field of the :class:`Mechanism`
 gives the law parameter of every tendon in every assignment k (K × m values,
-:mod:`~tenscell.fitting.heterogeneity`), the law gives the dynamic tangent
+:mod:`~tenscell.fitting.models.heterogeneity`), the law gives the dynamic tangent
 ``k*_j(ω)`` at the tensions ``P·T0`` and its exact derivatives
 (``complex_stiffness_derivatives``), and the kernel
 :func:`tenscell.linear.dynamic.dynamic_compliance` gives J(ω) and the exact
@@ -26,14 +26,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import laws as _laws
-from ..io.data import DataError
-from ..linear.modal import modulus
-from ..model.equilibrium import Cell
+from ... import laws as _laws
+from ...io.data import DataError
+from ...linear.modal import modulus
+from ...model.equilibrium import Cell
 from .heterogeneity import DISTRIBUTIONS, assignments
-from .mechanisms import KINDS, Field, Mechanism
-from .layout import ProblemLayout, _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
-from .problem import _LN10, _PENALTY, centred_start
+from .mechanism import KINDS, Field, Mechanism
+from ..parameters import ProblemLayout, _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
+from .voigt import _LN10, _PENALTY, centred_start
 
 __all__ = ["MechanismProblem", "make_mechanism_problem", "MechanismEvaluation"]
 
@@ -95,7 +95,7 @@ def _bounds_of(kind: str, S: float, w_m: float, G_loss: float) -> tuple[float, f
 class MechanismProblem(ProblemLayout):
     """A mechanism's moduli against one or several data sets (built by :func:`make_mechanism_problem`).
 
-    Duck-types the parts of :class:`~tenscell.fitting.problem.FitProblem` that
+    Duck-types the parts of :class:`~tenscell.fitting.models.voigt.FitProblem` that
     the search (:func:`tenscell.fitting.search.run_search`) and
     :func:`~tenscell.fitting.identifiability.identifiability` use, and adds
     its own starts (:meth:`initial_guess`) and moves (:meth:`perturb`).
@@ -178,7 +178,7 @@ class MechanismProblem(ProblemLayout):
 
         ``dP`` (N, n_params): d ln P / d φ of each point (for the Jacobian). None where not a stable cell.
         """
-        from ..linear.dynamic import dynamic_compliance
+        from ...linear.dynamic import dynamic_compliance
 
         vals, dln = self.law_values(phi)
         law_cls = getattr(_laws, self.mechanism.law)
@@ -284,7 +284,7 @@ class MechanismProblem(ProblemLayout):
 
     def jacobian_fd(self, theta, step: float = 1e-5) -> np.ndarray:
         """Central finite differences of :meth:`residuals` (the slow reference)."""
-        from .problem import _central
+        from .voigt import _central
 
         return _central(self.residuals, theta, step)
 
@@ -408,7 +408,7 @@ def make_mechanism_problem(data, model, cell: Cell | None = None, *, bounds: dic
     data : RheologyData or sequence of RheologyData
         As for :func:`tenscell.fitting.fit` (creep data are not supported here).
     model : str or Mechanism
-        A name of :data:`~tenscell.fitting.mechanisms.MECHANISMS` or a spec.
+        A name of :data:`~tenscell.fitting.models.mechanism.MECHANISMS` or a spec.
     cell : Cell, optional
         The reference cell (default the paper cell).
     bounds : dict, optional
@@ -424,8 +424,8 @@ def make_mechanism_problem(data, model, cell: Cell | None = None, *, bounds: dic
     ValueError
         Unknown mechanism or names, bad bounds or fixed values, creep data, too few points.
     """
-    from ..model.shapes import paper_cell
-    from .mechanisms import mechanism
+    from ...model.shapes import paper_cell
+    from .mechanism import mechanism
 
     mech = mechanism(model)
     datasets = as_datasets(data)

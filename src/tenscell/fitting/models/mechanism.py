@@ -5,11 +5,11 @@ dynamic tangent ``complex_stiffness``) and says how each of the law's
 parameters is laid out over the tendons (:class:`Field`): one value per
 family (actin / intermediate filament), one value shared by every tendon, a
 fixed value, or drawn from a named distribution
-(:mod:`tenscell.fitting.heterogeneity`) whose scale is per family or shared
+(:mod:`tenscell.fitting.models.heterogeneity`) whose scale is per family or shared
 and whose shape (spread in decades, or a trap-model exponent) is one more
 parameter. Optionally a cytoplasm viscosity η (Pa·s) acts in parallel with the
 structure. The prestress parameters come from the data exactly as in the
-per-tendon fit (:mod:`tenscell.fitting.problem`).
+per-tendon fit (:mod:`tenscell.fitting.models.voigt`).
 
 The per-tendon stiffnesses, damping and prestress of a mechanism are those of
 the reference cell (strut length ``L_ref``, 1 m for the paper cell): the
@@ -64,7 +64,7 @@ class Field:
     layout : {"family", "shared", "fixed"}
         One fitted value per family, one for all tendons, or ``value`` for all.
     distribution : str or None
-        A key of :data:`~tenscell.fitting.heterogeneity.DISTRIBUTIONS`: the
+        A key of :data:`~tenscell.fitting.models.heterogeneity.DISTRIBUTIONS`: the
         layout's value(s) are the distribution's scale and one more parameter
         (its shape, shared by the families) spreads the tendons.
     value : float or None

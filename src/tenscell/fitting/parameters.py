@@ -3,9 +3,9 @@
 This is the first of the fit's three layers (as in lmfit: parameters →
 problem → minimizer): :func:`parameter_layout` and :func:`data_arrays` turn
 a cell, data sets and the user's options into the plain arrays of a
-:class:`~tenscell.fitting.problem.FitProblem`; the problem computes
-residuals and their Jacobians (:mod:`~tenscell.fitting.problem`,
-:mod:`~tenscell.fitting.derivatives`); :func:`tenscell.fitting.fit` searches.
+:class:`~tenscell.fitting.models.voigt.FitProblem`; the problem computes
+residuals and their Jacobians (:mod:`~tenscell.fitting.models.voigt`,
+:mod:`~tenscell.fitting.models.voigt_kernel`); :func:`tenscell.fitting.fit` searches.
 A new parametrization (a mode of :data:`TENDON_MODES`, a new parameter kind)
 is a change here only.
 
@@ -304,8 +304,8 @@ class ProblemLayout:
     A problem holds ``names`` (with ``units`` and ``descriptions``), the log-space ``lower``/``upper`` bounds, the boolean ``free`` mask, the
     fixed log-values ``fixed_log`` (free entries overwritten by ``theta``), the data's ``omega``,
     ``y_obs``, ``weights``, ``dataset_index`` and ``sources``, its ``residuals(theta)``, and its prestress ``group_map``.
-    :class:`tenscell.fitting.problem.FitProblem` and
-    :class:`tenscell.fitting.mechanism_problem.MechanismProblem` both are one.
+    :class:`tenscell.fitting.models.voigt.FitProblem` and
+    :class:`tenscell.fitting.models.mechanism_problem.MechanismProblem` both are one.
     """
 
     names: tuple

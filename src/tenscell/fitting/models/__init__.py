@@ -1,0 +1,1 @@
+"""Every fittable model, one module per family, behind one registry."""
