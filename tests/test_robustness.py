@@ -31,7 +31,7 @@ NUMERIC_FLAGS = {
     tuple(FIT): {"--starts": (), "--seed": ("zero",), "--jobs": (), "--tolerance": (), "--baseline-starts": (),
                  "--max-points": (), "--min-prestress-share": (), "--max-decades": (),
                  "--min-prestress-elasticity": (), "--bound": (), "--fix": (), "--holdout": (), "--prestress": (),
-                 "--temperature": ("negative", "zero"), "--ensemble": ("zero",)},
+                 "--temperature": ("negative", "zero"), "--ensemble": ("zero",), "--workers": ("zero",)},
     ("simulate", "--amplitude", "1", "--freq", "1"): {
         "--amplitude": (), "--amplitudes": (), "--freq": (), "--cycles": (), "--samples": (),
         "--alpha-deg": ("negative", "zero"), "--delta-deg": (), "--EA": (), "--c": (), "--L": (),

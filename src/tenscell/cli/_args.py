@@ -26,7 +26,7 @@ __all__ = [
     "Parser", "HelpFormatter", "number", "integer", "number_list", "frequencies", "member_values",
     "lattice_size", "grid_cost", "add_model_options", "add_prestress", "add_out", "hidden_alias", "add_from_fit",
     "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS", "path",
-    "add_data_options", "data_options_from_args", "DATA_COLUMNS", "DATA_UNITS",
+    "add_data_options", "data_options_from_args", "DATA_COLUMNS", "DATA_UNITS", "add_cluster_options",
 ]
 
 #: most (prestress, frequency) points one command evaluates: each point costs a complex
@@ -453,3 +453,14 @@ def data_options_from_args(args) -> dict:
         else:
             out["units"] = units
     return out
+
+
+def add_cluster_options(p) -> None:
+    """``--workers N | --scheduler ADDRESS``: where the tasks run (shared by every Dask command)."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--workers", type=integer(0, 4096), default=None,
+                   help="local Dask workers started for this run (default: one per CPU when the work pays for starting "
+                        "them, judged from the first task's time, else in this process; 0: no Dask)")
+    g.add_argument("--scheduler", type=path("an address or a scheduler file"), default=None,
+                   help="an existing Dask scheduler: tcp://HOST:PORT or a scheduler file (dask scheduler "
+                        "--scheduler-file F)")

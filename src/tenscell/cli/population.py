@@ -4,7 +4,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._args import (add_data_options, add_out, data_options_from_args, frequencies, integer, number, number_list,
+from ._args import (add_cluster_options, add_data_options, add_out, data_options_from_args, frequencies, integer, number,
+                    number_list,
                     path)
 from ._cost import Cost, announce, check, measure
 from .fit import DAMPING_MODES, TENDON_MODES
@@ -12,17 +13,6 @@ from .fit import DAMPING_MODES, TENDON_MODES
 MODELS = ("tensegrity", "powerlaw")
 #: suffix of the work directory kept beside --out while a run is under way
 PARTIAL_SUFFIX = ".partial"
-
-
-def add_cluster_options(p) -> None:
-    """``--workers N | --scheduler ADDRESS``: where the tasks run (shared by every Dask command)."""
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=integer(0, 4096), default=None,
-                   help="local Dask workers started for this run (default: one per CPU when the work pays for starting "
-                        "them, judged from the first task's time, else in this process; 0: no Dask)")
-    g.add_argument("--scheduler", type=path("an address or a scheduler file"), default=None,
-                   help="an existing Dask scheduler: tcp://HOST:PORT or a scheduler file (dask scheduler "
-                        "--scheduler-file F)")
 
 
 def register(sub) -> None:

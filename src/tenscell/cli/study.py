@@ -6,7 +6,7 @@ from pathlib import Path
 
 from ._args import ENSEMBLE_MAX_K, add_data_options, add_out, data_options_from_args, integer, number, number_list, path
 from .fit import stated_prestress
-from .population import add_cluster_options
+from ._args import add_cluster_options
 
 #: assignments of the study's ensemble unless --ensemble says otherwise (tenscell.population.ensemble.DEFAULT_K)
 STUDY_ENSEMBLE_K = 1000
@@ -163,7 +163,7 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     print(report.split("## The answer")[0].split("\n\n", 2)[-1], flush=True)
     written = "mechanisms.csv, mechanisms.png, mechanisms.md"
     if s.ensemble is not None:
-        from ._mechanism import ENSEMBLE_FILES, write_ensemble
+        from .fit import ENSEMBLE_FILES, write_ensemble
 
         write_ensemble(out, s.ensemble, f"Ensemble of `{s.ensemble.mechanism}`, the distributed mechanism with the "
                                         "lowest BIC")
@@ -258,7 +258,12 @@ def _fitted_paper_cell(path) -> dict:
     """The sensitivity study's keyword arguments for the fitted paper cell in ``path`` (ValueError otherwise)."""
     from ..fitting.fitted import load_fit
 
+    from ..fitting.fitted import FittedCell
+
     model = load_fit(path)
+    if not isinstance(model, FittedCell):
+        raise ValueError(f"--from-fit {path}: the sensitivity study varies the paper cell's α, δ, L, EA and c; this "
+                         f"fit is {model.describe()}, not a fit of the Voigt cell (tenscell fit without --model)")
     p = model.cell.parameters
     if not {"alpha", "delta"} <= set(p) or not p.get("intermediate_filaments", False):
         raise ValueError(f"--from-fit {path}: the sensitivity study varies the paper cell's α, δ and L; this fit's "
@@ -293,7 +298,7 @@ def run(args) -> int:
         if args.name not in names and getattr(args, dest) != default:
             raise ValueError(f"{flag} applies to study {' and '.join(names)}, not to study {args.name}")
     if args.name == "mechanisms" and args.mechanisms is not None:
-        from ..fitting.models.mechanism import mechanism_names
+        from ..fitting.models.catalog import mechanism_names
 
         bad = [m for m in args.mechanisms.split(",") if m.strip() and m.strip() not in mechanism_names()]
         if bad:

@@ -140,5 +140,12 @@ def compactness_study(data, decades=DEFAULT_DECADES, *, cell=None, tendons: str 
     best = [int(np.argmin(search[: k + 1])) for k in range(len(fits))]
     fits = [fits[b] for b in best]
     sources = tuple(d.source for d in fits[0].datasets)
-    return CompactnessStudy(decades=D[order], rms=search[best], spread=np.array([r.stiffness_spread[2] for r in fits]),
+    return CompactnessStudy(decades=D[order], rms=search[best], spread=np.array([_decades(r) for r in fits]),
                             fits=tuple(fits), tolerance=float(tolerance), sources=sources, search_rms=search)
+
+
+def _decades(result) -> float:
+    """The tendon-stiffness spread (decades) of a Voigt fit."""
+    spread = result.stiffness_spread
+    assert spread is not None  # a Voigt cell has tendons
+    return float(spread[2])

@@ -71,24 +71,79 @@ import scipy.sparse as sp
 from ..._results import format_repr
 from ...linear.whitening import rescaled_basis, unit_damping_basis, whitened_basis
 from ...model.equilibrium import Cell
+from ..problem import LN10 as _LN10, PENALTY as _PENALTY, Problem, centred_start, central_difference as _central
+from .base import FitModel
+from .voigt_fitted import MODEL_FORMAT, FittedCell, scaled_cell
+from .voigt_results import VoigtResults
 from .voigt_kernel import _Evaluation, evaluate
-from ..parameters import (DAMPING_MODES, ProblemLayout, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
+from ..parameters import (DAMPING_MODES, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
                      prestress_varies, required_points)
 
-__all__ = ["TENDON_MODES", "DAMPING_MODES", "FitProblem", "make_problem", "required_points", "as_datasets"]
+__all__ = ["TENDON_MODES", "DAMPING_MODES", "VoigtModel", "FitProblem", "FittedCell", "scaled_cell", "MODEL_FORMAT", "make_problem", "required_points", "as_datasets"]
 
-_LN10 = math.log(10.0)
-# A residual (in decades) returned where the model is not a stable, passive
-# cell (K0 not positive definite, G' or G'' <= 0). Finite, so that the
-# trust-region solver simply rejects the step.
-_PENALTY = 10.0
 # Weight of the prestress-share penalty residual ρ·ln(S_min/share): a shortfall of
 # 1 % of the share costs as much as a 0.003-decade misfit of one point... times ρ/0.3
 _SHARE_WEIGHT = 30.0
 
 
+@dataclass(frozen=True)
+class VoigtModel(FitModel):
+    """The paper's cell with Voigt tendons (``T = EA·(l/l0 − 1) + c·l'``), stiffness and damping laid out per
+    tendon, per family or uniform, with the optional activity constraints (module docstring).
+
+    ``VoigtModel()`` is the paper's heterogeneous fit (``"voigt-per-tendon"``); ``VoigtModel("uniform")`` its
+    homogeneous baseline.
+    """
+
+    tendons: str = "per-tendon"
+    damping: str = "uniform"
+    min_prestress_share: float | None = None
+    max_decades: float | None = None
+    min_prestress_elasticity: float | None = None
+    elasticity_frequency_hz: float = 0.1
+    name: str = ""
+    description: str = ""
+
+    def __post_init__(self):
+        if self.tendons not in TENDON_MODES:
+            raise ValueError(f"tendons must be one of {', '.join(map(repr, TENDON_MODES))}, got {self.tendons!r}")
+        if self.damping not in DAMPING_MODES:
+            raise ValueError(f"damping must be one of {', '.join(map(repr, DAMPING_MODES))}, got {self.damping!r}")
+        check_options(self.min_prestress_share, self.max_decades, self.min_prestress_elasticity,
+                      self.elasticity_frequency_hz)
+        if not self.name:
+            name = f"voigt-{self.tendons}" + ("-damping-per-family" if self.damping == "per-family" else "")
+            object.__setattr__(self, "name", name)
+        if not self.description:
+            what = {"per-tendon": "a stiffness per tendon", "per-family": "a stiffness per family",
+                    "uniform": "one stiffness"}[self.tendons]
+            damp = "a damping per family" if self.damping == "per-family" else "one damping"
+            object.__setattr__(self, "description", f"Voigt tendons with {what} and {damp} (the paper's model)")
+
+    @property
+    def group(self) -> str:
+        return "the paper's Voigt cell"
+
+    def baseline(self) -> FitModel | None:
+        """The homogeneous cell (none for an unconstrained homogeneous fit: it is its own baseline)."""
+        if self.tendons == "uniform" and self.damping == "uniform" and not self.constrained:
+            return None
+        return VoigtModel("uniform")
+
+    @property
+    def constrained(self) -> bool:
+        """Whether an activity constraint or a bound on the stiffness spread shapes the search space."""
+        return any(x is not None for x in (self.min_prestress_share, self.max_decades, self.min_prestress_elasticity))
+
+    def problem(self, data, cell=None, *, bounds=None, fixed=None) -> FitProblem:
+        return make_problem(data, cell, tendons=self.tendons, damping=self.damping, bounds=bounds, fixed=fixed,
+                            min_prestress_share=self.min_prestress_share, max_decades=self.max_decades,
+                            min_prestress_elasticity=self.min_prestress_elasticity,
+                            elasticity_frequency_hz=self.elasticity_frequency_hz)
+
+
 @dataclass(frozen=True, eq=False, repr=False)
-class FitProblem(ProblemLayout):
+class FitProblem(VoigtResults, Problem):
     """The linear model of a cell against one or several data sets, with a parameter layout.
 
     Built by :func:`make_problem`; holds plain arrays only, so that it can be
@@ -146,6 +201,7 @@ class FitProblem(ProblemLayout):
     probe: np.ndarray
     L_ref: float
     white_unit: tuple
+    cell: Cell  # the reference cell (strut length L_ref) the arrays above come from
     # data
     sources: tuple
     omega: np.ndarray
@@ -180,7 +236,14 @@ class FitProblem(ProblemLayout):
             f"{self.n_residuals} residuals" + (f"; {', '.join(opts)}" if opts else ""),
         )
 
-    # -- layout (the rest in fitting.layout.ProblemLayout) --------------------------
+    @property
+    def spec(self) -> VoigtModel:
+        """The :class:`VoigtModel` of this problem (its parametrization and constraints)."""
+        return VoigtModel(tendons=self.tendons, damping=self.damping, min_prestress_share=self.min_prestress_share,
+                          max_decades=self.max_decades, min_prestress_elasticity=self.min_prestress_elasticity,
+                          elasticity_frequency_hz=self.elasticity_omega / (2 * math.pi))
+
+    # -- layout (the rest in fitting.problem.Problem) --------------------------
     @property
     def n_creep(self) -> int:
         """Number of creep points, all creep data sets together (their residuals come last)."""
@@ -433,30 +496,88 @@ class FitProblem(ProblemLayout):
         """(EA (m,), c (m,), P (groups,)) on the reference cell (N, N·s/m, N) equivalent to ``theta``."""
         return self._effective(self.full(theta))
 
-
-def centred_start(problem, out, phi: np.ndarray, scalable: np.ndarray) -> float | None:
-    """Score one candidate start the way every search ranks them, and centre it on the data.
-
-    ``out`` is ``problem``'s evaluation at ``phi`` (natural-log parameters). Scaling every stiffness-like
-    parameter (``scalable``) together by k scales G by k exactly, so the mean log10 residual is removed by
-    shifting them (``phi`` is changed in place) and the start is scored by the RMS of what is left (decades).
-    Returns None when the evaluation failed or hit the penalty.
-    """
-    r = problem._residuals_from(out) / problem.weights
-    if out is None or np.any(np.abs(r) >= _PENALTY):
-        return None
-    phi[scalable] -= float(np.mean(r)) * _LN10
-    return float(np.sqrt(np.mean((r - np.mean(r)) ** 2)))
+    # -- the search's starts and moves ----------------------------------------------------------
+    def _prestress_start(self, trial, p_ref: float, lp: float) -> None:
+        """Place the scalable prestress parameters so that the model prestress is about ``exp(p_ref)·10^lp`` (N)."""
+        measured = self.group_measured[np.isfinite(self.group_measured)]
+        log_pm = math.log(float(np.median(measured))) if measured.size else 0.0
+        for i in range(self.prestress_slice.start, self.n_params - 1):
+            if not self.free[i]:
+                continue
+            if self.kinds[i] == "P":
+                trial[i] = p_ref + lp
+            elif self.kinds[i] == "s":
+                trial[i] = p_ref + lp - log_pm
 
 
-def _central(fun, theta, step):
-    theta = np.asarray(theta, dtype=float)
-    cols = []
-    for k in range(theta.size):
-        e = np.zeros_like(theta)
-        e[k] = step
-        cols.append((fun(theta + e) - fun(theta - e)) / (2 * step))
-    return np.stack(cols, axis=-1)
+    def initial_guess(self, rng: np.random.Generator) -> np.ndarray:
+        """A start (free log-parameters): stiffnesses log-uniform over 5–10 decades, damping and scale placed on the data."""
+        phi = self.fixed_log.copy()
+        n_ea, n_c = self.n_ea, self.n_c
+        spread = rng.uniform(5.0, 10.0) if self.tendons == "per-tendon" else rng.uniform(0.0, 3.0)
+        if self.compact:
+            spread = min(spread, self._decades)
+        u = rng.uniform(-0.5, 0.5, n_ea) * spread * _LN10 if n_ea > 1 else np.zeros(1)
+        u = u + math.log(self.scale_stiffness)
+        # families' damping may differ by decades (a joint fit of the bundled data puts them ~4 apart)
+        c_jitter = rng.uniform(-2.0, 2.0, n_c) * _LN10 if n_c > 1 else np.zeros(1)
+        free = self.free
+        ic = slice(n_ea, n_ea + n_c)
+        kinds = np.array(self.kinds)
+        # scaling every EA, c and absolute prestress together by k scales G by k (exact)
+        scalable = free & np.isin(kinds, ("EA", "c", "P", "s"))
+        best = None
+        # damping c shifts the spectrum in frequency; the prestress-to-stiffness ratio sets how much P matters
+        c_grid = np.linspace(-6.0, 6.0, 25) * _LN10 if free[n_ea] else [None]
+        p_free = bool(np.any(free & np.isin(kinds, ("P", "s"))))
+        if self.prestress_matters:
+            # the data vary with prestress (or must respond to it), so P must matter: relative to a typical
+            # tendon, not the softest (a negligible P is a flat, prestress-blind trap the solver cannot leave)
+            p_ref = float(np.median(u))
+            p_grid = np.array([-2.0, -1.0, 0.0, 1.0]) * _LN10 if p_free else [None]
+        else:
+            p_ref = float(u.min())
+            p_grid = np.array([-6.0, -3.0, 0.0]) * _LN10 if p_free else [None]
+        for lc in c_grid:
+            for lp in p_grid:
+                trial = phi.copy()
+                trial[:n_ea] = u
+                if lc is not None:
+                    trial[ic] = math.log(self.scale_damping) + lc + c_jitter
+                if lp is not None:
+                    self._prestress_start(trial, p_ref, lp)
+                rms = centred_start(self, self._evaluate(trial, jac=False), trial, scalable)
+                if rms is None:
+                    continue
+                if best is None or rms < best[0]:
+                    best = (rms, trial)
+        if best is None:
+            trial = phi.copy()
+            trial[:n_ea] = u
+            best = (np.inf, trial)
+        return best[1][free]
+
+
+    def perturb(self, theta, rng: np.random.Generator) -> np.ndarray:
+        """A basin-hopping move (free log-parameters): redraw a few stiffnesses, or jitter every parameter of a small model."""
+        phi = self.full(theta)
+        free = self.free
+        ea_free = np.flatnonzero(free[: self.n_ea])
+        y = phi.copy()
+        if self.tendons == "per-tendon" and ea_free.size >= 3:
+            pick = rng.choice(ea_free, size=3, replace=False)
+            lo, hi = float(phi[ea_free].min()), float(phi[ea_free].max())
+            if hi - lo < 4 * _LN10:
+                mid = 0.5 * (lo + hi)
+                lo, hi = mid - 2 * _LN10, mid + 2 * _LN10
+            y[pick] = rng.uniform(lo, hi, size=3)
+        else:
+            move = free.copy()
+            # L is a gauge of (P, EA, c) unless one of c, P is held fixed: moving it only wanders
+            move[-1] &= not bool(np.all(free[self.n_ea: -1]))
+            y[move] += rng.normal(0.0, 1.0, int(move.sum())) * _LN10
+        return y[free]
+
 
 
 # ---------------------------------------------------------------------------------
@@ -559,4 +680,4 @@ def make_problem(
     layout, point_group = parameter_layout(cell, datasets, tendons, damping, bounds, fixed)
     matters = prestress_varies(datasets) or min_prestress_share is not None or min_prestress_elasticity is not None
     return FitProblem(**layout, **_cell_arrays(cell), **data_arrays(datasets, point_group),
-                      prestress_matters=bool(matters), **options)
+                      prestress_matters=bool(matters), cell=cell, **options)
