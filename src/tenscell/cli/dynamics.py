@@ -106,8 +106,9 @@ def law_from_args(args):
         cell, EA, c = model_from_args(args)
         P = prestress_from_args(args)
     else:
-        (model, P), cell = fitted, fitted[0].cell
-        EA, c = model.EA, model.c
+        model, P = fitted
+        EA, c = time_domain_tendons(model, P, args.from_fit)
+        cell = model.cell
     args.prestress_N = P
     if args.beta == 1.0:
         law = voigt_law(cell, P=P, EA=EA, c=c)
@@ -116,6 +117,24 @@ def law_from_args(args):
         law = power_dashpot_law(cell, P=P, EA=EA, c=c, beta=args.beta, **kw)
     rtol = args.rtol if args.rtol is not None else (1e-8 if args.beta == 1.0 else 1e-6)
     return cell, law, {"rtol": rtol, "slack": args.slack}
+
+
+def time_domain_tendons(model, P: float, path):
+    """(EA, c) of the Voigt tendons the nonlinear time domain integrates for a fitted model (ValueError in one line
+    for a model it cannot: no cell, tendons with internal dynamics, a cytoplasm in parallel)."""
+    if not model.structural:
+        raise ValueError(f"--from-fit {path}: {model.describe()} has no cell to simulate: it is a structure-free "
+                         "formula (use `tenscell moduli --from-fit`)")
+    law = model.tendon_law()
+    if law.dynamic:
+        raise ValueError(f"--from-fit {path}: the nonlinear time domain integrates tendon laws without internal "
+                         f"state; {model.describe()} has {type(law).__name__} tendons (internal dynamics): use "
+                         "`tenscell moduli --from-fit` for its moduli")
+    if model.viscosity:
+        raise ValueError(f"--from-fit {path}: {model.describe()} has a cytoplasm viscosity in parallel with the "
+                         "structure, which the nonlinear time domain does not integrate: use `tenscell moduli "
+                         "--from-fit` for its moduli")
+    return model.voigt_tendons(P)
 
 
 def check_resolvable_prestrain(cell, law, rtol: float, flag: str) -> None:
