@@ -187,7 +187,7 @@ def _damaged(doc: dict, how: str) -> dict:
         m["format"] = "someone-else"
     elif how == "missing":
         key = next(iter(m.get("values", {"structure": 0})))
-        (m["values"] if "values" in m else m).pop(key)
+        m.get("values", m).pop(key)
     elif how == "negative":
         if "values" in m:
             m["values"][next(iter(m["values"]))] = -1.0
