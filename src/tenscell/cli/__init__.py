@@ -226,7 +226,10 @@ _MAX_MESSAGE = 600
 
 
 def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split()) or type(err).__name__
+    """The error's message for the user: options spelled as flags (``_args.user_message``), on one line."""
+    from ._args import user_message
+
+    text = " ".join(user_message(err).split()) or type(err).__name__
     return text if len(text) <= _MAX_MESSAGE else text[:_MAX_MESSAGE - 1] + "…"
 
 

@@ -26,7 +26,7 @@ __all__ = [
     "Parser", "HelpFormatter", "number", "integer", "number_list", "frequencies", "member_values",
     "lattice_size", "grid_cost", "add_model_options", "add_prestress", "add_out", "hidden_alias", "add_from_fit",
     "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS", "path",
-    "add_data_options", "data_options_from_args", "DATA_COLUMNS", "DATA_UNITS",
+    "add_data_options", "data_options_from_args", "DATA_COLUMNS", "DATA_UNITS", "FLAG_SPELLING", "user_message",
 ]
 
 #: most (prestress, frequency) points one command evaluates: each point costs a complex
@@ -384,6 +384,31 @@ DATA_COLUMNS = ("frequency", "storage", "loss", "magnitude", "phase", "loss_tang
 #: --units QUANTITY=UNIT -> the ColumnMap field holding that unit
 DATA_UNITS = {"frequency": "frequency_unit", "modulus": "modulus_unit", "phase": "phase_unit",
               "prestress": "prestress_unit", "time": "time_unit", "compliance": "compliance_unit"}
+
+
+#: how the command line spells an option a library message names (tenscell._errors.option): the flag with its
+#: syntax, ``{value}`` the value the message gives, after "|" what it reads when the message gives none
+FLAG_SPELLING = {
+    **{field: f"--units {quantity}={{value}}|UNIT" for quantity, field in DATA_UNITS.items()},
+    **{quantity: f"--columns {quantity}={{value}}|NAME" for quantity in DATA_COLUMNS},
+    "columns": "--columns QUANTITY=NAME (or --columns-file)",
+    "geometric_factor": "the \"geometric_factor\" field of --columns-file",
+    "step": "--step {value}|N",
+    "interval": "--step {value}|N",
+    "temperature": "--temperature {value}|C",
+    "sheet": "--sheet {value}|NAME",
+    "accept": "--accept {value}|CHECK",
+    "min_points": "the {value} points this fit needs (one per free parameter)",
+}
+
+
+def user_message(err: BaseException) -> str:
+    """The message of ``err`` for the command line: every option it names spelled as the flag
+    (:data:`FLAG_SPELLING`, ``--units modulus=UNIT`` for ``modulus_unit=``), in one line."""
+    from .._errors import TenscellError, raw_message, spelled
+
+    text = raw_message(err) if isinstance(err, TenscellError) else str(err)
+    return spelled(text, FLAG_SPELLING)
 
 
 def _assignment(keys, flag: str, example: str):
