@@ -427,11 +427,17 @@ def _assignment(keys, flag: str, example: str):
     return convert
 
 
-def add_data_options(p: argparse.ArgumentParser) -> None:
-    """``--columns``, ``--units``, ``--columns-file``, ``--step``, ``--temperature``: reading a lab's own files.
+#: the reader's checks --accept can skip (tenscell.io.checks.CHECKS, written out for a quick parser; a test checks
+#: they agree)
+ACCEPT_CHECKS = ("one-frequency", "outliers", "decreasing", "point-count")
 
-    The same rules as :func:`tenscell.io.instruments.read_data`: without them a file's layout and units are
-    recognised from its content (tenscell's CSV, TRIOS, RheoCompass, a table with recognised headers)."""
+
+def add_data_options(p: argparse.ArgumentParser) -> None:
+    """``--columns``, ``--units``, ``--columns-file``, ``--step``, ``--temperature``, ``--sheet``, ``--accept``:
+    reading a lab's own files.
+
+    The same rules as :func:`tenscell.io.readers.read_data`: without them a file's layout and units are
+    recognised from its content (tenscell's CSV, TRIOS, RheoCompass, Excel, a table with recognised headers)."""
     g = p.add_argument_group("reading your own files (see docs/importing-data.md)")
     g.add_argument("--columns", action="append", default=None, metavar="QUANTITY=NAME",
                    type=_assignment(DATA_COLUMNS, "--columns", "storage=\"G' [Pa]\""),
@@ -441,40 +447,88 @@ def add_data_options(p: argparse.ArgumentParser) -> None:
                    type=_assignment(tuple(DATA_UNITS), "--units", "modulus=kPa"),
                    help="unit of QUANTITY (frequency Hz|rad/s, modulus Pa|kPa|MPa, phase deg|rad, prestress Pa|kPa, "
                         "time s|ms|min, compliance 1/Pa|1/kPa|1/MPa) when the file does not state it; repeatable")
-    g.add_argument("--columns-file", default=None, metavar="FILE.json",
-                   help="a JSON object of tenscell.ColumnMap fields (e.g. {\"frequency\": \"omega\", "
+    g.add_argument("--columns-file", default=None, metavar="FILE.json", type=path("a JSON file"),
+                   help="a JSON object of tenscell.io.ColumnMap fields (e.g. {\"frequency\": \"omega\", "
                         "\"frequency_unit\": \"rad/s\", ...}); --columns and --units override it")
-    g.add_argument("--step", default=None, metavar="N|NAME",
-                   help="TRIOS step or RheoCompass interval to read (number or name) when the file holds several")
+    g.add_argument("--step", default=None, metavar="N|NAME", type=_step,
+                   help="TRIOS step or RheoCompass interval to read (its number, or its name) when the file holds "
+                        "several")
     g.add_argument("--temperature", type=number(-273.15, 1e4, "°C"), default=None, metavar="C",
                    help="read the TRIOS step or RheoCompass interval at this temperature (°C)")
+    g.add_argument("--sheet", default=None, metavar="NAME", type=path("a sheet name"),
+                   help="the sheet of an Excel workbook to read (default the first)")
+    g.add_argument("--accept", action="append", default=None, choices=ACCEPT_CHECKS, metavar="CHECK",
+                   help="read data that a reader's check refuses, when you know they are right (repeatable): "
+                        "one-frequency (moduli at one frequency), outliers (a value decades from its neighbours), "
+                        "decreasing (a creep compliance that decreases), point-count (a TRIOS step shorter or "
+                        "longer than its 'Number of points'); recorded in what was read")
+
+
+def _step(text):
+    text = str(text).strip()
+    if not text:
+        raise argparse.ArgumentTypeError("empty value; expected a step's number or name")
+    if text.isdigit():
+        if int(text) < 1:
+            raise argparse.ArgumentTypeError(f"{text}: steps are numbered from 1")
+        return int(text)
+    return text
+
+
+_step.__name__ = "step"
 
 
 def data_options_from_args(args) -> dict:
-    """keyword arguments of :func:`tenscell.io.instruments.read_data` from :func:`add_data_options`' flags
-    (ValueError, naming the flag, for a file that cannot be read or contradictory choices)."""
+    """keyword arguments of :func:`tenscell.io.readers.read_data` from :func:`add_data_options`' flags, the column
+    map checked before any file is read (ValueError naming the flag otherwise)."""
     import json
 
     fields: dict = {}
-    if getattr(args, "columns_file", None):
+    source = getattr(args, "columns_file", None)
+    if source:
         try:
-            with open(args.columns_file, encoding="utf-8") as fh:
+            with open(source, encoding="utf-8") as fh:
                 loaded = json.load(fh)
-        except (OSError, ValueError) as err:
-            raise ValueError(f"--columns-file {args.columns_file}: {err}") from None
+        except OSError as err:
+            raise ValueError(f"--columns-file {source}: {err.strerror or err}") from None
+        except json.JSONDecodeError as err:
+            raise ValueError(f"--columns-file {source}, line {err.lineno}: not JSON ({err.msg})") from None
+        except (UnicodeDecodeError, ValueError) as err:
+            raise ValueError(f"--columns-file {source}: not a JSON text file ({type(err).__name__})") from None
         if not isinstance(loaded, dict):
-            raise ValueError(f"--columns-file {args.columns_file}: expected a JSON object of ColumnMap fields")
+            raise ValueError(f"--columns-file {source}: expected a JSON object of column-map fields "
+                             "({\"frequency\": \"omega\", \"frequency_unit\": \"rad/s\", ...})")
         fields.update(loaded)
     fields.update(dict(getattr(args, "columns", None) or ()))
     units = {DATA_UNITS[k]: v for k, v in (getattr(args, "units", None) or ())}
     if getattr(args, "step", None) is not None and getattr(args, "temperature", None) is not None:
         raise ValueError("--step and --temperature both choose the step; give one")
-    step = getattr(args, "step", None)
-    out = {"columns": fields or None, "step": int(step) if step is not None and step.strip().isdigit() else step,
-           "temperature": getattr(args, "temperature", None)}
+    out = {"columns": fields or None, "step": getattr(args, "step", None),
+           "temperature": getattr(args, "temperature", None), "sheet": getattr(args, "sheet", None),
+           "accept": tuple(getattr(args, "accept", None) or ())}
     if units:
         if fields:
             fields.update(units)
         else:
             out["units"] = units
+    _check_column_map(fields or None, units, source)
     return out
+
+
+def _check_column_map(fields, units, source) -> None:
+    """The map these flags give, built once before any file is read: an unknown field or unit is refused here."""
+    if fields is None and not units:
+        return
+    from ..io.columns import ColumnMap
+
+    known = list(ColumnMap.__dataclass_fields__)
+    for key in fields or ():
+        if key not in known:
+            where = f"--columns-file {source}" if source else "--columns"
+            raise ValueError(f"{where}: {key!r} is not a field of a column map; the fields are {', '.join(known)}")
+    if fields is not None:
+        ColumnMap(**fields)  # ColumnMapError naming the field as its flag
+        return
+    creep = ("time_unit", "compliance_unit")
+    ColumnMap(frequency="f", storage="a", loss="b", **{k: v for k, v in units.items() if k not in creep})
+    ColumnMap(time="t", compliance="j", **{k: v for k, v in units.items() if k in creep})

@@ -79,8 +79,9 @@ def register(sub) -> None:
     p.add_argument("--baseline-starts", type=integer(1, 10_000), default=2,
                    help="starts for the homogeneous baseline fit")
     p.add_argument("--max-points", type=integer(4, 100_000), default=100,
-                   help="fit at most this many points: denser data is binned in log frequency per prestress "
-                        "(weighted log means; the rule is in tenscell.io.thinning and the report)")
+                   help="fit at most this many points: denser data is binned in log frequency (moduli) or log time "
+                        "(creep) per prestress (weighted log means; the rule and the weights are in "
+                        "tenscell.io.thinning and the report)")
     add_out(p)
     p.set_defaults(func=run)
 
@@ -209,16 +210,26 @@ def add_constraints(p) -> None:
                    help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
 
 
+#: the data-reading flags that choose what to read in a file, by their keyword in data_options_from_args
+_CHOOSING = {"columns": "--columns/--columns-file", "units": "--units", "step": "--step",
+             "temperature": "--temperature", "sheet": "--sheet"}
+
+
 def read_data_arg(text: str, min_points: int, options: dict | None = None):
     """A data file (moduli or creep compliance; tenscell's CSV, an instrument export or a table with recognised
-    headers, see :func:`tenscell.io.instruments.read_data`), or ``bundled:NAME`` for a data set shipped with
-    tenscell. ``options``: :func:`~tenscell.cli._args.data_options_from_args` (column map, units, step)."""
+    headers, see :func:`tenscell.io.readers.read_data`), or ``bundled:NAME`` for a data set shipped with
+    tenscell. ``options``: :func:`~tenscell.cli._args.data_options_from_args` (column map, units, step, checks
+    accepted)."""
     from ..io.data import bundled
-    from ..io.instruments import read_data
+    from ..io.readers import read_data
 
-    if text.lower().startswith("bundled:"):
-        return bundled(text.split(":", 1)[1])
     options = dict(options or {})
+    if text.lower().startswith("bundled:"):
+        given = [flag for key, flag in _CHOOSING.items() if options.get(key)]
+        if given:
+            raise ValueError(f"{given[0]} says how to read a file; {text} is a data set shipped with tenscell, in "
+                             "its own layout")
+        return bundled(text.split(":", 1)[1])
     units = options.pop("units", None) or {}
     return read_data(text, min_points=min_points, **options, **units)
 
@@ -255,6 +266,8 @@ def read_datasets(paths, prestress_options, min_points: int, options: dict | Non
             raise ValueError(f"--prestress {name}={value:g}: {name} already has --prestress "
                              f"{name}={stated[match[0]]:g}; one prestress per file")
         stated[match[0]] = value
+    from .._progress import stage
+
     datasets = []
     for k, p in enumerate(paths):
         d = read_data_arg(p, min_points if len(paths) == 1 else 1, options)
@@ -263,8 +276,27 @@ def read_datasets(paths, prestress_options, min_points: int, options: dict | Non
                 d = d.with_prestress(stated[k])
             except ValueError as err:
                 raise ValueError(f"--prestress: {err}") from None
+        stage(d.provenance.line())  # what was read: file, layout, step, temperature, conversions
         datasets.append(d)
     return datasets
+
+
+def read_inputs(args, min_points: int) -> list:
+    """The fit command's data: every file read with the data flags (one line each saying what was read), the
+    stated prestresses attached, and data denser than ``--max-points`` binned (one line each saying how)."""
+    from .._progress import stage
+    from ..io.thinning import bin_datasets
+
+    datasets = read_datasets(args.data, args.prestress, min_points, data_options_from_args(args))
+    binned = bin_datasets(datasets, args.max_points)
+    for path, data, thin in zip(args.data, datasets, binned):
+        if thin is not data:
+            axis = "time" if getattr(data, "kind", None) == "creep" else "frequency"
+            weights = "each bin weighing as one point" if thin.counts is None and not thin.has_sd else \
+                "each bin weighing √(its points)" if not thin.has_sd else "weighted by the stated SDs"
+            stage(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log {axis} (--max-points "
+                  f"{args.max_points}; {weights})")
+    return list(binned)
 
 
 def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=None):
@@ -394,7 +426,6 @@ def run(args) -> int:
     from .._parallel import background, jobs_for
     from .._progress import stage
     from ..io.outputs import OutputSet
-    from ..io.thinning import bin_datasets
 
     if args.model not in (None, "voigt-per-tendon"):
         from ._mechanism import run_mechanism_fit
@@ -405,14 +436,7 @@ def run(args) -> int:
                          "distribution, not to the per-tendon fit")
     check_contradictions(args)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping),
-                             data_options_from_args(args))
-    binned = bin_datasets(datasets, args.max_points)  # moduli only: creep data are kept as they are
-    for path, data, thin in zip(args.data, datasets, binned):
-        if thin is not data:
-            stage(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log frequency "
-                  f"(--max-points {args.max_points})")
-    datasets = list(binned)
+    datasets = read_inputs(args, fitting.required_points(args.tendons, args.damping))
     held = None
     if args.holdout is not None:
         if len(datasets) != 1:

@@ -138,15 +138,16 @@ class CreepData:
             return np.ones(self.n) if self.counts is None else np.sqrt(self.counts)
         return self.compliance * math.log(10.0) / self.compliance_sd
 
-    def binned(self, max_points: int | None = None) -> "CreepData":
-        """At most ``max_points`` points by log-time binning (:func:`tenscell.io.thinning.bin_log_time`).
+    def binned(self, max_points: int | None = None, weighting: str = "bins") -> "CreepData":
+        """At most ``max_points`` points by log-time binning (:func:`tenscell.io.thinning.bin_log_time`; without
+        SDs each bin weighs as one point, or √(its points) with ``weighting="counts"``).
 
         Returns ``self`` when it has no more points than that; the binned data's provenance and comments state
         the rule, the counts and the weights.
         """
         from .thinning import DEFAULT_MAX_POINTS, bin_log_time
 
-        return bin_log_time(self, DEFAULT_MAX_POINTS if max_points is None else max_points)
+        return bin_log_time(self, DEFAULT_MAX_POINTS if max_points is None else max_points, weighting)
 
     def with_prestress(self, prestress_pa: float) -> "CreepData":
         """A copy that states the prestress (Pa) at which the creep was measured (links it in a joint fit)."""

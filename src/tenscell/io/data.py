@@ -284,15 +284,16 @@ class RheologyData:
         """Number of data points."""
         return int(self.frequency_hz.shape[0])
 
-    def binned(self, max_points: int | None = None) -> "RheologyData":
-        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`).
+    def binned(self, max_points: int | None = None, weighting: str = "counts") -> "RheologyData":
+        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`; without SDs a
+        bin weighs √(its points), or as one point with ``weighting="bins"``).
 
         Returns ``self`` when it has no more points than that; the binned data's
         provenance and comments state the rule and the counts.
         """
         from .thinning import DEFAULT_MAX_POINTS, bin_log_frequency
 
-        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points)
+        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points, weighting)
 
     def with_prestress(self, prestress_pa: float) -> "RheologyData":
         """A copy that states the prestress (Pa) at which the data were measured (a constant ``prestress`` column).

@@ -124,13 +124,13 @@ class Provenance(Mapping):
         if self.temperature_c is not None:
             where.append(f"{self.temperature_c:g} °C")
         head = f"read {os.path.basename(self.file) or self.file}" + (f" ({', '.join(where)})" if where else "")
-        parts = [f"{self.points} points" if self.points is not None else ""]
+        parts = [f"{self.points:,} points" if self.points is not None else ""]
         for q, header, unit in self.columns:
             si = SI_UNITS.get(q, unit)
             shown = f"{unit} → {si}" if unit and unit != si and q != "phase" else unit
             parts.append(f"{_SHORT.get(q, q)} {header!r}" + (f" {shown}" if shown else ""))
         parts += list(self.notes)
-        if self.accepted:
-            parts.append(f"accepted despite the checks: {', '.join(self.accepted)}")
+        if self.accepted:  # each "check: problem"; the line names the checks, the mapping keeps the problems
+            parts.append(f"read despite the checks: {', '.join(a.split(':', 1)[0] for a in self.accepted)}")
         body = "; ".join(p for p in parts if p)
         return head + (f": {body}" if body else "")

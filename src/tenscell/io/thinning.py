@@ -14,17 +14,26 @@ well-placed points. The rule (:func:`bin_log_frequency`, :func:`bin_log_time`):
 3. A bin becomes one point: frequency (time) and prestress are the geometric
    means of its points; log10 G' and log10 G'' (log10 J) are the means of its
    points' values weighted by their squared fit weights ``w`` (``G ln10 / sd``
-   with standard deviations, else 1 per measured point), and the bin weighs
-   ``sqrt(sum w^2)``: stored as the SD of the weighted mean when the data
-   state SDs, else as the bin's count of measured points (``counts``; the fit
-   weighs such a point √count, :attr:`~tenscell.io.data.RheologyData.weights_storage`).
+   with standard deviations, else 1 per measured point).
+4. Its weight in the fit: with standard deviations, ``sqrt(sum w^2)``, stored as
+   the SD of the weighted mean (``weighting`` does not matter then). Without
+   them, ``weighting="counts"`` (moduli) keeps the bin's count of measured
+   points (``counts``; the fit weighs such a point √count,
+   :attr:`~tenscell.io.data.RheologyData.weights_storage`), and
+   ``weighting="bins"`` (creep) gives every bin the weight of one point.
 
-With that weight, the fit's least-squares objective on the binned data equals
-the objective on the raw data minus the within-bin scatter (a constant),
-wherever the model varies little across a bin: binning keeps what the data
-say about the model and drops only the noise already averaged out. Binned
-data without SDs still state none: the fit's noise criterion and its standard
-errors do not mistake a bin's count for a measured noise.
+With ``"counts"`` (or SDs), the fit's least-squares objective on the binned
+data equals the objective on the raw data minus the within-bin scatter (a
+constant), wherever the model varies little across a bin: binning keeps what
+the data say about the model and drops only the noise already averaged out.
+A frequency sweep is sampled evenly in log f, so its bins hold similar counts
+and the two rules agree. A creep table is sampled evenly in *time* (a rheometer
+logs every 0.1 s): the raw objective would weigh each decade of time ten times
+the decade before (the last decade of a 0.2–720 s curve holds 90 % of its
+points), which is the sampling's doing, not the data's; ``"bins"`` gives each
+interval of log t the same say, as a curve sampled evenly in log t would.
+Binned data without SDs still state none: the fit's noise criterion and its
+standard errors do not mistake a bin's count for a measured noise.
 """
 from __future__ import annotations
 
@@ -50,9 +59,9 @@ def binning_notes(data) -> tuple[str, ...]:
 def binning_rule(data) -> str | None:
     """What binning did to ``data`` and how the fit weighs its points, in one sentence for a report; None if unbinned.
 
-    E.g. ``"binned from 7,199 to 97 points in equal log10-t bins (at most 100; tenscell.io.thinning): t and J
-    are geometric (weighted log) means within a bin, and each bin weighs √(its 1 to 61 points) in the fit (no
-    SDs stated), so the objective is that of all 7,199 points up to their scatter within bins"``.
+    E.g. ``"binned from 7,199 to 93 points in equal log10-t bins per prestress (at most 100; tenscell.io.thinning;
+    1 to 83 points a bin): t and J are weighted log means within a bin, and each bin weighs as one point in the
+    fit (no SDs stated): every interval of log t has the same say, whatever the sampling rate"``.
     """
     notes = binning_notes(data)
     return notes[-1] if notes else None
@@ -111,20 +120,31 @@ def _counts(data) -> np.ndarray:
     return np.ones(data.n) if data.counts is None else np.asarray(data.counts, dtype=float)
 
 
-def _rule(data, n_out: int, max_points: int, axis: str, counts: np.ndarray) -> str:
+_WEIGHTINGS = ("counts", "bins")
+
+
+def _rule(data, n_out: int, max_points: int, axis: str, counts: np.ndarray, weighting: str) -> str:
     values = "t and J" if axis == "t" else "f, G' and G''"
+    lo, hi = int(round(counts.min())), int(round(counts.max()))
+    held = f"{lo} to {hi} points" if lo != hi else f"{lo} points"
+    head = (f"{_NOTE}{data.n:,} to {n_out:,} points in equal log10-{axis} bins per prestress (at most {max_points}; "
+            f"tenscell.io.thinning; {held} a bin): {values} are weighted log means within a bin")
     if data.has_sd:
-        weight = "each bin weighs sqrt(sum w²) of its points' weights w = value·ln10/sd (its SD is that of the mean)"
-    else:
-        lo, hi = int(counts.min()), int(counts.max())
-        weight = (f"each bin weighs √(its {lo} to {hi} points)" if lo != hi else f"each bin weighs √{lo}") + \
-            " in the fit (no SDs stated)"
-    return (f"{_NOTE}{data.n:,} to {n_out:,} points in equal log10-{axis} bins per prestress (at most {max_points}; "
-            f"tenscell.io.thinning): {values} are weighted log means within a bin, and {weight}, so the objective "
-            f"is that of all {data.n:,} points up to their scatter within bins")
+        return (f"{head}, and each bin weighs sqrt(sum w²) of its points' weights w = value·ln10/sd (its SD is that of "
+                f"the mean), so the objective is that of all {data.n:,} points up to their scatter within bins")
+    if weighting == "counts":
+        return (f"{head}, and each bin weighs √(its points) in the fit (no SDs stated), so the objective is that of "
+                f"all {data.n:,} points up to their scatter within bins")
+    return (f"{head}, and each bin weighs as one point in the fit (no SDs stated): every interval of log {axis} has "
+            f"the same say, whatever the sampling rate")
 
 
-def bin_log_frequency(data, max_points: int = DEFAULT_MAX_POINTS):
+def _check_weighting(weighting) -> None:
+    if weighting not in _WEIGHTINGS:
+        raise ValueError(f"weighting must be one of {', '.join(_WEIGHTINGS)}, got {weighting!r}")
+
+
+def bin_log_frequency(data, max_points: int = DEFAULT_MAX_POINTS, weighting: str = "counts"):
     """``data`` (RheologyData) with at most ``max_points`` points, by the rule in the module docstring.
 
     Parameters
@@ -133,14 +153,18 @@ def bin_log_frequency(data, max_points: int = DEFAULT_MAX_POINTS):
     max_points : int
         Largest number of points returned (>= 1). Data with at most this many
         points is returned unchanged.
+    weighting : {"counts", "bins"}
+        Without SDs, a bin weighs √(its points) (the raw objective) or as one point.
 
     Returns
     -------
     RheologyData
-        The binned data (with SDs of the bin means when the data state SDs, else with ``counts``), its comments
-        and provenance extended by one line stating the rule, the point counts and the weights.
+        The binned data (with SDs of the bin means when the data state SDs, else with ``counts`` under
+        ``"counts"``), its comments and provenance extended by one line stating the rule, the point counts and
+        the weights (:func:`binning_rule`).
     """
     _check_max_points(max_points)
+    _check_weighting(weighting)
     if data.n <= max_points:
         return data
     inverse = _bins(data.frequency_hz, data.prestress, max_points)
@@ -153,22 +177,26 @@ def bin_log_frequency(data, max_points: int = DEFAULT_MAX_POINTS):
     if data.has_sd:
         sd_s = Gs * math.log(10.0) / np.sqrt(np.bincount(inverse, weights=s2, minlength=nb))
         sd_l = Gl * math.log(10.0) / np.sqrt(np.bincount(inverse, weights=l2, minlength=nb))
-    rule = _rule(data, nb, max_points, "f", counts)
+    rule = _rule(data, nb, max_points, "f", counts, weighting)
     return type(data)(  # a RheologyData (not imported: io.data imports this module for RheologyData.binned)
         frequency_hz=_log_mean(inverse, nb, data.frequency_hz), G_storage=Gs, G_loss=Gl,
         prestress=None if data.prestress is None else _log_mean(inverse, nb, data.prestress),
         G_storage_sd=sd_s, G_loss_sd=sd_l, source=data.source, comments=tuple(data.comments) + (rule,),
-        provenance=replace(data.provenance, points=nb).noted(rule), counts=counts,
+        provenance=replace(data.provenance, points=nb).noted(rule),
+        counts=counts if weighting == "counts" or data.has_sd else None,
     )
 
 
-def bin_log_time(data, max_points: int = DEFAULT_MAX_POINTS):
+def bin_log_time(data, max_points: int = DEFAULT_MAX_POINTS, weighting: str = "bins"):
     """``data`` (CreepData) with at most ``max_points`` points, binned in log10 t by the rule in the module docstring.
 
-    Returns ``data`` itself when it has no more points than that; else the binned CreepData (SDs of the bin
-    means when the data state SDs, else ``counts``), its comments and provenance extended by the rule.
+    ``weighting`` (without SDs): ``"bins"`` (default: each bin weighs as one point, every interval of log t
+    alike) or ``"counts"`` (√(its points): the objective of all the raw points). Returns ``data`` itself when it
+    has no more points than that; else the binned CreepData (SDs of the bin means when the data state SDs), its
+    comments and provenance extended by the rule (:func:`binning_rule`).
     """
     _check_max_points(max_points)
+    _check_weighting(weighting)
     if data.n <= max_points:
         return data
     inverse = _bins(data.time_s, data.prestress, max_points)
@@ -177,12 +205,12 @@ def bin_log_time(data, max_points: int = DEFAULT_MAX_POINTS):
     counts = np.bincount(inverse, weights=_counts(data), minlength=nb)
     J = _log_mean(inverse, nb, data.compliance, w2)
     sd = None if not data.has_sd else J * math.log(10.0) / np.sqrt(np.bincount(inverse, weights=w2, minlength=nb))
-    rule = _rule(data, nb, max_points, "t", counts)
+    rule = _rule(data, nb, max_points, "t", counts, weighting)
     return type(data)(  # a CreepData (io.creep_data imports this module for CreepData.binned)
         time_s=_log_mean(inverse, nb, data.time_s), compliance=J, compliance_sd=sd,
         prestress=None if data.prestress is None else _log_mean(inverse, nb, data.prestress), source=data.source,
         comments=tuple(data.comments) + (rule,), provenance=replace(data.provenance, points=nb).noted(rule),
-        counts=counts,
+        counts=counts if weighting == "counts" or data.has_sd else None,
     )
 
 
