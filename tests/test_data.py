@@ -385,7 +385,7 @@ def test_header_errors(tmp_path, header, fragments):
 def test_missing_file(tmp_path):
     path = tmp_path / "does_not_exist.csv"
     message = read_error(path)
-    assert "cannot read" in message
+    assert "cannot read the file: No such file or directory" in message and "Errno" not in message
 
 
 def test_directory_is_unreadable(tmp_path):
@@ -395,9 +395,17 @@ def test_directory_is_unreadable(tmp_path):
 
 
 def test_not_utf8(tmp_path):
+    """A spreadsheet in a Western locale writes Windows-1252; Excel's "Unicode text" UTF-16 with a byte-order mark;
+    both are read as such. A binary file (NUL bytes) is refused saying so."""
     path = tmp_path / "latin1.csv"
-    path.write_bytes(b"# \xe9\xff\xfe\n" + HEADER.encode() + b"1,2,3\n")
-    assert "cannot read" in read_error(path)
+    path.write_bytes("# 25 °C, G' in Pa\n".encode("cp1252") + HEADER.encode() + b"1,2,3\n2,3,4\n")
+    assert read_csv(path).comments == ("25 °C, G' in Pa",)
+    wide = tmp_path / "utf16.csv"
+    wide.write_bytes(("# µm\n" + HEADER + "1,2,3\n2,3,4\n").encode("utf-16"))
+    assert read_csv(wide).comments == ("µm",) and read_csv(wide).n == 2
+    binary = tmp_path / "image.csv"
+    binary.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR")
+    assert "not a text file" in read_error(binary)
 
 
 @pytest.mark.parametrize("text", ["", "\n\n", "# only comments\n#\n"])

@@ -42,7 +42,8 @@ BAD_CSV = {
     "unterminated quote": (HEADER + '"1,1,1\n').encode(),
     "ragged row": (HEADER + "1,1\n" + GOOD_ROWS).encode(),
     "too few points": (HEADER + "1,1,1\n2,1,1\n").encode(),
-    "UTF-16": (HEADER + GOOD_ROWS).encode("utf-16"),
+    # UTF-16 with its byte-order mark (Excel's "Unicode text") is read; without it, it is bytes with NULs
+    "UTF-16 without a byte-order mark": (HEADER + GOOD_ROWS).encode("utf-16-le"),
 }
 
 _STRUT = {"nodes": [[0, 0, 0], [1, 0, 0]], "struts": [[0, 1]]}

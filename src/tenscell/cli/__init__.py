@@ -23,7 +23,7 @@ import sys
 import time
 import warnings
 
-from ._args import Parser, command_line
+from ._args import Parser, check_stdout, command_line
 
 __all__ = ["main", "build_parser", "COMMAND_MODULES", "EXIT_INTERNAL"]
 
@@ -127,6 +127,7 @@ def _run(argv, started: float, transcript: "_Transcript") -> int:
             return stop.code if isinstance(stop.code, int) else 2
         args.command_line = command_line(argv)
         args.started = started
+        check_stdout(args.command)  # results on standard output: it must take them, before any work
         with warnings.catch_warnings():
             # floating-point warnings never reach the user: inputs are range-checked and
             # results checked for finiteness where an overflow is possible
@@ -247,6 +248,6 @@ def _exit_now(status: int) -> None:
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
-        except (OSError, ValueError):
+        except (OSError, ValueError, AttributeError):  # AttributeError: a closed descriptor made it None
             pass
     os._exit(status)

@@ -81,30 +81,32 @@ def _float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a number") from None
 
 
-def _in_range(v: float, lo: float | None, hi: float | None, unit: str, *, open_lo: bool = False) -> float:
+def _in_range(v: float, lo: float | None, hi: float | None, unit: str, *, open_lo: bool = False,
+              open_hi: bool = False) -> float:
     u = f" {unit}" if unit else ""
+    allowed = _range_text(lo, hi, unit, open_lo, open_hi)
     if math.isnan(v):
-        raise argparse.ArgumentTypeError(f"got nan; expected a number{_range_text(lo, hi, unit, open_lo)}")
-    bad = (lo is not None and (v <= lo if open_lo else v < lo)) or (hi is not None and v > hi)
+        raise argparse.ArgumentTypeError(f"got nan; expected a number{allowed}")
+    bad = (lo is not None and (v <= lo if open_lo else v < lo)) or (hi is not None and (v >= hi if open_hi else v > hi))
     if bad or math.isinf(v):
-        raise argparse.ArgumentTypeError(f"{_fmt(v)}{u} is out of range; allowed{_range_text(lo, hi, unit, open_lo)}")
+        raise argparse.ArgumentTypeError(f"{_fmt(v)}{u} is out of range; allowed{allowed}")
     return v
 
 
-def _range_text(lo, hi, unit, open_lo=False) -> str:
+def _range_text(lo, hi, unit, open_lo=False, open_hi=False) -> str:
     u = f" {unit}" if unit else ""
     if lo is None and hi is None:
         return " a finite number" + (f" ({unit})" if unit else "")
     if hi is None:
         return f" {'>' if open_lo else '>='} {_fmt(lo)}{u}"
     if lo is None:
-        return f" <= {_fmt(hi)}{u}"
-    return f" {'(' if open_lo else '['}{_fmt(lo)}, {_fmt(hi)}]{u}"
+        return f" {'<' if open_hi else '<='} {_fmt(hi)}{u}"
+    return f" {'(' if open_lo else '['}{_fmt(lo)}, {_fmt(hi)}{')' if open_hi else ']'}{u}"
 
 
 def number(lo: float | None = None, hi: float | None = None, unit: str = "", *, open_lo: bool = False,
-           quantity: str | None = None):
-    """An argparse ``type``: one finite float in [lo, hi] (or (lo, hi] with ``open_lo``).
+           open_hi: bool = False, quantity: str | None = None):
+    """An argparse ``type``: one finite float in [lo, hi] (``open_lo``, ``open_hi``: the bound excluded).
 
     ``quantity`` names an entry of :data:`RANGES` to take the bounds and unit from.
     """
@@ -112,7 +114,7 @@ def number(lo: float | None = None, hi: float | None = None, unit: str = "", *, 
         lo, hi, unit = RANGES[quantity]
 
     def convert(text):
-        return _in_range(_float(text), lo, hi, unit, open_lo=open_lo)
+        return _in_range(_float(text), lo, hi, unit, open_lo=open_lo, open_hi=open_hi)
 
     convert.__name__ = "number"
     return convert
@@ -150,6 +152,18 @@ def number_list(lo=None, hi=None, unit="", *, quantity=None, max_items: int = 10
 
     convert.__name__ = "list"
     return convert
+
+
+def ensemble_size(text):
+    """An argparse ``type`` for ``--ensemble K`` (every command alike): 0 for none, or 2 to ENSEMBLE_MAX_K
+    assignments; 1 is refused (one assignment has no spread between assignments)."""
+    k = integer(0, ENSEMBLE_MAX_K, "assignments (0: none)")(text)
+    if k == 1:
+        raise argparse.ArgumentTypeError("1 assignment has no spread between assignments; give K >= 2, or 0 for none")
+    return k
+
+
+ensemble_size.__name__ = "integer"
 
 
 def frequencies(max_points: int = MAX_GRID_POINTS):
@@ -341,7 +355,7 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     """The options that choose the paper cell and its tendon properties (shared by commands)."""
     p.add_argument("--alpha-deg", type=number(-180.0, 180.0, "degrees"), default=0.0,
                    help="reference azimuth α (degrees)")
-    p.add_argument("--delta-deg", type=number(0.0, 90.0, "degrees", open_lo=True), default=None,
+    p.add_argument("--delta-deg", type=number(0.0, 90.0, "degrees", open_lo=True, open_hi=True), default=None,
                    help="reference declination δ (degrees; default 50 with IFs, the IF-free curve without)")
     p.add_argument("--EA", type=member_values("EA"), default=1.0,
                    help="tendon stiffness EA (N): one value, family=value pairs or one per tendon (comma list)")
@@ -357,8 +371,14 @@ def model_from_args(args):
     from ..model.shapes import paper_cell
 
     delta = None if args.delta_deg is None else math.radians(args.delta_deg)
-    cell = paper_cell(alpha=math.radians(args.alpha_deg), delta=delta, L=args.L,
-                      intermediate_filaments=not args.no_if)
+    try:
+        cell = paper_cell(alpha=math.radians(args.alpha_deg), delta=delta, L=args.L,
+                          intermediate_filaments=not args.no_if)
+    except ValueError as err:  # a reference the model does not have: say which flags chose it
+        chosen = [f"{flag} {_fmt(v)}" for flag, v in (("--alpha-deg", args.alpha_deg), ("--delta-deg", args.delta_deg),
+                                                      ("--L", args.L)) if v is not None]
+        chosen += ["--no-if"] if args.no_if else []
+        raise type(err)(f"{', '.join(chosen)}: {err}") from None
     EA = expand(cell.structure, _arrayish(args.EA), "--EA", "N")
     c = expand(cell.structure, _arrayish(args.c), "--c", "N·s/m")
     return cell, EA, c
@@ -398,17 +418,57 @@ FLAG_SPELLING = {
     "temperature": "--temperature {value}|C",
     "sheet": "--sheet {value}|NAME",
     "accept": "--accept {value}|CHECK",
+    "slack": "--slack {value}|allow",
     "min_points": "the {value} points this fit needs (one per free parameter)",
 }
 
 
 def user_message(err: BaseException) -> str:
     """The message of ``err`` for the command line: every option it names spelled as the flag
-    (:data:`FLAG_SPELLING`, ``--units modulus=UNIT`` for ``modulus_unit=``), in one line."""
+    (:data:`FLAG_SPELLING`, ``--units modulus=UNIT`` for ``modulus_unit=``); an operating system's error as its
+    file and reason (``out/fit.json: No space left on device``), not Python's ``[Errno 28]`` form."""
     from .._errors import TenscellError, raw_message, spelled
 
+    if isinstance(err, OSError) and not isinstance(err, TenscellError) and err.strerror:
+        where = err.filename if err.filename is not None else "writing the results"
+        return f"{where}: {err.strerror}"
     text = raw_message(err) if isinstance(err, TenscellError) else str(err)
     return spelled(text, FLAG_SPELLING)
+
+
+#: commands whose results go to standard output (the others write an output set and report on stderr)
+STDOUT_COMMANDS = ("moduli", "simulate", "creep", "show", "study")
+
+
+def check_stdout(command: str | None) -> None:
+    """ValueError before any work when ``command`` writes results to a standard output that cannot take them:
+    closed, open for reading only, or /dev/full (``tenscell moduli > /dev/full``)."""
+    import os
+    import stat
+
+    if command not in STDOUT_COMMANDS:
+        return
+    if sys.stdout is None:  # Python's standard output when descriptor 1 was closed (>&-)
+        raise ValueError("standard output is closed; the results go there (redirect it to a file: > FILE)")
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, ValueError, OSError):  # replaced by an object without a descriptor (captured)
+        return
+    try:
+        st = os.fstat(fd)
+    except OSError:
+        raise ValueError("standard output is closed; the results go there (redirect it to a file: > FILE)") from None
+    if stat.S_ISCHR(st.st_mode) and st.st_rdev == os.makedev(1, 7):
+        raise ValueError("standard output is /dev/full, which takes no data; redirect it to a file (> FILE) or a "
+                         "program (| ...)")
+    try:
+        import fcntl
+
+        readonly = fcntl.fcntl(fd, fcntl.F_GETFL) & os.O_ACCMODE == os.O_RDONLY
+    except (ImportError, OSError):
+        return
+    if readonly:
+        raise ValueError("standard output is open for reading only; the results go there (> FILE)")
 
 
 def _assignment(keys, flag: str, example: str):

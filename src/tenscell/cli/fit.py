@@ -6,7 +6,7 @@ import contextlib
 import time
 from pathlib import Path
 
-from ._args import ENSEMBLE_MAX_K, RANGES, add_data_options, add_out, data_options_from_args, integer, number
+from ._args import RANGES, add_data_options, add_out, data_options_from_args, ensemble_size, integer, number
 
 #: the fit's parametrizations (the same tuples as tenscell.fitting.TENDON_MODES / DAMPING_MODES,
 #: written out so that building the parser does not import the fitting code; a test checks they agree)
@@ -52,7 +52,7 @@ def register(sub) -> None:
     p.add_argument("--model", choices=MECHANISM_NAMES, default=None,
                    help="fit a mechanism instead of the per-tendon Voigt cell (tenscell.fitting.mechanisms; "
                         "writes fit.json, report.md, fit.png; --fix/--bound take its parameter names or kinds)")
-    p.add_argument("--ensemble", type=integer(0, ENSEMBLE_MAX_K), default=0, metavar="K",
+    p.add_argument("--ensemble", type=ensemble_size, default=0, metavar="K",
                    help="with --model of a mechanism whose tendon values are drawn from a distribution: evaluate "
                         "the fitted mechanism over K assignments at the data's prestresses and frequencies "
                         "(ensemble.csv, .png, .md: mean, spread between assignments, the fit's own average; "
@@ -108,17 +108,19 @@ def _bound(text):
                                          "(or, with --model, a parameter name of the mechanism)")
     # a mechanism's parameter names (--model) are checked against the mechanism before any fitting
     unit = BOUND_UNITS.get(kind, "")
+    u = f" {unit}" if unit else ""
     parts = value.split(":")
     if len(parts) != 2:
         raise argparse.ArgumentTypeError(f"{kind}: expected LO:HI in {unit or 'SI units'}, got {value[:40]!r}")
     try:
+        lo, hi = (number()(x) for x in parts)  # numbers first: a reversed interval is named as such
+        if not lo < hi:
+            raise argparse.ArgumentTypeError(f"{kind}={value}: reversed or empty interval; the lower bound {lo:g}{u} "
+                                             f"must be below the upper bound {hi:g}{u} (LO:HI)")
         check = number(*BOUND_RANGES[kind], unit) if kind in BOUND_RANGES else number(0.0, None, "", open_lo=True)
         lo, hi = (check(x) for x in parts)
     except argparse.ArgumentTypeError as err:
-        raise argparse.ArgumentTypeError(f"{kind}: {err}") from None
-    if not lo < hi:
-        u = f" {unit}" if unit else ""
-        raise argparse.ArgumentTypeError(f"{kind}: the lower bound {lo:g}{u} must be below the upper bound {hi:g}{u}")
+        raise argparse.ArgumentTypeError(str(err) if str(err).startswith(f"{kind}=") else f"{kind}: {err}") from None
     return kind, (lo, hi)
 
 

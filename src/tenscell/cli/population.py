@@ -93,7 +93,7 @@ def _register_study(sub) -> None:
     kinds.required = True
     mc = kinds.add_parser("monte-carlo", help="simultaneous ±spread perturbations of every parameter")
     mc.add_argument("--draws", type=integer(1, 10**9), required=True, help="number of draws")
-    mc.add_argument("--spread", type=number(0.0, 1.0, open_lo=True), default=0.10,
+    mc.add_argument("--spread", type=number(0.0, 1.0, open_lo=True, open_hi=True), default=0.10,
                     help="uniform ±spread of every factor (fraction < 1)")
     mc.add_argument("--parameters", choices=("all", "material"), default="all",
                     help="perturb EA_j, c_j, P and the geometry (all) or only the material parameters")

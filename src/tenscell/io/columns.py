@@ -565,12 +565,36 @@ def guess_columns(names: Sequence[str]) -> ColumnMap | None:
     return None
 
 
-def _read_text(path: Path) -> str:
+def read_text_file(path, *, newline: str | None = "") -> str:
+    """A data file's text: UTF-8 (a byte-order mark dropped), UTF-16 with its byte-order mark (Excel's "Unicode
+    text"), else Windows-1252 (spreadsheets in Western locales) when the bytes hold no NUL (binary files do).
+    ``newline`` as for :func:`open` ("" keeps line ends for ``splitlines``, None turns them into "\n").
+
+    Raises DataError naming the file and the operating system's reason (``No such file or directory``).
+    """
     try:
-        with open(path, encoding="utf-8-sig", newline="") as fh:
-            return fh.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: cannot read file: {exc}") from exc
+        with open(path, "rb") as fh:
+            raw = fh.read()
+    except OSError as exc:
+        raise DataError(f"{path}: cannot read the file: {exc.strerror or type(exc).__name__}") from None
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        encodings: tuple[str, ...] = ("utf-16",)
+    elif b"\x00" in raw:  # valid UTF-8 may hold a NUL; a single-byte encoding would read any binary file
+        encodings = ("utf-8-sig",)
+    else:
+        encodings = ("utf-8-sig", "cp1252", "latin-1")
+    for encoding in encodings:
+        try:
+            text = raw.decode(encoding)
+        except UnicodeDecodeError:
+            continue
+        return text if newline == "" else text.replace("\r\n", "\n").replace("\r", "\n")
+    raise DataError(f"{path}: not a text file (binary bytes); tenscell reads text exports (CSV, TSV, TRIOS and "
+                    "RheoCompass text) and Excel workbooks (.xlsx)")
+
+
+def _read_text(path: Path) -> str:
+    return read_text_file(path)
 
 
 def _text_table(path: Path, sep: str | None, header_line: int | None, units_line: bool, decimal: str) -> _Table:
@@ -617,7 +641,8 @@ def _excel_table(path: Path, sheet: str | int | None, header_row: int | None, un
     try:
         book = openpyxl.load_workbook(path, read_only=True, data_only=True)
     except Exception as exc:  # openpyxl raises many types for a bad file
-        raise DataError(f"{path}: cannot read workbook: {exc}") from exc
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not an Excel workbook (.xlsx)"
+        raise DataError(f"{path}: cannot read the workbook: {reason}") from None
     try:
         names_ = book.sheetnames
         if sheet is None:

@@ -23,7 +23,7 @@ import numpy as np
 
 from .._errors import option
 from .._results import dataframe, format_repr
-from .columns import parse_frame
+from .columns import parse_frame, read_text_file
 from .data import (RheologyData, _csv_lines, _error, _locations, _parse_float, _provenance, _stated_prestress,
                    check_ranges, checked, read_csv)
 from .outputs import atomic_path
@@ -261,11 +261,7 @@ def _parse(text: str, source: str) -> CreepData:
 
 def _read_text(path) -> tuple[str, str]:
     source = os.fsdecode(os.fspath(path))
-    try:
-        with open(source, encoding="utf-8-sig") as fh:
-            return fh.read(), source
-    except (OSError, UnicodeDecodeError) as exc:
-        raise _error(source, f"cannot read file: {exc}") from exc
+    return read_text_file(source, newline=None), source
 
 
 def read_creep_csv(path, *, min_points: int = 1, accept=()) -> CreepData:

@@ -33,7 +33,7 @@ import numpy as np
 
 from .._errors import option
 from .._ranges import RANGES, range_problem
-from .columns import DataError, parse_frame
+from .columns import DataError, parse_frame, read_text_file
 from .outputs import atomic_path
 from .provenance import Provenance
 
@@ -715,13 +715,8 @@ def read_csv(path: str | os.PathLike[str], *, min_points: int = 1, accept=()) ->
     source = os.fspath(path)
     if isinstance(source, bytes):
         source = os.fsdecode(source)
-    try:
-        # utf-8-sig drops the byte-order mark spreadsheet programs often add,
-        # which would otherwise become part of the first column name.
-        with open(source, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise _error(source, f"cannot read file: {exc}") from exc
+    # the byte-order mark spreadsheet programs often add is dropped (it would become part of the first name)
+    text = read_text_file(source, newline=None)
     return _parse_text(text, source, min_points, accept)
 
 
