@@ -268,8 +268,6 @@ def read_datasets(paths, prestress_options, min_points: int, options: dict | Non
             raise ValueError(f"--prestress {name}={value:g}: {name} already has --prestress "
                              f"{name}={stated[match[0]]:g}; one prestress per file")
         stated[match[0]] = value
-    from .._progress import stage
-
     datasets = []
     for k, p in enumerate(paths):
         d = read_data_arg(p, min_points if len(paths) == 1 else 1, options)
@@ -278,27 +276,29 @@ def read_datasets(paths, prestress_options, min_points: int, options: dict | Non
                 d = d.with_prestress(stated[k])
             except ValueError as err:
                 raise ValueError(f"--prestress: {err}") from None
-        stage(d.provenance.line())  # what was read: file, layout, step, temperature, conversions
         datasets.append(d)
     return datasets
 
 
-def read_inputs(args, min_points: int) -> list:
-    """The fit command's data: every file read with the data flags (one line each saying what was read), the
-    stated prestresses attached, and data denser than ``--max-points`` binned (one line each saying how)."""
-    from .._progress import stage
+def read_inputs(args, min_points: int) -> tuple[list, list[str]]:
+    """The fit command's data and what to say about them: every file read with the data flags, the stated
+    prestresses attached, data denser than ``--max-points`` binned; with one line per file saying what was read
+    (layout, step, temperature, conversions: :meth:`~tenscell.io.provenance.Provenance.line`) and how it was
+    binned, for the command to print once every check has passed (a refusal stays one line)."""
     from ..io.thinning import bin_datasets
 
     datasets = read_datasets(args.data, args.prestress, min_points, data_options_from_args(args))
     binned = bin_datasets(datasets, args.max_points)
+    lines = []
     for path, data, thin in zip(args.data, datasets, binned):
+        lines.append(data.provenance.line())
         if thin is not data:
             axis = "time" if getattr(data, "kind", None) == "creep" else "frequency"
             weights = "each bin weighing as one point" if thin.counts is None and not thin.has_sd else \
                 "each bin weighing √(its points)" if not thin.has_sd else "weighted by the stated SDs"
-            stage(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log {axis} (--max-points "
-                  f"{args.max_points}; {weights})")
-    return list(binned)
+            lines.append(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log {axis} (--max-points "
+                         f"{args.max_points}; {weights})")
+    return list(binned), lines
 
 
 def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=None):
@@ -438,7 +438,7 @@ def run(args) -> int:
                          "distribution, not to the per-tendon fit")
     check_contradictions(args)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    datasets = read_inputs(args, fitting.required_points(args.tendons, args.damping))
+    datasets, read_lines = read_inputs(args, fitting.required_points(args.tendons, args.damping))
     held = None
     if args.holdout is not None:
         if len(datasets) != 1:
@@ -454,6 +454,8 @@ def run(args) -> int:
             raise ValueError(f"--holdout {args.holdout[0]:g}:{args.holdout[1]:g}: {err}") from None
         datasets = [train]
     space = search_space(args, datasets)  # bad input: before any fitting
+    for line in read_lines:  # what was read, now that every check has passed
+        stage(line)
     args.jobs = jobs_for(args.starts, args.jobs)
     stage(f"fitting {sum(d.n for d in datasets)} points: {args.starts} start(s), stiffness "
           f"{args.tendons}, damping {args.damping}, {args.jobs} process(es)")

@@ -314,6 +314,8 @@ def run(args) -> int:
         from .fit import read_datasets
 
         args.datasets = read_datasets(args.data, args.prestress, 1, data_options_from_args(args))
+        for data in args.datasets:  # what was read: layout, step, temperature, conversions
+            stage(data.provenance.line())
     if args.name == "sensitivity" and args.draws > _QUICK_DRAWS:
         from ._cost import Cost, announce, check
         from .population import monte_carlo_rate
