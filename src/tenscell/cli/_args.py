@@ -419,7 +419,8 @@ FLAG_SPELLING = {
     "sheet": "--sheet {value}|NAME",
     "accept": "--accept {value}|CHECK",
     "slack": "--slack {value}|allow",
-    "min_points": "the {value} points this fit needs (one per free parameter)",
+    "min_points": "the {value} points this fit needs (one per free parameter; fewer parameters: --tendons uniform, "
+                  "or a mechanism with --model NAME)",
 }
 
 

@@ -389,10 +389,10 @@ def _with_column_map(sources, options: dict):
     """With --columns/--units/--step/--temperature, each cell's file read by tenscell.io.read_data in this process
     (its own headers and units; a file that cannot be read is that cell's failure, as for tenscell's layout)."""
     units = options.pop("units", None) or {}
-    if not any(v is not None for v in options.values()) and not units:
+    if not any(v is not None and v != () for v in options.values()) and not units:
         return sources
     from ..io.data import DataError, RheologyData
-    from ..io.instruments import read_data
+    from ..io.readers import read_data
     from ..population.sources import CellSource
 
     out = []

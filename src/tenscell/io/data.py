@@ -566,8 +566,7 @@ def _parse_text(text: str, source: str, min_points: int, accept=(), layout: str 
     if n < min_points:
         raise _error(
             source,
-            f"{n} data point{'s' if n != 1 else ''}, fewer than {option('min_points', min_points)} "
-            f"(a fit needs at least as many points as free parameters)",
+            f"{n} data point{'s' if n != 1 else ''}, fewer than {option('min_points', min_points)}",
         )
 
     arr = {c: np.asarray(v, dtype=np.float64) for c, v in values.items()}

@@ -40,6 +40,8 @@ class Provenance(Mapping):
         The step (TRIOS) or interval (RheoCompass) read, 1-based as the reader numbers them.
     step_name : str, optional
         Its name in the file.
+    step_word : str
+        What the format calls a step: ``"step"`` (TRIOS), ``"interval"`` (RheoCompass).
     steps : int, optional
         How many steps the file holds.
     temperature_c : float, optional
@@ -59,6 +61,7 @@ class Provenance(Mapping):
     layout: str = ""
     step: int | None = None
     step_name: str | None = None
+    step_word: str = "step"
     steps: int | None = None
     temperature_c: float | None = None
     columns: tuple[tuple[str, str, str], ...] = ()
@@ -120,7 +123,7 @@ class Provenance(Mapping):
         where = [self.layout] if self.layout else []
         if self.step is not None:
             of = f" of {self.steps}" if self.steps else ""
-            where.append(f"step {self.step}{of}" + (f" {self.step_name!r}" if self.step_name else ""))
+            where.append(f"{self.step_word} {self.step}{of}" + (f" {self.step_name!r}" if self.step_name else ""))
         if self.temperature_c is not None:
             where.append(f"{self.temperature_c:g} °C")
         head = f"read {os.path.basename(self.file) or self.file}" + (f" ({', '.join(where)})" if where else "")

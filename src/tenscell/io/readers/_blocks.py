@@ -190,6 +190,7 @@ def read_block(block: Block, request: Request, base: Provenance, what: str = "st
         raise DataError(f"{table.source}: {what} {block.number} {block.name!r} has no columns tenscell recognises "
                         "(frequency with G' and G'', or time with compliance); say which column holds what with "
                         f"{option('columns')}")
-    base = Provenance(file=base.file, layout=base.layout, step=block.number, step_name=block.name or None,
-                      steps=base.steps, temperature_c=block.temperature_c)
+    own_name = block.name and block.name != f"{what} {block.number}"  # a name of its own, not "interval 2"
+    base = Provenance(file=base.file, layout=base.layout, step=block.number, step_word=what,
+                      step_name=block.name if own_name else None, steps=base.steps, temperature_c=block.temperature_c)
     return build(table, cmap, request.min_points, base, request.accept, what=f"{what} {block.number} {block.name!r}")
