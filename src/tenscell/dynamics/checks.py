@@ -98,7 +98,9 @@ def _largest_start(cell: Cell, law: TendonLaw, loading, slack: str, steps: int =
             hi = mid
         if hi - lo < 0.04:
             break
-    return loading.amplitude * 10.0 ** lo
+    amplitude = loading.amplitude * 10.0 ** lo
+    step = 10.0 ** (np.floor(np.log10(amplitude)) - 1)  # two significant digits, rounded down: it still starts
+    return float(np.floor(amplitude / step) * step)
 
 
 def _scaled(loading, factor: float):
