@@ -280,12 +280,14 @@ def _resolve(table: _Table, cmap: ColumnMap) -> dict[str, tuple[int, str]]:
             listed = ", ".join(repr(n) for n in stripped if n)
             raise _error(table, f"no column {col!r} for {_NAMES[quantity]} ({option(quantity, col)}); "
                                 + (f"the columns are {listed}" if listed else "the header names no columns"))
-    out, unstated = {}, []
+    out: dict[str, tuple[int, str]] = {}
+    unstated = []
     for quantity, j in found.items():
         unit = _unit_of(table, cmap, quantity, j)
         if unit is None:
             unstated.append(quantity)
-        out[quantity] = (j, unit)
+        else:
+            out[quantity] = (j, unit)
     if unstated:
         fields_ = list(dict.fromkeys(_QUANTITIES[q] for q in unstated))
         named = " and ".join(f"{_NAMES[q]} ({table.names[found[q]].strip()!r})" for q in unstated)

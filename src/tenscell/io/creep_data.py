@@ -152,6 +152,7 @@ class CreepData:
     def with_prestress(self, prestress_pa: float) -> "CreepData":
         """A copy that states the prestress (Pa) at which the creep was measured (links it in a joint fit)."""
         p = _stated_prestress(self, prestress_pa)
+        assert self.provenance is not None  # set by __post_init__
         return CreepData(time_s=self.time_s, compliance=self.compliance, compliance_sd=self.compliance_sd,
                          prestress=np.full(self.n, p), source=self.source, comments=self.comments,
                          locations=self.locations, provenance=self.provenance.noted(f"prestress stated: {p:g} Pa"),

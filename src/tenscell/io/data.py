@@ -304,6 +304,7 @@ class RheologyData:
         state prestresses, or for a non-positive value.
         """
         p = _stated_prestress(self, prestress_pa)
+        assert self.provenance is not None  # set by __post_init__
         return RheologyData(frequency_hz=self.frequency_hz, G_storage=self.G_storage, G_loss=self.G_loss,
                             prestress=np.full(self.n, p), G_storage_sd=self.G_storage_sd,
                             G_loss_sd=self.G_loss_sd, source=self.source, comments=self.comments,
@@ -504,7 +505,7 @@ def _csv_lines(text: str, source: str, comments: list[str]):
     # Split on "\n" only (the file was opened in universal-newline mode), so
     # that line numbers agree with what an editor shows; str.splitlines()
     # would also break on form feeds and other rare separators.
-    delimiter = None
+    delimiter: str | None = None
     for lineno, line in enumerate(text.split("\n"), start=1):
         stripped = line.strip()
         if not stripped:
@@ -516,7 +517,7 @@ def _csv_lines(text: str, source: str, comments: list[str]):
         if header:
             delimiter = next((d for d in (",", ";", "\t") if d in stripped), ",")
         try:
-            fields = next(csv.reader([line], delimiter=delimiter, strict=True))
+            fields = next(csv.reader([line], delimiter=delimiter or ",", strict=True))
         except csv.Error as exc:
             raise _error(source, f"malformed CSV: {exc}", lineno) from exc
         yield lineno, fields if header or delimiter == "," else [f.replace(",", ".") for f in fields]

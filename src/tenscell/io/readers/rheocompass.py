@@ -52,8 +52,8 @@ def blocks_of(probe: Probe) -> list[Block]:
     starts = [k for k, s in enumerate(lines) if s.lstrip().startswith(_DATA)]
     if not starts:
         hit = probe.first_line(_POINTS.lower(), "rheocompass", "anton paar", limit=80)
-        where = f" (line {hit[0]}: {hit[1][:60]!r})" if hit else ""
-        raise DataError(f"{source}: looks like an Anton Paar RheoCompass export{where} but has no "
+        seen = f" (line {hit[0]}: {hit[1][:60]!r})" if hit else ""
+        raise DataError(f"{source}: looks like an Anton Paar RheoCompass export{seen} but has no "
                         f"'{_DATA}' line (the column names of an interval): export the intervals' data as text")
     first = min([k for k, s in enumerate(lines) if s.lstrip().startswith(_POINTS)] + starts)
     meta = tuple(s.strip().replace("\t", " ") for s in lines[:first] if s.strip())
