@@ -163,28 +163,8 @@ def bin_log_frequency(data, max_points: int = DEFAULT_MAX_POINTS, weighting: str
         ``"counts"``), its comments and provenance extended by one line stating the rule, the point counts and
         the weights (:func:`binning_rule`).
     """
-    _check_max_points(max_points)
-    _check_weighting(weighting)
-    if data.n <= max_points:
-        return data
-    inverse = _bins(data.frequency_hz, data.prestress, max_points)
-    nb = int(inverse.max()) + 1
-    s2, l2 = data.weights_storage ** 2, data.weights_loss ** 2
-    counts = np.bincount(inverse, weights=_counts(data), minlength=nb)
-    Gs = _log_mean(inverse, nb, data.G_storage, s2)
-    Gl = _log_mean(inverse, nb, data.G_loss, l2)
-    sd_s = sd_l = None
-    if data.has_sd:
-        sd_s = Gs * math.log(10.0) / np.sqrt(np.bincount(inverse, weights=s2, minlength=nb))
-        sd_l = Gl * math.log(10.0) / np.sqrt(np.bincount(inverse, weights=l2, minlength=nb))
-    rule = _rule(data, nb, max_points, "f", counts, weighting)
-    return type(data)(  # a RheologyData (not imported: io.data imports this module for RheologyData.binned)
-        frequency_hz=_log_mean(inverse, nb, data.frequency_hz), G_storage=Gs, G_loss=Gl,
-        prestress=None if data.prestress is None else _log_mean(inverse, nb, data.prestress),
-        G_storage_sd=sd_s, G_loss_sd=sd_l, source=data.source, comments=tuple(data.comments) + (rule,),
-        provenance=replace(data.provenance, points=nb).noted(rule),
-        counts=counts if weighting == "counts" or data.has_sd else None,
-    )
+    return _bin(data, "frequency_hz", (("G_storage", "G_storage_sd", data.weights_storage ** 2),
+                                       ("G_loss", "G_loss_sd", data.weights_loss ** 2)), max_points, weighting, "f")
 
 
 def bin_log_time(data, max_points: int = DEFAULT_MAX_POINTS, weighting: str = "bins"):
@@ -195,23 +175,28 @@ def bin_log_time(data, max_points: int = DEFAULT_MAX_POINTS, weighting: str = "b
     has no more points than that; else the binned CreepData (SDs of the bin means when the data state SDs), its
     comments and provenance extended by the rule (:func:`binning_rule`).
     """
+    return _bin(data, "time_s", (("compliance", "compliance_sd", data.weights ** 2),), max_points, weighting, "t")
+
+
+def _bin(data, axis: str, series, max_points: int, weighting: str, symbol: str):
+    """``data`` binned along its field ``axis`` by the module's rule; ``series``: (value field, its SD field,
+    the values' squared fit weights) of each quantity averaged in a bin."""
     _check_max_points(max_points)
     _check_weighting(weighting)
     if data.n <= max_points:
         return data
-    inverse = _bins(data.time_s, data.prestress, max_points)
+    inverse = _bins(getattr(data, axis), data.prestress, max_points)
     nb = int(inverse.max()) + 1
-    w2 = data.weights ** 2
     counts = np.bincount(inverse, weights=_counts(data), minlength=nb)
-    J = _log_mean(inverse, nb, data.compliance, w2)
-    sd = None if not data.has_sd else J * math.log(10.0) / np.sqrt(np.bincount(inverse, weights=w2, minlength=nb))
-    rule = _rule(data, nb, max_points, "t", counts, weighting)
-    return type(data)(  # a CreepData (io.creep_data imports this module for CreepData.binned)
-        time_s=_log_mean(inverse, nb, data.time_s), compliance=J, compliance_sd=sd,
-        prestress=None if data.prestress is None else _log_mean(inverse, nb, data.prestress), source=data.source,
-        comments=tuple(data.comments) + (rule,), provenance=replace(data.provenance, points=nb).noted(rule),
-        counts=counts if weighting == "counts" or data.has_sd else None,
-    )
+    fields: dict[str, np.ndarray | None] = {axis: _log_mean(inverse, nb, getattr(data, axis))}
+    for value, sd, w2 in series:
+        fields[value] = mean = _log_mean(inverse, nb, getattr(data, value), w2)
+        fields[sd] = mean * math.log(10.0) / np.sqrt(np.bincount(inverse, weights=w2, minlength=nb)) \
+            if data.has_sd else None
+    rule = _rule(data, nb, max_points, symbol, counts, weighting)
+    return replace(data, **fields, prestress=None if data.prestress is None else _log_mean(inverse, nb, data.prestress),
+                   comments=tuple(data.comments) + (rule,), provenance=replace(data.provenance, points=nb).noted(rule),
+                   counts=counts if weighting == "counts" or data.has_sd else None, locations=None)
 
 
 def bin_datasets(datasets, max_points: int = DEFAULT_MAX_POINTS) -> tuple:
