@@ -77,7 +77,9 @@ def main() -> int:
     print(f"   ratio binned / baseline (CPU): {rows[0][5] / rows[1][5]:.2f}")
     prob_full = fitting.make_problem([data])
     prob_bin = fitting.make_problem([binned])
-    theta = prob_bin.initial_guess(np.random.default_rng(0)) if hasattr(prob_bin, "initial_guess") else None
+    from tenscell.fitting.search import _initial_guess
+
+    theta = _initial_guess(prob_bin, np.random.default_rng(0))
     if theta is not None:
         _, _, c_full = _clock(lambda: [prob_full.residuals(theta) for _ in range(3)])
         _, _, c_bin = _clock(lambda: [prob_bin.residuals(theta) for _ in range(3)])
