@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import sys
 
-from ._args import ENSEMBLE_MAX_K, MAX_GRID_POINTS, add_model_options, add_prestress, frequencies, grid_cost, integer
-from ._args import add_cluster_options
+from ._args import MAX_GRID_POINTS, add_cluster_options, add_model_options, add_prestress, ensemble_size, frequencies, grid_cost
 
 DEFAULT_FREQ = "0.01:1000:61"
 
@@ -20,15 +19,16 @@ def register(sub) -> None:
     add_model_options(p)
     e = p.add_argument_group("ensemble (with --from-fit of a mechanism whose tendon values are drawn from a "
                              "distribution)")
-    e.add_argument("--ensemble", type=integer(2, ENSEMBLE_MAX_K), default=None, metavar="K",
+    e.add_argument("--ensemble", type=ensemble_size, default=None, metavar="K",
                    help="evaluate the fitted mechanism over K assignments of its tendon values (the fit averaged "
-                        "a few) and write the mean G', G'' with the spread between assignments (sd, standard "
+                        "a few; 0: none, as for fit and study) and write the mean G', G'' with the spread between assignments (sd, standard "
                         "error, 5-95%% band) and the fit's own average; runs on the population engine")
     add_cluster_options(e)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    args.ensemble = args.ensemble or None  # --ensemble 0: none, as for `fit` and `study`
     if args.ensemble is None and (args.workers is not None or args.scheduler is not None):
         raise ValueError(f"{'--workers' if args.workers is not None else '--scheduler'} applies to --ensemble")
     if args.ensemble is not None and args.from_fit is None:

@@ -583,7 +583,7 @@ def _residual_lines(f) -> list[str]:
 def _provenance(d) -> dict:
     """What was read for data set ``d``: its source and, where the reader recorded it, the step, temperature and
     unit conversions (:attr:`tenscell.io.data.RheologyData.provenance`)."""
-    return {"source": d.source, **dict(getattr(d, "provenance", None) or {})}
+    return {"source": d.source, **(dict(d.provenance) if d.provenance is not None else {})}
 
 
 def _rms(r) -> float | None:
