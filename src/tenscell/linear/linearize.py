@@ -25,12 +25,13 @@ import scipy.sparse as sp
 from .._checks import positive_array, positive_scalar
 from ..laws import DynamicLawError, LinearSpring, TendonLaw, Voigt
 from ..laws.base import DEFAULT_REALIZATION_TOL, Realization
-from ..model.equilibrium import Cell, tangent_stiffness, weighted_gram
+from .._errors import NotPositiveDefiniteError
+from ..model.equilibrium import Cell, tangent_stiffness
+from .assembly import assemble_damping, assemble_stiffness, spring_stiffness
 from .dynamic import cytoplasm_damping, viscosity_value
-from .modal import (
-    NotPositiveDefiniteError, Pencil, PrestressFamily, RelaxationSpectrum, assemble_damping, assemble_stiffness,
-    relaxation_spectrum,
-)
+from .family import PrestressFamily
+from .pencil import Pencil
+from .spectrum import RelaxationSpectrum, relaxation_spectrum
 from .._threads import hot_path
 from .ordering import coordinate_locations
 from .rigid import deformation_basis, unresisted_share
@@ -140,7 +141,7 @@ class LinearModel:
 
     @cached_property
     def pencil(self) -> Pencil:
-        """The pencil (K0, C0) with its decompositions, each computed once for this model (:mod:`tenscell.linear.modal`);
+        """The pencil (K0, C0) with its decompositions, each computed once for this model (:mod:`tenscell.linear.pencil`);
         for a free-standing structure the pencil on the complement of its rigid-body motions (``basis``)."""
         return self._new_pencil()
 
@@ -267,7 +268,7 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     -----
     A loop over prestresses reuses what does not depend on P: on a dense
     cell its supports hold, the models of one set of tendons belong to one
-    :class:`tenscell.linear.modal.PrestressFamily` (``K0 = P·Kp + Km``, C0
+    :class:`tenscell.linear.family.PrestressFamily` (``K0 = P·Kp + Km``, C0
     whitened once; the cell keeps the family of the tendons it last served),
     so each model costs one eigensolve and its check is that every
     relaxation rate is positive. For a whole grid of prestresses,
@@ -303,8 +304,8 @@ def _prestress_family(cell: Cell, EA: np.ndarray, c: np.ndarray) -> PrestressFam
     kept = _families.get(cell)
     if kept is not None and kept[0] == key:
         return kept[1]
-    family = PrestressFamily.build(cell.Kp, weighted_gram(cell.A, EA / cell.lengths), assemble_damping(cell, c),
-                                   cell.load, cell.probe)
+    family = PrestressFamily.build(cell.Kp, spring_stiffness(cell, EA), assemble_damping(cell, c), cell.load,
+                                   cell.probe)
     _families[cell] = (key, family)
     return family
 
