@@ -26,8 +26,8 @@ import numpy as np
 
 from ..model.equilibrium import weighted_gram
 
-__all__ = ["continuum_factor", "modulus", "assemble_stiffness", "assemble_damping", "spring_stiffness",
-           "voigt_stiffness"]
+__all__ = ["continuum_factor", "modulus", "assemble_stiffness", "stiffness_stack", "assemble_damping",
+           "spring_stiffness", "voigt_stiffness"]
 
 
 def continuum_factor(L: float) -> float:
@@ -54,6 +54,14 @@ def assemble_stiffness(cell, P: float, k):
         ``(EA_j + P·T0_j)/l_j`` (:func:`voigt_stiffness`).
     """
     return P * cell.prestress_hessian + weighted_gram(cell.A, k)
+
+
+def stiffness_stack(cell, P: float, k: np.ndarray) -> np.ndarray:
+    """:func:`assemble_stiffness` for many sets of member tangents at once, dense: shape (q, n, n) for ``k`` of
+    shape (q, m) (N/m, real or complex, e.g. a dynamic tangent ``k*(ω)`` at q frequencies)."""
+    A = np.asarray(cell.A)
+    H = np.asarray(cell.prestress_hessian, dtype=float)
+    return P * H[None] + (A[None] * k[:, None, :]) @ A.T
 
 
 def spring_stiffness(cell, EA):

@@ -127,14 +127,15 @@ class Pencil:
     def ordering(self) -> np.ndarray | None:
         """The fill-reducing permutation shared by the factors of K0 and of every ``K0 + σC0`` (sparse), or None.
 
-        Geometric nested dissection on the union of the patterns of K0 and C0
-        when the pencil is sparse, has :data:`~tenscell.linear.ordering.MIN_SIZE`
-        coordinates or more and knows their locations; None (CHOLMOD's AMD) otherwise.
+        Chosen by size (:func:`tenscell.linear.ordering.fill_reducing`) on the union
+        of the patterns of K0 and C0 when the pencil is sparse, has
+        :data:`~tenscell.linear.ordering.MIN_SIZE` coordinates or more and knows
+        their locations; None (CHOLMOD's AMD) otherwise.
         """
         if not self.sparse or self.points is None or self.n < ordering.MIN_SIZE:
             return None
         pattern = abs(sp.csr_matrix(self.K0)) + abs(sp.csr_matrix(self.C0))
-        return ordering.nested_dissection(pattern, self.points)
+        return ordering.fill_reducing(pattern, self.points)
 
     def check(self) -> None:
         """Raise :class:`NotPositiveDefiniteError` unless K0 is positive definite (factors K0 once).
