@@ -107,9 +107,7 @@ def metis_dissection(A, points: np.ndarray) -> np.ndarray:
     if pymetis is None:  # pragma: no cover - fill_reducing asks only when it is there
         raise ImportError("metis_dissection needs pymetis: pip install 'tenscell[large]'")
     n = A.shape[0]
-    _, group, count = np.unique(np.asarray(points, dtype=float).reshape(n, -1), axis=0, return_inverse=True,
-                                return_counts=True)
-    group = group.ravel()
+    group, count = _locations(np.asarray(points, dtype=float).reshape(n, -1))
     i, j = _edges(A)
     gi, gj = group[i], group[j]
     keep = gi != gj
@@ -144,6 +142,22 @@ def coordinate_locations(coords) -> np.ndarray:
         np.add.at(acc, idx[:, k], x)
         np.add.at(cnt, idx[:, k], 1.0)
     return acc[:-1] / np.maximum(cnt[:-1], 1.0)[:, None]
+
+
+def _locations(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct location of each unknown (an index) and the number of unknowns at each location.
+
+    One lexicographic sort of the rows (``np.unique(axis=0)`` sorts a structured view, 3× slower here).
+    """
+    order = np.lexsort(points.T[::-1])
+    p = points[order]
+    first = np.empty(points.shape[0], dtype=bool)
+    first[:1] = True
+    np.any(p[1:] != p[:-1], axis=1, out=first[1:])
+    sorted_group = np.cumsum(first) - 1
+    group = np.empty_like(sorted_group)
+    group[order] = sorted_group
+    return group, np.bincount(sorted_group)
 
 
 def _edges(A) -> tuple[np.ndarray, np.ndarray]:
