@@ -173,8 +173,12 @@ def test_cholmod_detects_indefinite_K0(monkeypatch):
     lin = tenscell.linearize(tenscell.paper_cell(delta=math.radians(44.0)), 1000.0, check=False)
     with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="pivot"):
         _as_sparse(lin).pencil.check()
-    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="smallest relaxation rate -"):
-        lin.pencil.check()  # a member of the prestress family: its rates are the check
+    assert lin.pencil.family is not None  # a member of the prestress family: the same criterion, K0's Cholesky
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="smallest eigenvalue -"):
+        lin.pencil.check()
+    unchecked = tenscell.linearize(lin.cell, 1000.0, check=False)
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="Cholesky factor does not exist"):
+        unchecked.pencil.modes  # noqa: B018 - the family's modes check it too, by the same criterion
     cell = lin.cell
     own = tenscell.linearize(cell, 1000.0, c=np.logspace(-6, 2, cell.m), check=False)
     assert own.pencil.family is None  # C0 too ill-conditioned to whiten by: K0's own factor is the check

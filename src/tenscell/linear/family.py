@@ -112,10 +112,11 @@ class PrestressFamily:
             raise _unstable(P[bad], lam[bad, 0], describe, hint)
         return lam, U
 
-    def modes(self, P: float, describe: str = "the model", hint: str = "") -> Modes:
+    def modes(self, P: float, describe: str = "the model", hint: str = "", *, checked: bool = False) -> Modes:
         """The modal decomposition of the pencil at prestress ``P`` (N), as :attr:`Pencil.modes` gives it.
 
-        ``τ = 1/λ`` ascending, K0-orthonormal vectors ``Lc⁻ᵀu/√λ``, weights ``(d̃·u)(b̃·u)/λ``.
+        ``τ = 1/λ`` ascending, weights ``(d̃·u)(b̃·u)/λ``, K0-orthonormal vectors ``Lc⁻ᵀu/√λ`` (formed on first
+        use: a compliance needs only τ and ρ). ``checked``: K0 at P is already known to be positive definite.
 
         Raises
         ------
@@ -123,12 +124,17 @@ class PrestressFamily:
             If K0 is not positive definite at P (the one criterion, as for the grid).
         """
         lam, U = symmetric_eigen(P * self.Kpt + self.Kmt)
-        if not is_positive_definite(self.stiffness(P)):
+        if not checked and not is_positive_definite(self.stiffness(P)):
             raise _unstable(P, lam[0], describe, hint)
         r = 1.0 / lam  # τ, descending: the results are reversed views, ascending in τ
-        V = tri(self.Lc, U, trans=1)
-        V *= np.sqrt(r)
-        return Modes(tau=r[::-1], vectors=V[:, ::-1], weights=((self.dt @ U) * (self.bt @ U) * r)[::-1])
+        Lc = self.Lc
+
+        def vectors():
+            V = tri(Lc, U, trans=1)
+            V *= np.sqrt(r)
+            return V[:, ::-1]
+
+        return Modes(tau=r[::-1], weights=((self.dt @ U) * (self.bt @ U) * r)[::-1], make_vectors=vectors)
 
     @hot_path
     def compliance(self, P: np.ndarray, w: np.ndarray, describe: str = "the model") -> np.ndarray:

@@ -138,15 +138,8 @@ class Pencil:
         return ordering.fill_reducing(pattern, self.points)
 
     def check(self) -> None:
-        """Raise :class:`NotPositiveDefiniteError` unless K0 is positive definite (factors K0 once).
-
-        A pencil of a :class:`PrestressFamily` is checked by its modes instead
-        (every relaxation rate > 0, the grid's criterion): they are what its
-        models are made for, and a factor of K0 would be extra work.
-        """
-        if self.family is not None:
-            self.modes  # noqa: B018 - the family's rates are the check
-            return
+        """Raise :class:`NotPositiveDefiniteError` unless K0 is positive definite (factors K0 once: the one criterion,
+        whose factor is kept for static solves)."""
         self.cholesky  # noqa: B018 - computing the factor is the check
 
     @hot_path
@@ -240,7 +233,8 @@ class Pencil:
             )
         if self.family is not None:
             family, P = self.family
-            return family.modes(P, self.describe, self.hint)
+            # K0 checked already (linearize's check: its Cholesky factor) needs no second factorization
+            return family.modes(P, self.describe, self.hint, checked="cholesky" in self.__dict__)
         L = self.cholesky  # the positive-definiteness check
         tau, U = np.linalg.eigh(whiten(L, np.asarray(self.C0)))
         tau = np.clip(tau, 0.0, None)  # C0 is positive semidefinite: negative τ are rounding

@@ -25,7 +25,6 @@ __all__ = ["Modes", "modal_compliance", "RelaxationSpectrum", "relaxation_spectr
 ZERO_TIME = 1e-12
 
 
-@dataclass(frozen=True, eq=False)
 class Modes:
     """``C0 v = τ K0 v`` for a dense pencil: ``J(s) = Σ ρ_k/(1 + s·τ_k)``.
 
@@ -34,14 +33,27 @@ class Modes:
     tau : ndarray, shape (n,)
         Retardation times τ_k (s), ascending, ≥ 0 (0 for undamped modes).
     vectors : ndarray, shape (n, n)
-        K0-orthonormal eigenvectors as columns (``VᵀK0V = I``).
+        K0-orthonormal eigenvectors as columns (``VᵀK0V = I``); built on first use when the record
+        was made with ``make_vectors`` (a compliance needs only τ and ρ).
     weights : ndarray, shape (n,)
         ``ρ_k = (D0·v_k)(b·v_k)`` (m/N), ``b = −H0``.
     """
 
-    tau: np.ndarray
-    vectors: np.ndarray
-    weights: np.ndarray
+    __slots__ = ("tau", "weights", "_vectors", "_make_vectors")
+
+    def __init__(self, tau: np.ndarray, vectors: np.ndarray | None = None, weights: np.ndarray | None = None, *,
+                 make_vectors=None):
+        if weights is None or (vectors is None) == (make_vectors is None):
+            raise TypeError("Modes needs tau, weights and either vectors or make_vectors")
+        self.tau, self.weights = tau, weights
+        self._vectors, self._make_vectors = vectors, make_vectors
+
+    @property
+    def vectors(self) -> np.ndarray:
+        """K0-orthonormal eigenvectors as columns, shape (n, n)."""
+        if self._vectors is None:
+            self._vectors, self._make_vectors = self._make_vectors(), None
+        return self._vectors
 
 
 def modal_compliance(tau: np.ndarray, rho: np.ndarray, w: np.ndarray) -> np.ndarray:
