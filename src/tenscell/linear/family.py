@@ -14,6 +14,7 @@ for a grid).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -126,15 +127,15 @@ class PrestressFamily:
         lam, U = symmetric_eigen(P * self.Kpt + self.Kmt)
         if not checked and not is_positive_definite(self.stiffness(P)):
             raise _unstable(P, lam[0], describe, hint)
-        r = 1.0 / lam  # τ, descending: the results are reversed views, ascending in τ
-        Lc = self.Lc
+        U = U[:, ::-1]  # ascending in τ = 1/λ
+        tau = 1.0 / lam[::-1]
+        d, b = self._probe_load @ U
+        return Modes(tau=tau, weights=d * b * tau, make_vectors=_ModeVectors(self.Lc, U, tau))
 
-        def vectors():
-            V = tri(Lc, U, trans=1)
-            V *= np.sqrt(r)
-            return V[:, ::-1]
-
-        return Modes(tau=r[::-1], weights=((self.dt @ U) * (self.bt @ U) * r)[::-1], make_vectors=vectors)
+    @cached_property
+    def _probe_load(self) -> np.ndarray:
+        """``[d̃; b̃]``, shape (2, n): one product gives both projections of every mode."""
+        return np.stack([self.dt, self.bt])
 
     @hot_path
     def compliance(self, P: np.ndarray, w: np.ndarray, describe: str = "the model") -> np.ndarray:
@@ -147,6 +148,20 @@ class PrestressFamily:
         for i in range(0, P.size, _GRID_BLOCK):
             J[i: i + _GRID_BLOCK] = modal_compliance(tau[i: i + _GRID_BLOCK], rho[i: i + _GRID_BLOCK], w)
         return J
+
+
+class _ModeVectors:
+    """The K0-orthonormal modes ``Lc⁻ᵀU·diag(√τ)`` of a family member, formed when first asked for."""
+
+    __slots__ = ("Lc", "U", "tau")
+
+    def __init__(self, Lc, U, tau):
+        self.Lc, self.U, self.tau = Lc, U, tau
+
+    def __call__(self) -> np.ndarray:
+        V = tri(self.Lc, np.asarray(self.U, order="F"), trans=1)
+        V *= np.sqrt(self.tau)
+        return V
 
 
 def _unstable(P: float, rate: float, describe: str, hint: str) -> NotPositiveDefiniteError:

@@ -318,6 +318,7 @@ class _KeptTendons:
     c_in: float | None
     law: Voigt
     H0: np.ndarray
+    load: np.ndarray
 
     def matches(self, EA, c) -> bool:
         return _same(EA, self.EA_in, self.EA) and _same(c, self.c_in, self.c)
@@ -332,11 +333,15 @@ class _KeptTendons:
         if not d.min() > 0:
             return None
         l0 = cell.lengths * self.EA / d  # Eq. 11, as Voigt.rest_lengths writes it
-        lin = LinearModel(cell=cell, P=P, EA=self.EA, c=self.c, K0=family.stiffness(P), C0=family.C0, H0=self.H0,
-                          D0=np.asarray(cell.probe), l0=l0, law=self.law._placed(l0))
-        lin.__dict__["pencil"] = lin._new_pencil(family)
+        # every field is known valid: set them without the frozen dataclass's field-by-field __init__
+        lin = object.__new__(LinearModel)
+        lin.__dict__.update(cell=cell, P=P, EA=self.EA, c=self.c, K0=family.stiffness(P), C0=family.C0, H0=self.H0,
+                            D0=np.asarray(cell.probe), l0=l0, law=self.law._placed(l0), viscosity=0.0,
+                            realization=None, basis=None)
+        pencil = lin.__dict__["pencil"] = Pencil(lin.K0, family.C0, self.load, lin.D0, describe=f"{cell.describe()} at "
+                                                 f"P={P:.6g}", hint=_STABILITY_HINT, family=(family, P))
         if check:
-            lin.pencil.check()
+            pencil.check()
         return lin
 
 
@@ -366,10 +371,12 @@ def _prestress_family(cell: Cell, EA: np.ndarray, c: np.ndarray, EA_in=None, c_i
     family = PrestressFamily.build(cell.Kp, spring_stiffness(cell, EA), assemble_damping(cell, c), cell.load,
                                    cell.probe)
     EA_r, c_r = np.array(EA, dtype=float), np.array(c, dtype=float)
-    H0 = -np.asarray(cell.load, dtype=float)
-    for arr in (EA_r, c_r, H0):
+    load = np.array(cell.load, dtype=float)
+    H0 = -load
+    for arr in (EA_r, c_r, H0, load):
         arr.flags.writeable = False
     _families[cell] = _KeptTendons(key=key, family=family, EA=EA_r, c=c_r, law=Voigt._trusted(EA=EA_r, c=c_r), H0=H0,
+                                   load=load,
                                    EA_in=EA_in if type(EA_in) in (float, int) else None,
                                    c_in=c_in if type(c_in) in (float, int) else None)
     return family

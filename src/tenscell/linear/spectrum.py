@@ -70,7 +70,10 @@ def modal_compliance(tau: np.ndarray, rho: np.ndarray, w: np.ndarray) -> np.ndar
     weights[..., 0, :] = rho
     np.multiply(rho, tau, out=weights[..., 1, :])
     parts = weights @ den
-    return parts[..., 0, :] - 1j * (w * parts[..., 1, :])
+    J = np.empty(parts.shape[:-2] + (w.size,), dtype=complex)
+    J.real = parts[..., 0, :]
+    np.multiply(parts[..., 1, :], -w, out=J.imag)  # written in place: no complex temporaries
+    return J
 
 
 def ritz_is_zero(tau: np.ndarray) -> np.ndarray:
