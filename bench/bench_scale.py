@@ -15,7 +15,8 @@ Stages, each beside its floor on this machine, measured in the same run:
 * numeric factorizations (two), against their flops (Σ c_j² over the factor's column counts, each) at the
   single-core rate of a dense matrix product measured here (the BLAS-3 kernel they spend their time in);
 * Lanczos solves, against streaming the factor twice per solve (2 × 8 B × fill at the read bandwidth measured here);
-* the rest of the Lanczos run (sparse products, reorthogonalization) and the modal sums.
+* the rest of the Lanczos run (sparse products, reorthogonalization), against streaming its matrices and vectors
+  (C0 once, K0 + σC0 twice, the Lanczos vectors four times per step), and the modal sums.
 
 Baseline, in the same process on the same cell: the previous release's path (geometric nested dissection at every
 size from 5,000 coordinates), its total and its fill; below 15,000 coordinates the two paths are the same.
@@ -191,8 +192,13 @@ def run(shape, bw, rate):
         n_solves = best["steps"] + len(lin.pencil._runs[shift])  # every step, and the start of each run
         best["solves_floor"] = n_solves * 2 * 8 * counts_s.sum() / bw
         best["n_solves"] = n_solves
+        # the rest of a step streams C0 once and K0 + σC0 twice (12 B per entry: value and index) and the
+        # Lanczos vectors four times (the two reorthogonalizations: 8 B per entry of V[:j+1] each)
+        streamed = 12 * (2 * lin.pencil.shifted(shift).nnz + lin.C0.nnz)
+        steps = best["steps"]
+        best["run_floor"] = (steps * streamed + 4 * 8 * lin.cell.n * steps * (steps + 1) / 2) / bw
     else:
-        best.update(fill=0.0, numeric_floor=0.0, solves_floor=0.0, n_solves=0)
+        best.update(fill=0.0, numeric_floor=0.0, solves_floor=0.0, n_solves=0, run_floor=0.0)
     if best["method"] == "metis":  # the previous release's path on the same shape
         base = _pipeline(shape, metis=False)
         best["base_total"] = base["total"]
@@ -276,7 +282,8 @@ def _print_row(r):
     nf = r["numeric_floor"]
     print(f"{'x'.join(map(str, r['shape'])):>9} {r['dof']:7d} {r['method']:>9} {r['build']:6.2f} {r['assembly']:6.2f} "
           f"{r['ordering']:6.2f} {r['symbolic']:6.2f} {r['numeric']:6.2f} {nf:6.2f} {r['solves']:6.2f} "
-          f"{r['solves_floor']:6.2f} {r['lanczos_other'] + r['sums']:6.2f} {r['total']:7.2f} {r['steps']:5d} "
+          f"{r['solves_floor']:6.2f} {r['lanczos_other']:6.2f} {r['run_floor']:6.2f} {r['sums']:6.3f} {r['total']:7.2f} "
+          f"{r['steps']:5d} "
           f"{r['fill'] / 1e6:7.2f} {r['base_fill'] / 1e6:7.2f} {r['base_total']:7.2f} {r['base_total'] / r['total']:6.2f}x "
           f"{r['diff']:9.1e}", flush=True)
 
@@ -326,10 +333,12 @@ def main(argv=None) -> int:
           f"product {rate / 1e9:.1f} GFLOP/s on one core; {len(F)} frequencies 1e-2..1e3 Hz; EA = 1 N (tendons), 1e3 N "
           f"(struts), c = {C:g} N·s/m, P = {P:g} N; CPU seconds")
     print(f"{'modules':>9} {'dof':>7} {'ordering':>9} {'build':>6} {'assem.':>6} {'order':>6} {'symb.':>6} "
-          f"{'numer.':>6} {'floor':>6} {'solves':>6} {'floor':>6} {'other':>6} {'total':>7} {'steps':>5} "
+          f"{'numer.':>6} {'floor':>6} {'solves':>6} {'floor':>6} {'run':>6} {'floor':>6} {'sums':>6} {'total':>7} "
+          f"{'steps':>5} "
           f"{'fill':>7} {'fill':>7} {'prev.':>7} {'prev./':>7} {'max|dG|/G':>9}")
     print(f"{'':>9} {'':>7} {'':>9} {'(s)':>6} {'(s)':>6} {'(s)':>6} {'(s)':>6} {'(s)':>6} {'(s)':>6} {'(s)':>6} "
-          f"{'(s)':>6} {'(s)':>6} {'(s)':>7} {'':>5} {'(1e6)':>7} {'prev.':>7} {'(s)':>7} {'lib.':>7}")
+          f"{'(s)':>6} {'(s)':>6} {'(s)':>6} {'(s)':>6} {'(s)':>7} {'':>5} {'(1e6)':>7} {'prev.':>7} {'(s)':>7} "
+          f"{'lib.':>7}")
     rows = []
     with _threads.limited():
         _pipeline((2, 2, 2))  # warm-up: first-call imports, not timed
@@ -344,7 +353,8 @@ def main(argv=None) -> int:
           "dissection or METIS by size, AMD below 5,000); symb.: CHOLMOD's symbolic analyses and the conversions to "
           "cvxopt; numer.: the two numeric factorizations, beside their floor (their flops at the dense matrix-product "
           "rate above); solves: every Lanczos solve, beside streaming the factor twice per solve at the bandwidth above; "
-          "other: the run's sparse products, reorthogonalization and modal sums; prev.: the previous release's path "
+          "run: the rest of the Lanczos run (sparse products, reorthogonalization), beside streaming C0 once, K0 + σC0 twice "
+          "and the Lanczos vectors four times per step; sums: the modal sums; prev.: the previous release's path "
           "(geometric nested dissection at every size), its fill of K0's factor, its total and its ratio to the "
           "library's; max|dG|/G: the two answers' largest relative difference (both converged to 1e-12)")
     big_memory = peak_memory(rows[-1]["shape"]) if rows[-1]["dof"] > 100_000 else None
