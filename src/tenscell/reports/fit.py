@@ -377,8 +377,27 @@ SECTIONS = [("summary", section_summary), ("provenance", section_provenance), ("
 MODEL_SECTIONS = frozenset({"prestress", "creep", "held", "assignments"})
 
 
+def section_out_of_sample(validation) -> list[str]:
+    """The model and its structure-free baselines refitted on held-out splits, ranked, with the verdict."""
+    if validation is None:
+        return []
+    rows = [(f"**{r.model}**" if r.model == validation.model else r.model,
+             "tensegrity" if r.structural else "structure-free",
+             "n/a" if r.n_params < 0 else r.n_params, num(r.mean, 3), num(r.worst, 3),
+             *(num(x, 3) for x in r.rms)) for r in validation.rows]
+    return ["## Out of sample: the model against its baselines", "",
+            "Every model refitted on each split's training data (frequency sweeps trained at or below a cut-off, "
+            "prestress sweeps without some prestresses) and scored by the RMS of its log10 errors on the points it "
+            "did not see (decades); best first.", "",
+            table(("model", "kind", "parameters", "mean held-out RMS", "worst", *validation.splits), rows),
+            f"**Verdict**: {validation.verdict}.", "",
+            "*What this does not show*: held-out errors on data generated from a published law measure how well a "
+            "model extrapolates that law, not the cell; a model that fits the training data better can still "
+            "extrapolate worse.", ""]
+
+
 def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None,
-                 comparison=None) -> str:
+                 comparison=None, validation=None) -> str:
     """A Markdown report of a fit of any model: verdict, each data set, identifiability, model comparison,
     parameters, errors, the baseline beside it, and the sections of its kind of model.
 
@@ -392,6 +411,8 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
     comparison : ModelComparison, optional
         From :func:`tenscell.fitting.scores.compare_models` (e.g. with held-out data); computed from ``result``
         and ``baseline`` when not given.
+    validation : OutOfSampleComparison, optional
+        The model and its baselines out of sample (:func:`tenscell.fitting.validation.compare_out_of_sample`).
     """
     if title is None:
         title = (f"Fit of `{result.spec.name}` to " + " and ".join(f"`{_name(d.source)}`" for d in result.datasets))
@@ -404,4 +425,6 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
             continue
         out += section_comparison(result, baseline, comparison=comparison) if name == "comparison" \
             else section(result, baseline)
+        if name == "comparison":
+            out += section_out_of_sample(validation)
     return "\n".join(out)

@@ -76,6 +76,11 @@ class FitModel:
         """The model a fit of this one is shown beside in its report (None: none)."""
         return None
 
+    def formula(self) -> FitModel | None:
+        """This model's own structure-free formula: its terms lumped into one element with the same prestress
+        coupling, the baseline a tensegrity must beat out of sample (None for a formula itself)."""
+        return None
+
     @property
     def structural(self) -> bool:
         """Whether the model has a cell (a structure whose geometry and prestress carry the response)."""
