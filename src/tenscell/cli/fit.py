@@ -553,9 +553,10 @@ def _validation(args, spec, datasets, space):
         stage(f"out of sample: not run for {spec.name} ({VALIDATE_AUTO_MAX_PARAMETERS}+ parameters per refit; "
               "--validate yes runs it)")
         return None
-    return compare_out_of_sample(spec, datasets, standard_baselines(datasets), model_options=space, notify=stage,
-                                 starts=2, seed=args.seed, hops=8, patience=3, tolerance=args.tolerance,
-                                 max_points=None)
+    validation = compare_out_of_sample(spec, datasets, standard_baselines(datasets), model_options=space,
+                                       notify=stage, starts=2, seed=args.seed, hops=8, patience=3,
+                                       tolerance=args.tolerance, max_points=None)
+    return validation if validation.splits else None  # no split leaves enough points to fit every model
 
 
 def _min_points(spec) -> int:

@@ -228,6 +228,17 @@ class OutOfSampleComparison:
                              for i, s in enumerate(self.splits)}})
 
 
+def _fittable(model, data, cell) -> bool:
+    """Whether ``model``'s problem can be laid out on ``data`` (enough points for its parameters)."""
+    from ..io.data import DataError
+
+    try:
+        model.problem(data, None if not model.structural else cell)
+    except (DataError, ValueError):
+        return False
+    return True
+
+
 def standard_baselines(data) -> tuple[str, ...]:
     """The structural-damping law with and without its Newtonian term — with a modulus linear in P when some data
     set varies the prestress (the plain law has no prestress)."""
@@ -267,7 +278,12 @@ def compare_out_of_sample(spec, data, baselines=(), *, formula=None, n_params: d
     others = [get_model(b) for b in baselines]
     if formula is not None and all(o.name != formula.name for o in others) and not formula.structural:
         others.insert(0, formula)
-    split_list = splits(data)
+    # a baseline that cannot describe these data at all (a formula of moduli against creep data) is left out
+    others = [o for o in others if _fittable(o, data, cell)]
+    if formula is not None and not _fittable(formula, data, cell):
+        formula = None
+    # a split whose training data some model cannot be fitted to (too few points for its parameters) is left out
+    split_list = tuple(s for s in splits(data) if all(_fittable(m, s.train, cell) for m in (model, *others)))
     counts = dict(n_params or {})
     for m in (model, *others):  # the parameters each model has on the full data (free, less an exact gauge)
         if m.name not in counts:
