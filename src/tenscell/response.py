@@ -185,6 +185,11 @@ class FrequencyResponse:
             f"G' {span(self.G_storage, 'Pa')}; G'' {span(self.G_loss, 'Pa')}",
         )
 
+    def _repr_html_(self) -> str:
+        from ._results import reporter
+
+        return reporter("frequency_response_html")(self)  # the grid and G', G'' at three frequencies
+
     def to_xarray(self):
         """The grid as an ``xarray.Dataset`` (dims ``prestress`` in N, ``frequency`` in Hz; ``J_real``, ``J_imag``
         in m/N (the compliance's real and imaginary parts: every netCDF engine writes them), ``G_storage``,

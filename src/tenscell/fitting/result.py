@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .._results import CORRELATION_THRESHOLD, correlation_text, dataframe, format_repr, plus_minus
+from .._results import CORRELATION_THRESHOLD, correlation_text, dataframe, format_repr, plus_minus, reporter
 from ..io.data import RheologyData
 from .problem import Problem
 from .records import (CreepFit, DatasetFit, accepted, data_axis, error_fields, information_criteria, noise_rms,
@@ -416,6 +416,9 @@ class FitResult:
             f"{self.verdict}; per data set: {sets}",
             f"{self.starts} start(s), seed {self.seed}, {self.elapsed_s:.1f} s; stopped: {self.stop_reason}",
         )
+
+    def _repr_html_(self) -> str:
+        return reporter("fit_html")(self)  # verdict, quality, provenance, parameters with ± (reports/html.py)
 
     def to_dataframe(self):
         """Data, model and log10 errors at every point of every data set (columns with units).
