@@ -50,13 +50,14 @@ Which mechanism explains my cells? Fit every mechanism to your own files
 tables; several files are fitted jointly) and compare them on one table
 (it prints its estimated time before it starts):
 
-  tenscell study mechanisms MY_SWEEP.csv [MORE_FILES ...] --out mechanisms/
+  tenscell study mechanisms MY_SWEEP.csv MY_PRESTRESS_SWEEP.csv --out mechanisms/
 
 Then fit one mechanism, reported beside its own structure-free formula
 ({model} is the recommended first model; `tenscell fit --help`
-lists every --model), and ask it about prestresses and frequencies it never saw:
+lists every --model), and ask it about prestresses and frequencies it never saw
+(with a frequency sweep alone, leave --prestress out):
 
-  tenscell fit MY_SWEEP.csv --model {model} --out fit/
+  tenscell fit MY_SWEEP.csv MY_PRESTRESS_SWEEP.csv --model {model} --out fit/
   tenscell moduli --from-fit fit/fit.json --prestress 500,1000 --freq 0.01:100:41
 
 The paper itself: `tenscell reproduce`.
