@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import math
+import os
+import time
 from pathlib import Path
 
 from ._args import add_data_options, add_out, data_options_from_args, ensemble_size, integer, number, number_list, path
@@ -180,10 +182,32 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
 EVALUATIONS_PER_START_HOP = {"mechanism": 20.0, "voigt-per-tendon": 34.0}
 
 
+def _cpu_per_call(fn, calls: int = 5) -> float:
+    """CPU seconds of one call of ``fn`` (the mean of ``calls`` after one warm-up): what the work costs, whatever
+    share of the CPUs the machine gives it now."""
+    fn()
+    t0 = time.process_time()
+    for _ in range(calls):
+        fn()
+    return max(time.process_time() - t0, 1e-9) / calls
+
+
+def cpu_share(workers: int) -> float:
+    """The share of one CPU each of ``workers`` new processes can expect now: the CPUs over everything runnable
+    (the load average plus them), at most 1. On a shared machine a short timed call is served at once while a
+    long run waits its turn, so wall time is estimated from CPU time and this share."""
+    try:
+        load = os.getloadavg()[0]
+    except (OSError, AttributeError):  # pragma: no cover - no load average on this platform
+        return 1.0
+    return min(1.0, (os.cpu_count() or 1) / max(load + workers, 1.0))
+
+
 def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, holdout: bool):
-    """The mechanisms study's cost (:class:`tenscell.cli._cost.Cost`): one model evaluation of each mechanism timed
-    here (at a start of its fit, with the BLAS threads the search uses) × the evaluations its fit is expected to take
-    (:data:`EVALUATIONS_PER_START_HOP` × starts × hops), twice with a held-out refit, over ``jobs`` workers."""
+    """The mechanisms study's cost (:class:`tenscell.cli._cost.Cost`): the CPU time of one model evaluation of each
+    mechanism, timed here at a start of its fit with the BLAS threads the search uses, × the evaluations its fit is
+    expected to take (:data:`EVALUATIONS_PER_START_HOP` × starts × hops), twice with a held-out refit, over ``jobs``
+    workers at the CPU share the machine's load leaves them (:func:`cpu_share`)."""
     import numpy as np
 
     from .._threads import limited
@@ -192,24 +216,28 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, holdout:
     from ..fitting.models.catalog import PER_TENDON_VOIGT
     from ..fitting.models.voigt import VoigtModel
     from ..studies.mechanisms import PER_TENDON_HOPS
-    from ._cost import Cost, measure
+    from ._cost import Cost
 
-    seconds, evaluations = 0.0, 0
+    cpu, evaluations = 0.0, 0
     with limited():
         for name in names:
             per_tendon = name == PER_TENDON_VOIGT
             spec = VoigtModel(tendons="per-tendon", damping="per-family") if per_tendon else get_model(name)
             problem = spec.problem(*prepare(datasets, None, 100, spec))
             theta = problem.initial_guess(np.random.default_rng(0))
-            per = measure(lambda: problem.jacobian(theta), min_time_s=0.02, max_calls=5)
             rate = EVALUATIONS_PER_START_HOP["voigt-per-tendon" if per_tendon else "mechanism"]
             n = int(round(rate * starts * ((max(hops, PER_TENDON_HOPS) if per_tendon else hops) + 1)
                           * (2 if holdout else 1)))
-            seconds += n * per
+            cpu += n * _cpu_per_call(lambda: problem.jacobian(theta))
             evaluations += n
-    return Cost("model evaluation", max(evaluations, 1), seconds / max(evaluations, 1), min(jobs, len(names)),
+    workers = min(jobs, len(names))
+    share = cpu_share(workers)
+    per = cpu / max(evaluations, 1)
+    return Cost("model evaluation", max(evaluations, 1), per / share, workers,
                 detail=f"({len(names)} model(s) × {starts} start(s) × up to {hops} hop(s)"
-                       + (", each fitted twice: all data and held out" if holdout else "") + ")")
+                       + (", each fitted twice: all data and held out" if holdout else "")
+                       + f"; {per * 1e3:.2g} ms of CPU each, at {share:.0%} of a CPU per worker: load "
+                         f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs)")
 
 
 #: studies that fit data files given on the command line (not part of `reproduce`'s variants stage)
