@@ -28,7 +28,7 @@ FIXTURES = HERE.parent / "tests" / "data"
 # (``--temperature 25`` on the command line), its name or its number; moduli in MPa become Pa.
 trios = FIXTURES / "trios_lims_temperature_steps.txt"
 sweeps = {T: tc.read_data(trios, temperature=T) for T in (37, 25, 15)}
-for T, d in sweeps.items():
+for d in sweeps.values():
     print(d.provenance.line())
 
 # %%

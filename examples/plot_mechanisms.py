@@ -22,6 +22,7 @@ import tenscell as tc
 from tenscell.fitting import RECOMMENDED, fit
 from tenscell.fitting.models import baseline_of
 from tenscell.fitting.scores import compare_models
+from tenscell.reports.fit import fit_markdown
 
 data = [tc.bundled("stamenovic2002"), tc.bundled("fabry2001")]
 for d in data:
@@ -69,6 +70,4 @@ plt.gcf().suptitle(f"{RECOMMENDED} fitted jointly to both bundled data sets")
 # %%
 # The full Markdown report (as ``tenscell fit --model`` writes it) holds the verdict, the identifiability, the
 # baseline beside the fit and every point's error; its first lines:
-from tenscell.reports.fit import fit_markdown
-
 print("\n".join(fit_markdown(result, formula).splitlines()[:12]))

@@ -285,7 +285,7 @@ def _from_xarray(cls, ds):
         if name not in ds.variables:
             raise ValueError(f"dataset: no {name!r}; expected what FrequencyResponse.to_xarray() writes")
     units = {k: ds[k].attrs.get("units") for k in (*parts, "prestress", "frequency")}
-    if units != {**{k: "m/N" for k in parts}, "prestress": "N", "frequency": "Hz"}:
+    if units != {**dict.fromkeys(parts, "m/N"), "prestress": "N", "frequency": "Hz"}:
         raise ValueError(f"dataset: units {units}; expected J m/N, prestress N, frequency Hz")
     J = [np.asarray(ds[k].transpose("prestress", "frequency").values) for k in parts]
     return cls(frequency_hz=np.asarray(ds["frequency"].values, dtype=float),

@@ -81,7 +81,7 @@ def reproduce_fit(out: Path, log) -> None:
 REPRODUCE_MECHANISMS = ("springpot+visc", "springpot-tension+visc")
 #: the search of those fits: `tenscell fit`'s defaults (4 starts, seed 0, up to 30 hops), so that the command the
 #: report prints gives the same numbers
-MECHANISM_SEARCH = {"starts": 4, "seed": 0}
+MECHANISM_SEARCH: dict[str, Any] = {"starts": 4, "seed": 0}
 
 
 def _same_fit_command(data, name: str) -> str:

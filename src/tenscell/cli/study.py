@@ -228,7 +228,7 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, holdout:
             rate = EVALUATIONS_PER_START_HOP["voigt-per-tendon" if per_tendon else "mechanism"]
             n = int(round(rate * starts * ((max(hops, PER_TENDON_HOPS) if per_tendon else hops) + 1)
                           * (2 if holdout else 1)))
-            cpu += n * _cpu_per_call(lambda: problem.jacobian(theta))
+            cpu += n * _cpu_per_call(lambda pb=problem, th=theta: pb.jacobian(th))
             evaluations += n
     workers = min(jobs, len(names))
     share = cpu_share(workers)

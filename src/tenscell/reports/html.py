@@ -90,7 +90,8 @@ def _datasets(result) -> str:
 
 
 def _parameters(result) -> str:
-    rows, why = [], {}
+    rows: list[tuple] = []
+    why: dict[str, list[str]] = {}
     for p, (se, note) in zip(result.parameters, result.standard_errors):
         if se is None:
             why.setdefault(note.strip("()") or "not determined by the data", []).append(p.name)
