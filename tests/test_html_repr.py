@@ -82,6 +82,13 @@ def test_the_text_report_says_not_determined_once_per_reason():
     reasons = [line for line in text.splitlines() if line.strip().startswith("(—) not determined:")]
     assert len(reasons) == len({note.strip("()") or "not determined by the data"
                                 for _, (se, note) in zip(r.parameters, r.standard_errors) if se is None})
+    # the Markdown report's error table: σ unknown is said once, not in every cell
+    from tenscell.reports.fit import fit_markdown
+
+    errors = fit_markdown(r).split("## Errors")[1].split("\n## ")[0]
+    if r.identifiability().sigma is None:
+        assert errors.lower().count("not determined") == 1 and "σ is unknown" in errors
+    assert "(σ unknown)" not in errors
 
 
 def test_data_show_what_they_are_and_where_they_came_from(sweep):

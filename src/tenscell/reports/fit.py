@@ -309,6 +309,11 @@ def section_errors(result: FitResult, baseline=None) -> list[str]:
     se = result.model_standard_errors()  # decades of log10 G' / G'' / J, per residual
     out.append("Model values with their standard errors (linearized at the optimum, from the parameters' "
                "covariance: `FitResult.model_standard_errors()`).")
+    if not np.isfinite(se).any() or (baseline is not None and not np.isfinite(baseline.model_standard_errors()).any()):
+        # said once here, not in every cell of the tables below
+        whose = "the model values" if not np.isfinite(se).any() else "the baseline's values"
+        out.append(f"Not determined for {whose} (shown without ±): the noise level σ is unknown (no standard "
+                   "deviations in the data, and as many seen parameter combinations as residuals).")
     out.append("")
     for f in result.fits:
         d = f.data
@@ -344,8 +349,9 @@ def section_errors(result: FitResult, baseline=None) -> list[str]:
 
 def _model_value(value: float, se_decades: float) -> str:
     """A model value with its standard error, from that of its log10 (first order: value·ln10·se)."""
-    se = value * math.log(10.0) * se_decades if math.isfinite(se_decades) else None
-    return plus_minus(value, se, "", "" if se is not None else "(σ unknown)", 4)
+    if not math.isfinite(se_decades):
+        return num(value, 4)  # σ unknown: said once above the table (section_errors)
+    return plus_minus(value, value * math.log(10.0) * se_decades, "", "", 4)
 
 
 def section_alternatives(result: FitResult, baseline=None) -> list[str]:
