@@ -40,3 +40,33 @@ def test_the_printed_command_repeats_reproduces_fit(tmp_path, monkeypatch):
     assert doc["n_free_parameters"] == r.n_free
     assert doc["BIC"] == pytest.approx(bic, abs=1e-6)
     assert doc["rms_log10_error_per_dataset"] == pytest.approx(list(r.dataset_rms), abs=1e-9)
+
+
+def test_the_docs_headline_fit_gives_the_numbers_the_docs_print(tmp_path, monkeypatch):
+    """docs/fitting.md's `tenscell fit ... --model springpot-tension+visc` ends as the docs say (status 1, explained)
+    with the RMS, BIC and parameter counts its answer paragraph prints (read from the page, not typed here)."""
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "fitting.md").read_text(encoding="utf-8")
+    command = re.search(r"^tenscell fit bundled:stamenovic2002 bundled:fabry2001 --model (\S+) --out SP$", page,
+                        flags=re.M)
+    assert command and command.group(1) == NAME
+    said = re.search(r"RMS (\d\.\d+) on the prestress sweep and (\d\.\d+) on the frequency\s+sweep; BIC ([−-]\d+\.\d)"
+                     r".*?(\d+) of its (\d+) parameters determined", page, flags=re.S)
+    assert said, "the answer paragraph of docs/fitting.md"
+    monkeypatch.setenv("TENSCELL_PROGRESS", "0")
+    status = main(["fit", "bundled:stamenovic2002", "bundled:fabry2001", "--model", NAME, "--jobs", "1",
+                   "--out", str(tmp_path / "SP")])
+    doc = json.loads((tmp_path / "SP" / "fit.json").read_text())
+    rms = doc["rms_log10_error_per_dataset"]
+    assert (f"{rms[0]:.3f}", f"{rms[1]:.3f}") == (said.group(1), said.group(2))
+    assert f"{doc['BIC']:.1f}" == said.group(3).replace("−", "-")
+    assert doc["n_free_parameters"] == int(said.group(5))
+    determined = sum(p["stderr"] is not None and p["stderr_percent"] <= 10 for p in doc["parameters"] if p["vary"])
+    assert determined == int(said.group(4))
+    # the exit status the page explains: 1 when the prestress sweep misses the tolerance, which the report says
+    assert status == (0 if doc["converged"] else 1)
+    if status == 1:
+        assert "the prestress sweep's RMS misses the default tolerance" in page
+        assert "NOT converged" in (tmp_path / "SP" / "report.md").read_text()
