@@ -286,7 +286,7 @@ def register(sub) -> None:
                                    "each bound on its spread); mechanisms DATA... (every mechanism — per-tendon and "
                                    "compact Voigt, Maxwell, SLS, springpot, cytoplasm, distributions — fitted to the "
                                    "same data: parameters, RMS, AIC/BIC, identifiability, G' slope ripple, held-out "
-                                   "error).")
+                                   "error; it prints its estimated time first and refuses a run beyond a day).")
     p.add_argument("name", choices=sorted(STUDIES), help="which study")
     p.add_argument("data", nargs="*", help="compactness, mechanisms: file(s) of measured moduli (as for `tenscell "
                                            "fit`), or bundled:NAME")

@@ -19,7 +19,7 @@ from .._results import CORRELATION_THRESHOLD, correlation_text, ln_error, span
 from ._format import num
 
 __all__ = ["fit_html", "data_html", "frequency_response_html", "fitted_model_html", "comparison_html",
-           "population_html", "html_table"]
+           "population_html", "ensemble_html", "html_table"]
 
 #: the one inline style of every table (notebook themes style the rest)
 _TABLE = 'style="border-collapse: collapse; margin: 0.3em 0"'
@@ -243,3 +243,21 @@ def population_html(result) -> str:
                 _p(f"Each cell fitted with tendons {o.tendons}, damping {o.damping}, {o.starts} start(s); run seed "
                    f"{result.seed}; {result.elapsed_s:.1f} s on {result.n_workers or 'no'} Dask worker(s). The spread "
                    "of a parameter across cells includes its fitting uncertainty; no test of significance is made."))
+
+
+def ensemble_html(result) -> str:
+    """An :class:`~tenscell.population.ensemble.EnsembleResult`: the spread between assignments and how far the
+    fit's own average lies from the ensemble mean."""
+    nP, nf = result.reference.shape
+    rs, rl = result.relative_spread()
+    zs, zl = result.reference_z()
+    rows = [("assignments", f"{result.K} ({result.n_failed} not a stable cell), seed {result.seed}"),
+            ("grid", f"{nP} prestress(es) ({result.prestress_unit}) × {nf} frequencies, "
+                     f"{span(result.frequency_hz, 'Hz')}"),
+            ("spread between assignments (sd/mean, largest)", f"G′ {100 * rs:.3g} %, G″ {100 * rl:.3g} %"),
+            (f"the fit's {result.reference_K}-assignment average", f"within {zs:.2g} (G′) and {zl:.2g} (G″) sampling "
+                                                                   "standard errors of the ensemble mean"),
+            ("run", f"{result.elapsed_s:.1f} s" + (f" on {result.workers} Dask worker(s)" if result.workers else ""))]
+    return _div(f"EnsembleResult: {result.mechanism}", _pairs(rows),
+                _p("One cell of this mechanism differs from the mean by about the spread; every point's mean, sd and "
+                   "5–95 % band: .to_dataframe()."))
