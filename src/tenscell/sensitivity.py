@@ -43,7 +43,7 @@ from ._progress import progress_bar
 from ._results import dataframe, format_repr
 from ._threads import hot_path
 from .linear.linearize import LinearModel, linearize
-from .linear.modal import modulus
+from .linear.assembly import modulus
 from .linear.rigid import resolvent_full
 from .response import compliance
 from .model.shapes import paper_cell
