@@ -576,3 +576,13 @@ def test_ctrl_c_on_large_study_is_one_line(tmp_path, port_8787_taken):
                          "--workers", "2"], ready)
     assert code == 130
     _one_interrupt_line(err, kept=True)
+
+
+def test_a_population_shows_itself_in_a_notebook(serial):
+    # _repr_html_: cells per condition (fitted / converged / failed) and the per-condition medians, escaped
+    html = serial._repr_html_()
+    t = serial.table
+    assert html.startswith('<div class="tenscell-repr">') and f"PopulationResult: {serial.n_cells} cells" in html
+    for cond in set(t["condition"]):
+        assert f"<td style=\"text-align: left\">{cond or '(none)'}</td>" in html
+    assert "interquartile range" in html and "<script" not in html

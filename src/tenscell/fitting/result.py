@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .._results import CORRELATION_THRESHOLD, dataframe, format_repr, plus_minus
+from .._results import CORRELATION_THRESHOLD, correlation_text, dataframe, format_repr, plus_minus, reporter
 from ..io.data import RheologyData
 from .problem import Problem
 from .records import (CreepFit, DatasetFit, data_axis, error_fields, information_criteria, noise_rms,
@@ -27,8 +27,6 @@ from .records import (CreepFit, DatasetFit, data_axis, error_fields, information
 
 __all__ = ["FitResult", "FIT_NULL_MEANS", "report_quantities", "AS_WELL"]
 
-#: most correlations report() lists (all are in correlations() and fit.json)
-_MAX_CORRELATIONS = 20
 #: what a null in FitResult.to_dict() (and fit.json) stands for; written into the document as "null_means"
 FIT_NULL_MEANS = (
     "null: no value. start_rms: a start the search never ran (an earlier start met the target first); "
@@ -419,6 +417,9 @@ class FitResult:
             f"{self.starts} start(s), seed {self.seed}, {self.elapsed_s:.1f} s; stopped: {self.stop_reason}",
         )
 
+    def _repr_html_(self) -> str:
+        return reporter("fit_html")(self)  # verdict, quality, provenance, parameters with ± (reports/html.py)
+
     def to_dataframe(self):
         """Data, model and log10 errors at every point of every data set (columns with units).
 
@@ -536,21 +537,28 @@ class FitResult:
         ]
         if self.stiffness_spread is not None:
             q, u = self.derived, self.problem.units[0]
-            lines.append(f"    stiffness spread:   {q.text('stiffness_spread', 0, u, 3)} .. "
-                         f"{q.text('stiffness_spread', 1, u, 3)} ({q.text('stiffness_spread', 2, 'decades', 3)})")
-        lines.append("[[Parameters]] (value +/- standard error, in the unit shown; see identifiability())")
+            lines.append(f"    stiffness spread:   {q.text('stiffness_spread', 0, u, 3, ln=True)} .. "
+                         f"{q.text('stiffness_spread', 1, u, 3, ln=True)} ({q.text('stiffness_spread', 2, 'decades', 3)})")
+        lines.append("[[Parameters]] (value +/- standard error, in the unit shown: a factor ×/÷ when it exceeds 50 %, "
+                     "as the fit works in ln-parameters; see identifiability())")
         width = max(len(p.name) for p in self.parameters)
         if self.identifiability().gauge_removed:
             lines.append("    (L is an exact gauge of the moduli: the errors are those of EA/L², c/L, P/L² at the "
                          "fitted L)")
+        why: dict[str, list[str]] = {}  # "not determined" once per reason, under the table
         for p, (se, note) in zip(self.parameters, self.standard_errors):
-            lines.append(f"    {p.name + ':':<{width + 1}} {plus_minus(p.value, se, p.unit, note)}  "
-                         f"[{p.lower:.3g}, {p.upper:.3g}]  {p.description}")
+            if se is None:
+                why.setdefault(note.strip("()") or "not determined by the data", []).append(p.name)
+                shown = f"{p.value:.6g}" + (f" {p.unit}" if p.unit else "") + "  (—)"
+            else:
+                shown = plus_minus(p.value, se, p.unit, note, ln=True)
+            lines.append(f"    {p.name + ':':<{width + 1}} {shown}  [{p.lower:.3g}, {p.upper:.3g}]  {p.description}")
+        for reason, names in why.items():
+            listed = ", ".join(names[:12]) + (f" ... ({len(names)} in all)" if len(names) > 12 else "")
+            lines.append(f"    (—) not determined: {listed}: {reason}")
         strong = self.correlations()
-        lines.append(f"[[Correlations]] (unreported correlations are < {CORRELATION_THRESHOLD:.3f})")
-        lines += [f"    C({a}, {b}) = {r:+.4f}" for a, b, r in strong[:_MAX_CORRELATIONS]]
-        if len(strong) > _MAX_CORRELATIONS:
-            lines.append(f"    ... and {len(strong) - _MAX_CORRELATIONS} more (FitResult.correlations())")
+        lines.append(f"[[Correlations]] (unreported correlations are < {CORRELATION_THRESHOLD:.3f}; strongest first)")
+        lines += ["    " + c for c in correlation_text(strong)]
         if not strong:
             lines.append("    none")
         for f in self.fits:
