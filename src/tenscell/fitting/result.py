@@ -296,9 +296,12 @@ class FitResult:
         f = np.atleast_1d(np.asarray(f_hz, dtype=float))
         if prestress_pa is not None:
             Pm = np.atleast_1d(self.prestress_model(prestress_pa))
+            if dataset is None:
+                return self.problem.moduli_at(self.theta, f, Pm)
         else:
-            Pm = self.prestress_model(dataset=self.single_prestress_dataset() if dataset is None else dataset)
-        return self.problem.moduli_at(self.theta, f, Pm)
+            dataset = self.single_prestress_dataset() if dataset is None else dataset
+            Pm = self.prestress_model(dataset=dataset)
+        return self.problem.dataset_moduli_at(self.theta, f, Pm, dataset)
 
     def _default_prestress_N(self) -> float:
         """Model prestress (N) of the first single-prestress data set, else at the first data set's median."""
@@ -335,15 +338,11 @@ class FitResult:
         the default tolerance's analysis is computed once."""
         if rtol == 1e-8:
             return self._identifiability
-        from .identifiability import identifiability
-
-        return identifiability(self.problem, self.theta, sigma_known=self.sigma_known, rtol=rtol)
+        return self.problem.identifiability(self.theta, sigma_known=self.sigma_known, rtol=rtol)
 
     @cached_property
     def _identifiability(self):
-        from .identifiability import identifiability
-
-        return identifiability(self.problem, self.theta, sigma_known=self.sigma_known, rtol=1e-8)
+        return self.problem.identifiability(self.theta, sigma_known=self.sigma_known, rtol=1e-8)
 
     @property
     def standard_errors(self) -> tuple[tuple[float | None, str], ...]:
