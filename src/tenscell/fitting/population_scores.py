@@ -35,7 +35,7 @@ from .models.population import Population
 from .records import information_criteria
 from .scores import _subset
 
-__all__ = ["PopulationScores", "ScoreRow", "Correlation", "score_population", "springpot_exponent",
+__all__ = ["PopulationScores", "ScoreRow", "Correlation", "score_population", "population_cells", "springpot_exponent",
            "comment_values", "EXPONENT_BAND_HZ", "DEFAULT_SPLITS", "DEFAULT_BASELINES"]
 
 #: frequencies (Hz) over which a cell's exponent is measured (Xie et al.'s springpot fits: 1–100 Hz)
@@ -437,27 +437,45 @@ def _spearman(x, y) -> tuple[float, int]:
     return float(scipy.stats.spearmanr(x[ok], y[ok])[0]), int(ok.sum())
 
 
-def _correlations(cells, joint, anchor_hz: float, covariates) -> tuple[dict, tuple]:
-    """The per-cell table and the Spearman correlations, measured and from the population's fitted cells."""
-    pb = joint.problem
+def population_cells(result, anchor_hz: float = 10.0):
+    """Per cell of a population fit: source, points, RMS, the per-cell parameters with their standard errors,
+    and the measured and model exponent (:func:`springpot_exponent`) and stiffness (G′ at ``anchor_hz``, Pa; the
+    measured one where the cell has a point there, else NaN), as a DataFrame with units in the column names."""
+    pb = result.problem
+    errors = result.standard_errors
+    cols: dict = {"cell": np.arange(pb.n_cells), "source": [d.source for d in result.datasets],
+                  "n_points": [d.n for d in result.datasets],
+                  "rms_log10_error": [f.rms_log10_error for f in result.fits]}
+    for j, name in enumerate(pb.own_names):
+        idx = [int(pb.own_index(k)[j]) for k in range(pb.n_cells)]
+        unit = _unit_suffix(pb.units[idx[0]])
+        cols[f"{name}_{unit}"] = [result.parameters[i].value for i in idx]
+        cols[f"{name}_stderr_{unit}"] = [math.nan if errors[i][0] is None else errors[i][0] for i in idx]
+        cols[f"{name}_at_bound"] = [result.parameters[i].at_bound or "" for i in idx]
     meas_e, meas_s, model_e, model_s = [], [], [], []
-    for k, d in enumerate(cells):
+    for k, d in enumerate(result.datasets):
         meas_e.append(springpot_exponent(d.frequency_hz, d.G_storage, d.G_loss))
         meas_s.append(_stiffness(d.frequency_hz, d.G_storage, anchor_hz))
-        Gs, Gl = joint.moduli(d.frequency_hz, dataset=k)
+        Gs, Gl = result.moduli(d.frequency_hz, dataset=k)
         model_e.append(springpot_exponent(d.frequency_hz, Gs, Gl))
-        model_s.append(float(joint.moduli(np.array([anchor_hz]), dataset=k)[0][0]))
+        model_s.append(float(result.moduli(np.array([anchor_hz]), dataset=k)[0][0]))
+    cols.update({"exponent_measured": meas_e, "exponent_model": model_e, "stiffness_measured_Pa": meas_s,
+                 "stiffness_model_Pa": model_s})
+    return dataframe(cols, {"anchor_Hz": anchor_hz, "exponent": "springpot exponent fitted to G', G'' over "
+                                                               f"{EXPONENT_BAND_HZ[0]:g}-{EXPONENT_BAND_HZ[1]:g} Hz"})
+
+
+def _correlations(cells, joint, anchor_hz: float, covariates) -> tuple[dict, tuple]:
+    """The per-cell table and the Spearman correlations, measured and from the population's fitted cells."""
+    df = population_cells(joint, anchor_hz)
+    table = {c: df[c].to_numpy() for c in df.columns}
     if covariates is None:
         found = [comment_values(d) for d in cells]
         keys = [key for key in found[0] if all(key in v for v in found)]
         covariates = {key: [v[key] for v in found] for key in keys}
-    table = {"source": np.array([d.source for d in cells]), "exponent_measured": np.array(meas_e),
-             "exponent_model": np.array(model_e), "stiffness_measured_Pa": np.array(meas_s),
-             "stiffness_model_Pa": np.array(model_s)}
-    for j, name in enumerate(pb.own_names):
-        table[f"{name}_{_unit_suffix(pb.units[pb.n_shared + j])}"] = np.array(
-            [joint.parameters[i].value for i in (pb.own_index(k)[j] for k in range(pb.n_cells))])
-    out = [_correlation("exponent", "stiffness", meas_e, meas_s, model_e, model_s)]
+    meas_s, model_s = table["stiffness_measured_Pa"], table["stiffness_model_Pa"]
+    out = [_correlation("exponent", "stiffness", table["exponent_measured"], meas_s, table["exponent_model"],
+                        model_s)]
     for key, values in covariates.items():
         v = np.asarray(values, dtype=float)
         if v.size != len(cells):

@@ -7,13 +7,14 @@ from .compactness import compactness_markdown
 from .ensemble import ensemble_markdown
 from .fit import fit_markdown
 from .population import population_markdown, study_markdown
+from .population_fit import population_fit_markdown
 from .sensitivity import sensitivity_markdown
 from .studies import no_if_markdown, references_markdown, semiflexible_markdown, stiffening_markdown
 
 __all__ = [
     "fit_markdown", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
-    "ensemble_markdown",
+    "ensemble_markdown", "population_fit_markdown",
 ]
 
 
