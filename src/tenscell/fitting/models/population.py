@@ -52,8 +52,8 @@ __all__ = ["Population", "PopulationProblem", "FittedPopulation", "PopulationIde
 POPULATION_FORMAT = "tenscell-fitted-population"
 #: evaluations of one fit of the cells' own parameters (the shared ones held) in a start or a move
 CELL_FIT_EVALUATIONS = 25
-#: cells of the small population a start fits first (PopulationProblem.initial_guess)
-START_CELLS = 5
+#: cells of the small population a start or a move fits first (PopulationProblem.initial_guess, perturb)
+START_CELLS = 8
 
 
 def cell_parameter_name(name: str, k: int) -> str:
@@ -294,14 +294,22 @@ class PopulationProblem(Problem):
         phi = self.fixed_log.copy()
         phi[: self.n_shared] = phi_ref[self.base_shared]
         phi[self.n_shared:] = np.tile(phi_ref[self.base_own], self.n_cells)
-        phi = np.clip(phi, self.lower, self.upper)
+        return self._from_shared(np.clip(phi, self.lower, self.upper))[self.free]
+
+    def _from_shared(self, phi) -> np.ndarray:
+        """``phi`` moved to the optimum of the small population (:attr:`start_cells`) from its shared values, then
+        every cell's own parameters fitted with those shared values held."""
+        from ..search import local_fit
+
         few = self.start_cells
         if few.size < self.n_cells:
             sub = self.subset(few)
-            sub_phi = sub.fit_cells(np.concatenate([phi[: self.n_shared], np.tile(phi_ref[self.base_own], few.size)]))
-            theta, _, _ = local_fit(sub, sub_phi[sub.free], 4 * CELL_FIT_EVALUATIONS)
+            own = np.concatenate([self.own_index(int(k)) for k in few])
+            sub_phi = sub.fit_cells(np.concatenate([phi[: self.n_shared], phi[own]]))
+            theta, _, _ = local_fit(sub, sub_phi[sub.free], 8 * CELL_FIT_EVALUATIONS)
+            phi = phi.copy()
             phi[: self.n_shared] = sub.full(theta)[: self.n_shared]
-        return self.fit_cells(phi)[self.free]
+        return self.fit_cells(phi)
 
     @property
     def start_cells(self) -> np.ndarray:
@@ -336,13 +344,15 @@ class PopulationProblem(Problem):
             weights=np.concatenate([self.weights[pts], self.weights[n + pts]]))
 
     def perturb(self, theta, rng: np.random.Generator) -> np.ndarray:
-        """A basin-hopping move: the shared parameters jittered by about half a decade, then each cell's own fitted."""
+        """A basin-hopping move: the shared parameters jittered by about half a decade, the small population's
+        optimum from there, then each cell's own parameters fitted (so the search over all cells starts near the
+        new basin's optimum)."""
         phi = self.full(theta)
         shared = np.flatnonzero(self.free[: self.n_shared])
         step = np.minimum(0.5 * LN10, 0.25 * (self.upper[shared] - self.lower[shared]))
         phi[shared] = np.clip(phi[shared] + rng.normal(0.0, 1.0, shared.size) * step, self.lower[shared],
                               self.upper[shared])
-        return self.fit_cells(phi)[self.free]
+        return self._from_shared(phi)[self.free]
 
     def fit_cells(self, phi, max_nfev: int = CELL_FIT_EVALUATIONS) -> np.ndarray:
         """``phi`` with every cell's own parameters fitted and the shared ones held (one sparse least-squares run:
