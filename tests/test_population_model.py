@@ -44,7 +44,7 @@ def mechanism_cells(n=4, noise=0.0, seed=1):
     P = np.exp(rng.normal(math.log(2.0), 0.5, n))
     cells = []
     for k, p in enumerate(P):
-        theta = np.log([shared[n] if n in shared else p for n in pb.names])
+        theta = np.log([shared.get(n, p) for n in pb.names])
         Gs, Gl = pb.moduli_at(theta, F, np.full(F.size, p))
         e = np.exp(rng.normal(0.0, noise * math.log(10), (2, F.size)))
         cells.append(RheologyData(F, Gs * e[0], Gl * e[1], source=f"mcell{k}"))

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,9 +32,13 @@ from .._progress import progress_bar
 from .._results import dataframe, format_repr
 from ..io.data import RheologyData
 from .models import get_model
+from .models.formulas import Formula
 from .models.population import Population
 from .records import information_criteria
 from .scores import _subset
+
+if TYPE_CHECKING:
+    from .result import FitResult
 
 __all__ = ["PopulationScores", "ScoreRow", "Correlation", "score_population", "population_cells", "springpot_exponent",
            "comment_values", "EXPONENT_BAND_HZ", "DEFAULT_SPLITS", "DEFAULT_BASELINES"]
@@ -182,7 +187,7 @@ class PopulationScores:
 
     label: str
     population: Population
-    fit: object
+    fit: FitResult
     rows: tuple
     splits: tuple
     folds: int
@@ -258,10 +263,16 @@ def _errors(Gs, Gl, d: RheologyData) -> np.ndarray:
     return np.where(np.isfinite(r), r, np.inf)
 
 
-def _independent(cells, model, settings) -> list:
+def _fit(data, model, settings: dict, cell=None) -> FitResult:
+    """One fit through the stack with the scores' search settings (``starts``, ``hops``, ``seed``)."""
     from .entry import fit
 
-    return [fit(d, model=model, max_points=None, progress=False, **settings) for d in cells]
+    return fit(data, cell, model=model, starts=settings["starts"], hops=settings["hops"], seed=settings["seed"],
+               max_points=None, progress=False)
+
+
+def _independent(cells, model, settings) -> list:
+    return [_fit(d, model, settings) for d in cells]
 
 
 def _anchor_index(d: RheologyData, anchor_hz: float) -> int:
@@ -285,13 +296,15 @@ def _predict_cell(base, values: dict, own: tuple, d: RheologyData, anchor_hz: fl
 
     def miss(x):
         phi[j] = x
-        r = _errors(*pb.moduli(phi[pb.free]), d)[anchors]
+        Gs, Gl = pb.moduli(phi[pb.free])
+        r = _errors(Gs, Gl, d)[anchors]
         return np.where(np.isfinite(r), r, 10.0)
 
     lo, hi = pb.lower[j], pb.upper[j]
     x0 = np.clip(phi[j], lo + 1e-9 * (hi - lo), hi - 1e-9 * (hi - lo))
     phi[j] = scipy.optimize.least_squares(miss, x0, bounds=(lo, hi), xtol=1e-12, ftol=1e-12, gtol=1e-12).x
-    return np.delete(_errors(*pb.moduli(phi[pb.free]), d), anchors)
+    Gs, Gl = pb.moduli(phi[pb.free])
+    return np.delete(_errors(Gs, Gl, d), anchors)
 
 
 def _folds(n: int, folds: int, seed: int) -> list[np.ndarray]:
@@ -335,8 +348,6 @@ def score_population(cells, population, *, baselines=DEFAULT_BASELINES, splits=D
     -------
     PopulationScores
     """
-    from .entry import fit
-
     population = get_model(population)
     if not isinstance(population, Population) or len(population.per_cell) > 2:
         raise ValueError("score_population: needs a Population with one or two per-cell parameters (a held-out "
@@ -346,7 +357,7 @@ def score_population(cells, population, *, baselines=DEFAULT_BASELINES, splits=D
         raise ValueError(f"folds must lie between 2 and the number of cells ({len(cells)}), got {folds!r}")
     forms = [get_model(b) for b in baselines]
     for b in forms:
-        if b.family != "formula" or "G0" not in [r[0] for r in b.parameter_rows]:
+        if not isinstance(b, Formula) or "G0" not in [r[0] for r in b.parameter_rows]:
             raise ValueError(f"baselines: {b.name!r} is not a structure-free formula with a scale G0")
     settings = dict(starts=starts, hops=hops, seed=seed)
     steps = 1 + len(forms) + len(splits) * (1 + len(forms)) + folds
@@ -355,7 +366,7 @@ def score_population(cells, population, *, baselines=DEFAULT_BASELINES, splits=D
             bar.update(1)
             return x
 
-        joint = step(fit(cells, cell, model=population, progress=False, max_points=None, **settings))
+        joint = step(_fit(cells, population, settings, cell))
         independent = [step(_independent(cells, b, settings)) for b in forms]
         held_f = [step(_heldout_frequencies(cells, population, forms, lo, hi, settings, cell, bar))
                   for lo, hi in splits]
@@ -383,30 +394,29 @@ def _row(name, kind, fits, sigma_known: bool, held_f, held_c) -> ScoreRow:
 
 def _heldout_frequencies(cells, population, forms, lo, hi, settings, cell, bar) -> list[float]:
     """RMS at each cell's points outside ``[lo, hi]`` Hz of the population and of each formula, all trained inside."""
-    from .entry import fit
-
-    parts = [_window(d, lo, hi) for d in cells]
-    use = [k for k, (tr, te) in enumerate(parts) if tr is not None and te is not None]
-    train = [parts[k][0] for k in use]
-    test = [parts[k][1] for k in use]
-    joint = fit(train, cell, model=population, progress=False, max_points=None, **settings)
+    pairs = [(tr, te) for tr, te in (_window(d, lo, hi) for d in cells) if tr is not None and te is not None]
+    train, test = [tr for tr, _ in pairs], [te for _, te in pairs]
+    joint = _fit(train, population, settings, cell)
     out = [_rms([_errors(*joint.moduli(t.frequency_hz, dataset=i), t) for i, t in enumerate(test)])]
     for b in forms:
         fits = _independent(train, b, settings)
-        out.append(_rms([_errors(*f.moduli(t.frequency_hz), t) for f, t in zip(fits, test)]))
+        out.append(_rms([_heldout_errors(f, t) for f, t in zip(fits, test)]))
         bar.update(1)
     return out
 
 
+def _heldout_errors(result, held: RheologyData) -> np.ndarray:
+    Gs, Gl = result.moduli(held.frequency_hz)
+    return _errors(Gs, Gl, held)
+
+
 def _heldout_cells(cells, population, forms, independent, joint, folds, anchor_hz, settings, cell, step):
     """k-fold: RMS of the held-out cells' predicted residuals, for the population and each formula."""
-    from .entry import fit
-
     own = population.per_cell
     errors: list[list[np.ndarray]] = [[] for _ in range(1 + len(forms))]
     for held in _folds(len(cells), int(folds), int(settings["seed"])):
         rest = [d for k, d in enumerate(cells) if k not in set(held.tolist())]
-        part = step(fit(rest, cell, model=population, progress=False, max_points=None, **settings))
+        part = step(_fit(rest, population, settings, cell))
         # the shared values, and the training cells' median own values as the start
         typical = part.problem.typical_phi(part.problem.full(part.theta))
         values = dict(zip(part.problem.cells[0].names, np.exp(typical)))

@@ -410,7 +410,7 @@ def _jacobian_pattern(pb: PopulationProblem) -> tuple:
         pts = np.flatnonzero(pb.dataset_index == k)
         row_k = np.concatenate([pts, n + pts])
         index = np.array([shared_pos[i] if i in shared_pos else pb.n_shared + k * pb.n_own + own_pos[i]
-                          for i in base_free], dtype=int)
+                          for i in base_free.tolist()], dtype=int)
         col = free_col[index]
         kept = col >= 0
         order.append(row_k)
@@ -481,7 +481,7 @@ def make_population_problem(data, population: Population, cell=None, *, bounds: 
     shared = np.array([i for i in range(first.n_params) if i not in set(own.tolist())], dtype=int)
     lows = np.array([pb.lower for pb in cells])
     highs = np.array([pb.upper for pb in cells])
-    n_cells, n_own = len(cells), own.size
+    n_cells = len(cells)
     names = [first.names[i] for i in shared]
     units = [first.units[i] for i in shared]
     kinds = [first.kinds[i] for i in shared]
@@ -624,7 +624,7 @@ def _block_analysis(problem, pars, r, B_all, blocks, cell_rows, shared, analysed
     B_red = np.zeros_like(B_all)
     G, own_rank, own_null = [], 0, []
     h = np.zeros(r.size)
-    for (own, A), (U, s, Vt), rows in zip(blocks, svds, cell_rows):
+    for (own, _), (U, s, Vt), rows in zip(blocks, svds, cell_rows):
         rk = int(np.sum(s > cut)) if top > 0 else 0
         Uk, Bk = U[:, :rk], B_all[rows]
         B_red[rows] = Bk - Uk @ (Uk.T @ Bk)
@@ -660,7 +660,7 @@ def _block_analysis(problem, pars, r, B_all, blocks, cell_rows, shared, analysed
         cell_names += [problem.names[i] for i in own]
         cell_se.append(_errors(cov, share, sigma)[0])
         cell_null.append(share)
-    bound = [i for i in np.flatnonzero(problem.free & ~analysed)]
+    bound = list(np.flatnonzero(problem.free & ~analysed))
     excluded = [(pars[i].name, f"{pars[i].at_bound} bound") for i in bound]
     n_shared_excluded = sum(i < problem.n_shared for i in bound)
     return PopulationIdentifiability(
@@ -758,7 +758,7 @@ class FittedPopulation(FittedModel):
                 pre[name] = v[int(k)]
             else:
                 raise ValueError(f"per-cell parameter {name!r} is not a value of {self.typical.describe()}")
-        return dataclasses.replace(self.typical, values=values, source=self.cells[int(k)], **pre)  # type: ignore
+        return dataclasses.replace(self.typical, values=values, source=self.cells[int(k)], **pre)  # type: ignore[type-var]
 
     def moduli(self, f_hz, prestress_pa: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         return self.typical.moduli(f_hz, prestress_pa)
@@ -780,7 +780,7 @@ class FittedPopulation(FittedModel):
         if not isinstance(spec, Population):
             raise FitFileError(f"model.population: a {type(spec).__name__}, not a population")
         typ = field_of(obj, "typical", dict)
-        kind = FITTED_KINDS.get(typ.get("format"))  # type: ignore[arg-type]
+        kind = FITTED_KINDS.get(typ.get("format"))
         if kind is None or kind is cls:
             raise FitFileError(f"model.typical.format: {typ.get('format')!r} is not a fitted model of one cell")
         typical = kind.from_dict(typ)
