@@ -40,7 +40,7 @@ import scipy.sparse
 
 from ..._results import format_repr
 from ...io.data import DataError, RheologyData
-from ..identifiability import Identifiability, NULL_SHARE, _combinations, _sigma
+from ..identifiability import Identifiability, _combinations, _sigma, errors_from_covariance
 from ..parameters import as_datasets
 from ..problem import LN10, Problem
 from .base import FITTED_KINDS, FitFileError, FitModel, FittedModel, field_of, model_from_dict
@@ -648,7 +648,7 @@ def _block_analysis(problem, pars, r, B_all, blocks, cell_rows, shared, analysed
     Minv = np.linalg.inv(M) if M.size else M
     null_share = np.sqrt(np.einsum("ij,jk,ik->i", V0, Minv, V0)) if V0.size else np.zeros(shared.size)
     cov_s = (V[:, :rank] / ss[:rank] ** 2) @ V[:, :rank].T if rank else np.zeros((shared.size, shared.size))
-    se, corr = _errors(cov_s, null_share, sigma)
+    se, corr = errors_from_covariance(cov_s, null_share, sigma)
     cell_names, cell_se, cell_null = [], [], []
     for (own, _), (_, s, Vt), g, gv0, nn in zip(blocks, svds, G, GV0, own_null):
         if not own.size:
@@ -658,7 +658,7 @@ def _block_analysis(problem, pars, r, B_all, blocks, cell_rows, shared, analysed
         via_shared = np.einsum("ij,jk,ik->i", gv0, Minv, gv0) if gv0.size else np.zeros(own.size)
         share = np.sqrt(nn**2 + via_shared)
         cell_names += [problem.names[i] for i in own]
-        cell_se.append(_errors(cov, share, sigma)[0])
+        cell_se.append(errors_from_covariance(cov, share, sigma)[0])
         cell_null.append(share)
     bound = list(np.flatnonzero(problem.free & ~analysed))
     excluded = [(pars[i].name, f"{pars[i].at_bound} bound") for i in bound]
@@ -672,19 +672,6 @@ def _block_analysis(problem, pars, r, B_all, blocks, cell_rows, shared, analysed
         cell_names=tuple(cell_names), cell_standard_errors=np.concatenate(cell_se) if cell_se else np.zeros(0),
         cell_null_share=np.concatenate(cell_null) if cell_null else np.zeros(0),
         cell_excluded=tuple(excluded[n_shared_excluded:]))
-
-
-def _errors(cov: np.ndarray, null_share: np.ndarray, sigma: float | None) -> tuple[np.ndarray, np.ndarray]:
-    """Standard errors of ln (inf where not determined, NaN where σ is unknown) and correlations from a covariance
-    in units of σ², by the rule of :mod:`tenscell.fitting.identifiability`."""
-    d = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    determinable = null_share <= NULL_SHARE
-    se = np.where(determinable, d * (sigma if sigma is not None else np.nan), np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        corr = cov / np.outer(d, d)
-    corr[~determinable, :] = np.nan
-    corr[:, ~determinable] = np.nan
-    return se, corr
 
 
 # ---------------------------------------------------------------------------------------
