@@ -474,8 +474,9 @@ def _joint_model(args, datasets):
         raise
 
 
-#: model evaluations of one least-squares run of a joint fit (Xie cells: 37-45 per run for every model tried), and
-#: the cells' own fit in each start or move (tenscell.fitting.models.population.CELL_FIT_EVALUATIONS)
+#: evaluations of every cell in one start or move of a joint fit, at most: the search's run over all cells (12-54
+#: in bench/bench_popmodel.py, 59 Xie cells and 200 synthetic ones), and the cells' own fit before it (at most
+#: tenscell.fitting.models.population.CELL_FIT_EVALUATIONS = 25)
 _EVALUATIONS_PER_RUN = 45 + 25
 
 
@@ -485,8 +486,12 @@ def _joint_cost(problem, args, jobs: int) -> Cost:
 
     from .._threads import limited
 
-    theta = problem.initial_guess(np.random.default_rng(args.seed))
-    phi = problem.full(theta)
+    # a realistic point at no fitting cost: the base model's own start on the reference cell, shared by every cell
+    ref = problem.cells[problem.reference_cell]
+    phi_ref = ref.full(ref.initial_guess(np.random.default_rng(args.seed)))
+    phi = problem.fixed_log.copy()
+    phi[: problem.n_shared] = phi_ref[problem.base_shared]
+    phi[problem.n_shared:] = np.tile(phi_ref[problem.base_own], problem.n_cells)
 
     def once():
         problem._jacobian_from(problem._evaluate_constrained(phi, jac=True))
@@ -495,8 +500,9 @@ def _joint_cost(problem, args, jobs: int) -> Cost:
         per = measure(once, max_calls=3)
     runs = args.starts * (1 + args.hops)
     nnz = problem.sparsity().nnz
+    # memory: the Jacobian's values and indices in COO and CSR form, a few copies (about 100 bytes per nonzero)
     return Cost("evaluation", runs * _EVALUATIONS_PER_RUN, per, min(jobs, args.starts),
-                memory_bytes=64.0 * nnz * 4, detail=f"of {problem.n_cells} cells (at most; {args.starts} start(s) × "
+                memory_bytes=100.0 * nnz, detail=f"of {problem.n_cells} cells (at most; {args.starts} start(s) × "
                                                      f"{1 + args.hops} run(s))")
 
 
