@@ -39,6 +39,8 @@ FIT_NULL_MEANS = (
     "computed number that is not finite: its value is listed under non_finite")
 #: other starts whose RMS is within this factor of the best (or the tolerance) count as fitting "as well"
 AS_WELL = 1.1
+#: data sets the repr lists by name (a population's cells beyond them are summarized)
+_REPR_SETS = 6
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -409,7 +411,10 @@ class FitResult:
 
     # -- conventions ----------------------------------------------------------------------
     def __repr__(self) -> str:
-        sets = ", ".join(f"{_short(f.data.source)} {f.rms_log10_error:.3g}" for f in self.fits)
+        sets = ", ".join(f"{_short(f.data.source)} {f.rms_log10_error:.3g}" for f in self.fits[:_REPR_SETS])
+        if len(self.fits) > _REPR_SETS:  # a population of cells: the first few, the worst, the count
+            worst = max(self.fits, key=lambda f: f.rms_log10_error)
+            sets += f", … (worst {_short(worst.data.source)} {worst.rms_log10_error:.3g}; {len(self.fits)} in all)"
         return format_repr(
             f"FitResult: {self.label} ({self.problem.describe()}), {len(self.datasets)} data set(s), "
             f"{sum(d.n for d in self.datasets)} points, {self.problem.n_free} free parameters",
