@@ -521,7 +521,7 @@ def run_joint(args) -> int:
     sources = _with_column_map(read_sources(args.input), data_options_from_args(args))
     datasets = _joint_data(sources)
     population, problem = _joint_model(args, datasets)
-    jobs = jobs_for(args.starts, args.workers or None)
+    jobs = 1 if args.workers == 0 else jobs_for(args.starts, args.workers)  # --workers 0: in this process
     cost = check(_joint_cost(problem, args, jobs), "INPUT", hint="fewer cells, --starts or --hops")
     if cost.seconds > 10:
         announce(cost)

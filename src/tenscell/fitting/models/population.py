@@ -320,7 +320,7 @@ class PopulationProblem(Problem):
         return np.sort(order[np.round(np.linspace(0, self.n_cells - 1, START_CELLS)).astype(int)])
 
     def subset(self, cells) -> PopulationProblem:
-        """The same population over the cells ``cells`` (indices), its shared parameters held as here."""
+        """The same population over the cells ``cells`` (indices), with the same parameters free and held."""
         cells = np.asarray(cells, dtype=int)
         own = np.concatenate([self.own_index(int(k)) for k in cells]) if cells.size else np.zeros(0, int)
         keep = np.concatenate([np.arange(self.n_shared), own])
