@@ -253,6 +253,23 @@ def test_scores_of_a_population_generated_by_the_population_model():
     assert ec.n_cells == 10 and -1 <= ec.model <= 1
     assert sc.correlation("stiffness", "aspect_ratio").n_cells == 10
     assert sc.to_dataframe().shape[0] == 3 and "notes" in sc.to_dict()
+    from tenscell.reports.population_fit import population_fit_markdown
+
+    text = population_fit_markdown(sc.fit, table, scores=sc)
+    assert "Against independent per-cell formulas" in text and f"`{FORMULA}`" in text and sc.notes[0] in text
+
+
+def test_scores_with_two_parameters_per_cell_anchor_two_numbers():
+    cells, _ = formula_cells(6, noise=0.01, seed=6)
+    sc = score_population(cells, Population(FORMULA, per_cell=("G0", "eta")), folds=3, starts=1, hops=0,
+                          baselines=("structural-damping+newtonian",), progress=False)
+    assert math.isfinite(sc.rows[0].heldout_cells) and sc.rows[0].n_params == 1 + 2 * 6
+    assert any("two measured numbers" in n for n in sc.notes)
+    with pytest.raises(ValueError, match="one or two per-cell"):
+        score_population(cells, Population(FORMULA, per_cell=("G0", "eta", "alpha")), progress=False)
+    with pytest.raises(ValueError, match="scale G0"):
+        score_population(cells, Population(FORMULA, per_cell=("G0",)), baselines=("springpot+visc",),
+                         progress=False)
 
 
 @pytest.mark.skipif(not XIE.is_dir(), reason="the Xie et al. cells are not beside the repository (../shared/data)")

@@ -520,9 +520,14 @@ def _notes(joint, correlations) -> tuple:
     bound = [p.name for p in joint.parameters[: pb.n_shared] if p.at_bound]
     if bound:
         notes.append(f"Shared parameter(s) at a bound: {', '.join(bound)} (a limit, not an estimate).")
-    n_own_bound = sum(1 for p in joint.parameters[pb.n_shared:] if p.at_bound)
+    n_own_bound = sum(any(joint.parameters[i].at_bound for i in pb.own_index(k)) for k in range(pb.n_cells))
     if n_own_bound:
-        notes.append(f"{n_own_bound} of {pb.n_cells} cells have their {own} at a bound.")
+        notes.append(f"{n_own_bound} of {pb.n_cells} cells have {'their' if pb.n_own == 1 else 'one of their'} "
+                     f"{own} at a bound.")
+    if pb.n_own == 2:
+        notes.append(f"With two parameters per cell ({own}) each cell's exponent and stiffness are both fitted to it: "
+                     "their correlation across cells restates the data; a held-out cell's two are set by two "
+                     "measured numbers (its G′ and G″ at the anchor frequency), not one.")
     ident = joint.identifiability()
     loose = [n for n, se in zip(ident.names, ident.standard_errors) if not (np.isfinite(se) and se <= 0.1)]
     if loose:

@@ -132,8 +132,9 @@ def population_scores_markdown(scores) -> list[str]:
     return ["## Against independent per-cell formulas", "",
             f"{scores.label or 'The cells'}: the population model and per-cell structure-free formulas fitted "
             "cell by cell, on the same residuals (BIC), at each cell's frequencies outside each training window, and "
-            f"on held-out cells whose own parameter is set by their measured G′ at {num(scores.anchor_hz)} Hz (the "
-            "formulas: their other parameters at the training cells' median).", "",
+            f"on held-out cells whose own parameter{'s are' if len(scores.population.per_cell) > 1 else ' is'} set "
+            f"by their measured {'G′ and G″' if len(scores.population.per_cell) > 1 else 'G′'} at "
+            f"{num(scores.anchor_hz)} Hz (the formulas: their other parameters at the training cells' median).", "",
             table(head, rows), "",
             "Spearman rank correlations across cells (exponent: a springpot fitted to G′, G″ over 1–100 Hz; "
             f"stiffness: G′ at {num(scores.anchor_hz)} Hz):", "",
