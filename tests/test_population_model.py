@@ -193,7 +193,7 @@ def test_fitted_population_round_trips_and_answers_as_its_cells(tmp_path):
     m = load_fit(path)
     assert isinstance(m, FittedPopulation) and m.n_cells == 5
     for k in range(5):
-        np.testing.assert_allclose(m.cell(k).moduli(F)[0], res.moduli(F, dataset=k)[0], rtol=1e-12)
+        np.testing.assert_allclose(m.cell_model(k).moduli(F)[0], res.moduli(F, dataset=k)[0], rtol=1e-12)
     typical = np.exp(np.median(np.log(m.per_cell["G0"])))
     assert m.typical.values["G0"] == pytest.approx(typical, rel=1e-12)
     np.testing.assert_allclose(m.moduli(F)[0], res.moduli(F)[0], rtol=1e-12)

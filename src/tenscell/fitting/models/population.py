@@ -26,7 +26,7 @@ time linear in the number of cells; the full Jacobian's singular value decomposi
 in the number of residuals.
 
 The fitted model (:class:`FittedPopulation`) answers as its typical cell: the shared parameters with each per-cell
-parameter at its median over the cells (geometric mean of the middle); :meth:`FittedPopulation.cell` gives any
+parameter at its median over the cells (of an even number, the geometric mean of the middle two); :meth:`FittedPopulation.cell_model` gives any
 cell's own fitted model.
 """
 from __future__ import annotations
@@ -730,10 +730,15 @@ class FittedPopulation(FittedModel):
     def n_cells(self) -> int:
         return len(self.cells)
 
+    @property
+    def cell(self):
+        """The typical cell's reference cell (None for a structure-free formula)."""
+        return getattr(self.typical, "cell", None)
+
     def describe(self) -> str:
         return f"the typical cell of the fitted population {self.population.name} ({len(self.cells)} cells)"
 
-    def cell(self, k: int) -> FittedModel:
+    def cell_model(self, k: int) -> FittedModel:
         """Cell ``k``'s own fitted model: the typical cell with cell ``k``'s per-cell values."""
         if not 0 <= int(k) < len(self.cells):
             raise ValueError(f"cell must lie in 0..{len(self.cells) - 1}, got {k!r}")
