@@ -199,6 +199,22 @@ def test_fitted_population_round_trips_and_answers_as_its_cells(tmp_path):
     np.testing.assert_allclose(m.moduli(F)[0], res.moduli(F)[0], rtol=1e-12)
 
 
+def test_fitted_mechanism_population_answers_every_consumer_as_its_typical_cell():
+    cells, _, _ = mechanism_cells(3)
+    pb = Population("springpot-tension+visc", per_cell=("P",)).problem(cells)
+    theta = pb.initial_guess(np.random.default_rng(0))
+    m = pb.fitted(theta, None)
+    typical = m.typical
+    assert m.cell is typical.cell and m.structural and m.viscosity == typical.viscosity
+    P = float(np.median(m.per_cell["P"]))
+    assert m.prestress() == pytest.approx(P, rel=1e-12)
+    for a, b in zip(m.voigt_tendons(P), typical.voigt_tendons(P)):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_allclose(m.linear(P_N=P).K0, typical.linear(P_N=P).K0)
+    np.testing.assert_allclose(m.cell_model(1).moduli(F)[0], pb.dataset_moduli_at(theta, F, m.per_cell["P"][1], 1)[0],
+                               rtol=1e-12)
+
+
 def test_bad_populations_are_refused_in_one_line():
     cells, _ = formula_cells(3)
     with pytest.raises(ValueError, match="per_cell: G1 is not a parameter"):

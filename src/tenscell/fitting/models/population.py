@@ -752,14 +752,22 @@ class FittedPopulation(FittedModel):
                 raise ValueError(f"per-cell parameter {name!r} is not a value of {self.typical.describe()}")
         return dataclasses.replace(self.typical, values=values, source=self.cells[int(k)], **pre)  # type: ignore[type-var]
 
+    # every consumer of a fitted model gets the typical cell's answers
     def moduli(self, f_hz, prestress_pa: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         return self.typical.moduli(f_hz, prestress_pa)
+
+    @property
+    def viscosity(self) -> float:
+        return self.typical.viscosity
 
     def tendon_law(self, assignment: int = 0):
         return self.typical.tendon_law(assignment)
 
     def linear(self, prestress_pa: float | None = None, *, P_N: float | None = None, **kw):
         return self.typical.linear(prestress_pa, P_N=P_N, **kw)
+
+    def voigt_tendons(self, P_N: float) -> tuple[np.ndarray, np.ndarray]:
+        return self.typical.voigt_tendons(P_N)
 
     def to_dict(self) -> dict:
         return {"format": POPULATION_FORMAT, "population": self.population.to_dict(),
