@@ -5,7 +5,8 @@ In the manner of lmfit, every fit has the same layers:
 - :mod:`~tenscell.fitting.models`: what is fitted — a :class:`~tenscell.fitting.models.base.FitModel` builds its
   problem against data; one registry (:data:`MODELS`, :func:`get_model`) holds the paper's Voigt cell
   (:mod:`~.models.voigt`), the few-parameter mechanisms (:mod:`~.models.mechanism`) and the structure-free
-  formulas every tensegrity has to beat (:mod:`~.models.formulas`);
+  formulas every tensegrity has to beat (:mod:`~.models.formulas`); a :class:`Population` fits any of them to many
+  cells at once, with shared and per-cell parameters (:mod:`~.models.population`);
 - :mod:`~tenscell.fitting.parameters` and :mod:`~tenscell.fitting.problem`: the parameters' layout (names, units,
   bounds, fixes, the data's prestress groups) and the protocol every problem follows (residuals, Jacobian, starts,
   moves, and what the result reads);
@@ -22,7 +23,9 @@ The Markdown report is :func:`tenscell.reports.fit.fit_markdown`.
 """
 from .entry import fit
 from .fitted import FittedCell, FittedFormula, FittedMechanism, FittedModel, load_fit
-from .models import GROUPS, MODELS, RECOMMENDED, FitModel, Formula, Mechanism, VoigtModel, get_model, model_names
+from .models import (GROUPS, MODELS, RECOMMENDED, FitModel, Formula, Mechanism, Population, VoigtModel, get_model,
+                     model_names)
+from .models.population import FittedPopulation
 from .models.catalog import MECHANISMS, PER_TENDON_VOIGT, mechanism_names
 from .models.mechanism import Field
 from .models.voigt import DAMPING_MODES, TENDON_MODES, FitProblem, make_problem, required_points
@@ -42,6 +45,7 @@ __all__ = [
     "VoigtModel",
     "Mechanism",
     "Formula",
+    "Population",
     "Field",
     "MODELS",
     "GROUPS",
@@ -62,6 +66,7 @@ __all__ = [
     "FittedCell",
     "FittedMechanism",
     "FittedFormula",
+    "FittedPopulation",
     "load_fit",
     "PrestressActivity",
     "prestress_activity",

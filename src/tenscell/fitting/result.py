@@ -37,6 +37,8 @@ FIT_NULL_MEANS = (
     "computed number that is not finite: its value is listed under non_finite")
 #: other starts whose RMS is within this factor of the best (or the tolerance) count as fitting "as well"
 AS_WELL = 1.1
+#: data sets the repr lists by name (a population's cells beyond them are summarized)
+_REPR_SETS = 6
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -294,9 +296,12 @@ class FitResult:
         f = np.atleast_1d(np.asarray(f_hz, dtype=float))
         if prestress_pa is not None:
             Pm = np.atleast_1d(self.prestress_model(prestress_pa))
+            if dataset is None:
+                return self.problem.moduli_at(self.theta, f, Pm)
         else:
-            Pm = self.prestress_model(dataset=self.single_prestress_dataset() if dataset is None else dataset)
-        return self.problem.moduli_at(self.theta, f, Pm)
+            dataset = self.single_prestress_dataset() if dataset is None else dataset
+            Pm = self.prestress_model(dataset=dataset)
+        return self.problem.dataset_moduli_at(self.theta, f, Pm, dataset)
 
     def _default_prestress_N(self) -> float:
         """Model prestress (N) of the first single-prestress data set, else at the first data set's median."""
@@ -333,15 +338,11 @@ class FitResult:
         the default tolerance's analysis is computed once."""
         if rtol == 1e-8:
             return self._identifiability
-        from .identifiability import identifiability
-
-        return identifiability(self.problem, self.theta, sigma_known=self.sigma_known, rtol=rtol)
+        return self.problem.identifiability(self.theta, sigma_known=self.sigma_known, rtol=rtol)
 
     @cached_property
     def _identifiability(self):
-        from .identifiability import identifiability
-
-        return identifiability(self.problem, self.theta, sigma_known=self.sigma_known, rtol=1e-8)
+        return self.problem.identifiability(self.theta, sigma_known=self.sigma_known, rtol=1e-8)
 
     @property
     def standard_errors(self) -> tuple[tuple[float | None, str], ...]:
@@ -408,7 +409,10 @@ class FitResult:
 
     # -- conventions ----------------------------------------------------------------------
     def __repr__(self) -> str:
-        sets = ", ".join(f"{_short(f.data.source)} {f.rms_log10_error:.3g}" for f in self.fits)
+        sets = ", ".join(f"{_short(f.data.source)} {f.rms_log10_error:.3g}" for f in self.fits[:_REPR_SETS])
+        if len(self.fits) > _REPR_SETS:  # a population of cells: the first few, the worst, the count
+            worst = max(self.fits, key=lambda f: f.rms_log10_error)
+            sets += f", … (worst {_short(worst.data.source)} {worst.rms_log10_error:.3g}; {len(self.fits)} in all)"
         return format_repr(
             f"FitResult: {self.label} ({self.problem.describe()}), {len(self.datasets)} data set(s), "
             f"{sum(d.n for d in self.datasets)} points, {self.problem.n_free} free parameters",
