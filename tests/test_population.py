@@ -453,6 +453,9 @@ def test_plan_says_what_it_measured_and_decided():
     assert "16 more tasks of 0.14 s CPU" in here and "0.3 busy" in here and "in this process" in here
     away = _engine.plan(200, 0.17, _use(2, 0.0)).describe()
     assert "cluster of 2 workers" in away and "\n" not in away
+    assert "(one CPU)" in _engine.plan(10**4, 1.0, _use(1, 0.0)).describe()
+    assert "fewer than 2 CPUs are free" in _engine.plan(10**4, 1.0, _use(4, 2.8)).describe()
+    assert "start-up" in _engine.plan(16, 0.14, _use(4, 0.0)).describe()
 
 
 def test_batch_size():

@@ -352,9 +352,13 @@ class Plan:
             return (f"{head}: a local Dask cluster of {self.workers} workers (about {self.cluster_s:.0f} s against "
                     f"{self.here_s:.0f} s in this process)")
         if self.cluster_s is None:
-            why = ("fewer than 2 CPUs are free" if u.free < 1.5 else
-                   f"each worker would get less than {WORK_PER_START:g}x its start-up "
-                   f"(about {WORKER_START_CPU_S:g} s CPU) in work")
+            if u.cpus < 2:
+                why = "one CPU"
+            elif int(u.free + 0.5) < 2:
+                why = "fewer than 2 CPUs are free"
+            else:
+                why = (f"each worker would get less than {WORK_PER_START:g}x its start-up (about "
+                       f"{WORKER_START_CPU_S:g} s CPU) in work")
         else:
             why = f"about {self.cluster_s:.1f} s on a local Dask cluster against {self.here_s:.1f} s here"
         return f"{head}: they run in this process ({why})"
@@ -425,7 +429,8 @@ def run_tasks(fn: Callable, items: Iterable[tuple[object, tuple]], *, client=Non
         yield from ((tag, fn(*args)) for tag, args in items)
         return
     deciding = client is None and scheduler is None and workers is None
-    window, cpu, done = CpuWindow(), [], 0
+    window, done = CpuWindow(), 0
+    cpu: list[float] = []  # CPU seconds of each task run here
     # tasks here until the sample is long enough to judge (deciding) or the first one (sizing the batches)
     while done < len(items) and (not cpu or (deciding and time.perf_counter() - window.started < SAMPLE_S)):
         tag, args = items[done]
