@@ -97,8 +97,8 @@ def _child_ensemble(workers: str) -> dict:
     import numpy as np
 
     from tenscell import paper_cell
-    from tenscell.fitting.mechanism_fit import FittedMechanism
-    from tenscell.fitting.mechanisms import MECHANISMS
+    from tenscell.fitting.fitted import FittedMechanism
+    from tenscell.fitting.models.catalog import MECHANISMS
     from tenscell.population import mechanism_ensemble
 
     model = FittedMechanism(MECHANISMS["voigt-lognormal-damping"], paper_cell(),
@@ -166,9 +166,21 @@ def _child_study(draws: int, workers: str) -> dict:
     return {"cpu_before_run_s": c0, "wall_s": wall, "notify": lines}
 
 
+def _child_warm() -> dict:
+    """Import what the runs and their workers import, writing the byte-code cache (as an installation has it)."""
+    import importlib
+
+    for name in ("distributed", "distributed.worker", "distributed.nanny", "tenscell.population.run",
+                 "tenscell.population.ensemble", "tenscell.population.studies", "tenscell.fitting",
+                 "tenscell.sensitivity", "scipy.optimize", "pandas", "pyarrow.parquet"):
+        importlib.import_module(name)
+    return {"cpu_before_run_s": 0.0}
+
+
 def child(argv: list[str]) -> None:
     kind, *rest = argv
-    answer = {"fit": lambda: _child_fit(int(rest[0]), int(rest[1]), int(rest[2]), rest[3]),
+    answer = {"warm": _child_warm,
+              "fit": lambda: _child_fit(int(rest[0]), int(rest[1]), int(rest[2]), rest[3]),
               "ensemble": lambda: _child_ensemble(rest[0]),
               "costs": _child_cluster_costs,
               "study": lambda: _child_study(int(rest[0]), rest[1])}[kind]()
@@ -303,7 +315,7 @@ def main() -> None:
           "run's processes (its Dask workers included)", flush=True)
     with tempfile.TemporaryDirectory() as cache:
         env = child_env(cache)
-        run_child(env, "ensemble", "0")  # writes the byte-code cache
+        run_child(env, "warm")  # writes the byte-code cache
         parts = set(args.parts.split(","))
         runs = fits(env, args) if parts & {"fits", "defaults"} else {}
         if "costs" in parts:
