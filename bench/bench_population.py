@@ -255,6 +255,15 @@ def _engine_constant(name: str) -> float:
     return float(getattr(_engine, name))
 
 
+def _quiet_plan(tasks: int, task_cpu_s: float) -> str:
+    """What :func:`tenscell.population._engine.plan` decides for this work with no CPU busy elsewhere."""
+    from tenscell._parallel import CpuUse, usable_cpus
+    from tenscell.population import _engine
+
+    use = CpuUse(wall_s=0.0, cpu_s=0.0, cpus=usable_cpus(), busy_elsewhere=0.0, source="assumed")
+    return _engine.plan(tasks, task_cpu_s, use).describe()
+
+
 def defaults(env, args, loop_fit: dict) -> None:
     fit = ("fit", str(args.cells), str(args.starts), str(args.hops))
     loads = [("the machine's own load", 0)] + ([] if args.quick else [("high load: 2 busy loops started here", 2)])
@@ -264,6 +273,9 @@ def defaults(env, args, loop_fit: dict) -> None:
             here = loop_fit if not spinners else run_child(env, *fit, "0")
             d = run_child(env, *fit, "default")
             print(f"  fit-population, {args.cells} cells: {_decision(d)}")
+            if not spinners:
+                print(f"    the same work on this machine with no other load (the engine's model, not a run): "
+                      f"{_quiet_plan(args.cells - 1, here['cpu_s'] / args.cells)}")
             ratio = d["wall_s"] / here["wall_s"]
             print(f"    default: {d['workers']} worker(s), wall {d['wall_s']:.2f} s, CPU {d['cpu_s']:.2f} s; in this "
                   f"process: wall {here['wall_s']:.2f} s, CPU {here['cpu_s']:.2f} s -> default/here {ratio:.2f}x wall "
@@ -274,6 +286,8 @@ def defaults(env, args, loop_fit: dict) -> None:
                   f"in this process: wall {e_here['wall_s']:.2f} s, CPU {e_here['cpu_s']:.2f} s; stays in this "
                   f"process (goal): {_verdict(e_def['workers'] == 0)}")
             if not spinners:
+                chunks = ENSEMBLE["K"] // 50
+                print(f"    with no other load (the engine's model): {_quiet_plan(chunks - 1, e_here['cpu_s'] / chunks)}")
                 e_two = run_child(env, "ensemble", "2")
                 print(f"    on 2 workers (what the default avoids): wall {e_two['wall_s']:.2f} s, CPU "
                       f"{e_two['cpu_s']:.2f} s = {e_two['cpu_s'] / e_here['cpu_s']:.2f}x the CPU, "
