@@ -468,14 +468,31 @@ def test_batch_size():
     assert _engine.batch_size(10**4, 0.2, 2) == round(_engine.TASK_SECONDS / 0.2)
 
 
+def test_cpu_window_subtracts_this_process_from_the_busy_time(monkeypatch):
+    """Over 1 s on 2 CPUs (200 ticks), 150 busy ticks of which this process's 0.5 s is 50: the others used 1 CPU."""
+    ticks = iter([(1000, 5000), (1150, 5200)])
+    clock = iter([10.0, 11.0])
+    cpu = iter([3.0, 3.5])
+    monkeypatch.setattr(_parallel, "_affinity", lambda: {0, 1})
+    monkeypatch.setattr(_parallel, "_cpu_ticks", lambda cpus: next(ticks))
+    monkeypatch.setattr(_parallel, "_CLK_TCK", 100.0)
+    monkeypatch.setattr(_parallel.time, "perf_counter", lambda: next(clock))
+    monkeypatch.setattr(_parallel.time, "process_time", lambda: next(cpu))
+    use = _parallel.CpuWindow().stop()
+    assert (use.source, use.cpus, use.wall_s, use.cpu_s) == ("/proc/stat", 2, 1.0, 0.5)
+    assert use.busy_elsewhere == pytest.approx(1.0) and use.free == pytest.approx(1.0)
+
+
 def test_cpu_window_sees_this_process_and_the_others():
     """This process's own busy loop is not counted as other work; a busy child process is."""
     w = _parallel.CpuWindow()
-    t = time.perf_counter()
-    while time.perf_counter() - t < 0.3:
+    t = time.process_time()
+    while time.process_time() - t < 0.2:  # 0.2 s of this process's CPU, however long a loaded machine takes
         pass
     mine = w.stop()
-    assert mine.cpu_s > 0.1 and 0.0 <= mine.busy_elsewhere <= mine.cpus
+    assert mine.cpu_s >= 0.2 and 0.0 <= mine.busy_elsewhere <= mine.cpus
+    # others' share and this process's together fill at most every CPU (10 ms ticks: a little rounding)
+    assert mine.busy_elsewhere + mine.cpu_s / mine.wall_s <= mine.cpus + 0.25
     if mine.source != "/proc/stat" or mine.cpus < 2:
         pytest.skip("no /proc/stat or one CPU: the load average stands in for the measurement")
     spin = subprocess.Popen([sys.executable, "-c", "import time\nt = time.time()\nwhile time.time() - t < 5: pass"])
