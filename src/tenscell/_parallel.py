@@ -106,6 +106,7 @@ class CpuWindow:
         self._stat = _cpu_ticks(self._cpus)
 
     def stop(self) -> CpuUse:
+        """What was used from construction until now (the window can be stopped more than once)."""
         wall, cpu = time.perf_counter() - self.started, time.process_time() - self._cpu
         after = _cpu_ticks(self._cpus)
         n = len(self._cpus)
