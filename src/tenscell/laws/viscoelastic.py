@@ -45,7 +45,6 @@ from functools import lru_cache
 from typing import Any, ClassVar
 
 import numpy as np
-import scipy.optimize
 
 from .base import DEFAULT_REALIZATION_TOL, DynamicLawError, Parameter, Realization, _refs, angular_frequencies
 from .springs import _SpringEA
@@ -146,6 +145,9 @@ def springpot_prony(alpha: float, band_hz: tuple[float, float] = DEFAULT_REALIZA
     ValueError
         If no series of the schedule (up to 8 arms per decade) reaches ``tol``.
     """
+    # scipy.optimize costs 0.1-0.16 s to import and only this fit (cached per alpha, band, tol) uses it
+    import scipy.optimize
+
     lo, hi = np.log10(2 * np.pi * band_hz[0]), np.log10(2 * np.pi * band_hz[1])
     wc = np.logspace(lo, hi, int(np.ceil((hi - lo) * _PRONY_CHECK_PER_DECADE)) + 1)
     err = np.inf
