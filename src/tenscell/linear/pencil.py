@@ -287,16 +287,26 @@ class Pencil:
 
     # -- sparse: factors and Lanczos runs per shift ----------------------------------------------------
     def factor(self, shift: float = 0.0):
-        """Sparse Cholesky factor of ``K0 + shift·C0`` (shift in rad/s, ≥ 0), computed once per shift."""
+        """Sparse Cholesky factor of ``K0 + shift·C0`` (shift in rad/s), computed once per shift.
+
+        A positive shift serves the frequency and time domains; a negative one, ``−λ0``, the slowest modes
+        (:func:`tenscell.linear.krylov.load_modes`): its factor exists exactly when λ0 (1/s) lies below every
+        relaxation rate, and :class:`NotPositiveDefiniteError` says it does not.
+        """
         shift = float(shift)
         if shift == 0.0:
             return self.cholesky
         if shift not in self._factors:
             Ks = self.shifted(shift).tocsc()
-            # C0 is positive semidefinite: K0 + σC0 not positive definite means K0 is not either
-            self._factors[shift] = positive_definite_factor(Ks, what=f"K0 + {shift:g}·C0 (so neither is K0)",
-                                                            describe=self.describe, hint=self.hint,
-                                                            perm=self.ordering)
+            # C0 is positive semidefinite: K0 + σC0 (σ > 0) not positive definite means K0 is not either
+            what = f"K0 + {shift:g}·C0 (so neither is K0)" if shift > 0 else \
+                f"K0 − {-shift:g}·C0 (some relaxation rate is at most {-shift:g} 1/s)"
+            try:
+                self._factors[shift] = positive_definite_factor(Ks, what=what, describe=self.describe,
+                                                                hint=self.hint, perm=self.ordering)
+            except NotPositiveDefiniteError:
+                del self._shifted[shift]  # no run will use it
+                raise
         return self._factors[shift]
 
     def shifted(self, shift: float):
