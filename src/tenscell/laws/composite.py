@@ -8,7 +8,7 @@ import numpy as np
 
 from .._checks import positive_array
 from ..model.equilibrium import Cell
-from .base import DEFAULT_REALIZATION_TOL, Realization, Tangent, TendonLaw, _refs, angular_frequencies
+from .base import DEFAULT_REALIZATION_TOL, Realization, Tangent, TendonLaw, _refs, angular_frequencies, laplace_variables
 
 __all__ = ["CompositeLaw", "family_laws"]
 
@@ -181,6 +181,15 @@ class CompositeLaw(TendonLaw):
         out = np.empty((w.size, self.m), dtype=complex)
         for law, i in zip(self.laws, self.indices):
             out[:, i] = law.complex_stiffness(l[i], T[i], w)
+        return out
+
+    def laplace_stiffness(self, l, T, s) -> np.ndarray:
+        """Each part's ``k*(s)`` on its tendons (N/m), shape ``(n_s, m)``."""
+        l, T = _refs(l, T)
+        z = laplace_variables(s)
+        out = np.empty((z.size, self.m), dtype=complex)
+        for law, i in zip(self.laws, self.indices):
+            out[:, i] = law.laplace_stiffness(l[i], T[i], z)
         return out
 
     def complex_stiffness_derivatives(self, l, T, omega) -> tuple[np.ndarray, np.ndarray]:

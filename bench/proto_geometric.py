@@ -1,0 +1,104 @@
+"""Prototype (issue 26, G1/G2): which mechanisms let the paper's geometric prestress stiffness do the work?
+
+For each candidate (a mechanism spec on a reference cell) on the two bundled data sets jointly
+(Stamenović 2002's prestress sweep at 0.1 Hz and Fabry 2001's frequency sweep, both generated from
+published laws), with the **anchored gauge** (prestress scale s in [0.01, 100] m², i.e. the strut length
+L = s^-1/2 in [0.1, 10] of the reference's 1 m when the model prestress equals the measured one, the paper's
+convention) unless the row says "free":
+
+* free parameters, RMS per data set (decades), BIC;
+* the share of ΔG' and ΔG'' over 350-1900 Pa (0.1 Hz) carried by the geometric prestress stiffness P·Kp
+  (:func:`tenscell.fitting.shares.structure_shares`, exact from the kernel);
+* the mechanism's structure-free formula (its law's k* on one lumped element, T = s·P, + iωη) on the same data;
+* G2: the same mechanism refitted to the two unlike joint sets (:func:`tenscell.studies.falsification.unlike_sets`:
+  stiffness independent of prestress; exponent rising with prestress), its RMS there and the ratio to its RMS
+  on the cell data (worst data set each).
+
+Run: .venv/bin/python bench/proto_geometric.py [names...]   (default: every candidate; about 10 min on 2 cores)
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, __import__("os").path.dirname(__file__))
+from proto_common import bic, fit, load_banner, lumped_problem, problem, values  # noqa: E402
+
+from tenscell.fitting.mechanisms import ACTIVE_BETA, MECHANISMS, Field as F, Mechanism  # noqa: E402
+from tenscell.fitting.shares import structure_shares  # noqa: E402
+from tenscell.io import bundled  # noqa: E402
+from tenscell.model.shapes import nucleated_cell, paper_cell  # noqa: E402
+from tenscell.studies.falsification import unlike_sets  # noqa: E402
+
+
+def sp(name, ea="family", kappa="family", alpha="shared", kappa_dist=None, visc=True):
+    return Mechanism(name, "Springpot", (F("EA", "stiffness", ea), F("kappa", "coefficient", kappa, kappa_dist),
+                                         F("alpha", "exponent", alpha)), viscosity=visc)
+
+
+def tsp(name, beta):
+    return Mechanism(name, "TensionSpringpot", (
+        F("EA", "stiffness", "shared"), F("kappa", "coefficient", "shared"), F("alpha", "exponent", "shared"),
+        F("beta", "ratio", "fixed", value=beta), F("alpha_T", "exponent", "shared")), viscosity=True)
+
+
+def candidates():
+    deg = np.pi / 180
+    c = {
+        # (mechanism, cell builder, anchored)
+        "springpot+visc (free gauge)": (MECHANISMS["springpot+visc"], paper_cell, False),
+        "springpot+visc": (MECHANISMS["springpot+visc"], paper_cell, True),
+        "springpot-shared+visc": (sp("springpot-shared+visc", "shared", "shared"), paper_cell, True),
+        "springpot-alpha-family+visc": (sp("springpot-alpha-family+visc", "shared", "family", "family"), paper_cell, True),
+        "springpot-lognormal-kappa+visc": (sp("springpot-lognormal-kappa+visc", "shared", "shared", kappa_dist="lognormal"),
+                                           paper_cell, True),
+        "springpot+visc, delta 47 deg": (MECHANISMS["springpot+visc"], lambda: paper_cell(delta=47 * deg), True),
+        "springpot+visc, delta 53 deg": (MECHANISMS["springpot+visc"], lambda: paper_cell(delta=53 * deg), True),
+        "springpot-shared+visc, nucleus": (sp("springpot-shared+visc", "shared", "shared"), nucleated_cell, True),
+        "maxwell+visc": (MECHANISMS["maxwell+visc"], paper_cell, True),
+        "springpot-tension+visc (beta 1000)": (MECHANISMS["springpot-tension+visc"], paper_cell, True),
+        "springpot-tension+visc (free gauge)": (MECHANISMS["springpot-tension+visc"], paper_cell, False),
+    }
+    for beta in (1.0, 3.0, 10.0, 30.0):
+        c[f"springpot-tension+visc (beta {beta:g})"] = (tsp(f"springpot-tension-b{beta:g}+visc", beta), paper_cell, True)
+    return c
+
+
+def main(argv):
+    ds = (bundled("stamenovic2002"), bundled("fabry2001"))
+    unlike = unlike_sets(ds)
+    cands = candidates()
+    names = argv or list(cands)
+    print(f"# proto_geometric: {load_banner()}; ACTIVE_BETA = {ACTIVE_BETA:g}", flush=True)
+    print("| candidate | free | gauge | RMS S/F | BIC | geo share dG'/dP, dG''/dP | s (m²) | at bound | formula RMS S/F "
+          "(free) | unlike flat RMS (ratio) | unlike exp-rising RMS (ratio) | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for name in names:
+        mech, cell_of, anchored = cands[name]
+        t0 = time.process_time()
+        cell = cell_of()
+        pb = problem(ds, mech, cell, anchored=anchored)
+        fo = fit(pb, starts=4, hops=4)
+        sh = structure_shares(pb, fo.theta)
+        v = values(pb, fo.theta)
+        lp = lumped_problem(ds, mech)
+        lf = fit(lp, starts=6, hops=4)
+        worst = max(fo.rms)
+        un = []
+        for kind, uds in unlike.items():
+            pu = problem(uds, mech, cell, anchored=anchored)
+            fu = fit(pu, starts=3, hops=3, x0=fo.theta)
+            un.append((max(fu.rms), max(fu.rms) / worst))
+        print(f"| {name} | {int(pb.free.sum())} | {'anchored' if anchored else 'free'} | {fo.rms[0]:.4f}/{fo.rms[1]:.4f} "
+              f"| {bic(pb, fo.theta):.1f} | {sh.geometric_share_storage:.1%}, {sh.geometric_share_loss:.1%} "
+              f"| {v.get('s', float('nan')):.3g} | {', '.join(fo.at_bound) or '—'} "
+              f"| {lf.rms[0]:.4f}/{lf.rms[1]:.4f} ({int(lp.free.sum())}) "
+              f"| {un[0][0]:.4f} ({un[0][1]:.2f}) | {un[1][0]:.4f} ({un[1][1]:.2f}) | {time.process_time() - t0:.0f} |",
+              flush=True)
+        print("    " + ", ".join(f"{k}={x:.4g}" for k, x in v.items()), flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
