@@ -4,8 +4,10 @@
   basin-hopping moves (the problem's own ``perturb``): a fixed budget, reproducible by seed;
 * :class:`Lumped` — a mechanism's *structure-free formula*: its tendon law's k*(ω; T) on one lumped element of
   unit length whose tension is ``s·P`` (the same prestress coupling: P in Pa scaled by ``s``, or a fitted P),
-  plus the cytoplasm's iωη: ``G* = k*_law(ω; l = 1, T = s·P) + iωη``; the law's parameters are its own (one value
-  each); the same data layout as a mechanism problem;
+  plus the cytoplasm's iωη: ``G* = Σ_families k*_law(ω; l = 1, T = s·P) + iωη`` — one element per family in
+  parallel when the mechanism lays a parameter out per family, one element otherwise; the law's parameters are its
+  own (per family where the mechanism has them per family); a distributed field takes one value (its scale); the
+  same data layout as a mechanism problem;
 * :func:`rms_by_set`, :func:`bic`, :func:`score` — scores on any data, at fitted parameters.
 
 Every number printed by a prototype comes from these functions run on the data named in the script.
@@ -136,6 +138,13 @@ class Lumped:
     y_obs: np.ndarray
     weights: np.ndarray
     dataset_index: np.ndarray
+    families: tuple = ("all",)
+    per_family: tuple = ()  # law parameters with one value per family
+
+    def family_names(self, name):
+        if name in self.per_family:
+            return [f"{name}_{f}" for f in self.families]
+        return [name] * len(self.families)
 
     @property
     def n_points(self):
@@ -153,14 +162,17 @@ class Lumped:
     def moduli_phi(self, phi, omega, P):
         law_cls = getattr(laws, self.law)
         vals = {}
-        for p in law_cls.parameters:
-            vals[p.name] = (np.array([self.fixed_law[p.name]]) if p.name in self.fixed_law
-                            else np.array([math.exp(phi[self.names.index(p.name)])]))
+        for p in law_cls.parameters:  # one element per family (a shared parameter takes one value for all)
+            if p.name in self.fixed_law:
+                vals[p.name] = np.full(len(self.families), self.fixed_law[p.name])
+            else:
+                vals[p.name] = np.array([math.exp(phi[self.names.index(n)]) for n in self.family_names(p.name)])
         law = law_cls._trusted(**vals)
         G = np.empty(omega.size, complex)
+        ones = np.ones(len(self.families))
         for Pg in np.unique(P):
             sel = P == Pg
-            G[sel] = law.complex_stiffness(np.array([1.0]), np.array([Pg]), omega[sel])[:, 0]
+            G[sel] = law.complex_stiffness(ones, Pg * ones, omega[sel]).sum(axis=1)
         if self.eta_index is not None:
             G = G + 1j * omega * math.exp(phi[self.eta_index])
         return G
@@ -217,17 +229,23 @@ def lumped_problem(data, mech, *, fixed_law=None, bounds=None) -> Lumped:
     mech = mechanism(mech)
     datasets = as_datasets(data)
     law_cls = getattr(laws, mech.law)
-    fixed_law = dict(fixed_law or {})
+    given = dict(fixed_law or {})
+    law_names = {p.name for p in law_cls.parameters}
+    fixed_law = {k: v for k, v in given.items() if k in law_names}
+    fixed_names = {k: v for k, v in given.items() if k not in law_names}  # e.g. alpha_actin
     for f in mech.fields:
         if f.layout == "fixed":
             fixed_law[f.law_parameter] = f.value
     names, kinds = [], []
+    per_family = tuple(f.law_parameter for f in mech.fields if f.layout == "family" and f.distribution is None)
+    families = ("actin", "intermediate_filament") if per_family else ("all",)
     for p in law_cls.parameters:
         if p.name in fixed_law:
             continue
         kind = next(f.kind for f in mech.fields if f.law_parameter == p.name)
-        names.append(p.name)
-        kinds.append(kind)
+        for n in (dict.fromkeys(f"{p.name}_{fam}" for fam in families) if p.name in per_family else [p.name]):
+            names.append(n)
+            kinds.append(kind)
     eta_index = None
     if mech.viscosity:
         eta_index = len(names)
@@ -255,13 +273,18 @@ def lumped_problem(data, mech, *, fixed_law=None, bounds=None) -> Lumped:
     y = np.r_[np.log10(np.concatenate([d.G_storage for d in datasets])),
               np.log10(np.concatenate([d.G_loss for d in datasets]))]
     w = np.r_[np.concatenate([d.weights_storage for d in datasets]), np.concatenate([d.weights_loss for d in datasets])]
+    free, fixed_log = np.ones(len(names), bool), 0.5 * (lo + hi)
+    for k, v in fixed_names.items():
+        free[names.index(k)] = False
+        fixed_log[names.index(k)] = math.log(v)
     return Lumped(law=mech.law, names=tuple(names), kinds=tuple(kinds), lower=lo, upper=hi,
-                  free=np.ones(len(names), bool), fixed_log=0.5 * (lo + hi),
+                  free=free, fixed_log=fixed_log,
                   law_fields=tuple(p.name for p in law_cls.parameters), fixed_law=fixed_law, eta_index=eta_index,
                   omega=2 * np.pi * np.concatenate([d.frequency_hz for d in datasets]),
                   group_index=np.concatenate(point_group).astype(int),
                   group_log_offset=np.array([g[2] for g in groups]), group_map=gm, prestress_start=start, y_obs=y,
-                  weights=w, dataset_index=np.concatenate([np.full(d.n, k) for k, d in enumerate(datasets)]))
+                  weights=w, dataset_index=np.concatenate([np.full(d.n, k) for k, d in enumerate(datasets)]),
+                  families=families, per_family=per_family)
 
 
 def problem(data, mech, cell=None, anchored=True, bounds=None, fixed=None):

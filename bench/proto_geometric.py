@@ -61,9 +61,20 @@ def candidates():
         "springpot-tension+visc (beta 1000)": (MECHANISMS["springpot-tension+visc"], paper_cell, True),
         "springpot-tension+visc (free gauge)": (MECHANISMS["springpot-tension+visc"], paper_cell, False),
     }
+    # exponents held at physical values, so that the cell's 0.2 power law must come from the structure's mixing
+    # of prestress (elastic, geometric) and tendon (fractional) stiffness: G ~ P^(1-g) (k s^a)^g with a·g = 0.2
+    # (1/2: Rouse-like; 3/4: semiflexible filaments, Gittes & MacKintosh 1998)
+    c["springpot+visc, alpha held 0.5"] = (MECHANISMS["springpot+visc"], paper_cell, True, {"alpha": 0.5})
+    c["springpot+visc, alpha held 0.75"] = (MECHANISMS["springpot+visc"], paper_cell, True, {"alpha": 0.75})
+    c["springpot-alpha-family+visc, actin alpha held 0.75"] = (
+        c["springpot-alpha-family+visc"][0], paper_cell, True, {"alpha_actin": 0.75})
+    for a_act, a_if in ((1 / 3, 2 / 3), (1 / 3, 3 / 4), (1 / 2, 2 / 3), (1 / 2, 3 / 4), (1 / 3, 1 / 2), (1 / 4, 3 / 4)):
+        c[f"springpot-alpha-family+visc, alphas held {a_act:.3g}, {a_if:.3g}"] = (
+            c["springpot-alpha-family+visc"][0], paper_cell, True,
+            {"alpha_actin": a_act, "alpha_intermediate_filament": a_if})
     for beta in (1.0, 3.0, 10.0, 30.0):
         c[f"springpot-tension+visc (beta {beta:g})"] = (tsp(f"springpot-tension-b{beta:g}+visc", beta), paper_cell, True)
-    return c
+    return {k: v if len(v) == 4 else (*v, None) for k, v in c.items()}
 
 
 def main(argv):
@@ -76,19 +87,19 @@ def main(argv):
           "(free) | unlike flat RMS (ratio) | unlike exp-rising RMS (ratio) | CPU s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name in names:
-        mech, cell_of, anchored = cands[name]
+        mech, cell_of, anchored, fixed = cands[name]
         t0 = time.process_time()
         cell = cell_of()
-        pb = problem(ds, mech, cell, anchored=anchored)
+        pb = problem(ds, mech, cell, anchored=anchored, fixed=fixed)
         fo = fit(pb, starts=4, hops=4)
         sh = structure_shares(pb, fo.theta)
         v = values(pb, fo.theta)
-        lp = lumped_problem(ds, mech)
+        lp = lumped_problem(ds, mech, fixed_law=fixed)
         lf = fit(lp, starts=6, hops=4)
         worst = max(fo.rms)
         un = []
         for kind, uds in unlike.items():
-            pu = problem(uds, mech, cell, anchored=anchored)
+            pu = problem(uds, mech, cell, anchored=anchored, fixed=fixed)
             fu = fit(pu, starts=3, hops=3, x0=fo.theta)
             un.append((max(fu.rms), max(fu.rms) / worst))
         print(f"| {name} | {int(pb.free.sum())} | {'anchored' if anchored else 'free'} | {fo.rms[0]:.4f}/{fo.rms[1]:.4f} "
