@@ -54,6 +54,10 @@ def candidates():
         "springpot-alpha-family+visc": (sp("springpot-alpha-family+visc", "shared", "family", "family"), paper_cell, True),
         "springpot-lognormal-kappa+visc": (sp("springpot-lognormal-kappa+visc", "shared", "shared", kappa_dist="lognormal"),
                                            paper_cell, True),
+        "springpot-alpha-family-lognormal-kappa+visc": (Mechanism(
+            "springpot-alpha-family-lognormal-kappa+visc", "Springpot",
+            (F("EA", "stiffness", "shared"), F("kappa", "coefficient", "shared", "lognormal"),
+             F("alpha", "exponent", "family")), viscosity=True), paper_cell, True),
         "springpot+visc, delta 47 deg": (MECHANISMS["springpot+visc"], lambda: paper_cell(delta=47 * deg), True),
         "springpot+visc, delta 53 deg": (MECHANISMS["springpot+visc"], lambda: paper_cell(delta=53 * deg), True),
         "springpot-shared+visc, nucleus": (sp("springpot-shared+visc", "shared", "shared"), nucleated_cell, True),
@@ -98,7 +102,7 @@ def main(argv):
         lf = fit(lp, starts=6, hops=4)
         worst = max(fo.rms)
         un = []
-        for kind, uds in unlike.items():
+        for uds in unlike.values():
             pu = problem(uds, mech, cell, anchored=anchored, fixed=fixed)
             fu = fit(pu, starts=3, hops=3, x0=fo.theta)
             un.append((max(fu.rms), max(fu.rms) / worst))

@@ -18,7 +18,6 @@ Run: .venv/bin/python bench/proto_xie.py [names...]
 """
 from __future__ import annotations
 
-import math
 import os
 import sys
 import time

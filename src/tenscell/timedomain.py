@@ -57,6 +57,7 @@ import numpy as np
 import scipy.linalg
 
 from ._checks import positive_array, positive_scalar
+from ._errors import TenscellError
 from .linear.linearize import LinearModel
 from .linear.modal import ZERO_TIME, continuum_factor
 from ._threads import hot_path
@@ -81,8 +82,12 @@ __all__ = [
 TALBOT_NODES = 32
 
 
-class RealizationWarning(UserWarning):
-    """A time-domain quantity was asked of a realized spectrum at a time outside the band it was realized over."""
+class RealizationWarning(TenscellError, UserWarning):
+    """A time-domain quantity was asked of a realized spectrum at a time outside the band it was realized over.
+
+    A warning (``warnings.warn``), and a :class:`~tenscell.TenscellError` like every class tenscell defines, so that
+    ``warnings.simplefilter("error", RealizationWarning)`` turns it into an error one ``except`` catches.
+    """
 
 
 def realized_times(band_hz) -> tuple[float, float]:

@@ -27,10 +27,14 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._errors import TenscellError
+
+if TYPE_CHECKING:
+    from ..io.data import RheologyData
 
 __all__ = ["DEFAULT_DIRECTORY", "XIE_LINES", "FACTS", "RealCellsMissing", "XieCell", "OocyteRelaxation",
            "real_cells_directory", "xie_cells", "xie_median", "hl60_creep", "oocyte_relaxation"]
@@ -123,7 +127,7 @@ class XieCell:
 
     line: str
     index: int
-    data: object
+    data: RheologyData
     aspect_ratio: float
     area: float
     hertz_modulus_pa: float
