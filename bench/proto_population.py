@@ -3,8 +3,9 @@
 Per cell line (59 MCF-10A, 46 MDA-MB-436 cells; 1-200 Hz, up to 6 frequencies each, no standard deviations):
 
 * **population model** — a mechanism on the paper cell whose material parameters (law, cytoplasm η) are shared by
-  every cell of the line, with per cell either its prestress P_i only ("1/cell") or P_i and a scale a_i
-  multiplying its moduli ("2/cell": how much structure the probe meets); fitted jointly by one
+  every cell of the line, with per cell either its prestress P_i only, or P_i and a scale a_i multiplying its
+  moduli (how much structure the probe meets), or P_i with the scale set by the cell's measured aspect ratio,
+  a_i = AR_i^γ (one shared γ: the structure input from a measurement); fitted jointly by one
   ``scipy.optimize.least_squares`` (trf) on the stacked residuals, with the block Jacobian assembled from the
   per-cell problems' exact Jacobians (shared columns dense, per-cell columns block-diagonal);
 * **baselines** — independent per-cell power laws (the structural-damping law, 2 parameters per cell) and power
@@ -46,6 +47,8 @@ from tenscell.studies.real_cells import XIE_LINES, xie_cells, xie_median  # noqa
 DIRECTORY = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data", "real-cells")
 LN10 = math.log(10.0)
 F_REF = 10.0  # Hz: the one measured number of a held-out cell is G'(F_REF)
+#: per-cell parameters: P_i; P_i and a scale a_i; P_i with a_i = AR_i^gamma (one shared gamma, the measured aspect ratio)
+MODES = (1, 2, "ar")
 FOLDS = 5
 
 
@@ -56,14 +59,17 @@ def strip_sd(d: RheologyData) -> RheologyData:
 class Population:
     """Shared mechanism parameters + per-cell log P_i (+ log a_i) over many cells; residuals and block Jacobian."""
 
-    def __init__(self, cells, mech, fixed=None, per_cell=1):
+    def __init__(self, cells, mech, fixed=None, per_cell=1, ar=None):
         self.probs = [make_mechanism_problem(c, mech, fixed=fixed) for c in cells]
+        self.mode = per_cell
+        self.log_ar = None if ar is None else np.log10(np.asarray(ar, float))
+        per_cell = 1 if per_cell == "ar" else per_cell
         pb0 = self.probs[0]
         self.ip = list(pb0.names).index("P")
         self.free0 = pb0.free.copy()
         self.shared_idx = [i for i in np.flatnonzero(pb0.free) if i != self.ip]
         self.ns, self.N, self.k = len(self.shared_idx), len(cells), per_cell
-        self.n = self.ns + self.k * self.N
+        self.n = self.ns + self.k * self.N + (self.mode == "ar")
         # every cell's problem has its own default bounds (they scale with its data): take their union
         lo = np.min([p.lower for p in self.probs], axis=0)
         hi = np.max([p.upper for p in self.probs], axis=0)
@@ -71,6 +77,8 @@ class Population:
             np.r_[lo[self.shared_idx], np.full(self.N, lo[self.ip]), np.full(self.N, -5 * LN10)]
         self.upper = np.r_[hi[self.shared_idx], np.full(self.N, hi[self.ip])] if per_cell == 1 else \
             np.r_[hi[self.shared_idx], np.full(self.N, hi[self.ip]), np.full(self.N, 5 * LN10)]
+        if self.mode == "ar":  # one shared exponent: log10 a_i = gamma·log10(aspect ratio_i)
+            self.lower, self.upper = np.r_[self.lower, -5.0], np.r_[self.upper, 5.0]
         self.rows = np.cumsum([0] + [p.y_obs.size for p in self.probs])
 
     def cell_theta(self, x, i):
@@ -83,6 +91,8 @@ class Population:
         return th
 
     def scale(self, x, i):
+        if self.mode == "ar":
+            return x[-1] * self.log_ar[i]
         return x[self.ns + self.N + i] / LN10 if self.k == 2 else 0.0
 
     def residuals(self, x):
@@ -101,6 +111,8 @@ class Population:
             J[r, self.ns + i] = Ji[:, free_pos[self.ip]]
             if self.k == 2:
                 J[r, self.ns + self.N + i] = pb.weights / LN10
+            if self.mode == "ar":
+                J[r, -1] = pb.weights * self.log_ar[i]
         return J
 
     def fit(self, x0, max_nfev=200):
@@ -148,9 +160,11 @@ def start(cells, mech, fixed, med):
 
 
 def population_fit(cells, mech, fixed, med, per_cell):
-    pop = Population([c.data for c in cells], mech, fixed, per_cell)
+    pop = Population([c.data for c in cells], mech, fixed, per_cell, ar=[c.aspect_ratio for c in cells])
     shared, P = start(cells, mech, fixed, med)
-    x0 = np.r_[shared, np.full(pop.N, P)] if per_cell == 1 else np.r_[shared, np.full(pop.N, P), np.zeros(pop.N)]
+    x0 = np.r_[shared, np.full(pop.N, P)] if per_cell != 2 else np.r_[shared, np.full(pop.N, P), np.zeros(pop.N)]
+    if per_cell == "ar":
+        x0 = np.r_[x0, 0.0]
     # per-cell P first (shared held: each cell's own scalar least squares), then everything jointly
     for i in range(pop.N):
         def g(p, i=i):
@@ -169,21 +183,25 @@ def heldout_population(cells, mech, fixed, med, per_cell, rng):
         test = order[k::FOLDS]
         train = [cells[i] for i in order if i not in set(test)]
         pop, r = population_fit(train, mech, fixed, med, per_cell)
-        a_med = np.median(r.x[pop.ns + pop.N:]) if per_cell == 2 else 0.0
+        a_med = np.median(r.x[pop.ns + pop.N:]) if per_cell == 2 else 0.0  # the training cells' median scale
         for i in test:
             d = cells[i].data
             if F_REF not in d.frequency_hz or d.n < 3:
                 continue
-            one = Population([d], mech, fixed, per_cell)
+            one = Population([d], mech, fixed, per_cell, ar=[cells[i].aspect_ratio])
             target = math.log10(d.G_storage[d.frequency_hz == F_REF][0])
 
+            def cell_x(p):
+                if per_cell == 2:
+                    return np.r_[r.x[: pop.ns], p, a_med]
+                return np.r_[r.x[: pop.ns], p, r.x[-1]] if per_cell == "ar" else np.r_[r.x[: pop.ns], p]
+
             def g(p):
-                x = np.r_[r.x[: pop.ns], p] if per_cell == 1 else np.r_[r.x[: pop.ns], p, a_med]
-                return [math.log10(one.moduli(x, 0, [F_REF]).real[0]) - target]
+                return [math.log10(one.moduli(cell_x(p), 0, [F_REF]).real[0]) - target]
 
             p0 = np.median(r.x[pop.ns: pop.ns + pop.N])
             p = so.least_squares(g, [p0], bounds=(pop.lower[pop.ns], pop.upper[pop.ns])).x
-            x = np.r_[r.x[: pop.ns], p] if per_cell == 1 else np.r_[r.x[: pop.ns], p, a_med]
+            x = cell_x(p)
             scores.append(rms(one.moduli(x, 0, d.frequency_hz), d, skip_ref=True))
     return float(np.sqrt(np.mean(np.square(scores))))
 
@@ -230,8 +248,8 @@ def main(argv):
     names = argv or ["springpot-lognormal-kappa+visc", "springpot-alpha-family+visc", "springpot+visc"]
     print(f"# proto_population: {load_banner()}")
     print("| line | model | per cell | free | RMS (fit) | BIC | held-out cells RMS | Spearman(exponent, G'(10 Hz)) "
-          "model / data | CPU s |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "model / data | Spearman(G'(10 Hz), aspect ratio) model / data | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for line in XIE_LINES:
         cells = [c for c in xie_cells(line, DIRECTORY) if c.data.n >= 4]
         med = xie_median(line, DIRECTORY)
@@ -245,16 +263,18 @@ def main(argv):
         g10 = np.array(g10)
         ok = np.isfinite(g10)
         rho_data = spearmanr(np.array(data_expo)[ok], g10[ok])[0]
+        ar = np.array([c.aspect_ratio for c in cells])
+        rho_ar_data = spearmanr(g10[ok], ar[ok])[0]
         for newt in (False, True):
             t0 = time.process_time()
             bic, r_fit, held, expo = baseline(cells, newt, np.random.default_rng(0))
             rho = spearmanr(np.array(expo)[ok], g10[ok])[0]
             print(f"| {line} ({len(cells)} cells) | per-cell power law{' + Newtonian' if newt else ''} | "
                   f"{3 if newt else 2} | {(3 if newt else 2) * len(cells)} | {r_fit:.3f} | {bic:.1f} | {held:.3f} | "
-                  f"{rho:+.2f} / {rho_data:+.2f} | {time.process_time() - t0:.0f} |", flush=True)
+                  f"{rho:+.2f} / {rho_data:+.2f} | — / {rho_ar_data:+.2f} | {time.process_time() - t0:.0f} |", flush=True)
         for name in names:
             mech, _, _, fixed = cands[name]
-            for per_cell in (1, 2):
+            for per_cell in MODES:
                 t0 = time.process_time()
                 pop, r = population_fit(cells, mech, fixed, med, per_cell)
                 res = r.fun
@@ -264,10 +284,12 @@ def main(argv):
                               for i, c in enumerate(cells)]
                 model_g10 = np.array([pop.moduli(r.x, i, [F_REF]).real[0] for i in range(len(cells))])
                 rho = spearmanr(model_expo, model_g10)[0]
+                rho_ar = spearmanr(model_g10, ar)[0]
                 held = heldout_population(cells, mech, fixed, med, per_cell, np.random.default_rng(0))
-                print(f"| {line} ({len(cells)} cells) | {name} | {per_cell} | {pop.n} | "
+                label = {1: "P_i", 2: "P_i, a_i", "ar": "P_i; a_i = AR_i^gamma"}[per_cell]
+                print(f"| {line} ({len(cells)} cells) | {name} | {label} | {pop.n} | "
                       f"{float(np.sqrt(np.mean(res ** 2))):.3f} | {bic:.1f} | {held:.3f} | {rho:+.2f} / {rho_data:+.2f} "
-                      f"| {time.process_time() - t0:.0f} |", flush=True)
+                      f"| {rho_ar:+.2f} / {rho_ar_data:+.2f} | {time.process_time() - t0:.0f} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,7 @@ without a Newtonian term (:func:`tenscell.fitting.models.fit_structural_damping`
 Caveats the numbers inherit (real_cells.FACTS): the authors' selection of monotone curves, the undocumented drag
 correction at 100-200 Hz, unreliable 1 Hz points, medians over the cells positive at all 6 frequencies.
 
-Run: .venv/bin/python bench/proto_xie.py [names...]
+Run: .venv/bin/python bench/proto_xie.py [--unweighted] [names...]
 """
 from __future__ import annotations
 
@@ -78,16 +78,23 @@ def baseline_scores(train, test, newtonian):
     return rms(Gt_s + 1j * Gt_l, train), rms(G, test), 3 if newtonian else 2
 
 
+def unweighted(d: RheologyData) -> RheologyData:
+    return RheologyData(frequency_hz=d.frequency_hz, G_storage=d.G_storage, G_loss=d.G_loss, source=d.source)
+
+
 def main(argv):
     real_cells_directory(DIRECTORY)
     cands = candidates()
+    weighted = "--unweighted" not in argv
+    argv = [a for a in argv if a != "--unweighted"]
     names = argv or ["springpot-alpha-family+visc", "springpot+visc", "springpot-tension+visc (free gauge)",
                      "springpot-lognormal-kappa+visc", "maxwell+visc"]
-    print(f"# proto_xie: {load_banner()}")
+    print(f"# proto_xie: {load_banner()}; fits {'weighted by the medians' bootstrap standard errors' if weighted else 'unweighted'}")
     print("| line | split | model | free | train RMS | held-out RMS | CPU s |")
     print("|---|---|---|---|---|---|---|")
     for line in XIE_LINES:
         d = xie_median(line, DIRECTORY)
+        d = d if weighted else unweighted(d)
         for split, ((lo, hi), held) in SPLITS.items():
             train, test = window(d, lo, hi), subset(d, np.array(held))
             for newt in (True, False):
