@@ -89,7 +89,8 @@ def main(argv):
     argv = [a for a in argv if a != "--unweighted"]
     names = argv or ["springpot-alpha-family+visc", "springpot+visc", "springpot-tension+visc (free gauge)",
                      "springpot-lognormal-kappa+visc", "maxwell+visc"]
-    print(f"# proto_xie: {load_banner()}; fits {'weighted by the medians' bootstrap standard errors' if weighted else 'unweighted'}")
+    how = "weighted by the medians' bootstrap standard errors" if weighted else "unweighted"
+    print(f"# proto_xie: {load_banner()}; fits {how}")
     print("| line | split | model | free | train RMS | held-out RMS | CPU s |")
     print("|---|---|---|---|---|---|---|")
     for line in XIE_LINES:
