@@ -19,7 +19,9 @@ package does the same for any :class:`tenscell.io.data.RheologyData`:
 - :mod:`~tenscell.fitting.mechanisms`, :mod:`~tenscell.fitting.mechanism_problem`,
   :mod:`~tenscell.fitting.mechanism_fit`, :mod:`~tenscell.fitting.heterogeneity`:
   few-parameter mechanisms (tendon laws with dynamics, cytoplasm, distributions of
-  tendon properties) fitted by the same search (``fit(data, model=NAME)``).
+  tendon properties) fitted by the same search (``fit(data, model=NAME)``);
+- :mod:`~tenscell.fitting.shares`: what the structure carries, the geometric prestress stiffness's
+  share of dG′/dP and dG″/dP against the law's tension terms (:func:`structure_shares`).
 
 The Markdown report is :func:`tenscell.reports.fit.fit_markdown`.
 """
@@ -30,6 +32,7 @@ from .result import (DatasetFit, FitAlternative, FitCurve, FitParameter, FitResu
 from .entry import fit
 from .mechanisms import MECHANISMS, Field, Mechanism, mechanism_names
 from .mechanism_fit import FittedMechanism, MechanismFit, fit_mechanism, load_any_fit
+from .shares import StructureShares, structure_shares
 
 __all__ = [
     "TENDON_MODES",
@@ -57,4 +60,6 @@ __all__ = [
     "FittedMechanism",
     "fit_mechanism",
     "load_any_fit",
+    "StructureShares",
+    "structure_shares",
 ]
