@@ -22,7 +22,7 @@ Scores (unweighted log10 residuals, decades):
   a springpot G* ∝ (iω)^x fitted to G', G'' over 1-100 Hz, to the model's moduli and, for the reference, to the
   data's (the authors' own springpot exponents give -0.72 / -0.77; this definition on the data -0.66 / -0.82).
 
-Run: .venv/bin/python bench/proto_population.py [mechanism...]
+Run: .venv/bin/python bench/proto_population.py [--line=MCF-10A] [--modes=1,2,ar] [mechanism...]
 """
 from __future__ import annotations
 
@@ -245,12 +245,16 @@ def baseline(cells, newtonian, rng):
 
 def main(argv):
     cands = candidates()
+    lines = [a.split("=", 1)[1] for a in argv if a.startswith("--line=")] or list(XIE_LINES)
+    modes = [m if m == "ar" else int(m) for a in argv if a.startswith("--modes=") for m in a.split("=", 1)[1].split(",")]
+    modes = modes or list(MODES)
+    argv = [a for a in argv if not a.startswith("--")]
     names = argv or ["springpot-lognormal-kappa+visc", "springpot-alpha-family+visc", "springpot+visc"]
     print(f"# proto_population: {load_banner()}")
     print("| line | model | per cell | free | RMS (fit) | BIC | held-out cells RMS | Spearman(exponent, G'(10 Hz)) "
           "model / data | Spearman(G'(10 Hz), aspect ratio) model / data | CPU s |")
     print("|---|---|---|---|---|---|---|---|---|---|")
-    for line in XIE_LINES:
+    for line in lines:
         cells = [c for c in xie_cells(line, DIRECTORY) if c.data.n >= 4]
         med = xie_median(line, DIRECTORY)
         f100 = np.array([1.0, 3.0, 10.0, 30.0, 100.0])
@@ -271,10 +275,10 @@ def main(argv):
             rho = spearmanr(np.array(expo)[ok], g10[ok])[0]
             print(f"| {line} ({len(cells)} cells) | per-cell power law{' + Newtonian' if newt else ''} | "
                   f"{3 if newt else 2} | {(3 if newt else 2) * len(cells)} | {r_fit:.3f} | {bic:.1f} | {held:.3f} | "
-                  f"{rho:+.2f} / {rho_data:+.2f} | — / {rho_ar_data:+.2f} | {time.process_time() - t0:.0f} |", flush=True)
+                  f"{rho:+.3f} / {rho_data:+.3f} | — / {rho_ar_data:+.2f} | {time.process_time() - t0:.0f} |", flush=True)
         for name in names:
             mech, _, _, fixed = cands[name]
-            for per_cell in MODES:
+            for per_cell in modes:
                 t0 = time.process_time()
                 pop, r = population_fit(cells, mech, fixed, med, per_cell)
                 res = r.fun
@@ -288,8 +292,8 @@ def main(argv):
                 held = heldout_population(cells, mech, fixed, med, per_cell, np.random.default_rng(0))
                 label = {1: "P_i", 2: "P_i, a_i", "ar": "P_i; a_i = AR_i^gamma"}[per_cell]
                 print(f"| {line} ({len(cells)} cells) | {name} | {label} | {pop.n} | "
-                      f"{float(np.sqrt(np.mean(res ** 2))):.3f} | {bic:.1f} | {held:.3f} | {rho:+.2f} / {rho_data:+.2f} "
-                      f"| {rho_ar:+.2f} / {rho_ar_data:+.2f} | {time.process_time() - t0:.0f} |", flush=True)
+                      f"{float(np.sqrt(np.mean(res ** 2))):.3f} | {bic:.1f} | {held:.3f} | {rho:+.3f} / {rho_data:+.3f} "
+                      f"| {rho_ar:+.3f} / {rho_ar_data:+.3f} | {time.process_time() - t0:.0f} |", flush=True)
 
 
 if __name__ == "__main__":
