@@ -23,9 +23,9 @@ import numpy as np
 import scipy.optimize as so
 
 import tenscell.laws as laws
-from tenscell.fitting.layout import _prestress_layout, as_datasets
-from tenscell.fitting.mechanism_problem import make_mechanism_problem
-from tenscell.fitting.models import information_criteria
+from tenscell.fitting.models.mechanism import make_mechanism_problem
+from tenscell.fitting.parameters import _prestress_layout, as_datasets
+from tenscell.fitting.records import information_criteria
 
 LN10 = math.log(10.0)
 SHARED = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data")
@@ -224,7 +224,7 @@ _LUMPED_BOUNDS = {"stiffness": (1e-6, 1e8), "coefficient": (1e-6, 1e8), "exponen
 
 def lumped_problem(data, mech, *, fixed_law=None, bounds=None) -> Lumped:
     """The structure-free formula of a mechanism spec (its law, its fixed fields; every free field one value)."""
-    from tenscell.fitting.mechanisms import mechanism
+    from tenscell.fitting.models.catalog import mechanism
 
     mech = mechanism(mech)
     datasets = as_datasets(data)
@@ -291,6 +291,58 @@ def problem(data, mech, cell=None, anchored=True, bounds=None, fixed=None):
     b = dict(ANCHORED if anchored else {})
     b.update(bounds or {})
     return make_mechanism_problem(data, mech, cell, bounds=b or None, fixed=fixed)
+
+
+@dataclass
+class PowerLaw:
+    """The structural-damping law ``G* = G0·Γ(1−x)·(iω)^x + iωμ`` fitted to one frequency sweep (x the exponent)."""
+
+    G0: float
+    x: float
+    mu: float
+    rms: float
+
+    def complex(self, f_hz):
+        w = 2 * np.pi * np.asarray(f_hz, float)
+        return self.G0 * math.gamma(1 - self.x) * (1j * w) ** self.x + 1j * w * self.mu
+
+    def moduli(self, f_hz):
+        G = self.complex(f_hz)
+        return G.real, G.imag
+
+
+def power_law_fit(d, newtonian: bool) -> PowerLaw:
+    """Least squares on log10 G', log10 G'' (weighted by the data's sd if any), a few starts in the exponent."""
+    w = 2 * np.pi * d.frequency_hz
+    wt = np.r_[d.weights_storage, d.weights_loss]
+    y = np.r_[np.log10(d.G_storage), np.log10(d.G_loss)]
+
+    def G(th):
+        x = th[1]
+        out = math.exp(th[0]) * math.gamma(1 - x) * (1j * w) ** x
+        return out + (1j * w * math.exp(th[2]) if newtonian else 0.0)
+
+    def res(th):
+        g = G(th)
+        if np.any(g.real <= 0) or np.any(g.imag <= 0):
+            return np.full(y.size, 1e3)
+        return wt * (np.r_[np.log10(g.real), np.log10(g.imag)] - y)
+
+    lo = [-30.0, 0.01] + ([-30.0] if newtonian else [])
+    hi = [30.0, 0.99] + ([10.0] if newtonian else [])
+    best = None
+    g0 = math.log(float(np.median(d.G_storage)))
+    mu0 = math.log(max(float(np.median(d.G_loss / w)) * 0.1, 1e-9))
+    for x0 in (0.1, 0.2, 0.35, 0.5):
+        th0 = [g0 - x0 * float(np.mean(np.log(w))), x0] + ([mu0] if newtonian else [])
+        r = so.least_squares(res, th0, bounds=(lo, hi), method="trf", x_scale="jac")
+        if best is None or r.cost < best.cost:
+            best = r
+    th = best.x
+    g = G(th)
+    rr = np.r_[np.log10(g.real), np.log10(g.imag)] - y
+    return PowerLaw(G0=math.exp(th[0]), x=float(th[1]), mu=math.exp(th[2]) if newtonian else 0.0,
+                    rms=float(np.sqrt(np.mean(rr ** 2))))
 
 
 def fmt(x, nd=3):

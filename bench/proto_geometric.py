@@ -31,7 +31,8 @@ import numpy as np
 sys.path.insert(0, __import__("os").path.dirname(__file__))
 from proto_common import bic, fit, load_banner, lumped_problem, problem, values  # noqa: E402
 
-from tenscell.fitting.mechanisms import ACTIVE_BETA, MECHANISMS, Field as F, Mechanism  # noqa: E402
+from tenscell.fitting.models.catalog import ACTIVE_BETA, MECHANISMS  # noqa: E402
+from tenscell.fitting.models.mechanism import Field as F, Mechanism  # noqa: E402
 from tenscell.fitting.shares import structure_shares  # noqa: E402
 from tenscell.io import bundled  # noqa: E402
 from tenscell.io.data import RheologyData  # noqa: E402

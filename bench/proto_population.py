@@ -9,11 +9,11 @@ Per cell line (59 MCF-10A, 46 MDA-MB-436 cells; 1-200 Hz, up to 6 frequencies ea
   ``scipy.optimize.least_squares`` (trf) on the stacked residuals, with the block Jacobian assembled from the
   per-cell problems' exact Jacobians (shared columns dense, per-cell columns block-diagonal);
 * **baselines** — independent per-cell power laws (the structural-damping law, 2 parameters per cell) and power
-  law + Newtonian (3 per cell), :func:`tenscell.fitting.models.fit_structural_damping`.
+  law + Newtonian (3 per cell), :func:`proto_common.power_law_fit`.
 
 Scores (unweighted log10 residuals, decades):
 
-* BIC of each (Gaussian residuals, σ estimated: :func:`tenscell.fitting.models.information_criteria`);
+* BIC of each (Gaussian residuals, σ estimated: :func:`tenscell.fitting.records.information_criteria`);
 * **held-out cells**, 5-fold (cells in a seeded order): the shared parameters from the other 4/5 of the cells;
   each held-out cell gets *one measured number*, its G'(10 Hz): the population model sets P_i to reproduce it (a_i
   at the training cells' median), a baseline power law takes the training cells' median exponent (and
@@ -36,11 +36,11 @@ import scipy.optimize as so
 from scipy.stats import spearmanr
 
 sys.path.insert(0, os.path.dirname(__file__))
-from proto_common import fit, load_banner  # noqa: E402
+from proto_common import fit, load_banner, power_law_fit  # noqa: E402
 from proto_geometric import candidates  # noqa: E402
 
-from tenscell.fitting.mechanism_problem import make_mechanism_problem  # noqa: E402
-from tenscell.fitting.models import fit_structural_damping, information_criteria  # noqa: E402
+from tenscell.fitting.models.mechanism import make_mechanism_problem  # noqa: E402
+from tenscell.fitting.records import information_criteria  # noqa: E402
 from tenscell.io.data import RheologyData  # noqa: E402
 from tenscell.studies.real_cells import XIE_LINES, xie_cells, xie_median  # noqa: E402
 
@@ -133,11 +133,12 @@ def power_exponent(f, G):
 
     The authors' own 1-100 Hz springpot exponents (``alpha_1to100``) give Spearman -0.72 / -0.77 with G'(10 Hz);
     this fit (the structural-damping law without its Newtonian term) on the same cells gives -0.66 / -0.82 and
-    correlates 0.96 / 0.95 with theirs: the one definition applied to data and models alike here.
+    correlates 0.96 / 0.95 with theirs: the one definition applied to data and models alike here
+    (:func:`proto_common.power_law_fit`).
     """
     f = np.asarray(f, float)
     d = RheologyData(frequency_hz=f, G_storage=np.real(G), G_loss=np.imag(G), source="exponent")
-    return float(fit_structural_damping(d, newtonian=False).x - 1.0)
+    return power_law_fit(d, newtonian=False).x
 
 
 def rms(G, d, skip_ref=False):
@@ -207,7 +208,7 @@ def heldout_population(cells, mech, fixed, med, per_cell, rng):
 
 
 def baseline(cells, newtonian, rng):
-    fits = [fit_structural_damping(c.data, newtonian=newtonian) for c in cells]
+    fits = [power_law_fit(c.data, newtonian) for c in cells]
     res = []
     for c, f in zip(cells, fits):
         Gs, Gl = f.moduli(c.data.frequency_hz)
@@ -221,7 +222,7 @@ def baseline(cells, newtonian, rng):
     for k_ in range(FOLDS):
         test = set(order[k_::FOLDS].tolist())
         tr = [fits[i] for i in range(len(cells)) if i not in test]
-        x = np.median([f.x for f in tr]) - 1.0  # the exponent (the fit stores 1 + exponent)
+        x = np.median([f.x for f in tr])
         mu = np.median([f.mu for f in tr]) if newtonian else 0.0
         for i in test:
             d = cells[i].data

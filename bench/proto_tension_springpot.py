@@ -1,7 +1,7 @@
 """Prototype (issue 18, helper mech): springpot tendons whose coefficient and/or exponent depend on the tension.
 
 The two variants that are not in the package (their laws defined here) are registered into
-``tenscell.laws`` and ``tenscell.fitting.mechanisms.MECHANISMS`` at run time; the third is the
+``tenscell.laws`` and ``tenscell.fitting.models.mechanism.MECHANISMS`` at run time; the third is the
 package's ``TensionSpringpot`` with beta free (held at 1000 it is the built-in
 ``springpot-tension+visc``). Each is scored by the study's own ``evaluate_mechanism`` (same
 metrics as ``tenscell study mechanisms``), with its parameters, their local standard errors
@@ -26,8 +26,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 import tenscell.laws as laws
-from tenscell.fitting import mechanism_problem as mp
-from tenscell.fitting import mechanisms as mm
+from tenscell.fitting.models import catalog as mc
+from tenscell.fitting.models import mechanism as mm
 from tenscell.laws.base import Parameter, angular_frequencies
 from tenscell.laws.viscoelastic import Springpot, _DynamicSpring, _log_iw
 
@@ -141,7 +141,7 @@ for _n, _base in (("sp-texp-b1000+visc", "sp-texp+visc"),):
 def register():
     for cls in (ScaledSpringpot, TensionExpSpringpot):
         setattr(laws, cls.__name__, cls)
-    orig = mp._bounds_of
+    orig = mm.kind_bounds
 
     def bounds_of(kind, S, w_m, G_loss):
         if kind == "ratio":  # the prototype's runs (the package's default is 1e-3 to 1e5)
@@ -150,16 +150,16 @@ def register():
             return 1e-6 * S, 1e4 * S
         return orig(kind, S, w_m, G_loss)
 
-    mp._bounds_of = bounds_of
-    mm.MECHANISMS.update(VARIANTS)
+    mm.kind_bounds = bounds_of
+    mc.MECHANISMS.update(VARIANTS)
 
 
 def fd_check(name):
     """Exact Jacobian of the mechanism problem against central differences at a random point."""
     from tenscell.io import bundled
-    from tenscell.fitting.mechanism_problem import make_mechanism_problem
+    from tenscell.fitting.models.mechanism import make_mechanism_problem
 
-    pb = make_mechanism_problem([bundled("stamenovic2002"), bundled("fabry2001")], name)
+    pb = make_mechanism_problem([bundled("stamenovic2002"), bundled("fabry2001")], mc.MECHANISMS[name])
     th = pb.initial_guess(np.random.default_rng(1))
     J, Jfd = pb.jacobian(th), pb.jacobian_fd(th)
     return float(np.max(np.abs(J - Jfd)) / np.max(np.abs(Jfd)))

@@ -29,7 +29,7 @@ from proto_common import load_banner  # noqa: E402
 from proto_geometric import candidates  # noqa: E402
 
 import tenscell.laws as laws  # noqa: E402
-from tenscell.fitting.mechanism_problem import make_mechanism_problem  # noqa: E402
+from tenscell.fitting.models.mechanism import make_mechanism_problem  # noqa: E402
 from tenscell.io.data import RheologyData  # noqa: E402
 from tenscell.linear.dynamic import dynamic_compliance  # noqa: E402
 from tenscell.linear.modal import modulus  # noqa: E402

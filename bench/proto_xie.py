@@ -9,7 +9,7 @@ For each cell line (MCF-10A, MDA-MB-436; the medians of ``../shared/data/real-ce
 every model is fitted on the training frequencies and scored (unweighted RMS of log10 G', log10 G'', decades) on
 the held-out ones: the mechanisms on the paper cell (no prestress is measured: P is fitted in N), each
 mechanism's structure-free formula (:class:`proto_common.Lumped`), the power law (structural damping) with and
-without a Newtonian term (:func:`tenscell.fitting.models.fit_structural_damping`).
+without a Newtonian term (:func:`proto_common.power_law_fit`).
 
 Caveats the numbers inherit (real_cells.FACTS): the authors' selection of monotone curves, the undocumented drag
 correction at 100-200 Hz, unreliable 1 Hz points, medians over the cells positive at all 6 frequencies.
@@ -25,10 +25,9 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from proto_common import fit, load_banner, lumped_problem, problem  # noqa: E402
+from proto_common import fit, load_banner, lumped_problem, power_law_fit, problem  # noqa: E402
 from proto_geometric import candidates  # noqa: E402
 
-from tenscell.fitting.models import fit_structural_damping  # noqa: E402
 from tenscell.io.data import RheologyData  # noqa: E402
 from tenscell.studies.real_cells import XIE_LINES, real_cells_directory, xie_median  # noqa: E402
 
@@ -71,7 +70,7 @@ def mech_scores(mech, cell, train, test, lumped=False, starts=6, hops=6, fixed=N
 
 
 def baseline_scores(train, test, newtonian):
-    f = fit_structural_damping(train, newtonian=newtonian)
+    f = power_law_fit(train, newtonian)
     Gs, Gl = f.moduli(test.frequency_hz)
     G = Gs + 1j * Gl
     Gt_s, Gt_l = f.moduli(train.frequency_hz)

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import tenscell
-from tenscell.fitting.result import frequency_slopes, prestress_slopes
+from tenscell.fitting.curves import frequency_slopes, prestress_slopes
 from tenscell.io.data import bundled
 from tenscell.reports.fit import fit_markdown
 

@@ -16,8 +16,8 @@ import pytest
 
 from tenscell import paper_cell
 from tenscell.cli import main as cli_main
-from tenscell.fitting.mechanism_fit import FittedMechanism
-from tenscell.fitting.mechanisms import MECHANISMS
+from tenscell.fitting.fitted import FittedMechanism
+from tenscell.fitting.models.catalog import MECHANISMS
 from tenscell.population import ensemble as ens
 from tenscell.population import mechanism_ensemble
 
@@ -148,7 +148,7 @@ def test_moduli_ensemble_writes_the_results_table(fits, capsys):
 
 @pytest.mark.parametrize("argv, word", [
     (["--ensemble", "1"], "--ensemble"),
-    (["--ensemble", "0"], "--ensemble"),
+    (["--ensemble", "0", "--workers", "2"], "--workers"),  # 0: no ensemble, as for fit and study
     (["--workers", "2"], "--workers"),
     (["--ensemble", "10", "--workers", "-1"], "--workers"),
     # the cost, before any work: 1e11 solves (over a day at any plausible µs per solve) and ~6 TB of members
@@ -246,7 +246,7 @@ def test_fit_refuses_an_ensemble_it_cannot_have_before_fitting(argv, word, tmp_p
 
 def test_an_assignment_that_is_not_a_stable_cell_is_left_out_and_counted(monkeypatch):
     """One member whose K(ω) cannot be solved: its row is NaN, n_failed counts it, the statistics use the rest."""
-    from tenscell.fitting.mechanism_problem import MechanismProblem
+    from tenscell.fitting.models.mechanism import MechanismProblem
 
     ref = mechanism_ensemble(_model(), F, PRESTRESS, K=12, workers=0, progress=False)
     bad_u = {}
@@ -258,7 +258,7 @@ def test_an_assignment_that_is_not_a_stable_cell_is_left_out_and_counted(monkeyp
             return None
         return original(self, phi, omega, P, jac, dP)
 
-    from tenscell.fitting.mechanism_fit import bare_problem
+    from tenscell.fitting.models.mechanism import bare_problem
 
     full = bare_problem(dataclasses.replace(_model().mechanism, assignments=12), paper_cell())
     bad_u["row"] = full.shape_maps[0][3][5]

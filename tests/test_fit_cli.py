@@ -80,11 +80,11 @@ def test_from_fit_errors(tmp_path, capsys):
 
 def test_fitted_cell_with_inert_prestress_refuses_a_nonlinear_run_but_gives_linear_creep(tmp_path, capsys):
     from tenscell import paper_cell
-    from tenscell.fitting.fitted import FittedModel
+    from tenscell.fitting.fitted import FittedCell
 
     rng = np.random.default_rng(0)
     cell = paper_cell()
-    model = FittedModel(cell=cell, EA=10 ** rng.uniform(-7, 6, cell.m), c=10 ** rng.uniform(0, 3, cell.m), P=5.6e-8)
+    model = FittedCell(cell=cell, EA=10 ** rng.uniform(-7, 6, cell.m), c=10 ** rng.uniform(0, 3, cell.m), P=5.6e-8)
     path = tmp_path / "fit.json"
     path.write_text(json.dumps({"model": model.to_dict()}))
     assert cli_main(["creep", "--from-fit", str(path), "--out", str(tmp_path / "c")]) == 0
@@ -94,13 +94,14 @@ def test_fitted_cell_with_inert_prestress_refuses_a_nonlinear_run_but_gives_line
 
 # --- fit: --bound, --fix, --holdout --------------------------------------------------------------
 @pytest.mark.parametrize("flag,match", [
-    (["--bound", "EA=1e3:1e-3"], "--bound: EA: the lower bound 1000 N must be below the upper bound 0.001 N"),
+    (["--bound", "EA=1e3:1e-3"], "--bound: EA=1e3:1e-3: reversed or empty interval; the lower bound 1000 N must be "
+                                 "below the upper bound 0.001 N"),
     (["--bound", "X-Y=1:2"], "unknown parameter kind 'X-Y'"),
-    (["--bound", "X=1:2"], "--bound X=1:2: no parameter of kind 'X'"),  # a name only a --model could have
+    (["--bound", "X=1:2"], "--bound X=1:2: no parameter or parameter kind 'X'"),  # a name only a --model could have
     (["--bound", "c=1"], "c: expected LO:HI in N·s/m"),
     (["--fix", "L"], "expected NAME=VALUE"),
     (["--fix", "L=-1"], "--fix: -1 is out of range"),
-    (["--bound", "s=1:2"], "--bound s=1:2: no parameter of kind 's'"),
+    (["--bound", "s=1:2"], "--bound s=1:2: no parameter or parameter kind 's'"),
     (["--fix", "c_actin=1"], "--fix c_actin=1: no parameter named 'c_actin'"),
     (["--fix", "L=5000"], "--fix L=5000: outside its bounds"),
     (["--holdout", "10:1"], "FMIN 10 Hz must be below FMAX 1 Hz"),
@@ -175,7 +176,7 @@ def test_fit_uses_one_process_per_cpu_by_default_and_timing_is_ordered(tmp_path,
     out = tmp_path / "fit"
     code = cli_main(["fit", "bundled:stamenovic2002", "--tendons", "per-family", "--starts", "3", "--out", str(out)])
     assert code in (0, 1)
-    assert f"3 start(s), stiffness per-family, damping uniform, {min(3, usable_cpus())} process(es)" in \
+    assert f"with voigt-per-family: 3 start(s), {min(3, usable_cpus())} process(es)" in \
         capsys.readouterr().err
     doc = json.loads((out / "fit.json").read_text())
     t = doc["timing"]

@@ -1,4 +1,4 @@
-"""Creep compliance from the spectrum and its kernels (tenscell.fitting.creep); creep data files."""
+"""Creep compliance from the spectrum and its kernels (tenscell.fitting.models.voigt_creep); creep data files."""
 from __future__ import annotations
 
 from decimal import Decimal, getcontext
@@ -9,7 +9,7 @@ import scipy.integrate
 import scipy.linalg
 
 import tenscell
-from tenscell.fitting.creep import creep_from_modes, pair_kernels, step_kernel
+from tenscell.fitting.models.voigt_creep import creep_from_modes, pair_kernels, step_kernel
 from tenscell.timedomain import creep_compliance
 
 

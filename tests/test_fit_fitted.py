@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import tenscell
-from tenscell.fitting.fitted import FittedModel, load_fit, predicted_creep, scaled_cell
+from tenscell.fitting.fitted import FittedCell, load_fit, predicted_creep, scaled_cell
 from tenscell.timedomain import creep_compliance, fit_power_law
 
 F = np.logspace(-2, 3, 9)
@@ -41,7 +41,7 @@ def test_scaled_cell_is_the_cell_at_that_strut_length(cell, L):
 
 def test_fitted_model_round_trips_through_json_exactly(cell, tmp_path):
     EA, c, P = _fitted_like(cell, 1)
-    model = FittedModel(cell=scaled_cell(cell, 0.7161638852932695), EA=EA, c=c, P=P, source="test")
+    model = FittedCell(cell=scaled_cell(cell, 0.7161638852932695), EA=EA, c=c, P=P, source="test")
     G = np.array(model.moduli(F))
     path = tmp_path / "fit.json"
     path.write_text(json.dumps({"rms_log10_error": 0.0, "model": model.to_dict()}))
@@ -51,23 +51,25 @@ def test_fitted_model_round_trips_through_json_exactly(cell, tmp_path):
     assert back.P == model.P and back.s is None
     assert back.cell.describe() == model.cell.describe()
     np.testing.assert_allclose(np.array(back.moduli(F)), G, rtol=1e-12)
-    assert "FittedModel" in repr(back)
+    assert "FittedCell" in repr(back)
 
 
 def test_prestress_scale_model(cell):
     EA, c, _ = _fitted_like(cell, 2)
-    model = FittedModel(cell=cell, EA=EA, c=c, s=0.01, prestress_pa=(350.0, 1000.0, 1900.0))
+    model = FittedCell(cell=cell, EA=EA, c=c, s=0.01, prestress_pa=(350.0, 1000.0, 1900.0))
     assert model.prestress() == pytest.approx(10.0)  # the median measured prestress × s
     assert model.prestress(500.0) == pytest.approx(5.0)
     assert model.linear(500.0).P == pytest.approx(5.0)
     with pytest.raises(ValueError, match="either a prestress P"):
-        FittedModel(cell=cell, EA=EA, c=c, P=1.0, s=0.01)
-    with pytest.raises(ValueError, match="prestress_pa"):
-        FittedModel(cell=cell, EA=EA, c=c, P=1.0).prestress(100.0)
+        FittedCell(cell=cell, EA=EA, c=c, P=1.0, s=0.01)
+    with pytest.raises(ValueError, match="fitted prestress P"):
+        FittedCell(cell=cell, EA=EA, c=c, P=1.0).prestress(100.0)
 
 
 @pytest.mark.parametrize("content,match", [("not json", "not valid JSON"), ('{"x": 1}', "no fitted model"),
-                                           ('{"model": {"format": "other"}}', "cannot be rebuilt")])
+                                           ('{"model": {"format": "other"}}', "not a tenscell fitted model"),
+                                           ('{"schema": 99, "model": {}}', "schema 99"),
+                                           ('{"model": {"format": "tenscell-fitted-mechanism"}}', "model.mechanism: missing")])
 def test_load_fit_errors_name_the_flag_and_file(tmp_path, content, match):
     p = tmp_path / "fit.json"
     p.write_text(content)
@@ -137,7 +139,7 @@ def test_fit_json_rebuilds_the_fitted_cell_to_rounding(small_fits, tmp_path):
 
 
 def test_report_has_identifiability_comparison_and_creep_sections(small_fits):
-    from tenscell.fitting.models import compare_models
+    from tenscell.fitting.scores import compare_models
     from tenscell.reports.fit import fit_markdown
 
     freq, pres = small_fits
@@ -174,7 +176,7 @@ def test_moduli_over_many_prestresses_equal_the_per_prestress_pipeline(small_fit
     f = np.array([0.05, 0.1, 1.0, 20.0])
     Gs, Gl = result.moduli(f, prestress_pa=P_pa)
     for k in range(P_pa.size):
-        lin = result._linear(float(result.prestress_model(P_pa[k])))
+        lin = result.problem.linear_at(result.theta, float(result.prestress_model(P_pa[k])))
         G = modulus(compliance(lin, [f[k]]), result.problem.L_ref)[0]
         assert Gs[k] == pytest.approx(G.real, rel=1e-10) and Gl[k] == pytest.approx(G.imag, rel=1e-10)
     # a grid with one prestress keeps the per-prestress path; broadcasting still pairs f with P

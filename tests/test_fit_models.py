@@ -1,4 +1,4 @@
-"""The structural-damping law, AIC/BIC and held-out error (tenscell.fitting.models)."""
+"""The structure-free formulas (the structural-damping law first), AIC/BIC and held-out error."""
 from __future__ import annotations
 
 import math
@@ -7,8 +7,11 @@ import numpy as np
 import pytest
 import scipy.stats
 
-from tenscell.fitting.models import (PHI0, StructuralDampingProblem, compare_models, fit_structural_damping,
-                                     information_criteria, split_holdout, structural_damping_moduli)
+from tenscell.fitting import fit
+from tenscell.fitting.models.formulas import FORMULAS, Formula, lumped_formula
+from tenscell.fitting.models.catalog import MECHANISMS
+from tenscell.fitting.scores import (compare_models, fit_structural_damping, information_criteria, split_holdout,
+                                     structural_damping_moduli)
 from tenscell.io.data import DataError, RheologyData, bundled
 
 F = np.logspace(-2, 2.5, 14)
@@ -35,40 +38,78 @@ def test_law_matches_its_definition_and_eta_is_the_loss_tangent():
     np.testing.assert_allclose(G.imag / G.real, eta, rtol=1e-12)
 
 
-@pytest.mark.parametrize("newtonian", [True, False])
-def test_jacobian_matches_finite_differences(newtonian):
+@pytest.mark.parametrize("name", sorted(FORMULAS))
+def test_formula_jacobian_matches_finite_differences(name):
     d = _law_data(sd=0.05)
-    p = StructuralDampingProblem(omega=2 * np.pi * d.frequency_hz,
-                                 y_obs=np.concatenate([np.log10(d.G_storage), np.log10(d.G_loss)]),
-                                 weights=np.concatenate([d.weights_storage, d.weights_loss]), phi0=2.0,
-                                 newtonian=newtonian)
-    theta = np.array([math.log(120.0), 0.31, math.log(0.2)])[: p.n_params]
+    data = [bundled("stamenovic2002"), d] if FORMULAS[name].uses_prestress else d
+    p = FORMULAS[name].problem(data)
+    theta = np.random.default_rng(1).uniform(*p.bounds)
     J = p.jacobian(theta)
     np.testing.assert_allclose(J, p.jacobian_fd(theta), rtol=1e-6, atol=1e-8 * np.abs(J).max())
 
 
+@pytest.mark.parametrize("mech", ["springpot+visc", "springpot-tension+visc", "maxwell", "sls", "voigt-compact"])
+def test_lumped_formula_jacobian_and_prestress_coupling(mech):
+    """A mechanism's structure-free formula: its law's terms, the same prestress coupling, exact Jacobian."""
+    f = lumped_formula(MECHANISMS[mech])
+    assert f.uses_prestress and ("springpot_P" in f.terms) == (mech == "springpot-tension+visc")
+    assert ("newtonian" in f.terms) == ("visc" in mech or MECHANISMS[mech].law == "Voigt")
+    p = f.problem([bundled("stamenovic2002"), _law_data(sd=0.05)])
+    assert "P_data[1]" in p.names  # the frequency sweep states no prestress: fitted, in Pa
+    theta = np.random.default_rng(2).uniform(*p.bounds)
+    J = p.jacobian(theta)
+    np.testing.assert_allclose(J, p.jacobian_fd(theta), rtol=1e-6, atol=1e-8 * np.abs(J).max())
+
+
+def test_formula_terms_are_passive_and_structural_damping_is_a_springpot():
+    """G'' > 0 for every term at every ω (passivity); the structural-damping law is exactly a springpot with
+    A = G0·Γ(1−α)."""
+    w = np.logspace(-3, 4, 50)
+    vals = {"E0": 10.0, "a": 0.2, "G0": 300.0, "g": 0.1, "alpha": 0.2, "A": 50.0, "B": 0.1, "alpha_T": 0.3,
+            "E_M": 40.0, "tau": 0.1, "eta": 0.5}
+    for term in ("structural", "structural_P", "springpot", "springpot_P", "maxwell", "newtonian"):
+        assert np.all(Formula("t", (term,)).complex_modulus(vals, w, 500.0).imag > 0), term
+    G = Formula("t", ("structural",)).complex_modulus(vals, w, 1.0)
+    S = Formula("t", ("springpot",)).complex_modulus({"A": 300.0 * math.gamma(0.8), "alpha": 0.2}, w, 1.0)
+    np.testing.assert_allclose(G, S, rtol=1e-13)
+    np.testing.assert_allclose(G, structural_damping_moduli(w, 300.0, 1.2, 0.0), rtol=1e-13)
+
+
 def test_fit_recovers_the_law():
     r = fit_structural_damping(_law_data())
-    assert r.G0 == pytest.approx(300.0, rel=1e-6)
-    assert r.x == pytest.approx(1.18, abs=1e-7)
-    assert r.mu == pytest.approx(0.05, rel=1e-5)
+    assert r.value("G0") == pytest.approx(300.0, rel=1e-6)
+    assert r.value("alpha") == pytest.approx(0.18, abs=1e-7)
+    assert r.value("eta") == pytest.approx(0.05, rel=1e-5)
     assert r.rms_log10_error < 1e-8
-    assert r.phi0 == PHI0
-    assert "x = 1.18" in repr(r)
+    assert r.spec.name == "structural-damping+newtonian" and r.cell is None
     df = r.to_dataframe()
     assert {"frequency_Hz", "G_storage_model_Pa"} <= set(df.columns)
+    model = r.model
+    np.testing.assert_allclose(np.array(model.moduli(F)), np.array(r.moduli(F)), rtol=1e-12)
+    with pytest.raises(ValueError, match="no cell"):
+        model.linear()
 
 
 def test_fit_of_the_bundled_data_finds_the_law_it_was_generated_from():
     r = fit_structural_damping(bundled("fabry2001"))
-    assert r.x == pytest.approx(1.20, abs=1e-4)  # the CSV comment: x − 1 = 0.20
-    assert r.mu == pytest.approx(0.239363, rel=1e-3)
+    assert r.value("alpha") == pytest.approx(0.20, abs=1e-4)  # the CSV comment: x − 1 = 0.20
+    assert r.value("eta") == pytest.approx(0.239363, rel=1e-3)
     assert r.rms_log10_error < 1e-4
 
 
 def test_prestress_sweep_is_refused():
     with pytest.raises(DataError, match="frequency sweep"):
         fit_structural_damping(bundled("stamenovic2002"))
+
+
+def test_formula_with_prestress_fits_the_prestress_sweep_and_reads_it_in_pa():
+    """(G0 + g·P)·Γ(1−α)(iω)^α: on the Stamenović lines G' = 0.20 P + 82 at 0.1 Hz it fits; the model's prestress
+    is the data's own (Pa), so the fitted model answers at any measured prestress."""
+    d = bundled("stamenovic2002")
+    r = fit(d, model="structural-damping-prestress+newtonian", starts=2, seed=0, progress=False)
+    assert r.rms_log10_error < 0.02
+    Gs, _ = r.model.moduli([0.1], 1000.0)
+    assert Gs[0] == pytest.approx(0.20 * 1000 + 82, rel=0.05)
 
 
 # --- information criteria ------------------------------------------------------------------
@@ -123,7 +164,7 @@ def test_compare_models_scores_every_model_on_the_same_residuals():
     row = cmp_.score("structural damping (power law)")
     assert row.n_params == 3
     assert row.rms_log10_error == pytest.approx(sd.rms_log10_error)
-    aic, bic, _ = information_criteria(sd.weighted_residuals, 3, sigma_known=False)
+    aic, bic, _ = information_criteria(sd.problem.residuals(sd.theta), 3, sigma_known=False)
     assert (row.aic, row.bic) == (pytest.approx(aic), pytest.approx(bic))
     # the tensegrity's k excludes the exact gauge: EA, c, P, L free -> 3
     assert cmp_.score("homogeneous tensegrity").n_params == 3

@@ -16,8 +16,7 @@ from threadpoolctl import threadpool_limits
 import tenscell
 from tenscell import fitting
 from tenscell.cli import main as cli_main
-from tenscell.fitting.problem import _central
-from tenscell.fitting.search import _initial_guess
+from tenscell.fitting.models.voigt import _central
 from tenscell.io.data import DataError, RheologyData, bundled, write_csv
 from tenscell.reports.fit import fit_markdown
 from tenscell.sensitivity import analytic_elasticities
@@ -83,7 +82,7 @@ def test_joint_jacobian_matches_finite_differences(cell, state, tendons, damping
     sweep, freq, _, _ = _joint_truth(cell, state_prestress=state)
     pr = fitting.make_problem([sweep, freq], cell, tendons=tendons, damping=damping)
     rng = np.random.default_rng(3)
-    theta = _initial_guess(pr, rng) + rng.normal(0, 0.3, pr.n_free)
+    theta = pr.initial_guess(rng) + rng.normal(0, 0.3, pr.n_free)
     Ja, Jf = pr.jacobian(theta), pr.jacobian_fd(theta)
     np.testing.assert_allclose(Ja, Jf, atol=2e-6 * np.abs(Ja).max(), rtol=0)
     assert np.all(np.abs(Ja).max(axis=0) > 0)
@@ -109,7 +108,7 @@ def test_share_and_penalty_jacobians_match_finite_differences(cell, tendons, dam
     sweep, freq, _, _ = _joint_truth(cell, state_prestress=False)
     pr = fitting.make_problem([sweep, freq], cell, tendons=tendons, damping=damping, min_prestress_share=0.99)
     rng = np.random.default_rng(8)
-    theta = _initial_guess(pr, rng) + rng.normal(0, 0.3, pr.n_free)
+    theta = pr.initial_guess(rng) + rng.normal(0, 0.3, pr.n_free)
     out = pr._evaluate(pr.full(theta), jac=True, share=True)
     dshare = _central(lambda t: np.log(pr.prestress_share(t)), theta, 1e-5)
     np.testing.assert_allclose(out.dshare[:, pr.free], dshare, atol=1e-5 * np.abs(dshare).max(), rtol=0)
@@ -127,7 +126,7 @@ def test_storage_elasticity_matches_core_and_its_jacobian(cell):
     pr = fitting.make_problem([sweep, freq], cell, damping="per-family", min_prestress_elasticity=0.95,
                               elasticity_frequency_hz=0.3)
     rng = np.random.default_rng(2)
-    theta = _initial_guess(pr, rng) + rng.normal(0, 0.3, pr.n_free)
+    theta = pr.initial_guess(rng) + rng.normal(0, 0.3, pr.n_free)
     E = pr.prestress_elasticity(theta)
     EA, c, P = pr.effective_properties(theta)
     for g in (0, 6):

@@ -60,4 +60,4 @@ def test_default_fit_in_a_notebook(widgets):
     widget = any("application/vnd.jupyter.widget-view+json" in o.get("data", {}) for o in outputs)
     assert widget == widgets  # the widget bar exactly when ipywidgets imports; the text bar otherwise
     if not widgets:
-        assert any(o.get("name") == "stderr" and "fit (uniform)" in o.get("text", "") for o in outputs)
+        assert any(o.get("name") == "stderr" and "fit (voigt-uniform)" in o.get("text", "") for o in outputs)

@@ -50,8 +50,8 @@ BUILDERS = {
 
 
 def _ensemble(cell):
-    from tenscell.fitting.mechanism_fit import FittedMechanism
-    from tenscell.fitting.mechanisms import MECHANISMS
+    from tenscell.fitting.fitted import FittedMechanism
+    from tenscell.fitting.models.catalog import MECHANISMS
     from tenscell.population import mechanism_ensemble
 
     model = FittedMechanism(MECHANISMS["voigt-lognormal-damping"], cell, {"EA_actin": 1.0, "EA_intermediate_filament": 0.2,

@@ -20,9 +20,8 @@ import numpy as np
 import pytest
 
 from tenscell import paper_cell
-from tenscell.fitting.mechanism_fit import FittedMechanism
-from tenscell.fitting.mechanism_problem import make_mechanism_problem
-from tenscell.fitting.mechanisms import MECHANISMS, Field, Mechanism
+from tenscell.fitting.models.catalog import MECHANISMS
+from tenscell.fitting.models.mechanism import Field, FittedMechanism, Mechanism, make_mechanism_problem
 from tenscell.fitting.shares import StructureShares, prestress_parts, structure_shares
 from tenscell.io import bundled
 from tenscell.laws import Springpot
@@ -42,7 +41,7 @@ def _theta(pb, values):
 
 
 def _tension_problem():
-    pb = make_mechanism_problem(DATA, "springpot-tension+visc")
+    pb = make_mechanism_problem(DATA, MECHANISMS["springpot-tension+visc"])
     return pb, _theta(pb, TENSION)
 
 
@@ -109,7 +108,7 @@ def test_shares_over_the_range_of_the_bundled_fit():
 @pytest.mark.parametrize("name", ["springpot+visc", "maxwell+visc", "voigt-compact+visc", "voigt-lognormal-damping"])
 def test_laws_without_a_tension_term_are_all_geometric(name):
     """Springpot, Maxwell, Voigt (also distributed): ∂k*/∂T = 1/l, so the constitutive part is exactly 0."""
-    pb = make_mechanism_problem(DATA, name)
+    pb = make_mechanism_problem(DATA, MECHANISMS[name])
     th = pb.initial_guess(np.random.default_rng(3))
     sh = structure_shares(pb, th, points=5)
     assert np.max(np.abs(sh.dG_constitutive)) < 1e-12 * np.max(np.abs(sh.dG))  # (1/l)·T − T/l: rounding only
@@ -132,7 +131,7 @@ def test_a_fitted_mechanism_gives_the_same_shares():
 
 
 def test_a_fit_without_stated_prestress_gives_the_local_derivative():
-    pb = make_mechanism_problem(bundled("fabry2001"), "springpot+visc")
+    pb = make_mechanism_problem(bundled("fabry2001"), MECHANISMS["springpot+visc"])
     th = pb.initial_guess(np.random.default_rng(0))
     sh = structure_shares(pb, th)
     assert sh.prestress_n.size == 1 and np.isnan(sh.prestress_pa[0]) and sh.closure == 0.0

@@ -9,7 +9,7 @@ import scipy.optimize
 
 import tenscell
 from tenscell._results import CORRELATION_THRESHOLD, plus_minus
-from tenscell.fitting.models import fit_structural_damping, structural_damping_moduli
+from tenscell.fitting.scores import fit_structural_damping, structural_damping_moduli
 
 DATA = Path(__file__).parent / "data"
 
@@ -26,6 +26,7 @@ def test_structural_damping_errors_agree_with_curve_fit():
     parameters G0, x, μ) gives the same standard errors and correlations to first order."""
     data = tenscell.read_data(DATA / "trios_lims_temperature_steps.txt", step=1)
     law = fit_structural_damping(data)
+    G0, alpha, eta = (law.value(k) for k in ("G0", "alpha", "eta"))
     w = 2 * np.pi * data.frequency_hz
     y = np.concatenate([np.log10(data.G_storage), np.log10(data.G_loss)])
 
@@ -33,16 +34,18 @@ def test_structural_damping_errors_agree_with_curve_fit():
         G = structural_damping_moduli(w, G0, x, mu)
         return np.concatenate([np.log10(G.real), np.log10(G.imag)])
 
-    p, cov = scipy.optimize.curve_fit(model, w, y, p0=[law.G0, law.x, law.mu], xtol=1e-14, ftol=1e-14)
-    np.testing.assert_allclose(p, [law.G0, law.x, law.mu], rtol=1e-6)
+    p, cov = scipy.optimize.curve_fit(model, w, y, p0=[G0, 1 + alpha, eta], xtol=1e-14, ftol=1e-14)
+    np.testing.assert_allclose(p, [G0, 1 + alpha, eta], rtol=1e-6)
     se = np.sqrt(np.diag(cov))
     # the Jacobians differ by curve_fit's finite differences (relative ~1e-7): 1e-4 is far above that and far
     # below the factor (n-p)/(n-rank) = 1 or a missed ln -> linear chain rule (a factor x−1 ≈ 0.2) would make
-    ours = [law.error(k)[0] for k in ("G0", "x", "mu")]
+    errors = dict(zip((p_.name for p_ in law.parameters), (e for e, _ in law.standard_errors)))
+    ours = [errors["G0"], errors["alpha"], errors["eta"]]
     np.testing.assert_allclose(ours, se, rtol=1e-4)
     rho = cov / np.outer(se, se)
-    listed = {(a, b): r for a, b, r in law.correlations}
-    names = ("G0", "x", "mu")
+    listed = {(a, b): r for a, b, r in law.correlations()}
+    listed.update({(b, a): r for (a, b), r in list(listed.items())})
+    names = ("G0", "alpha", "eta")
     for i in range(3):
         for j in range(i + 1, 3):
             if abs(rho[i, j]) >= CORRELATION_THRESHOLD:
@@ -50,10 +53,11 @@ def test_structural_damping_errors_agree_with_curve_fit():
             else:
                 assert (names[i], names[j]) not in listed
     text = law.report()
-    for k in ("G0:", "x:", "mu:"):
+    for k in ("G0:", "alpha:", "eta:"):
         assert "+/-" in next(line for line in text.splitlines() if line.strip().startswith(k))
     doc = law.to_dict()
-    assert doc["x_stderr"] == pytest.approx(se[1], rel=1e-4) and doc["G0_Pa_stderr_note"] == ""
+    row = next(p_ for p_ in doc["parameters"] if p_["name"] == "alpha")
+    assert row["stderr"] == pytest.approx(se[1], rel=1e-4) and row["stderr_note"] == ""
 
 
 @pytest.fixture(scope="module")

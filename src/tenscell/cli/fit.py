@@ -1,4 +1,9 @@
-"""``tenscell fit``: fit the tensegrity model to measured G', G'' (CSV) and write the fit's output set."""
+"""``tenscell fit``: fit any model to measured G', G'' or creep (files) and write the fit's output set.
+
+One path for every model (the paper's Voigt cell, a mechanism, a structure-free formula): the same reading of the
+data files (``--columns``, ``--units``, ``--step``...), the same checks of ``--bound``/``--fix`` against the model's
+parameters before any fitting, the same hold-out, search, report, figure and fit.json.
+"""
 from __future__ import annotations
 
 import argparse
@@ -6,20 +11,42 @@ import contextlib
 import time
 from pathlib import Path
 
-from ._args import ENSEMBLE_MAX_K, RANGES, add_data_options, add_out, data_options_from_args, integer, number
+from ._args import (RANGES, add_cluster_options, add_data_options, add_out, data_options_from_args, ensemble_size,
+                    integer, number)
 
 #: the fit's parametrizations (the same tuples as tenscell.fitting.TENDON_MODES / DAMPING_MODES,
 #: written out so that building the parser does not import the fitting code; a test checks they agree)
 TENDON_MODES = ("per-tendon", "per-family", "uniform")
 DAMPING_MODES = ("uniform", "per-family")
-#: the mechanisms of `--model` (tenscell.fitting.mechanisms.mechanism_names(), written out for a quick parser;
-#: a test checks they agree)
-MECHANISM_NAMES = ("voigt-per-tendon", "voigt-compact", "voigt-compact+visc", "voigt-lognormal-damping",
-                   "voigt-lognormal-stiffness", "voigt-trap-damping+visc", "maxwell", "maxwell+visc", "sls",
-                   "sls-trap+visc", "springpot", "springpot+visc", "springpot-tension+visc")
+#: the models of `--model` by group (tenscell.fitting.models.GROUPS, written out for a quick parser; a test checks
+#: they agree), and the one recommended for a first fit (tenscell.fitting.models.RECOMMENDED)
+MODEL_GROUPS = {
+    "the paper's Voigt cell": ("voigt-per-tendon", "voigt-per-family", "voigt-uniform"),
+    "mechanisms: Voigt tendons": ("voigt-compact", "voigt-compact+visc", "voigt-lognormal-damping",
+                                  "voigt-lognormal-stiffness", "voigt-trap-damping+visc"),
+    "mechanisms: filament turnover (Maxwell)": ("maxwell", "maxwell+visc"),
+    "mechanisms: standard linear solid": ("sls", "sls-trap+visc"),
+    "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc",
+                                       "springpot-alpha-family+visc"),
+    "structure-free formulas (baselines)": ("structural-damping", "structural-damping+newtonian",
+                                            "structural-damping-prestress", "structural-damping-prestress+newtonian"),
+}
+RECOMMENDED_MODEL = "springpot-tension+visc"
+MODEL_NAMES = tuple(n for names in MODEL_GROUPS.values() for n in names)
+#: the name of tenscell 0.2 (every name --model takes)
+MECHANISM_NAMES = MODEL_NAMES
 
 #: the files of one fit: extension -> name in `tenscell fit --out`
 FIT_FILES = {"json": "fit.json", "csv": "fit.csv", "md": "report.md", "png": "fit.png"}
+#: the files an ensemble adds to an output set (`fit --model ... --ensemble K`, `study mechanisms`)
+ENSEMBLE_FILES = ("ensemble.csv", "ensemble.png", "ensemble.md")
+
+
+def _model_help() -> str:
+    groups = "; ".join(f"{g}: {', '.join(names)}" for g, names in MODEL_GROUPS.items())
+    return (f"what to fit (default: the paper's Voigt cell laid out by --tendons/--damping). For a first fit of "
+            f"your own cells try {RECOMMENDED_MODEL} (few parameters, scored against its own structure-free "
+            f"formula in the report). Groups: {groups}. --fix/--bound take the model's parameter names or kinds")
 
 
 #: the prestress (Pa) at which the bundled frequency data (fabry2001) were measured, for joint fits: the
@@ -49,14 +76,14 @@ def register(sub) -> None:
                    help="stiffness per tendon (as in the paper), per family, or one for all")
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform",
                    help="damping c: one for all (as in the paper) or per family")
-    p.add_argument("--model", choices=MECHANISM_NAMES, default=None,
-                   help="fit a mechanism instead of the per-tendon Voigt cell (tenscell.fitting.mechanisms; "
-                        "writes fit.json, report.md, fit.png; --fix/--bound take its parameter names or kinds)")
-    p.add_argument("--ensemble", type=integer(0, ENSEMBLE_MAX_K), default=0, metavar="K",
-                   help="with --model of a mechanism whose tendon values are drawn from a distribution: evaluate "
-                        "the fitted mechanism over K assignments at the data's prestresses and frequencies "
+    p.add_argument("--model", choices=MODEL_NAMES, default=None, metavar="NAME", help=_model_help())
+    e = p.add_argument_group("ensemble (with --model of a mechanism whose tendon values are drawn from a "
+                             "distribution)")
+    e.add_argument("--ensemble", type=ensemble_size, default=0, metavar="K",
+                   help="evaluate the fitted mechanism over K assignments at the data's prestresses and frequencies "
                         "(ensemble.csv, .png, .md: mean, spread between assignments, the fit's own average; "
-                        "0: none; more with `tenscell moduli --from-fit FIT --ensemble K --workers N`)")
+                        "0: none), on the population engine")
+    add_cluster_options(e)
     add_constraints(p)
     add_data_options(p)
     p.add_argument("--bound", action="append", type=_bound, metavar="KIND=LO:HI", default=None,
@@ -79,8 +106,9 @@ def register(sub) -> None:
     p.add_argument("--baseline-starts", type=integer(1, 10_000), default=2,
                    help="starts for the homogeneous baseline fit")
     p.add_argument("--max-points", type=integer(4, 100_000), default=100,
-                   help="fit at most this many points: denser data is binned in log frequency per prestress "
-                        "(weighted log means; the rule is in tenscell.io.thinning and the report)")
+                   help="fit at most this many points: denser data is binned in log frequency (moduli) or log time "
+                        "(creep) per prestress (weighted log means; the rule and the weights are in "
+                        "tenscell.io.thinning and the report)")
     add_out(p)
     p.set_defaults(func=run)
 
@@ -107,17 +135,19 @@ def _bound(text):
                                          "(or, with --model, a parameter name of the mechanism)")
     # a mechanism's parameter names (--model) are checked against the mechanism before any fitting
     unit = BOUND_UNITS.get(kind, "")
+    u = f" {unit}" if unit else ""
     parts = value.split(":")
     if len(parts) != 2:
         raise argparse.ArgumentTypeError(f"{kind}: expected LO:HI in {unit or 'SI units'}, got {value[:40]!r}")
     try:
+        lo, hi = (number()(x) for x in parts)  # numbers first: a reversed interval is named as such
+        if not lo < hi:
+            raise argparse.ArgumentTypeError(f"{kind}={value}: reversed or empty interval; the lower bound {lo:g}{u} "
+                                             f"must be below the upper bound {hi:g}{u} (LO:HI)")
         check = number(*BOUND_RANGES[kind], unit) if kind in BOUND_RANGES else number(0.0, None, "", open_lo=True)
         lo, hi = (check(x) for x in parts)
     except argparse.ArgumentTypeError as err:
-        raise argparse.ArgumentTypeError(f"{kind}: {err}") from None
-    if not lo < hi:
-        u = f" {unit}" if unit else ""
-        raise argparse.ArgumentTypeError(f"{kind}: the lower bound {lo:g}{u} must be below the upper bound {hi:g}{u}")
+        raise argparse.ArgumentTypeError(str(err) if str(err).startswith(f"{kind}=") else f"{kind}: {err}") from None
     return kind, (lo, hi)
 
 
@@ -145,26 +175,52 @@ def _holdout(text):
 _holdout.__name__ = "holdout window"
 
 
-def search_space(args, datasets) -> dict:
-    """bounds, fixed and the constraints as keyword arguments of :func:`tenscell.fitting.fit`, checked.
+def spec_from_args(args):
+    """The model to fit: ``--model NAME``, or the Voigt cell of ``--tendons``, ``--damping`` and the constraints.
 
-    Each --bound kind and --fix name is checked against the parameters of these data (named with the
-    flag, in the units typed) before any fitting.
+    ValueError naming the flag for a Voigt flag given with another model.
     """
-    from .. import fitting
+    from ..fitting.models import get_model
+    from ..fitting.models.voigt import VoigtModel
 
-    space = {"min_prestress_share": args.min_prestress_share, "max_decades": args.max_decades,
-             "min_prestress_elasticity": args.min_prestress_elasticity}
-    plain = fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **space)
-    bounds = dict(args.bound or ())
-    for kind, (lo, hi) in bounds.items():
-        if kind not in plain.kinds:
-            raise ValueError(f"--bound {kind}={lo:g}:{hi:g}: no parameter of kind {kind!r} in this fit (kinds here: "
-                             f"{', '.join(dict.fromkeys(plain.kinds))})")
-    fixed = dict(args.fix or ())
+    voigt = {"tendons": (args.tendons, "per-tendon", "--tendons"), "damping": (args.damping, "uniform", "--damping"),
+             "min_prestress_share": (getattr(args, "min_prestress_share", None), None, "--min-prestress-share"),
+             "max_decades": (getattr(args, "max_decades", None), None, "--max-decades"),
+             "min_prestress_elasticity": (getattr(args, "min_prestress_elasticity", None), None,
+                                          "--min-prestress-elasticity")}
+    given = {k: v for k, (v, default, _) in voigt.items() if v != default}
+    if args.model is None:
+        return VoigtModel(**{k: v for k, (v, _, _) in voigt.items()})
+    spec = get_model(args.model)
+    if isinstance(spec, VoigtModel):  # --model voigt-per-family: --tendons may only agree with it
+        if "tendons" in given and given["tendons"] != spec.tendons:
+            raise ValueError(f"--tendons {given['tendons']} contradicts --model {args.model}")
+        return VoigtModel(**{**{k: v for k, (v, _, _) in voigt.items()}, "tendons": spec.tendons})
+    if given:
+        flag = voigt[next(iter(given))][2]
+        raise ValueError(f"{flag} applies to the Voigt cell (no --model, or --model voigt-*), not to --model "
+                         f"{args.model}")
+    return spec
+
+
+def search_space(args, datasets, spec) -> dict:
+    """``bounds`` and ``fixed`` as keyword arguments of :func:`tenscell.fitting.fit`, checked against ``spec``'s
+    parameters for these data (each --bound kind or name and --fix name named with the flag, in the units typed)
+    before any fitting."""
     import math
 
-    bounded = fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, bounds=bounds, **space)
+    plain = spec.problem(datasets)
+    bounds = dict(args.bound or ())
+    for key, (lo, hi) in bounds.items():
+        if key not in plain.kinds and key not in plain.names:
+            raise ValueError(f"--bound {key}={lo:g}:{hi:g}: no parameter or parameter kind {key!r} in this fit "
+                             f"(kinds here: {', '.join(dict.fromkeys(plain.kinds))}; parameters: "
+                             f"{_names_text(plain.names)})")
+    try:
+        bounded = spec.problem(datasets, bounds=bounds)
+    except ValueError as err:
+        raise ValueError(f"--bound: {err}") from None
+    fixed = dict(args.fix or ())
     lower, upper = [math.exp(x) for x in bounded.lower], [math.exp(x) for x in bounded.upper]
     for name, v in fixed.items():
         if name not in plain.names:
@@ -175,8 +231,8 @@ def search_space(args, datasets) -> dict:
         if not lower[i] <= v <= upper[i]:
             raise ValueError(f"--fix {name}={v:g}: outside its bounds [{lower[i]:.6g}, {upper[i]:.6g}] {unit} "
                              f"(widen them with --bound {plain.kinds[i]}=LO:HI)")
-    space.update(bounds=bounds or None, fixed=fixed or None)
-    fitting.make_problem(datasets, tendons=args.tendons, damping=args.damping, **space)
+    space = {"bounds": bounds or None, "fixed": fixed or None}
+    spec.problem(datasets, **space)
     return space
 
 
@@ -209,16 +265,26 @@ def add_constraints(p) -> None:
                    help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
 
 
+#: the data-reading flags that choose what to read in a file, by their keyword in data_options_from_args
+_CHOOSING = {"columns": "--columns/--columns-file", "units": "--units", "step": "--step",
+             "temperature": "--temperature", "sheet": "--sheet"}
+
+
 def read_data_arg(text: str, min_points: int, options: dict | None = None):
     """A data file (moduli or creep compliance; tenscell's CSV, an instrument export or a table with recognised
-    headers, see :func:`tenscell.io.instruments.read_data`), or ``bundled:NAME`` for a data set shipped with
-    tenscell. ``options``: :func:`~tenscell.cli._args.data_options_from_args` (column map, units, step)."""
+    headers, see :func:`tenscell.io.readers.read_data`), or ``bundled:NAME`` for a data set shipped with
+    tenscell. ``options``: :func:`~tenscell.cli._args.data_options_from_args` (column map, units, step, checks
+    accepted)."""
     from ..io.data import bundled
-    from ..io.instruments import read_data
+    from ..io.readers import read_data
 
-    if text.lower().startswith("bundled:"):
-        return bundled(text.split(":", 1)[1])
     options = dict(options or {})
+    if text.lower().startswith("bundled:"):
+        given = [flag for key, flag in _CHOOSING.items() if options.get(key)]
+        if given:
+            raise ValueError(f"{given[0]} says how to read a file; {text} is a data set shipped with tenscell, in "
+                             "its own layout")
+        return bundled(text.split(":", 1)[1])
     units = options.pop("units", None) or {}
     return read_data(text, min_points=min_points, **options, **units)
 
@@ -267,6 +333,27 @@ def read_datasets(paths, prestress_options, min_points: int, options: dict | Non
     return datasets
 
 
+def read_inputs(args, min_points: int) -> tuple[list, list[str]]:
+    """The fit command's data and what to say about them: every file read with the data flags, the stated
+    prestresses attached, data denser than ``--max-points`` binned; with one line per file saying what was read
+    (layout, step, temperature, conversions: :meth:`~tenscell.io.provenance.Provenance.line`) and how it was
+    binned, for the command to print once every check has passed (a refusal stays one line)."""
+    from ..io.thinning import bin_datasets
+
+    datasets = read_datasets(args.data, args.prestress, min_points, data_options_from_args(args))
+    binned = bin_datasets(datasets, args.max_points)
+    lines = []
+    for path, data, thin in zip(args.data, datasets, binned):
+        lines.append(data.provenance.line())
+        if thin is not data:
+            axis = "time" if getattr(data, "kind", None) == "creep" else "frequency"
+            weights = "each bin weighing as one point" if thin.counts is None and not thin.has_sd else \
+                "each bin weighing √(its points)" if not thin.has_sd else "weighted by the stated SDs"
+            lines.append(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log {axis} (--max-points "
+                         f"{args.max_points}; {weights})")
+    return list(binned), lines
+
+
 def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=None):
     """Everything a fit writes, computed before any file is touched: {extension: writer(path)}.
 
@@ -279,17 +366,19 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=No
     from ..reports.fit import fit_markdown
 
     doc = result.to_dict()
-    doc["baseline"] = {k: v for k, v in baseline.to_dict().items()
-                       if k in ("tendons", "damping", "rms_log10_error", "converged", "time_s", "parameters")}
+    own = baseline is result  # a fit that is its own baseline (a homogeneous Voigt cell, a formula)
+    doc["baseline"] = None if own else {k: v for k, v in baseline.to_dict().items()
+                                        if k in ("model_name", "tendons", "damping", "rms_log10_error", "converged",
+                                                 "time_s", "parameters", "AIC", "BIC")}
     if comparison is None:
-        from ..fitting.models import compare_models
+        from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline)
     doc["model_comparison"] = comparison.to_dict()
     if timing is not None:
         doc["timing"] = timing
     header, rows = fit_table(result, baseline)
-    markdown = fit_markdown(result, baseline, title=title, comparison=comparison)
+    markdown = fit_markdown(result, None if own else baseline, title=title, comparison=comparison)
     if figure is None:  # drawn here: only then does this process import the plotting stack (0.35 s)
         from .. import plotting
         from ..plotting.fits import fit_panels
@@ -320,17 +409,18 @@ def _warm_plotting() -> None:
     from ..plotting import fits  # noqa: F401
 
 
-def _baseline_fit(data, starts, seed, tolerance):
-    """The homogeneous baseline: it only shows what a homogeneous cell cannot do, so a short search suffices."""
+def _baseline_fit(data, spec, starts, seed, tolerance):
+    """A baseline: it only shows what a simpler model does on the same data, so a short search suffices."""
     from .. import fitting
 
-    return fitting.fit(data, tendons="uniform", starts=starts, seed=seed, jobs=1, tolerance=tolerance, hops=10,
+    return fitting.fit(data, model=spec, starts=starts, seed=seed, jobs=1, tolerance=tolerance, hops=10,
                        patience=3, max_points=None, progress=False)
 
 
-def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_starts, *, worker=None,
-            warm_plotting: bool = False, **search):
-    """The fit and its homogeneous baseline (the fit itself when it is homogeneous and unconstrained).
+def run_fit(data, spec, starts, seed, jobs, tolerance, baseline_starts, *, worker=None, warm_plotting: bool = False,
+            **search):
+    """The fit of ``spec`` and its baseline (:func:`tenscell.fitting.models.baseline_of`: the homogeneous cell for
+    a Voigt fit, the lumped structure-free formula for a mechanism; the fit itself where there is none).
 
     The baseline runs in a worker process beside the fit (``worker``, from
     :func:`tenscell._parallel.background`, or one of its own): it is
@@ -342,22 +432,21 @@ def run_fit(data, tendons, damping, starts, seed, jobs, tolerance, baseline_star
     from .. import fitting
     from .._parallel import background
     from .._progress import stage
+    from ..fitting.models import baseline_of
 
     def main_fit():
         # the command has binned the data already, by its own --max-points
-        return fitting.fit(data, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
-                           tolerance=tolerance, max_points=None, **search)
+        return fitting.fit(data, model=spec, starts=starts, seed=seed, jobs=jobs, tolerance=tolerance,
+                           max_points=None, **search)
 
-    constrained = search.get("min_prestress_share") or search.get("min_prestress_elasticity") or search.get(
-        "max_decades")
-    homogeneous = tendons == "uniform" and damping == "uniform" and not constrained
-    if homogeneous and not warm_plotting:  # nothing for a worker to do
+    base = baseline_of(spec)
+    if base is None and not warm_plotting:  # nothing for a worker to do
         result = main_fit()
         return result, result
-    if not homogeneous:
-        stage(f"homogeneous baseline: {baseline_starts} start(s), in a process of its own")
+    if base is not None:
+        stage(f"baseline {base.name}: {baseline_starts} start(s), in a process of its own")
     with background() if worker is None else contextlib.nullcontext(worker) as bg:
-        task = None if homogeneous else bg.submit(_baseline_fit, data, baseline_starts, seed, tolerance)
+        task = None if base is None else bg.submit(_baseline_fit, data, base, baseline_starts, seed, tolerance)
         if warm_plotting:
             bg.submit(_warm_plotting)
         result = main_fit()
@@ -390,70 +479,110 @@ class _Clock:
 def run(args) -> int:
     import sys
 
-    from .. import fitting
     from .._parallel import background, jobs_for
     from .._progress import stage
     from ..io.outputs import OutputSet
-    from ..io.thinning import bin_datasets
 
-    if args.model not in (None, "voigt-per-tendon"):
-        from ._mechanism import run_mechanism_fit
-
-        return run_mechanism_fit(args, read_datasets)
-    if args.ensemble:
-        raise ValueError("--ensemble applies to --model of a mechanism whose tendon values are drawn from a "
-                         "distribution, not to the per-tendon fit")
+    spec = spec_from_args(args)
     check_contradictions(args)
+    _check_ensemble(args, spec)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    datasets = read_datasets(args.data, args.prestress, fitting.required_points(args.tendons, args.damping),
-                             data_options_from_args(args))
-    binned = bin_datasets(datasets, args.max_points)  # moduli only: creep data are kept as they are
-    for path, data, thin in zip(args.data, datasets, binned):
-        if thin is not data:
-            stage(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log frequency "
-                  f"(--max-points {args.max_points})")
-    datasets = list(binned)
+    datasets, read_lines = read_inputs(args, _min_points(spec))
     held = None
     if args.holdout is not None:
-        if len(datasets) != 1:
-            raise ValueError(f"--holdout applies to one frequency sweep, got {len(datasets)} data sets")
-        if not hasattr(datasets[0], "frequency_hz"):
-            raise ValueError(f"--holdout applies to a frequency sweep of G', G''; {args.data[0]} holds creep "
-                             "compliance J(t)")
-        from ..fitting.models import split_holdout
-
-        try:
-            train, held = split_holdout(datasets[0], *args.holdout)
-        except ValueError as err:
-            raise ValueError(f"--holdout {args.holdout[0]:g}:{args.holdout[1]:g}: {err}") from None
-        datasets = [train]
-    space = search_space(args, datasets)  # bad input: before any fitting
+        datasets, held = _split_holdout(args, datasets)
+    space = search_space(args, datasets, spec)  # bad input: before any fitting
+    for line in read_lines:  # what was read, now that every check has passed
+        stage(line)
     args.jobs = jobs_for(args.starts, args.jobs)
-    stage(f"fitting {sum(d.n for d in datasets)} points: {args.starts} start(s), stiffness "
-          f"{args.tendons}, damping {args.damping}, {args.jobs} process(es)")
+    stage(f"fitting {sum(d.n for d in datasets)} points with {spec.name}: {args.starts} start(s), "
+          f"{args.jobs} process(es)")
     clock = _Clock(getattr(args, "started", None))
     names = " and ".join(Path(p).name for p in args.data)
-    title = f"Tensegrity fit to {names}"
+    title = f"Fit of {spec.name} to {names}"
     with background() as worker:
         # while the fit runs, the worker fits the baseline and imports the plotting stack; then it draws the
         # figure while this process writes the report: the figure is most of the time after the fit
-        result, baseline = run_fit(datasets, args.tendons, args.damping, args.starts, args.seed, args.jobs,
-                                   args.tolerance, args.baseline_starts, worker=worker, warm_plotting=True, **space)
+        result, baseline = run_fit(datasets, spec, args.starts, args.seed, args.jobs, args.tolerance,
+                                   args.baseline_starts, worker=worker, warm_plotting=True, **space)
         timing = clock.timing(result)
         timing["outputs_started_s"] = clock.now()
         # the report's ± need one model evaluation per parameter: half of them in the worker, before the figure
         result.compute_derived(worker)
         figure = worker.submit(fit_png, result, baseline, title)
-        from ..fitting.models import compare_models
+        from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
         outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure)
+    ensemble = _ensemble(args, result, datasets)
     with out as d:
         for ext, name in FIT_FILES.items():
             outputs[ext](d / name)
-    verdict = result.verdict
+        if ensemble is not None:
+            write_ensemble(d, ensemble, f"Ensemble of the fitted `{spec.name}`")
     each = "; ".join(f"{Path(f.data.source).name} {f.rms_log10_error:.5f}" for f in result.fits)
-    print(f"tenscell fit: rms log10 error {each} (tolerance {result.tolerance:g}): {verdict}; "
-          f"homogeneous baseline {baseline.rms_log10_error:.5f}; {result.elapsed_s:.1f} s; wrote {out.target}/",
-          file=sys.stderr)
+    base = "" if baseline is result else f"; baseline {baseline.spec.name} {baseline.rms_log10_error:.5f}"
+    print(f"tenscell fit: {spec.name}: rms log10 error {each} (tolerance {result.tolerance:g}): {result.verdict}"
+          f"{base}; {result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0 if result.converged else 1
+
+
+def _min_points(spec) -> int:
+    """Points a single data set needs for this model (the layout's own check is exact; this one reads early)."""
+    from ..fitting.models.voigt import VoigtModel, required_points
+
+    if isinstance(spec, VoigtModel):
+        return required_points(spec.tendons, spec.damping)
+    return 2
+
+
+def _split_holdout(args, datasets):
+    """``--holdout FMIN:FMAX``: (the training data, the held-out points) of one frequency sweep."""
+    if len(datasets) != 1:
+        raise ValueError(f"--holdout applies to one frequency sweep, got {len(datasets)} data sets")
+    if datasets[0].kind == "creep":
+        raise ValueError(f"--holdout applies to a frequency sweep of G', G''; {args.data[0]} holds creep "
+                         "compliance J(t)")
+    from ..fitting.scores import split_holdout
+
+    try:
+        train, held = split_holdout(datasets[0], *args.holdout)
+    except ValueError as err:
+        raise ValueError(f"--holdout {args.holdout[0]:g}:{args.holdout[1]:g}: {err}") from None
+    return [train], held
+
+
+def _check_ensemble(args, spec) -> None:
+    """``--ensemble K``: a mechanism drawn from a distribution, and K >= 2 (or 0: none), before any fitting."""
+    if not args.ensemble:
+        return
+    from ..fitting.models.mechanism import Mechanism
+
+    if not isinstance(spec, Mechanism) or not spec.heterogeneous:
+        raise ValueError(f"--ensemble: model {spec.name} draws no tendon property from a distribution: every "
+                         "assignment is the same cell, so it has no ensemble (0: none)")
+    if args.ensemble == 1:
+        raise ValueError("--ensemble: 1 assignment has no spread between assignments; give K >= 2, or 0 for none")
+
+
+def _ensemble(args, result, datasets):
+    """The fitted mechanism over ``--ensemble`` K assignments at the data's points (None without the flag)."""
+    if not args.ensemble:
+        return None
+    from .._progress import stage
+    from ..population.ensemble import ensemble_at_data
+
+    return ensemble_at_data(result.model, datasets, args.ensemble, workers=getattr(args, "workers", None),
+                            scheduler=getattr(args, "scheduler", None), notify=lambda line: stage(f"ensemble: {line}"))
+
+
+def write_ensemble(out: Path, ensemble, title: str) -> None:
+    """An ensemble's table, figure and Markdown into the directory ``out`` (of an open output set)."""
+    from .. import plotting
+    from ..io.outputs import write_csv_rows, write_text
+    from ..reports.ensemble import ensemble_markdown
+
+    df = ensemble.to_dataframe()
+    write_csv_rows(out / "ensemble.csv", list(df.columns), (tuple(map(float, r)) for r in df.itertuples(index=False)))
+    plotting.save(ensemble.plot(), out / "ensemble.png")
+    write_text(out / "ensemble.md", ensemble_markdown(ensemble, title))

@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import sys
 
-from ._args import ENSEMBLE_MAX_K, MAX_GRID_POINTS, add_model_options, add_prestress, frequencies, grid_cost, integer
-from .population import add_cluster_options
+from ._args import MAX_GRID_POINTS, add_cluster_options, add_model_options, add_prestress, ensemble_size, frequencies, grid_cost
 
 DEFAULT_FREQ = "0.01:1000:61"
 
@@ -20,15 +19,16 @@ def register(sub) -> None:
     add_model_options(p)
     e = p.add_argument_group("ensemble (with --from-fit of a mechanism whose tendon values are drawn from a "
                              "distribution)")
-    e.add_argument("--ensemble", type=integer(2, ENSEMBLE_MAX_K), default=None, metavar="K",
+    e.add_argument("--ensemble", type=ensemble_size, default=None, metavar="K",
                    help="evaluate the fitted mechanism over K assignments of its tendon values (the fit averaged "
-                        "a few) and write the mean G', G'' with the spread between assignments (sd, standard "
+                        "a few; 0: none, as for fit and study) and write the mean G', G'' with the spread between assignments (sd, standard "
                         "error, 5-95%% band) and the fit's own average; runs on the population engine")
     add_cluster_options(e)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
+    args.ensemble = args.ensemble or None  # --ensemble 0: none, as for `fit` and `study`
     if args.ensemble is None and (args.workers is not None or args.scheduler is not None):
         raise ValueError(f"{'--workers' if args.workers is not None else '--scheduler'} applies to --ensemble")
     if args.ensemble is not None and args.from_fit is None:
@@ -64,13 +64,13 @@ def _run_from_fit(args) -> int:
     import numpy as np
 
     from ._args import _MODEL_DEFAULTS
-    from ..fitting.mechanism_fit import load_any_fit
+    from ..fitting.fitted import load_fit
     from ..io.tables import check_finite_rows
 
     for dest, (default, flag) in _MODEL_DEFAULTS.items():
         if getattr(args, dest, default) != default:
             raise ValueError(f"{flag} cannot be combined with --from-fit: the fit gives the cell and its tendons")
-    model = load_any_fit(args.from_fit)
+    model = load_fit(args.from_fit)
     prestresses = [None] if args.prestress is None else list(args.prestress)
     if len(prestresses) * len(args.freq) > MAX_GRID_POINTS:
         raise ValueError(f"--prestress × --freq is {len(prestresses) * len(args.freq):,} points; at most "
@@ -86,13 +86,12 @@ def _run_from_fit(args) -> int:
     rows = []
     for P in prestresses:
         Gs, Gl = model.moduli(f, P)
-        label = float(P) if P is not None else (model.default_prestress_pa if hasattr(model, "default_prestress_pa")
-                                                else None)
-        shown = label if label is not None else model.prestress(None)
+        # the row's prestress: the one given, or the data's median (Pa) for a fit with a prestress scale, or the
+        # fitted model prestress (N) when its data stated none
+        column, shown = model.prestress_label(P)
         block = [(shown, fi, a, b) for fi, a, b in zip(f, Gs, Gl)]
         rows.extend(check_finite_rows(block, "G', G''", "(--from-fit, --prestress, --freq)"))
-    header = ["prestress_Pa" if getattr(model, "s", None) is not None else "prestress_N", "frequency_Hz",
-              "G_storage_Pa", "G_loss_Pa"]
+    header = [column, "frequency_Hz", "G_storage_Pa", "G_loss_Pa"]
     _write_rows(header, rows)
     return 0
 
@@ -101,7 +100,7 @@ def _ensemble_cost(model, K: int, n_points: int, parallel: int | None):
     """What ``--ensemble K`` costs: one assignment at one point timed here (a chunk of a few assignments)."""
     import numpy as np
 
-    from ..fitting.mechanism_fit import bare_problem
+    from ..fitting.models.mechanism import bare_problem
     from ..population.ensemble import ensemble_chunk
     from ._cost import Cost, measure
 

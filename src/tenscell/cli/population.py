@@ -4,7 +4,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._args import (add_data_options, add_out, data_options_from_args, frequencies, integer, number, number_list,
+from ._args import (add_cluster_options, add_data_options, add_out, data_options_from_args, frequencies, integer, number,
+                    number_list,
                     path)
 from ._cost import Cost, announce, check, measure
 from .fit import DAMPING_MODES, TENDON_MODES
@@ -12,17 +13,6 @@ from .fit import DAMPING_MODES, TENDON_MODES
 MODELS = ("tensegrity", "powerlaw")
 #: suffix of the work directory kept beside --out while a run is under way
 PARTIAL_SUFFIX = ".partial"
-
-
-def add_cluster_options(p) -> None:
-    """``--workers N | --scheduler ADDRESS``: where the tasks run (shared by every Dask command)."""
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--workers", type=integer(0, 4096), default=None,
-                   help="local Dask workers started for this run (default: one per CPU when the work pays for starting "
-                        "them, judged from the first task's time, else in this process; 0: no Dask)")
-    g.add_argument("--scheduler", type=path("an address or a scheduler file"), default=None,
-                   help="an existing Dask scheduler: tcp://HOST:PORT or a scheduler file (dask scheduler "
-                        "--scheduler-file F)")
 
 
 def register(sub) -> None:
@@ -93,7 +83,7 @@ def _register_study(sub) -> None:
     kinds.required = True
     mc = kinds.add_parser("monte-carlo", help="simultaneous ±spread perturbations of every parameter")
     mc.add_argument("--draws", type=integer(1, 10**9), required=True, help="number of draws")
-    mc.add_argument("--spread", type=number(0.0, 1.0, open_lo=True), default=0.10,
+    mc.add_argument("--spread", type=number(0.0, 1.0, open_lo=True, open_hi=True), default=0.10,
                     help="uniform ±spread of every factor (fraction < 1)")
     mc.add_argument("--parameters", choices=("all", "material"), default="all",
                     help="perturb EA_j, c_j, P and the geometry (all) or only the material parameters")
@@ -389,10 +379,10 @@ def _with_column_map(sources, options: dict):
     """With --columns/--units/--step/--temperature, each cell's file read by tenscell.io.read_data in this process
     (its own headers and units; a file that cannot be read is that cell's failure, as for tenscell's layout)."""
     units = options.pop("units", None) or {}
-    if not any(v is not None for v in options.values()) and not units:
+    if not any(v is not None and v != () for v in options.values()) and not units:
         return sources
     from ..io.data import DataError, RheologyData
-    from ..io.instruments import read_data
+    from ..io.readers import read_data
     from ..population.sources import CellSource
 
     out = []

@@ -4,9 +4,9 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._args import ENSEMBLE_MAX_K, add_data_options, add_out, data_options_from_args, integer, number, number_list, path
+from ._args import add_data_options, add_out, data_options_from_args, ensemble_size, integer, number, number_list, path
 from .fit import stated_prestress
-from .population import add_cluster_options
+from ._args import add_cluster_options
 
 #: assignments of the study's ensemble unless --ensemble says otherwise (tenscell.population.ensemble.DEFAULT_K)
 STUDY_ENSEMBLE_K = 1000
@@ -163,7 +163,7 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     print(report.split("## The answer")[0].split("\n\n", 2)[-1], flush=True)
     written = "mechanisms.csv, mechanisms.png, mechanisms.md"
     if s.ensemble is not None:
-        from ._mechanism import ENSEMBLE_FILES, write_ensemble
+        from .fit import ENSEMBLE_FILES, write_ensemble
 
         write_ensemble(out, s.ensemble, f"Ensemble of `{s.ensemble.mechanism}`, the distributed mechanism with the "
                                         "lowest BIC")
@@ -245,7 +245,7 @@ def register(sub) -> None:
     m.add_argument("--mechanisms", metavar="NAMES", default=None,
                    help="comma list of mechanisms (default all; see `tenscell fit --model`)")
     m.add_argument("--hops", type=integer(0, 10_000), default=10, help="basin-hopping moves per start")
-    m.add_argument("--ensemble", type=integer(0, ENSEMBLE_MAX_K), default=None, metavar="K",
+    m.add_argument("--ensemble", type=ensemble_size, default=None, metavar="K",
                    help=f"evaluate the distributed mechanism with the lowest BIC over K assignments of its tendon "
                         f"values at the data's prestresses and frequencies (ensemble.csv, .png, .md; default "
                         f"{STUDY_ENSEMBLE_K}; 0: none; 1 is refused: one assignment has no spread)")
@@ -258,7 +258,12 @@ def _fitted_paper_cell(path) -> dict:
     """The sensitivity study's keyword arguments for the fitted paper cell in ``path`` (ValueError otherwise)."""
     from ..fitting.fitted import load_fit
 
+    from ..fitting.fitted import FittedCell
+
     model = load_fit(path)
+    if not isinstance(model, FittedCell):
+        raise ValueError(f"--from-fit {path}: the sensitivity study varies the paper cell's α, δ, L, EA and c; this "
+                         f"fit is {model.describe()}, not a fit of the Voigt cell (tenscell fit without --model)")
     p = model.cell.parameters
     if not {"alpha", "delta"} <= set(p) or not p.get("intermediate_filaments", False):
         raise ValueError(f"--from-fit {path}: the sensitivity study varies the paper cell's α, δ and L; this fit's "
@@ -293,8 +298,11 @@ def run(args) -> int:
         if args.name not in names and getattr(args, dest) != default:
             raise ValueError(f"{flag} applies to study {' and '.join(names)}, not to study {args.name}")
     if args.name == "mechanisms" and args.mechanisms is not None:
-        from ..fitting.mechanisms import mechanism_names
+        from ..fitting.models.catalog import mechanism_names
 
+        if not [m for m in args.mechanisms.split(",") if m.strip()]:
+            raise ValueError(f"--mechanisms {args.mechanisms!r}: no mechanism named; give a comma list of names "
+                             f"({', '.join(mechanism_names())}), or leave the flag out for all of them")
         bad = [m for m in args.mechanisms.split(",") if m.strip() and m.strip() not in mechanism_names()]
         if bad:
             raise ValueError(f"--mechanisms: unknown mechanism {bad[0]!r}; known: {', '.join(mechanism_names())}")
@@ -311,6 +319,8 @@ def run(args) -> int:
         from .fit import read_datasets
 
         args.datasets = read_datasets(args.data, args.prestress, 1, data_options_from_args(args))
+        for data in args.datasets:  # what was read: layout, step, temperature, conversions
+            stage(data.provenance.line())
     if args.name == "sensitivity" and args.draws > _QUICK_DRAWS:
         from ._cost import Cost, announce, check
         from .population import monte_carlo_rate

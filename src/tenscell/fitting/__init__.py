@@ -1,40 +1,59 @@
-"""Heterogeneous fits of the linear tensegrity model to measured cell rheology.
+"""Fits of models to measured cell rheology: one stack for every model.
 
-The paper (Sultan, Stamenović & Ingber 2004, Figs. 4–5) fits tendon
-stiffnesses, the damping c, the prestress P and the strut length L so that the
-model's G', G'' match measured data; a homogeneous cell cannot do it. This
-package does the same for any :class:`tenscell.io.data.RheologyData`:
+In the manner of lmfit, every fit has the same layers:
 
-- :mod:`~tenscell.fitting.layout`: the parameters, their names, units, bounds
-  and fixes, and the data's arrays (:func:`required_points`, :data:`TENDON_MODES`);
-- :mod:`~tenscell.fitting.problem`: residuals and their analytic Jacobian
-  (:class:`FitProblem`, :func:`make_problem`), from the model and its
-  derivatives in :mod:`~tenscell.fitting.derivatives`;
-- :mod:`~tenscell.fitting.search`: starts, basin hopping, least squares,
-  stopping (:func:`fit`);
-- :mod:`~tenscell.fitting.result`: what a fit returns (:class:`FitResult`,
-  :class:`FitParameter`, per-data-set :class:`DatasetFit`, model curves and slopes);
-- :mod:`~tenscell.fitting.prestress`: is the prestress doing anything
-  (:class:`PrestressActivity`);
-- :mod:`~tenscell.fitting.mechanisms`, :mod:`~tenscell.fitting.mechanism_problem`,
-  :mod:`~tenscell.fitting.mechanism_fit`, :mod:`~tenscell.fitting.heterogeneity`:
-  few-parameter mechanisms (tendon laws with dynamics, cytoplasm, distributions of
-  tendon properties) fitted by the same search (``fit(data, model=NAME)``);
-- :mod:`~tenscell.fitting.shares`: what the structure carries, the geometric prestress stiffness's
-  share of dG′/dP and dG″/dP against the law's tension terms (:func:`structure_shares`).
+- :mod:`~tenscell.fitting.models`: what is fitted — a :class:`~tenscell.fitting.models.base.FitModel` builds its
+  problem against data; one registry (:data:`MODELS`, :func:`get_model`) holds the paper's Voigt cell
+  (:mod:`~.models.voigt`), the few-parameter mechanisms (:mod:`~.models.mechanism`) and the structure-free
+  formulas every tensegrity has to beat (:mod:`~.models.formulas`);
+- :mod:`~tenscell.fitting.parameters` and :mod:`~tenscell.fitting.problem`: the parameters' layout (names, units,
+  bounds, fixes, the data's prestress groups) and the protocol every problem follows (residuals, Jacobian, starts,
+  moves, and what the result reads);
+- :mod:`~tenscell.fitting.search`: starts, basin hopping, least squares, stopping;
+- :mod:`~tenscell.fitting.result`: the one result type (:class:`FitResult`) with its records
+  (:mod:`~tenscell.fitting.records`), curves and slopes (:mod:`~tenscell.fitting.curves`), identifiability
+  (:mod:`~tenscell.fitting.identifiability`), derived numbers with ± (:mod:`~tenscell.fitting.derived`), scores
+  against other models and held-out data (:mod:`~tenscell.fitting.scores`);
+- :mod:`~tenscell.fitting.fitted`: the fitted model every consumer takes (``moduli``, ``creep``, ``simulate``,
+  ``show --from-fit``, ensembles) and fit.json.
+- :mod:`~tenscell.fitting.shares`: what the structure carries, the geometric prestress stiffness's share of dG′/dP
+  and dG″/dP against the law's tension terms (:func:`structure_shares`).
 
+:func:`fit` runs them: ``fit(data)`` is the paper's per-tendon fit, ``fit(data, model=NAME)`` any other model.
 The Markdown report is :func:`tenscell.reports.fit.fit_markdown`.
 """
-from .prestress import PrestressActivity, prestress_activity
-from .problem import DAMPING_MODES, TENDON_MODES, FitProblem, make_problem, required_points
-from .result import (DatasetFit, FitAlternative, FitCurve, FitParameter, FitResult, data_axis, frequency_slopes,
-                     model_curve, prestress_slopes)
 from .entry import fit
-from .mechanisms import MECHANISMS, Field, Mechanism, mechanism_names
-from .mechanism_fit import FittedMechanism, MechanismFit, fit_mechanism, load_any_fit
+from .fitted import FittedCell, FittedFormula, FittedMechanism, FittedModel, load_fit
+from .models import GROUPS, MODELS, RECOMMENDED, FitModel, Formula, Mechanism, VoigtModel, get_model, model_names
+from .models.catalog import MECHANISMS, PER_TENDON_VOIGT, mechanism_names
+from .models.mechanism import Field
+from .models.voigt import DAMPING_MODES, TENDON_MODES, FitProblem, make_problem, required_points
+from .prestress import PrestressActivity, prestress_activity
+from .records import DatasetFit, FitAlternative, FitCurve, FitParameter, data_axis
+from .curves import frequency_slopes, model_curve, prestress_slopes
+from .result import FitResult
 from .shares import StructureShares, structure_shares
 
+#: one result type for every model: a mechanism's fit is a FitResult (the name of tenscell 0.2)
+MechanismFit = FitResult
+#: the fitted-model family's reader (the name of tenscell 0.2): any fit.json
+load_any_fit = load_fit
+
 __all__ = [
+    "fit",
+    "FitModel",
+    "VoigtModel",
+    "Mechanism",
+    "Formula",
+    "Field",
+    "MODELS",
+    "GROUPS",
+    "RECOMMENDED",
+    "get_model",
+    "model_names",
+    "MECHANISMS",
+    "PER_TENDON_VOIGT",
+    "mechanism_names",
     "TENDON_MODES",
     "DAMPING_MODES",
     "FitParameter",
@@ -42,23 +61,21 @@ __all__ = [
     "FitResult",
     "FitCurve",
     "DatasetFit",
+    "FittedModel",
+    "FittedCell",
+    "FittedMechanism",
+    "FittedFormula",
+    "load_fit",
     "PrestressActivity",
     "prestress_activity",
     "data_axis",
     "FitProblem",
     "make_problem",
-    "fit",
     "model_curve",
     "frequency_slopes",
     "prestress_slopes",
     "required_points",
-    "MECHANISMS",
-    "Mechanism",
-    "Field",
-    "mechanism_names",
     "MechanismFit",
-    "FittedMechanism",
-    "fit_mechanism",
     "load_any_fit",
     "StructureShares",
     "structure_shares",

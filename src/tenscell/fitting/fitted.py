@@ -1,19 +1,21 @@
-"""A fitted cell is a model like any other: the cell at the fitted strut length, its linear model, fit.json.
+"""A fitted model is a model like any other: moduli anywhere, its cell and tendon law, fit.json.
 
-:class:`FittedModel` holds what a fit determined — the cell scaled to the fitted
-strut length L, every tendon's EA and c, and the prestress (the model
-prestress P in N, or the scale s in m² that turns a measured prestress in Pa
-into P) — and gives the :class:`~tenscell.linear.linearize.LinearModel` that
-creep, relaxation, simulation, sensitivity and ``show`` take. Its
-:meth:`~FittedModel.to_dict` is the ``"model"`` entry of ``fit.json``: the
-structure at the fitted L with EA, c and the self-stress (the
-``docs/structure-format.md`` object), so that :func:`load_fit` rebuilds the
-same cell and the same moduli to rounding.
+Every fit's :attr:`~tenscell.fitting.FitResult.model` is a :class:`FittedModel`:
+
+* :class:`FittedCell` — the paper's cell with Voigt tendons (the per-tendon, per-family or homogeneous fit): the cell
+  at the fitted strut length, every tendon's EA and c;
+* :class:`FittedMechanism` — a mechanism: its law's values per tendon (one assignment of a distributed property, or
+  the average over the fit's K assignments for the moduli), the cytoplasm viscosity;
+* :class:`FittedFormula` — a structure-free formula (a baseline): moduli only, no cell.
+
+They share the prestress mapping (the model prestress P in N, or the scale s in m² that turns a measured prestress in
+Pa into P), :meth:`FittedModel.moduli`, and, for the two with a cell, :meth:`FittedModel.tendon_law` and
+:meth:`FittedModel.linear` — what creep, relaxation, simulation and ``show`` take. ``to_dict`` is the ``"model"``
+entry of fit.json, and :func:`load_fit` rebuilds any of them from a fit.json, validating it first (schema version,
+model, every field and its range) so that a damaged or foreign file is refused in one line naming the field.
 """
 from __future__ import annotations
 
-import dataclasses
-import functools
 import json
 import math
 from dataclasses import dataclass
@@ -23,190 +25,70 @@ import numpy as np
 
 from .._checks import positive_scalar
 from .._results import format_repr
-from ..linear.linearize import LinearModel, linearize
-from ..model.equilibrium import Cell, equilibrate
-from ..response import moduli as _moduli
+from ..linear.linearize import LinearModel
+from .models.base import FITTED_KINDS, FitFileError, FittedModel, cell_from_dict, cell_to_dict
+from .models.formulas import FORMULA_FORMAT, FittedFormula
+from .models.mechanism import MECHANISM_FORMAT, FittedMechanism
+from .models.voigt import MODEL_FORMAT, FittedCell, scaled_cell
 
-__all__ = ["FittedModel", "scaled_cell", "load_fit", "PredictedCreep", "predicted_creep", "MODEL_FORMAT"]
+__all__ = ["FittedModel", "FittedCell", "FittedMechanism", "FittedFormula", "scaled_cell", "load_fit",
+           "fitted_from_dict", "PredictedCreep", "predicted_creep", "MODEL_FORMAT", "MECHANISM_FORMAT",
+           "FORMULA_FORMAT", "FIT_SCHEMA", "FitFileError", "cell_to_dict", "cell_from_dict"]
 
-#: the ``format`` tag of fit.json's ``"model"`` entry
-MODEL_FORMAT = "tenscell-fitted-model"
-
-
-def scaled_cell(cell: Cell, L: float) -> Cell:
-    """The cell with every length scaled so that its strut length is ``L`` (m); same self-stress.
-
-    Scaling a structure leaves its member directions, hence its self-stress
-    ``T0``, unchanged; with ``(P, EA, c) -> (λ²P, λ²EA, λc)`` the scaled cell
-    has the same G′, G″ (the strut-length gauge).
-    """
-    L = positive_scalar("L", L, "m")
-    if L / cell.strut_length == 1.0:
-        return cell
-    return _scaled(cell, L)
+#: the version of the fit.json document :meth:`tenscell.fitting.FitResult.to_dict` writes (``"schema"``); version 1
+#: documents (tenscell 0.2, no ``"schema"`` entry) are still read
+FIT_SCHEMA = 2
 
 
-@functools.lru_cache(maxsize=2)  # the fit report's uncertainties move every parameter but L: one cell, many times
-def _scaled(cell: Cell, L: float) -> Cell:
-    lam = L / cell.strut_length
-    st = dataclasses.replace(cell.structure, nodes=np.asarray(cell.structure.nodes) * lam)
-    params = dict(cell.parameters)
-    if "L" in params:
-        params["L"] = L
-    return equilibrate(st, cell.coords.kind, T0=np.asarray(cell.T0), parameters=params)
-
-
-@dataclass(frozen=True, eq=False, repr=False)
-class FittedModel:
-    """The fitted cell and its tendon properties.
-
-    Attributes
-    ----------
-    cell : Cell
-        At the fitted strut length.
-    EA : ndarray, shape (m,)
-        Tendon stiffnesses (N).
-    c : ndarray, shape (m,)
-        Tendon damping (N·s/m).
-    P : float or None
-        Model prestress (N) when the data stated no prestress.
-    s : float or None
-        Prestress scale (m²): the model prestress is ``s × prestress (Pa)``.
-    prestress_pa : tuple of float
-        The measured (or fitted) prestresses of the data (Pa), when ``s`` is used.
-    source : str
-        What was fitted (for messages).
-    """
-
-    cell: Cell
-    EA: np.ndarray
-    c: np.ndarray
-    P: float | None = None
-    s: float | None = None
-    prestress_pa: tuple = ()
-    source: str = ""
-
-    def __post_init__(self):
-        if (self.P is None) == (self.s is None):
-            raise ValueError("a fitted model has either a prestress P (N) or a prestress scale s (m²), not both")
-        for name in ("EA", "c"):
-            a = np.array(getattr(self, name), dtype=float)
-            a.setflags(write=False)
-            object.__setattr__(self, name, a)
-        object.__setattr__(self, "prestress_pa", tuple(float(x) for x in self.prestress_pa))
-
-    @property
-    def L(self) -> float:
-        """Strut length (m)."""
-        return float(self.cell.strut_length)
-
-    @property
-    def default_prestress_pa(self) -> float | None:
-        """The median measured prestress (Pa) when the model uses ``s``; None otherwise."""
-        return float(np.median(self.prestress_pa)) if self.s is not None and self.prestress_pa else None
-
-    def prestress(self, prestress_pa: float | None = None) -> float:
-        """Model prestress P (N): the fitted P, or ``s × prestress_pa`` (default the median measured one)."""
-        if self.s is None:
-            if prestress_pa is not None:
-                raise ValueError("this fit has a fitted prestress P (N); prestress_pa applies to fits with a "
-                                 "measured prestress (a prestress scale s)")
-            assert self.P is not None  # a fit without a prestress scale fits P itself
-            return float(self.P)
-        if prestress_pa is None:
-            prestress_pa = self.default_prestress_pa
-            if prestress_pa is None:
-                raise ValueError("prestress_pa (Pa) is required: the fit scales measured prestresses by s")
-        return float(self.s) * positive_scalar("prestress_pa", prestress_pa, "Pa")
-
-    def linear(self, prestress_pa: float | None = None, *, P_N: float | None = None) -> LinearModel:
-        """The linear model at the fitted parameters (see :meth:`prestress`), or at model prestress ``P_N`` (N)."""
-        P = self.prestress(prestress_pa) if P_N is None else positive_scalar("P_N", P_N, "N")
-        return linearize(self.cell, P=P, EA=self.EA, c=self.c)
-
-    def moduli(self, f_hz, prestress_pa: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """G′, G″ (Pa) at frequencies ``f_hz`` (Hz) through the core pipeline."""
-        return _moduli(self.linear(prestress_pa), f_hz)
-
-    def __repr__(self) -> str:
-        pre = f"P = {self.P:.4g} N" if self.s is None else f"s = {self.s:.4g} m² (P = s × prestress in Pa)"
-        return format_repr(
-            "FittedModel",
-            f"{self.cell.describe()}",
-            f"EA {self.EA.min():.3g} .. {self.EA.max():.3g} N, c {self.c.min():.3g} .. {self.c.max():.3g} N·s/m, "
-            + pre,
-        )
-
-    # -- fit.json ---------------------------------------------------------------------------
-    def to_dict(self) -> dict:
-        """JSON-ready description that :meth:`from_dict` turns back into the same model (floats exact)."""
-        return {
-            "format": MODEL_FORMAT,
-            **cell_to_dict(self.cell, EA=self.EA, c=self.c),
-            "strut_length_m": self.L,
-            "P_N": self.P,
-            "s_m2": self.s,
-            "prestress_Pa": list(self.prestress_pa),
-            "source": self.source,
-        }
-
-    @classmethod
-    def from_dict(cls, obj: dict) -> "FittedModel":
-        """Rebuild from :meth:`to_dict` (e.g. ``json.load(fit.json)["model"]``)."""
-        if not isinstance(obj, dict) or obj.get("format") != MODEL_FORMAT:
-            raise ValueError(f"not a fitted model (expected an object with format {MODEL_FORMAT!r})")
-        cell, sf = cell_from_dict(obj)
-        return cls(cell=cell, EA=sf.EA, c=sf.c, P=obj.get("P_N"), s=obj.get("s_m2"),
-                   prestress_pa=tuple(obj.get("prestress_Pa") or ()), source=str(obj.get("source", "")))
-
-
-def cell_to_dict(cell: Cell, **member_values) -> dict:
-    """The JSON entries that rebuild ``cell`` (:func:`cell_from_dict`): its structure file with ``T0``
-    (and any per-member values such as ``EA``, ``c``), its parametrization and its construction parameters."""
-    from ..io.structure_files import structure_to_dict
-
-    return {"structure": structure_to_dict(cell.structure, T0=cell.T0, **member_values),
-            "parametrization": cell.coords.kind,
-            "cell_parameters": {k: (v if isinstance(v, (bool, str)) else float(v)) for k, v in cell.parameters.items()}}
-
-
-def cell_from_dict(obj: dict):
-    """``(cell, structure_file)`` from the entries :func:`cell_to_dict` wrote (the file keeps its member values)."""
-    from ..io.structure_files import structure_from_dict
-
-    sf = structure_from_dict(obj["structure"])
-    cell = equilibrate(sf.structure, obj.get("parametrization", "angles"), T0=sf.T0,
-                       parameters=obj.get("cell_parameters") or {})
-    return cell, sf
+def fitted_from_dict(obj: dict) -> FittedModel:
+    """Any fitted model from the dict its ``to_dict`` wrote (FitFileError naming the field that is wrong)."""
+    if not isinstance(obj, dict):
+        raise FitFileError(f"model: expected an object, got {type(obj).__name__}")
+    kind = FITTED_KINDS.get(obj.get("format"))  # type: ignore[arg-type]
+    if kind is None:
+        raise FitFileError(f"model.format: {obj.get('format')!r} is not a tenscell fitted model (expected one of "
+                           f"{', '.join(FITTED_KINDS)})")
+    try:
+        return kind.from_dict(obj)
+    except FitFileError:
+        raise
+    except (KeyError, TypeError, ValueError, AttributeError) as err:
+        raise FitFileError(f"model: the fitted model cannot be rebuilt: {err}") from None
 
 
 def load_fit(path) -> FittedModel:
-    """The fitted model stored in a ``fit.json`` written by ``tenscell fit`` (its ``"model"`` entry).
+    """The fitted model stored in a ``fit.json`` written by ``tenscell fit`` (any model), validated first.
 
     Raises
     ------
-    ValueError
-        If the file is not JSON or has no fitted model; the message names the file.
+    FitFileError
+        (a ValueError) If the file is not JSON, of an unknown schema version, or its model is missing, of an
+        unknown kind, or has a missing or out-of-range field; the message names the file and the field.
     """
     path = Path(path)
     try:
         obj = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError) as err:
-        raise ValueError(f"--from-fit {path}: cannot read the file ({err})") from None
+        raise FitFileError(f"--from-fit {path}: cannot read the file ({err})") from None
     except json.JSONDecodeError as err:
-        raise ValueError(f"--from-fit {path}: not valid JSON (line {err.lineno}: {err.msg})") from None
-    model = obj.get("model") if isinstance(obj, dict) else None
-    if model is None:
-        raise ValueError(f"--from-fit {path}: no fitted model in the file (a fit.json written by `tenscell fit` "
-                         "has a \"model\" entry)")
+        raise FitFileError(f"--from-fit {path}: not valid JSON (line {err.lineno}: {err.msg})") from None
+    if not isinstance(obj, dict):
+        raise FitFileError(f"--from-fit {path}: not a fit.json (a JSON object written by `tenscell fit`)")
+    schema = obj.get("schema", 1)
+    if schema not in (1, FIT_SCHEMA):
+        raise FitFileError(f"--from-fit {path}: schema {schema!r} is not one this tenscell reads (1 or {FIT_SCHEMA}); "
+                           "refit with this version")
+    if "model" not in obj:
+        raise FitFileError(f"--from-fit {path}: no fitted model in the file (a fit.json written by `tenscell fit` "
+                           "has a \"model\" entry)")
     try:
-        return FittedModel.from_dict(model)
-    except (KeyError, TypeError, ValueError) as err:
-        raise ValueError(f"--from-fit {path}: the fitted model cannot be rebuilt: {err}") from None
+        return fitted_from_dict(obj["model"])
+    except FitFileError as err:
+        raise FitFileError(f"--from-fit {path}: {err}") from None
 
 
 # ---------------------------------------------------------------------------------------
-# predicted creep of the fitted cell
+# predicted creep of a fitted cell
 # ---------------------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False, repr=False)
 class PredictedCreep:

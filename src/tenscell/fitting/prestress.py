@@ -23,7 +23,6 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .._results import dataframe, format_repr
-from .._threads import hot_path
 
 if TYPE_CHECKING:
     from .result import FitResult
@@ -153,18 +152,9 @@ class PrestressActivity:
         }
 
 
-def _elasticity_P(result: FitResult, P: float, f_hz) -> tuple[np.ndarray, np.ndarray]:
-    """(∂lnG'/∂lnP, ∂lnG''/∂lnP) of the fitted cell at model prestress P (N), frequencies f_hz."""
-    from ..sensitivity import analytic_elasticities
-
-    el = analytic_elasticities(result._linear(P), f_hz)
-    k = el.index("P")
-    return el.storage[k], el.loss[k]
-
-
-@hot_path
 def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERENCE_FREQUENCY_HZ) -> PrestressActivity:
-    """The prestress elasticities and share of a fit, at its data points and at a reference frequency.
+    """The prestress elasticities and share of a fit of the Voigt cell, at its data points and at a reference
+    frequency (:meth:`tenscell.fitting.models.voigt.FitProblem.prestress_activity`).
 
     Parameters
     ----------
@@ -172,25 +162,4 @@ def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERE
     reference_frequency_hz : float
         Frequency (Hz) of the per-prestress summary (default 0.1 Hz).
     """
-    pr = result.problem
-    P_groups = result.group_prestress()
-    share_groups = pr.prestress_share(result.theta)
-    f = pr.omega / (2 * np.pi)
-    storage = np.empty(f.size)
-    loss = np.empty(f.size)
-    ref = np.empty((2, P_groups.size))
-    for g, P in enumerate(P_groups):
-        sel = pr.group_index == g  # a creep data set's group has no moduli points, only the reference
-        # the group's points and the reference frequency in one linearization and one elasticity solve
-        a, b = _elasticity_P(result, P, np.append(f[sel], reference_frequency_hz))
-        storage[sel], loss[sel] = a[:-1], b[:-1]
-        ref[:, g] = a[-1], b[-1]
-    return PrestressActivity(
-        dataset=pr.dataset_index.copy(), frequency_hz=f, prestress_model_N=P_groups[pr.group_index],
-        storage=storage, loss=loss, share=share_groups[pr.group_index],
-        reference_frequency_hz=float(reference_frequency_hz), reference_prestress_N=P_groups,
-        reference_dataset=pr.group_dataset.copy(), reference_storage=ref[0], reference_loss=ref[1],
-        reference_share=share_groups, min_share_bound=pr.min_prestress_share,
-        min_elasticity_bound=pr.min_prestress_elasticity,
-        elasticity_bound_frequency_hz=float(pr.elasticity_omega / (2 * np.pi)),
-    )
+    return result.problem.prestress_activity(result, reference_frequency_hz)

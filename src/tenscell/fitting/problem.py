@@ -1,440 +1,311 @@
-"""The fitting problem: a cell's linear model against data, a parameter layout, residuals and their analytic Jacobian.
+"""The problem protocol: what every fittable model gives the search and the result.
 
-The second of the fit's three layers (lmfit's parameters → problem →
-minimizer): :mod:`~tenscell.fitting.layout` lays the parameters out,
-:class:`FitProblem` holds the plain arrays and computes residuals, penalties
-and Jacobians from the model of :mod:`~tenscell.fitting.derivatives`, and
-:func:`tenscell.fitting.fit` (:mod:`~tenscell.fitting.search`) searches.
+A model (:class:`tenscell.fitting.models.base.FitModel`) is a frozen
+specification; against data sets it builds a :class:`Problem`, which holds
+plain arrays only (so that it can be sent to worker processes) and answers
 
-Parameters and units
---------------------
-* ``EA`` (N): per tendon (``tendons="per-tendon"``, 33 values for the paper
-  cell), per family (actin / intermediate filament) or one for all.
-* ``c`` (N·s/m): one value (the paper) or per family (``damping="per-family"``).
-* The prestress. Where a data set states the prestress at which it was
-  measured (a ``prestress_Pa`` column: a prestress sweep, or a frequency sweep
-  at a stated prestress), the model prestress of each point is ``s·P_exp`` and
-  the parameter is the scale ``s`` (m², since ``P_exp`` is in Pa): one ``s``
-  links every data set. A data set that does not state its prestress gets its
-  own fitted prestress, ``P_data[k]`` (Pa, on the same scale ``s``) in a joint
-  fit, or the model prestress ``P`` (N) directly when no data set states one
-  (``P[k]`` for several such data sets).
-* ``L`` (m): strut length. For the linear moduli it is exactly redundant: a
-  cell scaled by λ (all lengths ×λ) with ``(P, EA, c) -> (λ²P, λ²EA, λc)`` has
-  the same G' and G'', so ``(P, EA, c, L) -> (λ²P, λ²EA, λc, λL)`` is an exact
-  gauge. It is fitted as the paper did, starts at the cell's own L and stays
-  there unless other parameters are fixed or hit bounds; fix P or c to make it
-  identifiable.
+* the **layout**: ``names``, ``units``, ``kinds``, ``descriptions``, the
+  log-space ``lower``/``upper`` bounds, the ``free`` mask and the fixed
+  log-values ``fixed_log``; the data's ``y_obs``, ``weights``,
+  ``dataset_index``, ``sources`` and prestress groups (``group_map``,
+  ``group_log_offset``, ``group_measured``, ``group_index``);
+* the **evaluation** the search shares between residuals and Jacobian:
+  ``_evaluate_constrained(phi, jac)`` (None where the model is not a stable,
+  passive cell), then ``_residuals_from``, ``_jacobian_from`` and
+  ``_penalty_from`` on that evaluation; ``residuals(theta)`` and
+  ``jacobian(theta)`` follow;
+* the **search's moves**: ``initial_guess(rng)`` and ``perturb(theta, rng)``;
+* **anywhere**: ``moduli_at(theta, f_hz, P_N)``, the model's G′, G″ at any
+  frequencies and model prestresses;
+* what the **result** reads: ``fitted(theta, result)`` (the fitted model,
+  :mod:`tenscell.fitting.fitted`), ``report_quantities(result)`` (the numbers
+  the report derives, each given a standard error by
+  :mod:`~tenscell.fitting.derived`), ``summary(result)`` (the model's own
+  entries of fit.json), ``stiffness_spread(theta)``,
+  ``assignment_spread(theta)`` and ``describe()``.
 
-Everything is fitted in natural-log space within bounds. Residuals are
-``w·(log10 G_model − log10 G_data)`` for G' and G'' of every point of every
-data set (``w`` = 1, or ``1/sd(log10 G)`` when the data have standard
-deviations). The Jacobian is analytic, from the relaxation spectrum
-``K0 v = λ C0 v``: with ``x = Z⁻¹(−H0)``, ``y = Z⁻ᵀ D0ᵀ`` and
-``Z = K0 + iωC0``, ``∂J/∂EA_j = −(yᵀa_j)(a_jᵀx)/l_j``,
-``∂J/∂c_j = −iω(yᵀa_j)(a_jᵀx)``, ``∂J/∂P = −yᵀKp x``, all frequencies at once
-from a few matrix products.
-
-Two options shape the search space:
-
-``min_prestress_share``
-    The prestress share of the static stiffness, ``P·yᵀKp x / yᵀK0 x`` at
-    ω → 0 (equal to ``∂ln G(0)/∂ln P``), must stay at or above this value at
-    every prestress of the data. Enforced as a one-sided penalty residual
-    ``ρ·ln(S_min/share)`` (zero when satisfied), with its exact Jacobian; the
-    share is scale-free, so it depends on P relative to the stiffnesses only.
-``min_prestress_elasticity``
-    ``∂ln G'/∂ln P`` at ``elasticity_frequency_hz`` (default 0.1 Hz, where
-    cells show about 0.7) must stay at or above this value at every prestress
-    of the data; the same kind of penalty, with the exact Jacobian of
-    ``Re(G·e)/Re(G)``, ``e = P·yᵀKp x / J`` at that frequency. The static
-    share can be large while G' at the data's frequencies does not respond to
-    P (the tendons' dashpots stiffen them there), so this is the constraint
-    that keeps the measured response prestress-driven.
-``max_decades``
-    The spread ``log10(max EA / min EA)`` of the fitted stiffnesses is at most
-    ``D``: the search works in coordinates ``ln EA_j = m + D·ln10·σ_j`` with
-    ``σ_j ∈ [−½, ½]`` and ``m`` within the EA bounds shrunk by ``D/2``. Box
-    bounds on (m, σ) are exactly the constraint (any set of stiffnesses within
-    the bounds whose spread is ≤ D has such a representation), so the
-    trust-region solver enforces it at every iterate, and the Jacobian follows
-    by the chain rule. A penalty would only approximate the bound.
+Every fit is in natural-log parameters: ``theta`` holds the logs of the free
+parameters in the order of ``names``; ``phi`` those of all parameters.
+Residuals are ``w·(log10 model − log10 data)``: the G′ block, the G″ block,
+then creep points (log10 J).
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
-from .._results import format_repr
-from ..linear.whitening import rescaled_basis, unit_damping_basis, whitened_basis
-from ..model.equilibrium import Cell
-from .derivatives import _Evaluation, evaluate
-from .layout import (DAMPING_MODES, ProblemLayout, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
-                     prestress_varies, required_points)
+__all__ = ["Problem", "centred_start", "central_difference", "log_residual_blocks", "draw_start", "jitter", "LN10",
+           "PENALTY"]
 
-__all__ = ["TENDON_MODES", "DAMPING_MODES", "FitProblem", "make_problem", "required_points", "as_datasets"]
-
-_LN10 = math.log(10.0)
-# A residual (in decades) returned where the model is not a stable, passive
-# cell (K0 not positive definite, G' or G'' <= 0). Finite, so that the
-# trust-region solver simply rejects the step.
-_PENALTY = 10.0
-# Weight of the prestress-share penalty residual ρ·ln(S_min/share): a shortfall of
-# 1 % of the share costs as much as a 0.003-decade misfit of one point... times ρ/0.3
-_SHARE_WEIGHT = 30.0
+LN10 = math.log(10.0)
+#: a residual (decades) returned where the model is not a stable, passive cell (K0 not positive definite, G' or
+#: G'' <= 0): finite, so that the trust-region solver simply rejects the step
+PENALTY = 10.0
 
 
-@dataclass(frozen=True, eq=False, repr=False)
-class FitProblem(ProblemLayout):
-    """The linear model of a cell against one or several data sets, with a parameter layout.
+class Problem:
+    """The parameter and residual layout every fit problem shares, and the protocol of the module docstring.
 
-    Built by :func:`make_problem`; holds plain arrays only, so that it can be
-    sent to worker processes. The parameter vector ``theta`` holds the natural
-    logarithms of the *free* parameters, in the order of :attr:`names`
-    restricted to :attr:`free`. Parameters are laid out as stiffness groups,
-    damping groups, prestress parameters, then ``L``.
-
-    Attributes
-    ----------
-    names : tuple of str
-        All parameter names.
-    units, descriptions, kinds : tuple of str
-        ``kinds`` is one of ``"EA"``, ``"c"``, ``"P"``, ``"s"``, ``"P_data"``, ``"L"`` per parameter.
-    lower, upper : ndarray
-        Log-space bounds of all parameters.
-    free : ndarray of bool
-    fixed_log : ndarray
-        Log values of all parameters (used for the fixed ones).
-    sources : tuple of str
-        The data sets' sources, in order.
-    dataset_index : ndarray of int, shape (N,)
-        Data set of each point (the points of all data sets, concatenated).
-    group_index : ndarray of int, shape (N,)
-        Prestress group of each point.
-    group_measured : ndarray, shape (groups,)
-        Measured prestress (Pa) of each group, NaN where the data set did not state it.
-    group_dataset : ndarray of int, shape (groups,)
-    min_prestress_share, min_prestress_elasticity, max_decades : float or None
-        The search-space options (module docstring).
-    elasticity_omega : float
-        Angular frequency (rad/s) of ``min_prestress_elasticity``.
+    Subclasses are frozen dataclasses (:class:`~tenscell.fitting.models.voigt.FitProblem`,
+    :class:`~tenscell.fitting.models.mechanism.MechanismProblem`,
+    :class:`~tenscell.fitting.models.formulas.FormulaProblem`); they declare the fields below and implement the
+    evaluation, the moves and the result hooks.
     """
 
     names: tuple
     units: tuple
     descriptions: tuple
     kinds: tuple
+    weights: np.ndarray
+    free: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
-    free: np.ndarray
     fixed_log: np.ndarray
-    tendons: str
-    damping: str
-    n_ea: int
-    n_c: int
-    ea_groups: np.ndarray
-    c_groups: np.ndarray
-    # cell (reference strut length L_ref)
-    A: np.ndarray
-    lengths: np.ndarray
-    T0: np.ndarray
-    H: np.ndarray
-    load: np.ndarray
-    probe: np.ndarray
-    L_ref: float
-    white_unit: tuple
-    # data
-    sources: tuple
     omega: np.ndarray
-    dataset_index: np.ndarray
-    group_index: np.ndarray
-    group_log_offset: np.ndarray
-    group_map: np.ndarray
-    group_measured: np.ndarray
-    group_dataset: np.ndarray
     y_obs: np.ndarray
-    weights: np.ndarray
-    # search
-    scale_stiffness: float
-    scale_damping: float
-    prestress_matters: bool
-    min_prestress_share: float | None = None
-    max_decades: float | None = None
-    min_prestress_elasticity: float | None = None
-    elasticity_omega: float = 2 * math.pi * 0.1
-    # creep data (times after a stress step): their residuals follow the moduli's in y_obs and weights
-    creep_t: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    creep_dataset: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
-    creep_group: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    dataset_index: np.ndarray
+    sources: tuple
+    group_map: np.ndarray
+    group_log_offset: np.ndarray
+    group_measured: np.ndarray
+    group_index: np.ndarray
+    creep_dataset: np.ndarray  # per creep point: its data set (the models with creep data have them)
+    creep_group: np.ndarray  # per creep point: its prestress group
+    # and every subclass has ``cell``: the reference cell (None for a structure-free formula)
 
-    def __repr__(self) -> str:
-        opts = [f"{k}={v:g}" for k, v in (("min_prestress_share", self.min_prestress_share),
-                                         ("min_prestress_elasticity", self.min_prestress_elasticity),
-                                         ("max_decades", self.max_decades)) if v is not None]
-        return format_repr(
-            f"FitProblem: {self.n_datasets} data set(s), {self.n_points} points, {self.n_groups} prestress(es)",
-            f"{self.n_free} free of {self.n_params} parameters (stiffness {self.tendons}, damping {self.damping}); "
-            f"{self.n_residuals} residuals" + (f"; {', '.join(opts)}" if opts else ""),
-        )
-
-    # -- layout (the rest in fitting.layout.ProblemLayout) --------------------------
+    # -- the model ------------------------------------------------------------------------
     @property
-    def n_creep(self) -> int:
-        """Number of creep points, all creep data sets together (their residuals come last)."""
-        return int(self.creep_t.size)
+    def spec(self):
+        """The :class:`~tenscell.fitting.models.base.FitModel` this problem was built from."""
+        raise NotImplementedError
+
+    def describe(self) -> str:
+        """One line: what is fitted (the model and its structure)."""
+        return self.spec.description
+
+    @property
+    def label(self) -> str:
+        """A short name of the model for tables and legends."""
+        return self.spec.name
+
+    @property
+    def comparison_name(self) -> str:
+        """The model's row name in a comparison table (:mod:`tenscell.fitting.scores`)."""
+        return self.spec.name
+
+    @property
+    def report_sections(self) -> tuple:
+        """Names of the report sections of this kind of model beside the ones every fit has
+        (:data:`tenscell.reports.fit.SECTIONS`)."""
+        return ()
+
+    # -- layout ---------------------------------------------------------------------------
+    @property
+    def n_params(self) -> int:
+        """Number of all parameters (free and fixed)."""
+        return len(self.names)
+
+    @property
+    def n_free(self) -> int:
+        """Number of free parameters (length of ``theta``)."""
+        return int(self.free.sum())
+
+    @property
+    def n_points(self) -> int:
+        """Number of moduli data points, all data sets together."""
+        return int(self.omega.size)
+
+    @property
+    def n_residuals(self) -> int:
+        """Number of data residuals."""
+        return int(self.y_obs.size)
+
+    @property
+    def n_datasets(self) -> int:
+        """Number of data sets fitted together."""
+        return len(self.sources)
+
+    @property
+    def n_groups(self) -> int:
+        """Number of distinct model prestresses."""
+        return int(self.group_map.shape[0])
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Log-space bounds of the free parameters."""
+        return self.lower[self.free], self.upper[self.free]
 
     @property
     def prestress_slice(self) -> slice:
         """Positions of the prestress parameters in :attr:`names`."""
-        return slice(self.n_ea + self.n_c, self.n_params - 1)
+        raise NotImplementedError
+
+    def full(self, theta) -> np.ndarray:
+        """Log values of all parameters from the free ones."""
+        phi = self.fixed_log.copy()
+        phi[self.free] = theta
+        return phi
+
+    def values(self, theta) -> np.ndarray:
+        """Parameter values (SI units) of all parameters, in the order of ``names``."""
+        return np.exp(self.full(theta))
 
     def rows(self, dataset: int) -> np.ndarray:
-        """Positions of data set ``dataset``'s residuals: its G' rows then its G'' rows, or its creep rows."""
-        creep = np.flatnonzero(self.creep_dataset == dataset)
-        if creep.size:
-            return 2 * self.n_points + creep
+        """Positions of data set ``dataset``'s moduli residuals: its G' rows then its G'' rows."""
         pts = np.flatnonzero(self.dataset_index == dataset)
         return np.concatenate([pts, self.n_points + pts])
 
-    # -- model ----------------------------------------------------------------------
-    def _effective(self, phi):
-        """Tendon properties and group prestresses on the reference cell (strut length L_ref) equivalent to ``phi``."""
-        EA = np.exp(phi[: self.n_ea])[self.ea_groups]
-        c = np.exp(phi[self.n_ea: self.n_ea + self.n_c])[self.c_groups]
-        P = np.exp(self.group_log_offset + self.group_map @ phi[self.prestress_slice])
-        lam = math.exp(phi[-1]) / self.L_ref
-        # the cell scaled by lam = L/L_ref has the moduli of the reference cell with these
-        # properties (module docstring), so L never needs a new cell
-        return EA / lam**2, c / lam, P / lam**2
+    def parameters(self, theta) -> tuple:
+        """The parameters as :class:`tenscell.fitting.FitParameter` records (SI units)."""
+        from .records import FitParameter
 
-    def _whitening(self, eta):
-        """(B, Ht, bt, Dt): A, the prestress Hessian, load and probe in the basis where C0 = I; None if C0 is not
-        positive definite (:mod:`tenscell.linear.whitening`)."""
-        if self.n_c == 1:  # C0 = c·A Aᵀ: rescale the precomputed basis
-            return rescaled_basis(self.white_unit, float(eta[0]))
-        return whitened_basis(self.A, eta, self.H, self.load, self.probe)
+        vals = self.values(theta)
+        lo, hi = np.exp(self.lower), np.exp(self.upper)
+        return tuple(
+            FitParameter(name=n, value=float(v), lower=float(a), upper=float(b), unit=u, vary=bool(fr), description=d)
+            for n, v, a, b, u, fr, d in zip(self.names, vals, lo, hi, self.units, self.free, self.descriptions)
+        )
 
-    def _evaluate(self, phi, jac: bool, share: bool = False, elasticity: bool = False) -> _Evaluation | None:
-        """Moduli (and, if asked, their log-derivatives, the prestress share and elasticity); None if unstable."""
-        return evaluate(self, phi, jac, share, elasticity)
+    def group_prestress(self, theta) -> np.ndarray:
+        """Model prestress (N) of each prestress group."""
+        phi = self.full(theta)
+        return np.exp(self.group_log_offset + self.group_map @ phi[self.prestress_slice])
 
-    def _to_params(self, d_EA, d_c, d_P):
-        """Per-tendon and per-group derivatives (rows: points or groups) to derivatives by all parameters.
+    def model_prestress(self, theta, prestress_pa) -> np.ndarray:
+        """Model prestress (N) of measured prestresses ``prestress_pa`` (Pa): ``s·prestress_pa`` for a problem
+        with a prestress scale ``s`` (some data set stated its prestress); ValueError otherwise."""
+        if "s" not in self.names:
+            raise ValueError("no data set of this fit stated its prestress, so prestress (Pa) has no model "
+                             "equivalent; use the fitted P (N)")
+        return float(self.values(theta)[self.names.index("s")]) * np.asarray(prestress_pa, dtype=float)
 
-        ``d_EA`` (r, m), ``d_c`` (r, m): by ln EA_j, ln c_j of each tendon; ``d_P`` (r, groups): by the
-        log prestress of each group. L acts through the effective (P/λ², EA/λ², c/λ).
-        """
-        out = np.zeros((d_EA.shape[0], self.n_params), dtype=np.result_type(d_EA, d_c, d_P))
-        out[:, : self.n_ea] = d_EA @ np.eye(self.n_ea)[self.ea_groups]
-        out[:, self.n_ea: self.n_ea + self.n_c] = d_c @ np.eye(self.n_c)[self.c_groups]
-        out[:, self.prestress_slice] = d_P @ self.group_map
-        out[:, -1] = -2.0 * d_P.sum(axis=1) - 2.0 * d_EA.sum(axis=1) - d_c.sum(axis=1)
-        return out
+    # -- the gauge and the search's coordinates --------------------------------------------
+    def gauge(self) -> np.ndarray:
+        """An exact gauge of the moduli in log-parameter space (zeros: none)."""
+        return np.zeros(self.n_params)
 
-    # -- residuals ------------------------------------------------------------------
-    def moduli(self, theta) -> tuple[np.ndarray, np.ndarray]:
-        """Model G', G'' (Pa) at the data points, shape (N,) each; NaN where the model is unstable."""
-        out = self._evaluate(self.full(theta), jac=False)
-        if out is None:
-            nan = np.full(self.omega.size, np.nan)
-            return nan, nan.copy()
-        return out.G.real, out.G.imag
+    @property
+    def n_model_parameters(self) -> int:
+        """Free parameters less the exact gauge, if any (what AIC and BIC count)."""
+        g = self.gauge()
+        moved = g != 0
+        return self.n_free - (1 if moved.any() and np.all(self.free[moved]) else 0)
 
-    def creep(self, theta) -> np.ndarray:
-        """Model creep compliance (1/Pa) at the creep points, shape (n_creep,); NaN where the model is unstable."""
-        out = self._evaluate(self.full(theta), jac=False)
-        return np.full(self.n_creep, np.nan) if out is None or out.Jc is None else out.Jc
+    def coordinate_map(self) -> np.ndarray:
+        """Search coordinates to free log-parameters: ``theta = T @ u`` (identity unless a model says otherwise)."""
+        return np.eye(self.n_free)
 
-    def residuals(self, theta) -> np.ndarray:
-        """Weighted data residuals ``w·(log10 G_model − log10 G_data)``, shape (2N,) (G' block, then G'')."""
-        return self._residuals_from(self._evaluate(self.full(theta), jac=False))
+    def coordinate_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of the search coordinates."""
+        return self.bounds
 
-    def _residuals_from(self, out) -> np.ndarray:
-        if out is None:
-            return np.full(self.y_obs.size, _PENALTY)
-        G = out.G
-        if not (np.all(G.real > 0) and np.all(G.imag > 0)):
-            return np.full(self.y_obs.size, _PENALTY)
-        parts = [np.log10(G.real), np.log10(G.imag)]
-        if self.n_creep:
-            if not np.all(out.Jc > 0):
-                return np.full(self.y_obs.size, _PENALTY)
-            parts.append(np.log10(out.Jc))
-        return self.weights * (np.concatenate(parts) - self.y_obs)
-
-    def jacobian(self, theta) -> np.ndarray:
-        """Analytic Jacobian of :meth:`residuals` with respect to ``theta``, shape (2N, n_free)."""
-        return self._jacobian_from(self._evaluate(self.full(theta), jac=True))
-
-    def _jacobian_from(self, out) -> np.ndarray:
-        if out is None or out.dlogG is None:
-            return np.zeros((self.y_obs.size, self.n_free))
-        G = out.G
-        dG = G[:, None] * out.dlogG[:, self.free]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            blocks = [dG.real / (G.real[:, None] * _LN10), dG.imag / (G.imag[:, None] * _LN10)]
-        if self.n_creep:
-            blocks.append(out.dlogJc[:, self.free] / _LN10)
-        return self.weights[:, None] * np.nan_to_num(np.vstack(blocks))
-
-    def jacobian_fd(self, theta, step: float = 1e-5) -> np.ndarray:
-        """Central finite-difference Jacobian of :meth:`residuals` (the slow reference), shape (2N, n_free)."""
-        return _central(self.residuals, theta, step)
-
-    # -- the prestress share and its penalty ---------------------------------------------
-    def prestress_share(self, theta) -> np.ndarray:
-        """Prestress share of the static stiffness at each prestress group, shape (groups,); NaN if unstable."""
-        out = self._evaluate(self.full(theta), jac=False, share=True)
-        if out is None or out.share is None:  # share=True always computes it when the model is stable
-            return np.full(self.n_groups, np.nan)
-        return out.share
-
-    def prestress_elasticity(self, theta) -> np.ndarray:
-        """``∂ln G'/∂ln P`` at :attr:`elasticity_omega` at each prestress group, shape (groups,); NaN if unstable."""
-        out = self._evaluate(self.full(theta), jac=False, elasticity=True)
-        if out is None or out.elasticity is None:  # elasticity=True always computes it when the model is stable
-            return np.full(self.n_groups, np.nan)
-        return out.elasticity
-
-    def _constraints(self) -> list:
-        """The active activity constraints: [(lower bound, field of _Evaluation, its d ln field)]."""
-        out = []
-        if self.min_prestress_share is not None:
-            out.append((self.min_prestress_share, "share", "dshare"))
-        if self.min_prestress_elasticity is not None:
-            out.append((self.min_prestress_elasticity, "elasticity", "delasticity"))
-        return out
+    def to_coordinates(self, theta) -> np.ndarray:
+        """Search coordinates of free log-parameters ``theta``."""
+        return np.asarray(theta, dtype=float).copy()
 
     @property
     def n_penalties(self) -> int:
-        """Penalty residuals the search adds to the data residuals (one per group and activity constraint)."""
-        return self.n_groups * len(self._constraints())
+        """One-sided penalty residuals appended after the data's (the Voigt cell's activity constraints); 0."""
+        return 0
 
+    @property
+    def n_creep(self) -> int:
+        """Creep points (their residuals follow the moduli's); 0 for a model fitted to moduli only."""
+        return 0
+
+    def creep(self, theta) -> np.ndarray:
+        """Model creep compliance (1/Pa) at the creep points (models that fit creep data)."""
+        raise NotImplementedError
+
+    # -- evaluation (subclasses implement the first three) --------------------------------------
     def _evaluate_constrained(self, phi, jac: bool):
-        return self._evaluate(phi, jac=jac, share=self.min_prestress_share is not None,
-                              elasticity=self.min_prestress_elasticity is not None)
+        raise NotImplementedError
+
+    def _residuals_from(self, out) -> np.ndarray:
+        raise NotImplementedError
+
+    def _jacobian_from(self, out) -> np.ndarray:
+        raise NotImplementedError
 
     def _penalty_from(self, out, jac: bool):
-        """Penalty residuals ``ρ·ln(bound/value)`` where a constrained value falls short (else 0), and their Jacobian."""
-        rows, jrows = [], []
-        for bound, name, dname in self._constraints():
-            r = np.zeros(self.n_groups)
-            Jr = np.zeros((self.n_groups, self.n_free)) if jac else None
-            if out is None:
-                r[:] = _PENALTY
-            else:
-                v = getattr(out, name)
-                short = v < bound
-                ok = short & (v > 0)
-                r[ok] = _SHARE_WEIGHT * np.log(bound / v[ok])
-                r[short & ~(v > 0)] = _SHARE_WEIGHT * 50.0  # no positive value: a flat wall
-                if Jr is not None and ok.any():
-                    Jr[ok] = -_SHARE_WEIGHT * getattr(out, dname)[ok][:, self.free]
-            rows.append(r)
-            if Jr is not None:
-                jrows.append(Jr)
-        if not rows:
-            return np.zeros(0), (np.zeros((0, self.n_free)) if jac else None)
-        return np.concatenate(rows), (np.vstack(jrows) if jac else None)
+        """Penalty residuals and their Jacobian (none by default)."""
+        return np.zeros(0), (np.zeros((0, self.n_free)) if jac else None)
 
-    def penalty(self, theta) -> np.ndarray:
-        """The penalty residuals the search adds (empty without a constraint), shape (n_penalties,)."""
-        if self.n_penalties == 0:
-            return np.zeros(0)
-        return self._penalty_from(self._evaluate_constrained(self.full(theta), jac=False), jac=False)[0]
+    def residuals(self, theta) -> np.ndarray:
+        """Weighted data residuals ``w·(log10 model − log10 data)`` at free log-parameters ``theta``."""
+        return self._residuals_from(self._evaluate_constrained(self.full(theta), jac=False))
+
+    def jacobian(self, theta) -> np.ndarray:
+        """Jacobian of :meth:`residuals` by the free log-parameters, shape (n_residuals, n_free)."""
+        return self._jacobian_from(self._evaluate_constrained(self.full(theta), jac=True))
+
+    def jacobian_fd(self, theta, step: float = 1e-5) -> np.ndarray:
+        """Central finite differences of :meth:`residuals` (the slow reference)."""
+        return central_difference(self.residuals, theta, step)
 
     def feasible(self, theta) -> bool:
-        """Whether every activity constraint holds at ``theta`` to within 1 % of its bound (True without one).
+        """The model's constraints hold at ``theta`` (none by default: True)."""
+        return True
 
-        The search counts a state as meeting the tolerance only when it is
-        also feasible (:func:`tenscell.fitting.fit`).
-        """
-        return bool(np.all(self.penalty(theta) <= _SHARE_WEIGHT * 0.01))
+    def rms(self, theta) -> float:
+        """RMS of the unweighted log10 residuals of all data sets (decades)."""
+        r = self.residuals(theta) / self.weights
+        return float(np.sqrt(np.mean(r**2)))
 
-    def penalty_jacobian(self, theta) -> np.ndarray:
-        """Analytic Jacobian of :meth:`penalty`, shape (n_penalties, n_free)."""
-        if self.n_penalties == 0:
-            return np.zeros((0, self.n_free))
-        return self._penalty_from(self._evaluate_constrained(self.full(theta), jac=True), jac=True)[1]
+    def dataset_rms(self, theta) -> np.ndarray:
+        """RMS of the unweighted log10 residuals of each data set (decades), shape (n_datasets,)."""
+        r = self.residuals(theta) / self.weights
+        return np.array([math.sqrt(float(np.mean(r[self.rows(k)] ** 2))) for k in range(self.n_datasets)])
 
-    # -- search coordinates (max_decades) ---------------------------------------------
-    @property
-    def compact(self) -> bool:
-        """True if ``max_decades`` actually constrains the stiffnesses (several EA, D below the EA box)."""
-        if self.max_decades is None or self.n_ea < 2:
-            return False
-        return self.max_decades * _LN10 < float(self.upper[0] - self.lower[0])
+    # -- the search's moves ---------------------------------------------------------------------
+    def initial_guess(self, rng: np.random.Generator) -> np.ndarray:
+        """A start: free log-parameters placed on the data."""
+        raise NotImplementedError
 
-    @property
-    def _decades(self) -> float:
-        """``max_decades`` where it is known to be set (the compact coordinates)."""
-        assert self.max_decades is not None, "only used when compact"
-        return self.max_decades
+    def perturb(self, theta, rng: np.random.Generator) -> np.ndarray:
+        """A basin-hopping move from free log-parameters ``theta``."""
+        raise NotImplementedError
 
-    def coordinate_map(self) -> np.ndarray:
-        """``T`` with ``theta = T @ u`` (search coordinates ``u``), shape (n_free, n_u).
+    # -- anywhere, and what the result reads ---------------------------------------------------
+    def moduli(self, theta) -> tuple[np.ndarray, np.ndarray]:
+        """Model G', G'' (Pa) at the data points; NaN where the model is not a stable cell."""
+        raise NotImplementedError
 
-        Identity unless :attr:`compact`; then ``u = (m, σ_1..σ_nEA, rest)`` and
-        ``ln EA_j = m + D·ln10·σ_j``.
-        """
-        n = self.n_free
-        if not self.compact:
-            return np.eye(n)
-        T = np.zeros((n, n + 1))
-        T[: self.n_ea, 0] = 1.0
-        T[: self.n_ea, 1: self.n_ea + 1] = np.eye(self.n_ea) * (self._decades * _LN10)
-        T[self.n_ea:, self.n_ea + 1:] = np.eye(n - self.n_ea)
-        return T
+    def moduli_at(self, theta, f_hz, P_N) -> tuple[np.ndarray, np.ndarray]:
+        """Model G', G'' (Pa) at frequencies ``f_hz`` (Hz) and model prestresses ``P_N`` (N), broadcast together."""
+        raise NotImplementedError
 
-    def coordinate_bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Box bounds of the search coordinates ``u``."""
-        lo, hi = self.bounds
-        if not self.compact:
-            return lo, hi
-        half = 0.5 * self._decades * _LN10
-        s = np.full(self.n_ea, 0.5)
-        return (np.concatenate([[lo[0] + half], -s, lo[self.n_ea:]]),
-                np.concatenate([[hi[0] - half], s, hi[self.n_ea:]]))
+    def fitted(self, theta, result):
+        """The fitted model (:mod:`tenscell.fitting.fitted`) at ``theta``; ``result`` gives the data's prestresses."""
+        raise NotImplementedError
 
-    def to_coordinates(self, theta) -> np.ndarray:
-        """Search coordinates of ``theta``; stiffnesses spread wider than ``max_decades`` are compressed about their centre."""
-        theta = np.asarray(theta, dtype=float)
-        if not self.compact:
-            return theta.copy()
-        e = theta[: self.n_ea]
-        width = self._decades * _LN10
-        spread = float(e.max() - e.min())
-        centre = 0.5 * float(e.max() + e.min())
-        lo, hi = self.coordinate_bounds()
-        mid = float(np.clip(centre, lo[0], hi[0]))
-        scale = min(1.0, width / spread) if spread > 0 else 1.0
-        sigma = np.clip((centre + (e - centre) * scale - mid) / width, -0.5, 0.5)
-        return np.concatenate([[mid], sigma, theta[self.n_ea:]])
+    def report_quantities(self, result) -> dict:
+        """Every number the report derives from the parameters, as flat arrays (given ± by :mod:`.derived`)."""
+        return {}
 
-    # -- records ----------------------------------------------------------------------
+    def summary(self, result) -> dict:
+        """The model's own entries of fit.json (beside the entries every fit has)."""
+        return {}
 
-    def gauge(self) -> np.ndarray:
-        """The exact strut-length gauge in log-parameter space, shape (n_params,).
+    def stiffness_spread(self, theta) -> tuple[float, float, float] | None:
+        """(min, max, decades) of the tendon stiffnesses (N, N, -); None for a model without tendons."""
+        return None
 
-        ``(P, EA, c, L) -> (λ²P, λ²EA, λc, λL)`` leaves G unchanged, i.e. the
-        moduli are constant along ``phi + t·gauge()`` for every t: 2 for each
-        stiffness and for a model prestress ``P`` or scale ``s``, 1 for each
-        damping and for ``L``, 0 for a data set's fitted prestress ``P_data``
-        (in Pa: the scale ``s`` carries the λ²). It is a gauge of the fit only
-        if every parameter it moves is free.
-        """
-        power = {"EA": 2.0, "c": 1.0, "P": 2.0, "s": 2.0, "P_data": 0.0, "L": 1.0}
-        return np.array([power[k] for k in self.kinds])
+    def stiffness_spread_interior(self, theta) -> tuple[float, float, float] | None:
+        """Like :meth:`stiffness_spread`, over the tendons not at a bound (None: not applicable, or all at one)."""
+        return None
 
-    def effective_properties(self, theta):
-        """(EA (m,), c (m,), P (groups,)) on the reference cell (N, N·s/m, N) equivalent to ``theta``."""
-        return self._effective(self.full(theta))
+    def prestress_activity(self, result, reference_frequency_hz: float = 0.1):
+        """Is the prestress doing anything? Defined for the Voigt cell (:mod:`tenscell.fitting.prestress`)."""
+        raise ValueError(f"the prestress activity analysis is defined for the Voigt cell, not for {self.spec.name}")
+
+    def assignment_spread(self, theta) -> tuple[float, float]:
+        """Largest sd (decades) of G', G'' between the assignments of a distributed property (0, 0: none)."""
+        return 0.0, 0.0
 
 
-def centred_start(problem, out, phi: np.ndarray, scalable: np.ndarray) -> float | None:
+def centred_start(problem: Problem, out, phi: np.ndarray, scalable: np.ndarray) -> float | None:
     """Score one candidate start the way every search ranks them, and centre it on the data.
 
     ``out`` is ``problem``'s evaluation at ``phi`` (natural-log parameters). Scaling every stiffness-like
@@ -443,13 +314,14 @@ def centred_start(problem, out, phi: np.ndarray, scalable: np.ndarray) -> float 
     Returns None when the evaluation failed or hit the penalty.
     """
     r = problem._residuals_from(out) / problem.weights
-    if out is None or np.any(np.abs(r) >= _PENALTY):
+    if out is None or np.any(np.abs(r) >= PENALTY):
         return None
-    phi[scalable] -= float(np.mean(r)) * _LN10
+    phi[scalable] -= float(np.mean(r)) * LN10
     return float(np.sqrt(np.mean((r - np.mean(r)) ** 2)))
 
 
-def _central(fun, theta, step):
+def central_difference(fun, theta, step: float) -> np.ndarray:
+    """Central finite differences of ``fun`` at ``theta``, one column per entry of ``theta``."""
     theta = np.asarray(theta, dtype=float)
     cols = []
     for k in range(theta.size):
@@ -459,104 +331,37 @@ def _central(fun, theta, step):
     return np.stack(cols, axis=-1)
 
 
-# ---------------------------------------------------------------------------------
-# building a problem
-# ---------------------------------------------------------------------------------
-def _cell_arrays(cell: Cell) -> dict:
-    """The cell as :class:`FitProblem` fields: dense A, the symmetric prestress Hessian Σ T0_j ∇²l_j, lengths,
-    T0, load, probe, the strut length and the whitened basis of unit damping.
+def log_residual_blocks(G, dG) -> np.ndarray:
+    """``d log10 G' / dθ`` over ``d log10 G'' / dθ`` from complex moduli ``G`` (N,) and ``dG`` (N, p)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.nan_to_num(np.vstack([dG.real / (G.real[:, None] * LN10), dG.imag / (G.imag[:, None] * LN10)]))
 
-    ValueError if C0 would be singular.
+
+def draw_start(problem: Problem, rng: np.random.Generator, scalable_kinds, candidates: int = 24) -> np.ndarray:
+    """A start: the best of ``candidates`` log-uniform draws in the middle of the bounds, scaled onto the data.
+
+    Every parameter of a ``scalable_kinds`` kind (and a prestress parameter) scaled by λ scales G* by λ, so the
+    mean log residual of a draw is removed by one shift (:func:`~tenscell.fitting.problem.centred_start`).
     """
-    dense = lambda M: M.toarray() if sp.issparse(M) else np.asarray(M, dtype=float)  # noqa: E731
-    A, H = dense(cell.A), dense(cell.prestress_hessian)
-    H = 0.5 * (H + H.T)
-    load, probe = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
-    white_unit = unit_damping_basis(A, H, load, probe)
-    if white_unit is None:
-        raise ValueError(
-            f"{cell.describe()}: the damping matrix C0 = Σ c_j a_j a_jᵀ is singular (the tendons leave a mechanism "
-            "undamped, e.g. the cell without intermediate filaments), so its relaxation spectrum, which the fit "
-            "uses, does not exist; fit a cell with a positive definite C0"
-        )
-    return dict(A=A, lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float), H=H,
-                load=load, probe=probe, L_ref=float(cell.strut_length),
-                white_unit=white_unit)
+    lo, hi = problem.lower, problem.upper
+    mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    scal = np.array([k in scalable_kinds or k in ("s", "P") for k in problem.kinds]) & problem.free
+    best = None
+    for _ in range(candidates):
+        phi = problem.fixed_log.copy()
+        draw = mid + rng.uniform(-0.6, 0.6, mid.size) * half
+        phi[problem.free] = draw[problem.free]
+        score = centred_start(problem, problem._evaluate_constrained(phi, jac=False), phi, scal)
+        if score is None:
+            continue
+        if best is None or score < best[0]:
+            best = (score, phi)
+    phi = best[1] if best is not None else problem.fixed_log.copy()
+    return np.clip(phi[problem.free], lo[problem.free], hi[problem.free])
 
 
-def make_problem(
-    data,
-    cell: Cell | None = None,
-    *,
-    tendons: str = "per-tendon",
-    damping: str = "uniform",
-    bounds: dict | None = None,
-    fixed: dict | None = None,
-    min_prestress_share: float | None = None,
-    max_decades: float | None = None,
-    min_prestress_elasticity: float | None = None,
-    elasticity_frequency_hz: float = 0.1,
-) -> FitProblem:
-    """Set up the fit of ``cell``'s linear model to one or several data sets.
-
-    Parameters
-    ----------
-    data : RheologyData or sequence of RheologyData
-        Frequency sweeps, prestress sweeps, or frequency sweeps at a stated
-        prestress (a ``prestress_Pa`` column; see
-        :meth:`RheologyData.with_prestress`). Several data sets are fitted
-        jointly by one parameter set (module docstring: the prestress).
-    cell : Cell, optional
-        The reference (default :func:`tenscell.paper_cell`). Its damping
-        matrix must be positive definite for positive c (true for the paper
-        cell with intermediate filaments).
-    tendons : {"per-tendon", "per-family", "uniform"}
-        Stiffness parametrization.
-    damping : {"uniform", "per-family"}
-        Damping parametrization.
-    bounds : dict, optional
-        ``{"EA": (lo, hi), "c": (lo, hi), "P": (lo, hi), "s": (lo, hi), "P_data": (lo, hi), "L": (lo, hi)}``
-        in N, N·s/m, N, m², Pa, m; each applies to every parameter of that
-        kind. Defaults scale with the data: with ``S = median(G')·L²`` (N),
-        ``ω_m = 2π·geomean(f)`` and ``P_m`` the median stated prestress (Pa):
-        EA in [1e-8, 1e6]·S, c in [1e-6, 1e6]·S/ω_m, P in [1e-10, 1e4]·S,
-        s in [1e-10, 1e4]·S/P_m, P_data in [1e-3, 1e3]·P_m, L in
-        [1e-3, 1e3]·L_cell.
-    fixed : dict, optional
-        Parameters to hold fixed, by name (any of :attr:`FitProblem.names`:
-        ``"L"``, ``"c"`` or ``"c_actin"``, ``"EA_intermediate_filament"``,
-        ``"EA[3]"``, a prestress ``"P"``, ``"s"``, ``"P_data[k]"``...), with
-        values in SI units (Pa for ``P_data``). Fixing any of EA, c, P (or
-        s) or L removes the strut-length gauge (and makes L identifiable).
-    min_prestress_share : float in (0, 1), optional
-        Lower bound on the prestress share of the static stiffness at every
-        prestress of the data (module docstring).
-    max_decades : float, optional
-        Upper bound on the spread log10(max EA / min EA) of the stiffnesses.
-    min_prestress_elasticity : float, optional
-        Lower bound on ``∂ln G'/∂ln P`` at ``elasticity_frequency_hz`` at
-        every prestress of the data (adherent cells: about 0.7 at 0.1 Hz).
-    elasticity_frequency_hz : float
-        Frequency (Hz) of that bound (default 0.1 Hz).
-
-    Returns
-    -------
-    FitProblem
-
-    Raises
-    ------
-    ValueError
-        Unknown modes, bad bounds, fixed values or options, a cell with
-        singular damping, or too few data points (:func:`required_points`).
-    """
-    from ..model.shapes import paper_cell
-
-    datasets = as_datasets(data)
-    options = check_options(min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz)
-    cell = paper_cell() if cell is None else cell
-    if not isinstance(cell, Cell):
-        raise ValueError(f"cell must be a tenscell Cell, got {type(cell).__name__}")
-    layout, point_group = parameter_layout(cell, datasets, tendons, damping, bounds, fixed)
-    matters = prestress_varies(datasets) or min_prestress_share is not None or min_prestress_elasticity is not None
-    return FitProblem(**layout, **_cell_arrays(cell), **data_arrays(datasets, point_group),
-                      prestress_matters=bool(matters), **options)
+def jitter(problem: Problem, theta, rng: np.random.Generator) -> np.ndarray:
+    """A basin-hopping move: every free log-parameter jittered by about half a decade, within the bounds."""
+    lo, hi = problem.bounds
+    step = np.minimum(0.5 * LN10, 0.25 * (hi - lo))
+    return np.clip(np.asarray(theta) + rng.normal(0.0, 1.0, theta.size) * step, lo, hi)

@@ -40,19 +40,16 @@ import scipy.optimize
 from .._checks import positive_scalar
 from .._parallel import Workers
 from .._progress import progress_bar
-from ..model.equilibrium import Cell
-from .problem import _LN10, FitProblem, as_datasets, centred_start, make_problem
-from .result import FitAlternative, FitResult, accepted, noise_note, noise_rms
 from .._threads import limited
-from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
+from .problem import Problem
 
-__all__ = ["fit", "run_search"]
+__all__ = ["run_search", "best_chain", "merged_history", "count"]
 
 
 class _Objective:
     """Residuals (data, then penalties) and Jacobian in search coordinates, sharing one evaluation per point."""
 
-    def __init__(self, problem: FitProblem):
+    def __init__(self, problem: Problem):
         self.problem = problem
         self.T = problem.coordinate_map()
         self.constrained = problem.n_penalties > 0
@@ -121,89 +118,7 @@ def _clip(lo, hi, u):
     return np.clip(u, lo + pad, hi - pad)
 
 
-def _prestress_start(problem: FitProblem, trial, p_ref: float, lp: float) -> None:
-    """Place the scalable prestress parameters so that the model prestress is about ``exp(p_ref)·10^lp`` (N)."""
-    measured = problem.group_measured[np.isfinite(problem.group_measured)]
-    log_pm = math.log(float(np.median(measured))) if measured.size else 0.0
-    for i in range(problem.prestress_slice.start, problem.n_params - 1):
-        if not problem.free[i]:
-            continue
-        if problem.kinds[i] == "P":
-            trial[i] = p_ref + lp
-        elif problem.kinds[i] == "s":
-            trial[i] = p_ref + lp - log_pm
-
-
-def _initial_guess(problem: FitProblem, rng: np.random.Generator) -> np.ndarray:
-    """A start (free log-parameters): stiffnesses log-uniform over 5–10 decades, damping and scale placed on the data."""
-    phi = problem.fixed_log.copy()
-    n_ea, n_c = problem.n_ea, problem.n_c
-    spread = rng.uniform(5.0, 10.0) if problem.tendons == "per-tendon" else rng.uniform(0.0, 3.0)
-    if problem.compact:
-        spread = min(spread, problem._decades)
-    u = rng.uniform(-0.5, 0.5, n_ea) * spread * _LN10 if n_ea > 1 else np.zeros(1)
-    u = u + math.log(problem.scale_stiffness)
-    # families' damping may differ by decades (a joint fit of the bundled data puts them ~4 apart)
-    c_jitter = rng.uniform(-2.0, 2.0, n_c) * _LN10 if n_c > 1 else np.zeros(1)
-    free = problem.free
-    ic = slice(n_ea, n_ea + n_c)
-    kinds = np.array(problem.kinds)
-    # scaling every EA, c and absolute prestress together by k scales G by k (exact)
-    scalable = free & np.isin(kinds, ("EA", "c", "P", "s"))
-    best = None
-    # damping c shifts the spectrum in frequency; the prestress-to-stiffness ratio sets how much P matters
-    c_grid = np.linspace(-6.0, 6.0, 25) * _LN10 if free[n_ea] else [None]
-    p_free = bool(np.any(free & np.isin(kinds, ("P", "s"))))
-    if problem.prestress_matters:
-        # the data vary with prestress (or must respond to it), so P must matter: relative to a typical
-        # tendon, not the softest (a negligible P is a flat, prestress-blind trap the solver cannot leave)
-        p_ref = float(np.median(u))
-        p_grid = np.array([-2.0, -1.0, 0.0, 1.0]) * _LN10 if p_free else [None]
-    else:
-        p_ref = float(u.min())
-        p_grid = np.array([-6.0, -3.0, 0.0]) * _LN10 if p_free else [None]
-    for lc in c_grid:
-        for lp in p_grid:
-            trial = phi.copy()
-            trial[:n_ea] = u
-            if lc is not None:
-                trial[ic] = math.log(problem.scale_damping) + lc + c_jitter
-            if lp is not None:
-                _prestress_start(problem, trial, p_ref, lp)
-            rms = centred_start(problem, problem._evaluate(trial, jac=False), trial, scalable)
-            if rms is None:
-                continue
-            if best is None or rms < best[0]:
-                best = (rms, trial)
-    if best is None:
-        trial = phi.copy()
-        trial[:n_ea] = u
-        best = (np.inf, trial)
-    return best[1][free]
-
-
-def _perturb(problem: FitProblem, theta, rng: np.random.Generator) -> np.ndarray:
-    """A basin-hopping move (free log-parameters): redraw a few stiffnesses, or jitter every parameter of a small model."""
-    phi = problem.full(theta)
-    free = problem.free
-    ea_free = np.flatnonzero(free[: problem.n_ea])
-    y = phi.copy()
-    if problem.tendons == "per-tendon" and ea_free.size >= 3:
-        pick = rng.choice(ea_free, size=3, replace=False)
-        lo, hi = float(phi[ea_free].min()), float(phi[ea_free].max())
-        if hi - lo < 4 * _LN10:
-            mid = 0.5 * (lo + hi)
-            lo, hi = mid - 2 * _LN10, mid + 2 * _LN10
-        y[pick] = rng.uniform(lo, hi, size=3)
-    else:
-        move = free.copy()
-        # L is a gauge of (P, EA, c) unless one of c, P is held fixed: moving it only wanders
-        move[-1] &= not bool(np.all(free[problem.n_ea: -1]))
-        y[move] += rng.normal(0.0, 1.0, int(move.sum())) * _LN10
-    return y[free]
-
-
-def _least_squares(problem: FitProblem, theta, max_nfev: int):
+def _least_squares(problem: Problem, theta, max_nfev: int):
     """One trust-region run from ``theta`` (free log-parameters), in the search coordinates."""
     obj = _Objective(problem)
     lo, hi = problem.coordinate_bounds()
@@ -215,25 +130,23 @@ def _least_squares(problem: FitProblem, theta, max_nfev: int):
     return obj.T @ res.x, res, obj.nfev
 
 
-def _assess(problem: FitProblem, theta) -> tuple[float, float, bool]:
+def _assess(problem: Problem, theta) -> tuple[float, float, bool]:
     """(rms over all data, worst data set's rms, penalties within 1 % of their bound)."""
     return problem.rms(theta), float(problem.dataset_rms(theta).max()), problem.feasible(theta)
 
 
-def _step(problem: FitProblem, chain: _Chain, settings: _Settings, max_nfev: int) -> _Chain:
+def _step(problem: Problem, chain: _Chain, settings: _Settings, max_nfev: int) -> _Chain:
     """Advance one start by one least-squares run: its first (from an initial guess) or one basin-hopping move."""
     # The matrices are tiny (n ~ 24): BLAS threads only add overhead, and on a
     # shared machine they make each evaluation ~10x slower.
     with limited():  # one place for BLAS threads (tenscell._threads), overridable by the user
         first = chain.theta is None
-        # a problem with starts and moves of its own (a fitted mechanism) brings them: the hook by which a new
-        # fitted model plugs into this search
+        # every problem brings its own starts and moves (fitting.problem.Problem): the hook by which a model plugs
+        # into this search
         if first:
-            guess = getattr(problem, "initial_guess", None) or (lambda rng: _initial_guess(problem, rng))
-            x0 = guess(chain.rng) if chain.initial is None else chain.initial
+            x0 = problem.initial_guess(chain.rng) if chain.initial is None else chain.initial
         else:
-            move = getattr(problem, "perturb", None) or (lambda th, rng: _perturb(problem, th, rng))
-            x0 = move(chain.theta, chain.rng)
+            x0 = problem.perturb(chain.theta, chain.rng)
         theta, res, nfev = _least_squares(problem, x0, max_nfev)
         chain.nfev += nfev
         chain.last_nfev = nfev
@@ -254,7 +167,7 @@ def _step(problem: FitProblem, chain: _Chain, settings: _Settings, max_nfev: int
     return chain
 
 
-def _best(chains) -> _Chain:
+def best_chain(chains) -> _Chain:
     """The start whose state the fit returns: the lowest cost among states that met the tolerance, else the lowest cost."""
     met = [ch for ch in chains if ch.met_theta is not None]
     return min(met, key=lambda ch: (ch.met_cost, ch.start)) if met else min(chains, key=lambda ch: (ch.cost, ch.start))
@@ -289,13 +202,13 @@ def _rounds(problem, chains, settings, jobs, polish_effort, bar):
                     bar.update(1)
                     return stop
             bar.update(1)
-            best = _best(chains)
+            best = best_chain(chains)
             bar.set_postfix(rms=f"{min(best.met_score, best.score):.4g}")
 
 
 def _polish_rule(chains, ch: _Chain, budget, settings: _Settings, polish_effort: float):
     """After start ``ch``'s step: the polishing budget left (None before the tolerance is met) and a stop reason."""
-    best = _best(chains)
+    best = best_chain(chains)
     if best.met_score <= settings.target:
         return budget, "met the polish target"
     if budget is not None:
@@ -309,7 +222,7 @@ def _polish_rule(chains, ch: _Chain, budget, settings: _Settings, polish_effort:
     return budget, ("" if budget > 0 else "met the tolerance (no polishing asked)")
 
 
-def _merged_history(chains):
+def merged_history(chains):
     """The starts' improvement records merged into one best-so-far trajectory."""
     events = sorted((t, r_, k, th) for k, ch in enumerate(chains) for (t, r_, th) in ch.history)
     history, history_theta, so_far = [], [], math.inf
@@ -321,7 +234,7 @@ def _merged_history(chains):
     return tuple(history), tuple(history_theta)
 
 
-def _warm_start(problem: FitProblem, initial):
+def _warm_start(problem: Problem, initial):
     """Free log-parameters of a warm start (None for none), checked against the problem's layout."""
     if initial is None:
         return None
@@ -334,82 +247,11 @@ def _warm_start(problem: FitProblem, initial):
     return np.clip(theta, lo, hi)
 
 
-def _count(name: str, value, minimum: int) -> int:
+def count(name: str, value, minimum: int) -> int:
+    """``value`` as an int, checked to be an integer >= ``minimum`` (ValueError naming ``name``)."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
         raise ValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
     return int(value)
-
-
-def fit(data, cell: Cell | None = None, *, tendons: str = "per-tendon", damping: str = "uniform", starts: int = 4,
-        seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01, hops: int = 30, patience: int = 6,
-        max_nfev: int = 100, polish: float = 0.2, polish_effort: float = 0.5, bounds: dict | None = None,
-        fixed: dict | None = None, min_prestress_share: float | None = None, max_decades: float | None = None,
-        min_prestress_elasticity: float | None = None, elasticity_frequency_hz: float = 0.1, initial=None,
-        max_points: int | None = DEFAULT_MAX_POINTS, progress: bool | None = None) -> FitResult:
-    """Fit the tensegrity model's G', G'' to measured data (multi-start, analytic Jacobian).
-
-    Parameters
-    ----------
-    data : RheologyData or sequence of RheologyData
-        A frequency or prestress sweep (see :mod:`tenscell.io.data`), or several
-        data sets fitted jointly by one parameter set; a frequency sweep that
-        states its prestress (``data.with_prestress(P_Pa)``) is linked to the
-        others by one prestress scale (see :mod:`tenscell.fitting.problem`).
-    cell : Cell, optional
-        Reference cell; default :func:`tenscell.paper_cell` (strut length 1 m).
-    tendons : {"per-tendon", "per-family", "uniform"}
-        Stiffness parametrization ("uniform" is the homogeneous baseline).
-    damping : {"uniform", "per-family"}
-    starts, hops, patience, max_nfev : int
-        Independent starts (>= 1), basin-hopping moves per start at most, moves
-        without a 5 % improvement before a start stops, model evaluations per
-        least-squares run.
-    seed : int or None
-        Seed of the numpy Generator; the same seed gives the same result
-        whatever ``jobs`` is. None draws fresh entropy.
-    jobs : int
-        Worker processes over starts (1 = in this process).
-    tolerance : float
-        RMS of the log10 errors (decades) every data set must reach to converge.
-    polish, polish_effort : float
-        The search stops as soon as one start's RMS is ``polish × tolerance``
-        (on every data set), or once the evaluations since the tolerance was
-        first met reach ``polish_effort`` × those it took to meet it (0 stops
-        at the tolerance); see the module docstring.
-    bounds, fixed, min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz :
-        See :func:`tenscell.fitting.make_problem`.
-    initial : FitResult or array_like, optional
-        A warm start: start 0 begins here (a FitResult of the same data and
-        parametrization, or its free log-parameters ``theta``), moved inside
-        the bounds (with ``max_decades``, stiffnesses compressed to the bound).
-    max_points : int or None
-        A moduli data set with more points is fitted binned in log frequency
-        per prestress (:func:`tenscell.io.thinning.bin_log_frequency`; the rule
-        and counts go into the data's comments and the report), as ``tenscell
-        fit --max-points`` does. None fits every point; creep data are never binned.
-    progress : bool or None
-        A progress bar: None when someone watches (a terminal or a notebook),
-        True always, False never (see :mod:`tenscell._progress`).
-
-    Returns
-    -------
-    FitResult
-
-    Raises
-    ------
-    ValueError
-        Bad options, data or cell (see :func:`make_problem`).
-    """
-    t_begin = time.monotonic()
-    datasets, cell = _prepared(data, cell, max_points)
-    problem = make_problem(datasets, cell, tendons=tendons, damping=damping, bounds=bounds, fixed=fixed,
-                           min_prestress_share=min_prestress_share, max_decades=max_decades,
-                           min_prestress_elasticity=min_prestress_elasticity,
-                           elasticity_frequency_hz=elasticity_frequency_hz)
-    chains, stop = run_search(problem, starts=starts, seed=seed, jobs=jobs, tolerance=tolerance, hops=hops,
-                              patience=patience, max_nfev=max_nfev, polish=polish, polish_effort=polish_effort,
-                              initial=initial, progress=progress, desc=f"fit ({tendons})", t_begin=t_begin)
-    return _result(problem, datasets, cell, chains, stop, float(tolerance), seed, t_begin)
 
 
 def run_search(problem, *, starts: int = 4, seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01,
@@ -420,25 +262,15 @@ def run_search(problem, *, starts: int = 4, seed: int | None = 0, jobs: int = 1,
 
     ``problem`` is a :class:`FitProblem`, or any object with its residual and
     Jacobian interface that brings its own ``initial_guess(rng)`` and
-    ``perturb(theta, rng)`` (:class:`tenscell.fitting.mechanism_problem.MechanismProblem`).
+    ``perturb(theta, rng)`` (:class:`tenscell.fitting.models.mechanism.MechanismProblem`).
     ``t_begin`` (``time.monotonic()``) is the moment the history's times count from (default: now).
     """
     t_begin = time.monotonic() if t_begin is None else t_begin
     settings = _settings(hops, patience, max_nfev, tolerance, polish, polish_effort, t_begin)
-    chains = _chains(problem, _count("starts", starts, 1), seed, initial)
+    chains = _chains(problem, count("starts", starts, 1), seed, initial)
     with progress_bar(total=settings.hops + 1, desc=desc, unit="round", progress=progress) as bar:
-        stop = _rounds(problem, chains, settings, _count("jobs", jobs, 1), float(polish_effort), bar)
+        stop = _rounds(problem, chains, settings, count("jobs", jobs, 1), float(polish_effort), bar)
     return chains, stop
-
-
-def _prepared(data, cell, max_points):
-    """The data sets (binned beyond ``max_points``) and the reference cell (default the paper's)."""
-    from ..model.shapes import paper_cell
-
-    datasets = as_datasets(data)
-    if max_points is not None:
-        datasets = bin_datasets(datasets, _count("max_points", max_points, 4))
-    return datasets, (paper_cell() if cell is None else cell)
 
 
 def _settings(hops, patience, max_nfev, tolerance, polish, polish_effort, t_begin) -> _Settings:
@@ -446,12 +278,12 @@ def _settings(hops, patience, max_nfev, tolerance, polish, polish_effort, t_begi
     tolerance = positive_scalar("tolerance", tolerance, "decades")
     if not (isinstance(polish_effort, (int, float)) and math.isfinite(polish_effort) and polish_effort >= 0):
         raise ValueError(f"polish_effort must be a finite number >= 0, got {polish_effort!r}")
-    return _Settings(hops=_count("hops", hops, 0), patience=_count("patience", patience, 1),
-                     max_nfev=_count("max_nfev", max_nfev, 1), tolerance=tolerance,
+    return _Settings(hops=count("hops", hops, 0), patience=count("patience", patience, 1),
+                     max_nfev=count("max_nfev", max_nfev, 1), tolerance=tolerance,
                      target=positive_scalar("polish", polish) * tolerance, t_begin=t_begin)
 
 
-def _chains(problem: FitProblem, starts: int, seed, initial) -> list[_Chain]:
+def _chains(problem: Problem, starts: int, seed, initial) -> list[_Chain]:
     """One chain per start, each with its own random stream spawned from ``seed``; start 0 may be warm."""
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
         raise ValueError(f"seed must be a non-negative integer or None, got {seed!r}")
@@ -459,38 +291,3 @@ def _chains(problem: FitProblem, starts: int, seed, initial) -> list[_Chain]:
     chains = [_Chain(start=k, rng=rngs[k]) for k in range(starts)]
     chains[0].initial = _warm_start(problem, initial)
     return chains
-
-
-def _result(problem, datasets, cell, chains, stop, tolerance, seed, t_begin) -> FitResult:
-    best = _best(chains)
-    theta = best.theta if best.met_theta is None else best.met_theta
-    assert theta is not None  # every chain that ran holds a point
-    r = problem.residuals(theta) / problem.weights
-    rms = float(np.sqrt(np.mean(r**2)))
-    per_set = problem.dataset_rms(theta)
-    noise = noise_rms(datasets)
-    converged = accepted(per_set, noise, tolerance)
-    cutoff = max(tolerance, 1.5 * rms)
-    alternatives = tuple(
-        FitAlternative(start=ch.start, rms_log10_error=ch.rms, parameters=problem.parameters(ch.theta))
-        for ch in sorted(chains, key=lambda ch: (ch.rms, ch.start))
-        if ch is not best and ch.rms <= cutoff
-    )
-    history, history_theta = _merged_history(chains)
-    which = "" if len(datasets) == 1 else " on every data set"
-    verdict = (f"reached rms {per_set.max():.4g} <= tolerance {tolerance:g}{which}" if per_set.max() <= tolerance
-               else f"did not reach the tolerance{which}: rms {per_set.max():.4g} > {tolerance:g}")
-    note = noise_note(per_set, noise, tolerance)
-    verdict += f"; {note}" if note else ""
-    message = (f"{verdict} (best of {len(chains)} start(s), start {best.start} after {best.hops} hop(s); "
-               f"search stopped: {stop}; optimizer: {best.message})")
-    return FitResult(
-        parameters=problem.parameters(theta), residuals=r, rms_log10_error=rms, tolerance=tolerance,
-        converged=converged, message=message, datasets=datasets, cell=cell, problem=problem, theta=theta,
-        tendons=problem.tendons, damping=problem.damping, starts=len(chains), seed=seed,
-        elapsed_s=time.monotonic() - t_begin, n_evaluations=sum(ch.nfev for ch in chains),
-        alternatives=alternatives, history=history,
-        # a start the search stopped before it ran has no RMS (NaN, null in fit.json), not an infinite one
-        start_rms=tuple(ch.rms if ch.theta is not None else math.nan for ch in chains),
-        history_theta=history_theta, stop_reason=stop,
-    )

@@ -266,15 +266,14 @@ def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
         Missing ``theta`` or frequencies, a bad range, an even or too small ``points``, or a cell that is not
         stable at a prestress of the range.
     """
-    from .mechanism_fit import FittedMechanism
+    from .models.mechanism import FittedMechanism
 
     if isinstance(points, bool) or not isinstance(points, int) or points < 3 or points % 2 == 0:
         raise ValueError(f"points must be an odd integer >= 3 (Simpson's rule), got {points!r}")
     if isinstance(model, FittedMechanism):
         if theta is not None:
             raise ValueError("theta is given by the fitted mechanism itself; pass theta only with a MechanismProblem")
-        problem = model._problem()
-        phi = np.log([model.values[n] for n in problem.names])
+        problem, phi = model._problem, model._phi
         s, P_fit = model.s, model.P
         if s is not None and prestress_pa is None:
             if not model.prestress_pa:

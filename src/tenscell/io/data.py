@@ -31,9 +31,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .._errors import option
 from .._ranges import RANGES, range_problem
-from .columns import DataError, parse_frame
+from .columns import DataError, parse_frame, read_text_file
 from .outputs import atomic_path
+from .provenance import Provenance
 
 __all__ = [
     "DataError",
@@ -70,6 +72,12 @@ _COLUMN_QUANTITY = {
     _FREQUENCY: "frequency", _PRESTRESS: "prestress", _STORAGE: "modulus", _LOSS: "modulus",
     _STORAGE_SD: "modulus", _LOSS_SD: "modulus", _ABS: "modulus", _ABS_SD: "modulus",
 }
+# column -> the quantity of a column map (tenscell.io.columns) it holds, and its unit, for the provenance
+_QUANTITY_OF = {_FREQUENCY: "frequency", _PRESTRESS: "prestress", _STORAGE: "storage", _LOSS: "loss",
+                _STORAGE_SD: "storage_sd", _LOSS_SD: "loss_sd", _ABS: "magnitude", _PHASE: "phase",
+                _ABS_SD: "magnitude_sd", _PHASE_SD: "phase_sd"}
+_UNIT_OF = {_FREQUENCY: "Hz", _PRESTRESS: "Pa", _STORAGE: "Pa", _LOSS: "Pa", _STORAGE_SD: "Pa", _LOSS_SD: "Pa",
+            _ABS: "Pa", _PHASE: "deg", _ABS_SD: "Pa", _PHASE_SD: "deg"}
 # RheologyData field -> its column in the package's layout
 _FIELD_COLUMN = {"frequency_hz": _FREQUENCY, "prestress": _PRESTRESS, "G_storage": _STORAGE, "G_loss": _LOSS,
                  "G_storage_sd": _STORAGE_SD, "G_loss_sd": _LOSS_SD}
@@ -147,7 +155,16 @@ class RheologyData:
     locations : tuple of str, optional
         Where each point is in `source`, in the order given (e.g. ``"line 12"``
         of a file, ``"row 7"`` of a sheet): readers pass it so that an error
-        names the line. Not kept (None) once the points are reordered.
+        names the line; reordered with the points.
+    provenance : Provenance, optional
+        What the data were read from and how (:class:`tenscell.io.provenance.Provenance`:
+        file, layout, step, temperature, columns and unit conversions, notes); readers
+        set it. Default: the source alone.
+    counts : array_like, shape (n,), optional
+        How many measured points each point stands for (binned data, see
+        :mod:`tenscell.io.thinning`); None: one each. Without standard
+        deviations a point weighs √count in a fit (the SDs of binned data
+        already carry their counts).
 
     Every value must lie in the range tenscell accepts for its quantity (the
     table :data:`tenscell._ranges.RANGES` that the command-line flags use):
@@ -175,6 +192,8 @@ class RheologyData:
     comments: tuple[str, ...] = ()
     kind: str | None = None
     locations: tuple[str, ...] | None = None
+    provenance: Provenance | None = None
+    counts: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         source = str(self.source)
@@ -209,6 +228,7 @@ class RheologyData:
             "prestress": as_array("prestress", self.prestress, optional=True),
             "G_storage_sd": as_array("G_storage_sd", self.G_storage_sd, optional=True),
             "G_loss_sd": as_array("G_loss_sd", self.G_loss_sd, optional=True),
+            "counts": as_array("counts", self.counts, optional=True),
         }
         lengths = {k: len(v) for k, v in arrays.items() if v is not None}
         if len(set(lengths.values())) != 1:
@@ -217,7 +237,8 @@ class RheologyData:
             raise _error(source, "no data points")
         locations = _locations(source, self.locations, lengths["frequency_hz"])
         check_ranges(source, {col: (a, _COLUMN_QUANTITY[col], "Pa" if col == _PRESTRESS else None)
-                              for k, a in arrays.items() if a is not None for col in (_FIELD_COLUMN[k],)}, locations)
+                              for k, a in arrays.items() if a is not None and k in _FIELD_COLUMN
+                              for col in (_FIELD_COLUMN[k],)}, locations)
         # canonical row order (prestress, then frequency, then the values): the same data set gives
         # the same object, and the same fit, whatever the order of the rows in its file
         keys = [a for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
@@ -233,6 +254,7 @@ class RheologyData:
         for name, arr in arrays.items():
             object.__setattr__(self, name, arr)
         object.__setattr__(self, "locations", locations)
+        object.__setattr__(self, "provenance", _provenance(self.provenance, source, lengths["frequency_hz"]))
 
         if isinstance(self.comments, str):
             raise _error(source, "comments must be a sequence of strings, not a str")
@@ -262,14 +284,16 @@ class RheologyData:
         """Number of data points."""
         return int(self.frequency_hz.shape[0])
 
-    def binned(self, max_points: int | None = None) -> "RheologyData":
-        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`).
+    def binned(self, max_points: int | None = None, weighting: str = "counts") -> "RheologyData":
+        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`; without SDs a
+        bin weighs √(its points), or as one point with ``weighting="bins"``).
 
-        Returns ``self`` when it has no more points than that.
+        Returns ``self`` when it has no more points than that; the binned data's
+        provenance and comments state the rule and the counts.
         """
         from .thinning import DEFAULT_MAX_POINTS, bin_log_frequency
 
-        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points)
+        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points, weighting)
 
     def with_prestress(self, prestress_pa: float) -> "RheologyData":
         """A copy that states the prestress (Pa) at which the data were measured (a constant ``prestress`` column).
@@ -280,9 +304,12 @@ class RheologyData:
         state prestresses, or for a non-positive value.
         """
         p = _stated_prestress(self, prestress_pa)
+        assert self.provenance is not None  # set by __post_init__
         return RheologyData(frequency_hz=self.frequency_hz, G_storage=self.G_storage, G_loss=self.G_loss,
                             prestress=np.full(self.n, p), G_storage_sd=self.G_storage_sd,
-                            G_loss_sd=self.G_loss_sd, source=self.source, comments=self.comments)
+                            G_loss_sd=self.G_loss_sd, source=self.source, comments=self.comments,
+                            locations=self.locations, provenance=self.provenance.noted(f"prestress stated: {p:g} Pa"),
+                            counts=self.counts)
 
     @property
     def has_sd(self) -> bool:
@@ -294,22 +321,22 @@ class RheologyData:
         """Weights for residuals of log10 G', shape (n,).
 
         ``G' ln(10) / sd(G')``, the inverse of the first-order SD of log10 G',
-        if `G_storage_sd` is given; otherwise ones.
+        if `G_storage_sd` is given; otherwise √counts (ones when each point is one measurement).
         """
-        return _log_weights(self.G_storage, self.G_storage_sd, self.n)
+        return _log_weights(self.G_storage, self.G_storage_sd, self.n, self.counts)
 
     @property
     def weights_loss(self) -> np.ndarray:
         """Weights for residuals of log10 G'', shape (n,).
 
         ``G'' ln(10) / sd(G'')``, the inverse of the first-order SD of
-        log10 G'', if `G_loss_sd` is given; otherwise ones.
+        log10 G'', if `G_loss_sd` is given; otherwise √counts (ones when each point is one measurement).
         """
-        return _log_weights(self.G_loss, self.G_loss_sd, self.n)
+        return _log_weights(self.G_loss, self.G_loss_sd, self.n, self.counts)
 
     # ---- notebook conventions (tenscell._results) and DataFrames in --------------
     @classmethod
-    def from_dataframe(cls, df, columns=None, *, source: str = "<DataFrame>", min_points: int = 1,
+    def from_dataframe(cls, df, columns=None, *, source: str = "<DataFrame>", min_points: int = 1, accept=(),
                        **units) -> RheologyData:
         """Measured moduli from a pandas DataFrame with your own column names and units.
 
@@ -322,10 +349,18 @@ class RheologyData:
         if parsed.layout == "creep":
             raise DataError(f"{source}: the columns hold creep compliance, not moduli; use "
                             "tenscell.io.CreepData.from_dataframe")
+        return cls.from_parsed(parsed, Provenance(file=source, layout="DataFrame"), accept)
+
+    @classmethod
+    def from_parsed(cls, parsed, provenance: Provenance, accept=(), what: str | None = None) -> "RheologyData":
+        """The moduli a parsed table holds (:class:`tenscell.io.columns.Parsed`), with the provenance as the
+        reader knows it (completed with the columns read), through the checks of :mod:`tenscell.io.checks`."""
         v = parsed.values
-        return cls(frequency_hz=v["frequency"], G_storage=v["storage"], G_loss=v["loss"], prestress=v.get("prestress"),
+        data = cls(frequency_hz=v["frequency"], G_storage=v["storage"], G_loss=v["loss"], prestress=v.get("prestress"),
                    G_storage_sd=v.get("storage_sd"), G_loss_sd=v.get("loss_sd"), source=parsed.source,
-                   comments=parsed.comments, locations=parsed.where)
+                   comments=parsed.comments, locations=parsed.where or None, provenance=provenance.read(parsed))
+        headers = {q: h for q, h, _ in parsed.columns if q in ("storage", "loss")}
+        return checked(data, accept, headers, what)
 
     def __repr__(self) -> str:
         from .._results import format_repr, span
@@ -376,11 +411,21 @@ def _stated_prestress(data, prestress_pa) -> float:
     return p
 
 
-def _log_weights(G: np.ndarray, sd: np.ndarray | None, n: int) -> np.ndarray:
-    # sd(log10 G) ~= sd(G) / (G ln 10) to first order.
+def _log_weights(G: np.ndarray, sd: np.ndarray | None, n: int, counts: np.ndarray | None = None) -> np.ndarray:
+    # sd(log10 G) ~= sd(G) / (G ln 10) to first order; a point that stands for m measurements without a stated SD
+    # weighs sqrt(m) (the SD of a mean of m points of equal, unknown noise)
     if sd is None:
-        return np.ones(n)
+        return np.ones(n) if counts is None else np.sqrt(counts)
     return G * math.log(10.0) / sd
+
+
+def _provenance(given, source: str, n: int) -> Provenance:
+    """The data's provenance: as given (a Provenance), or the source alone."""
+    if given is None:
+        return Provenance(file=source, points=n)
+    if not isinstance(given, Provenance):
+        raise _error(source, f"provenance must be a tenscell.io.provenance.Provenance, got {type(given).__name__}")
+    return given
 
 
 def _parse_float(text: str) -> float | None:
@@ -451,10 +496,16 @@ def _parse_header(raw: list[str], source: str, line: int) -> list[str]:
 
 
 def _csv_lines(text: str, source: str, comments: list[str]):
-    """Yield ``(line number, fields)`` of every non-blank, non-comment line; comments go to ``comments``."""
+    """Yield ``(line number, fields)`` of every non-blank, non-comment line; comments go to ``comments``.
+
+    The separator is the header's (the first such line): a comma, else a semicolon or a tab (as spreadsheets
+    write CSV in locales with a decimal comma); with a semicolon or a tab a decimal comma in the values is read
+    as a decimal point.
+    """
     # Split on "\n" only (the file was opened in universal-newline mode), so
     # that line numbers agree with what an editor shows; str.splitlines()
     # would also break on form feeds and other rare separators.
+    delimiter: str | None = None
     for lineno, line in enumerate(text.split("\n"), start=1):
         stripped = line.strip()
         if not stripped:
@@ -462,13 +513,17 @@ def _csv_lines(text: str, source: str, comments: list[str]):
         if stripped.startswith("#"):
             comments.append(stripped[1:].strip())
             continue
+        header = delimiter is None
+        if header:
+            delimiter = next((d for d in (",", ";", "\t") if d in stripped), ",")
         try:
-            yield lineno, next(csv.reader([line], strict=True))
+            fields = next(csv.reader([line], delimiter=delimiter or ",", strict=True))
         except csv.Error as exc:
             raise _error(source, f"malformed CSV: {exc}", lineno) from exc
+        yield lineno, fields if header or delimiter == "," else [f.replace(",", ".") for f in fields]
 
 
-def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
+def _parse_text(text: str, source: str, min_points: int, accept=(), layout: str = "tenscell CSV") -> RheologyData:
     comments: list[str] = []
     columns: list[str] | None = None
     header_line = 0
@@ -512,8 +567,7 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
     if n < min_points:
         raise _error(
             source,
-            f"{n} data point{'s' if n != 1 else ''}, fewer than min_points={min_points} "
-            f"(a fit needs at least as many points as free parameters)",
+            f"{n} data point{'s' if n != 1 else ''}, fewer than {option('min_points', min_points)}",
         )
 
     arr = {c: np.asarray(v, dtype=np.float64) for c, v in values.items()}
@@ -525,7 +579,9 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
         G_storage, G_loss = arr[_STORAGE], arr[_LOSS]
         storage_sd, loss_sd = arr.get(_STORAGE_SD), arr.get(_LOSS_SD)
 
-    return RheologyData(
+    provenance = Provenance(file=source, layout=layout, points=n,
+                            columns=tuple((_QUANTITY_OF[c], c, _UNIT_OF.get(c, "")) for c in columns))
+    data = RheologyData(
         frequency_hz=arr[_FREQUENCY],
         G_storage=G_storage,
         G_loss=G_loss,
@@ -535,7 +591,22 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
         source=source,
         comments=tuple(comments),
         locations=tuple(f"line {k}" for k in row_lines),
+        provenance=provenance,
     )
+    return checked(data, accept, {"storage": _STORAGE, "loss": _LOSS} if _STORAGE in arr else {})
+
+
+def checked(data, accept, columns: dict | None = None, what: str | None = None):
+    """``data`` as read, through :func:`tenscell.io.checks.check_measurement` (``accept``: checks to skip;
+    ``what`` names the step in the messages); the problems accepted are recorded in its provenance."""
+    from dataclasses import replace
+
+    from .checks import accepted_checks, check_measurement
+
+    found = check_measurement(data, accepted_checks(accept), columns, what)
+    if not found:
+        return data
+    return replace(data, provenance=replace(data.provenance, accepted=data.provenance.accepted + found))
 
 
 def _check_row(row: dict[str, float], source: str, lineno: int) -> None:
@@ -608,7 +679,7 @@ def _polar_to_cartesian(
     return G_storage, G_loss, storage_sd, loss_sd
 
 
-def read_csv(path: str | os.PathLike[str], *, min_points: int = 1) -> RheologyData:
+def read_csv(path: str | os.PathLike[str], *, min_points: int = 1, accept=()) -> RheologyData:
     """Read a rheology data file.
 
     Parameters
@@ -619,12 +690,16 @@ def read_csv(path: str | os.PathLike[str], *, min_points: int = 1) -> RheologyDa
     min_points : int, optional
         Minimum number of data points required, e.g. the number of free
         parameters of the model to be fitted. Default 1.
+    accept : str or sequence of str, optional
+        Checks of :mod:`tenscell.io.checks` to skip (``"one-frequency"``,
+        ``"outliers"``): read data they would refuse.
 
     Returns
     -------
     RheologyData
-        With ``source`` set to `path`, and ``comments`` holding every ``#``
-        line of the file (before or after the header) in file order.
+        With ``source`` set to `path`, ``comments`` holding every ``#``
+        line of the file (before or after the header) in file order, and its
+        ``provenance``.
 
     Raises
     ------
@@ -633,30 +708,26 @@ def read_csv(path: str | os.PathLike[str], *, min_points: int = 1) -> RheologyDa
         data rows; has unknown, duplicate, missing or mixed-layout columns;
         a row with the wrong number of fields; a non-numeric, NaN or infinite
         value; a non-positive frequency, prestress, modulus or SD; a phase
-        outside [0, 90] deg or at 0 or 90 deg (a zero modulus); or fewer
-        than `min_points` rows.
+        outside [0, 90] deg or at 0 or 90 deg (a zero modulus); fewer
+        than `min_points` rows; or data a check of :mod:`tenscell.io.checks`
+        refuses (one frequency, a value many decades from its neighbours).
     """
     source = os.fspath(path)
     if isinstance(source, bytes):
         source = os.fsdecode(source)
-    try:
-        # utf-8-sig drops the byte-order mark spreadsheet programs often add,
-        # which would otherwise become part of the first column name.
-        with open(source, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise _error(source, f"cannot read file: {exc}") from exc
-    return _parse_text(text, source, min_points)
+    # the byte-order mark spreadsheet programs often add is dropped (it would become part of the first name)
+    text = read_text_file(source, newline=None)
+    return _parse_text(text, source, min_points, accept)
 
 
-def parse_text(text: str, source: str = "<text>", *, min_points: int = 1) -> RheologyData:
+def parse_text(text: str, source: str = "<text>", *, min_points: int = 1, accept=()) -> RheologyData:
     """Parse rheology data from CSV text (what :func:`read_csv` does after reading the file).
 
     For data that arrive as text rather than as a file, e.g. one cell's rows
     of a long table sent to a worker. ``source`` names the data in error
     messages; see :func:`read_csv` for the layouts and the errors raised.
     """
-    return _parse_text(text, str(source), min_points)
+    return _parse_text(text, str(source), min_points, accept)
 
 
 def _format(x: float) -> str:
@@ -760,7 +831,7 @@ def bundled(name: str) -> RheologyData:
         text = resource.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise _error(source, f"cannot read bundled file: {exc}") from exc
-    return _parse_text(text, source, min_points=1)
+    return _parse_text(text, source, min_points=1, layout="bundled with tenscell")
 
 
 def generated_note(data) -> str | None:

@@ -21,7 +21,7 @@ __all__ = ["fit_figure", "data_points", "plot_fit", "fit_panels", "compactness_f
 
 def _x_axis(data: RheologyData) -> str:
     """``"prestress"`` for a sweep over prestress at one frequency, else ``"frequency"``."""
-    from ..fitting.result import data_axis
+    from ..fitting.records import data_axis
 
     return data_axis(data)
 
@@ -119,7 +119,7 @@ def plot_fit(result, ax: Axes | None = None, *, dataset: int | None = None, base
     Frequency sweeps on log-log axes against f (Hz); prestress sweeps on
     linear axes against prestress (Pa), as in the paper.
     """
-    from ..fitting.result import model_curve
+    from ..fitting.curves import model_curve
 
     if ax is None and dataset is None and len(result.datasets) > 1:
         return fit_panels(result, baseline=baseline, n=n)
@@ -133,9 +133,9 @@ def plot_fit(result, ax: Axes | None = None, *, dataset: int | None = None, base
     ax.plot(cv.x, cv.G_storage, "-", color="C0", label=f"G′ {cv.label}")
     ax.plot(cv.x, cv.G_loss, "--", color="C3", label=f"G″ {cv.label}")
     if baseline is not None:
-        bv = model_curve(baseline, n=n, dataset=k, label="homogeneous")
-        ax.plot(bv.x, bv.G_storage, ":", color="C0", label="G′ homogeneous")
-        ax.plot(bv.x, bv.G_loss, ":", color="C3", label="G″ homogeneous")
+        bv = model_curve(baseline, n=n, dataset=k)
+        ax.plot(bv.x, bv.G_storage, ":", color="C0", label=f"G′ {bv.label}")
+        ax.plot(bv.x, bv.G_loss, ":", color="C3", label=f"G″ {bv.label}")
     _axis_labels(ax, fit.axis)
     ax.set_ylabel("modulus (Pa)")
     at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else
@@ -153,7 +153,7 @@ def _plot_creep_fit(result, fit, ax, baseline=None):
     ax.loglog(d.time_s, d.compliance, "o", color="C2", label=what)
     ax.loglog(d.time_s, fit.J_model, "-", color="C2", label=f"J {result.label}")
     if baseline is not None:
-        ax.loglog(d.time_s, baseline.fits[fit.index].J_model, ":", color="C2", label="J homogeneous")
+        ax.loglog(d.time_s, baseline.fits[fit.index].J_model, ":", color="C2", label=f"J {baseline.label}")
     ax.set_xlabel("time after the step (s)")
     ax.set_ylabel("creep compliance (1/Pa)")
     at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else

@@ -18,7 +18,7 @@ def mechanisms_figure(study, datasets, axes: Sequence[Axes] | None = None, *, sh
 
     ``datasets`` are the study's data sets (the frequency sweep is the one the rows have curves for).
     """
-    from ..fitting.mechanisms import PER_TENDON_VOIGT
+    from ..fitting.models.catalog import PER_TENDON_VOIGT
     from ..studies.mechanisms import GOALS, SLOPE_BAND_HZ
 
     ax = new_panels(axes, 2, (10.0, 4.0), title="Mechanisms fitted to the same data")

@@ -1,8 +1,8 @@
 """Large ensembles of a distributed mechanism on the population engine: its mean moduli and their spread.
 
 A mechanism whose tendon properties are drawn from a distribution
-(:mod:`tenscell.fitting.heterogeneity`) is fitted through the average of its
-moduli over a few stratified assignments (K = 8, :class:`~tenscell.fitting.mechanisms.Mechanism`):
+(:mod:`tenscell.fitting.models.heterogeneity`) is fitted through the average of its
+moduli over a few stratified assignments (K = 8, :class:`~tenscell.fitting.models.mechanism.Mechanism`):
 an estimate of the moduli's expectation over every way of assigning the
 drawn values to the tendons. :func:`mechanism_ensemble` evaluates a fitted
 mechanism over many more assignments (K = 200–2000, up to :data:`MAX_K`) and
@@ -19,7 +19,7 @@ is timed here and, without ``workers``, decides whether a local Dask cluster
 pays for its start-up (else every chunk runs here); chunks are batched into
 Dask tasks of about two seconds. The numbers depend only on the model, the
 grid, K and the seed: the assignments are drawn here before any task runs
-(:func:`tenscell.fitting.heterogeneity.assignments`), chunk boundaries are
+(:func:`tenscell.fitting.models.heterogeneity.assignments`), chunk boundaries are
 fixed, and each chunk is a pure function of its rows — ``workers=0`` and a
 cluster give the same numbers.
 """
@@ -232,14 +232,16 @@ def ensemble_chunk(problem, phi, omega, P_N) -> np.ndarray:
 # the entry point
 # ---------------------------------------------------------------------------------------
 def _fitted_mechanism(model):
-    """The FittedMechanism of ``model`` (itself, or a MechanismFit's); ValueError for anything else."""
-    from ..fitting.mechanism_fit import FittedMechanism, MechanismFit
+    """The FittedMechanism of ``model`` (itself, or a fit's); ValueError for anything else."""
+    from ..fitting.fitted import FittedMechanism
+    from ..fitting.result import FitResult
 
-    if isinstance(model, MechanismFit):
-        model = model.model()
+    if isinstance(model, FitResult):
+        model = model.model
     if not isinstance(model, FittedMechanism):
-        raise ValueError(f"an ensemble needs a fitted mechanism (FittedMechanism or MechanismFit), got "
-                         f"{type(model).__name__}: a per-tendon fit has no distribution to draw from")
+        raise ValueError(f"an ensemble needs a fitted mechanism (a FittedMechanism, or the FitResult of a mechanism), "
+                         f"got {type(model).__name__}: only a mechanism with a distributed tendon property has "
+                         "assignments to draw (a per-tendon fit or a formula has none)")
     if not model.mechanism.heterogeneous:
         raise ValueError(f"mechanism {model.mechanism.name} draws no tendon property from a distribution: every "
                          "assignment is the same cell, so it has no ensemble")
@@ -275,7 +277,7 @@ def mechanism_ensemble(model, f_hz, prestress_pa=None, *, K: int = DEFAULT_K, se
         Frequencies (Hz), > 0.
     prestress_pa : float or sequence of float, optional
         Prestresses in the data's units (Pa), as for
-        :meth:`~tenscell.fitting.mechanism_fit.FittedMechanism.moduli` (default: its default prestress; for a
+        :meth:`~tenscell.fitting.fitted.FittedMechanism.moduli` (default: its default prestress; for a
         fit with its own model prestress P only None is accepted). ``model.prestress_pa`` gives every
         prestress of the data.
     K : int
@@ -295,7 +297,7 @@ def mechanism_ensemble(model, f_hz, prestress_pa=None, *, K: int = DEFAULT_K, se
     EnsembleResult
     """
     from .._progress import progress_bar
-    from ..fitting.mechanism_fit import bare_problem
+    from ..fitting.models.mechanism import bare_problem
     from . import _engine
 
     t0 = time.perf_counter()

@@ -11,7 +11,7 @@ Two generators:
     uses by default, so the generating parameters can be compared one by one.
 ``model="powerlaw"``
     each cell follows the structural-damping law used for cells (Fabry et al.
-    2001), :func:`tenscell.fitting.models.structural_damping_moduli` with
+    2001), :func:`tenscell.fitting.scores.structural_damping_moduli` with
     Φ0 = 2π·f0, with a log-normal G0 and a normal
     exponent x. The tensegrity fit then cannot return G0 and x; recovery is
     checked on what both share: G' at the reference frequency and the
@@ -220,7 +220,7 @@ def _powerlaw_cell(rng, medians, spread, cond, f):
     x = 1.0 + (medians["x"] - 1.0) * cond.factor("x") * (1 + spread * math.log(10) * rng.standard_normal())
     x = float(np.clip(x, 1.0 + 1e-3, 1.9))
     mu = medians["mu"] * cond.factor("mu")
-    from ..fitting.models import structural_damping_moduli
+    from ..fitting.scores import structural_damping_moduli
 
     G = structural_damping_moduli(2 * math.pi * f, G0, x, mu, 2 * math.pi * medians["f0"])
     return {"G0_Pa": G0, "x": x, "mu_Pa_s": mu, "f0_Hz": medians["f0"]}, G

@@ -1,9 +1,13 @@
-"""The Markdown report of a fit, rendered only from the fit's result fields.
+"""The Markdown report of a fit of any model, rendered only from the fit's result fields.
 
 The report is a sequence of sections; each section is a function
-``(result, baseline) -> list of lines`` (``baseline`` is the homogeneous fit of
-the same data, or None) listed in :data:`SECTIONS`. A new analysis adds its
-section function there.
+``(result, baseline) -> list of lines`` (``baseline`` is a baseline fit of the
+same data, e.g. the homogeneous cell, or None) listed in :data:`SECTIONS` with
+a name. The sections every fit has run for every model; a section named in
+:data:`MODEL_SECTIONS` runs only for a model whose problem asks for it
+(:attr:`tenscell.fitting.problem.Problem.report_sections`): the Voigt cell's
+prestress activity, creep and stiffness bounds, a mechanism's held fields and
+assignments. A new analysis adds its section function there.
 """
 from __future__ import annotations
 
@@ -12,16 +16,18 @@ import math
 import numpy as np
 
 from ..fitting.prestress import CELL_ELASTICITY
-from ..fitting.result import FitResult, noise_rms
+from ..fitting.models.voigt import FitProblem
+from ..fitting.records import noise_rms
+from ..fitting.result import FitResult
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
 from .._results import CORRELATION_THRESHOLD, plus_minus
 from ._format import num, table
 from .fit_analysis import section_comparison, section_creep, section_identifiability, section_provenance
 
-__all__ = ["fit_markdown", "SECTIONS", "section_summary", "section_datasets", "section_baseline", "section_shape",
-           "section_prestress", "section_stiffness", "section_parameters", "section_errors",
-           "section_alternatives"]
+__all__ = ["fit_markdown", "SECTIONS", "MODEL_SECTIONS", "section_summary", "section_datasets", "section_baseline",
+           "section_shape", "section_prestress", "section_stiffness", "section_parameters", "section_errors",
+           "section_alternatives", "section_held", "section_assignments", "parameter_error"]
 
 
 def _name(source: str) -> str:
@@ -77,10 +83,12 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
               if f.prestress_fitted_pa is not None else "")
         what = "creep compliance J(t)" if f.axis == "time" else f"{f.axis} sweep"
         lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {what}{at}.")
+        if f.data.provenance is not None:
+            lines.append(f"     Read: {f.data.provenance.line()}.")
         lines += [f"     Thinned: {note}." for note in binning_notes(f.data)]
     lines += [
-        f"- Model: {result.cell.describe()}; stiffness {result.tendons}, damping {result.damping}; "
-        f"{pr.n_free} free parameters against {pr.n_residuals} residuals.",
+        f"- Model `{result.spec.name}`: {pr.describe()}; {pr.n_free} free parameters against {pr.n_residuals} "
+        "residuals.",
         f"- RMS of the log10 errors: **{num(result.rms_log10_error, 4)}** decades over all points; the tolerance "
         f"{num(result.tolerance)} applies{each}: {verdict}.",
         f"- {result.message}",
@@ -116,10 +124,10 @@ def section_baseline(result: FitResult, baseline=None) -> list[str]:
     """The heterogeneous fit beside the homogeneous baseline."""
     if baseline is None:
         return []
-    rows = [(name, r.tendons, r.problem.n_free, num(r.rms_log10_error, 4), "yes" if r.converged else "no")
-            for name, r in (("this fit", result), ("homogeneous baseline", baseline))]
-    return ["## Against the homogeneous baseline", "",
-            table(("model", "stiffness", "free parameters", "RMS log10 error", "converged"), rows)]
+    rows = [(name, f"`{r.spec.name}`", r.problem.n_free, num(r.rms_log10_error, 4), "yes" if r.converged else "no")
+            for name, r in (("this fit", result), ("baseline", baseline))]
+    return [f"## Against its baseline, `{baseline.spec.name}`", "", baseline.problem.describe() + ".", "",
+            table(("fit", "model", "free parameters", "RMS log10 error", "converged"), rows)]
 
 
 def section_shape(result: FitResult, baseline=None) -> list[str]:
@@ -196,31 +204,85 @@ def section_prestress(result: FitResult, baseline=None) -> list[str]:
 
 
 def section_stiffness(result: FitResult, baseline=None) -> list[str]:
-    """The spread of the fitted stiffnesses (and the bound on it, if any)."""
+    """The spread of the fitted tendon stiffnesses (and, for the Voigt cell, the bound on it and those at a bound)."""
     q = result.derived
-    line = (f"Tendon stiffnesses span {q.text('stiffness_spread', 0, 'N')} to {q.text('stiffness_spread', 1, 'N')}: "
-            f"{q.text('stiffness_spread', 2, 'decades', 3)}{result._interior_text()}.")
-    if any(result.parameters[g].at_bound for g in set(result.problem.ea_groups.tolist())):
-        line += (" Stiffnesses sit at their bounds: the span is set by the bound box, not measured by the data.")
-    D = result.problem.max_decades
-    if D is not None:
-        line += (f" The fit bounded the spread to {num(D)} decades" +
-                 (" (no constraint here: the bound is wider than the stiffness bounds)." if not result.problem.compact
-                  else "."))
+    unit = result.problem.units[0]
+    inner = result.stiffness_spread_interior
+    full = result.stiffness_spread
+    extra = ("" if inner is None or inner == full else
+             f"; {inner[0]:.3g} .. {inner[1]:.3g} {unit} ({inner[2]:.1f} decades) without those at bounds")
+    line = (f"Tendon stiffnesses span {q.text('stiffness_spread', 0, unit)} to {q.text('stiffness_spread', 1, unit)}: "
+            f"{q.text('stiffness_spread', 2, 'decades', 3)}{extra}.")
+    pr = result.problem
+    if isinstance(pr, FitProblem):  # the Voigt cell's stiffness groups and its bound on their spread
+        if any(result.parameters[g].at_bound for g in set(pr.ea_groups.tolist())):
+            line += " Stiffnesses sit at their bounds: the span is set by the bound box, not measured by the data."
+        if pr.max_decades is not None:
+            line += (f" The fit bounded the spread to {num(pr.max_decades)} decades" +
+                     (" (no constraint here: the bound is wider than the stiffness bounds)." if not pr.compact
+                      else "."))
     return ["## Stiffness spread", "", line, ""]
 
 
+def section_held(result: FitResult, baseline=None) -> list[str]:
+    """A mechanism's law parameters held at a value (not fitted, not counted, not measured by this fit)."""
+    held = [f"`{f.law_parameter}` = {num(f.value)}" for f in result.spec.fields if f.layout == "fixed"]
+    if not held:
+        return []
+    return ["Held, not fitted (not counted among the free parameters, and not measured by this fit): "
+            + ", ".join(held) + ".", ""]
+
+
+def section_assignments(result: FitResult, baseline=None) -> list[str]:
+    """A distributed property's assignments: how much the moduli differ between them."""
+    spec = result.spec
+    if not spec.heterogeneous:
+        return []
+    q = result.derived
+    return [f"The moduli are the average over K = {spec.K} stratified assignments of the distributed property to "
+            f"the tendons; between assignments G' varies by up to {q.text('assignment_spread', 0, 'decades', 3)} "
+            f"and G'' by up to {q.text('assignment_spread', 1, 'decades', 3)} (standard deviation).", ""]
+
+
+def parameter_error(value: float, se: float | None) -> str:
+    """A fitted parameter's one standard error: ``±x %`` while it is below 50 %, else the factor ``×/÷ f`` (the
+    fit works in ln-parameters, so a large error is a factor, not a difference); "" when not determined."""
+    if se is None or not math.isfinite(se) or not value:
+        return ""
+    rel = se / abs(value)
+    return f"±{100 * rel:.2g} %" if rel < 0.5 else f"×/÷ {math.exp(min(rel, 700.0)):.3g}"
+
+
 def section_parameters(result: FitResult, baseline=None) -> list[str]:
-    """Every parameter with its standard error (lmfit's ``value +/- stderr (percent)``), bounds and whether it sits
-    at one; the strong correlations."""
-    rows = []
+    """Every parameter with its standard error (a percentage, or a factor when large), bounds, why it has none,
+    and its spread over the other starts that fit as well; the strong correlations."""
+    alt = result.alternative_spread() if result.alternatives else {}
+    rows: list[list[str]] = []
+    why: dict[str, list[str]] = {}
     for p, (se, note) in zip(result.parameters, result.standard_errors):
-        shown = plus_minus(p.value, se)
-        rows.append((p.name, shown, p.unit, num(p.lower, 3), num(p.upper, 3), note.strip("()")))
+        err = parameter_error(p.value, se)
+        reason = note.strip("()") or ("not determined by the data" if not err else "")
+        if not err:
+            why.setdefault(reason, []).append(p.name)
+        row = [p.name, num(p.value, 4), p.unit, err or "—", num(p.lower, 3), num(p.upper, 3)]
+        if alt:
+            row.append(num(alt.get(p.name), 3) if p.name in alt else "—")
+        rows.append(row)
+    head = ["parameter", "value", "unit", "one standard error", "lower", "upper"]
+    if alt:
+        head.append("spread over equally good starts (decades)")
     out = ["## Parameters", "",
            "Each value with its standard error (one σ, linearized at the optimum; see *How well the data determine "
-           "the parameters*), or why it has none.", "",
-           table(("parameter", "value +/- standard error", "unit", "lower", "upper", "note"), rows)]
+           "the parameters*): a percentage, or a factor ×/÷ when the error exceeds 50 % (the fit works in the "
+           "logarithms of the parameters).", "", table(head, rows)]
+    for reason, names in why.items():
+        shown = ", ".join(names[:12]) + (f" … ({len(names)} in all)" if len(names) > 12 else "")
+        out.append(f"No standard error (—) for {shown}: {reason}.")
+    if why:
+        out.append("")
+    if alt:
+        out += [f"{len(result.alternatives)} other start(s) fit as well: where a parameter's spread over them exceeds "
+                "its local error, the data allow several basins and the spread is the honest uncertainty.", ""]
     if result.identifiability().gauge_removed:
         out += ["The strut length L is an exact gauge of the moduli: each error is that of the combination the note "
                 "names (EA/L², c/L, P/L²) at the fitted L.", ""]
@@ -233,10 +295,10 @@ def section_parameters(result: FitResult, baseline=None) -> list[str]:
     else:
         out += [f"No correlation between determined parameters reaches |ρ| = {CORRELATION_THRESHOLD:g}.", ""]
     if result.n_at_bound:
-        out += [f"{result.n_at_bound} parameter(s) sit at a bound: a stiffness at its lower bound is a tendon "
-                "the fit switched off, one at its upper bound a tendon it made rigid.", ""]
+        out += [f"{result.n_at_bound} parameter(s) sit at a bound: the data want them beyond it, so the value is a "
+                "limit, not an estimate.", ""]
     if baseline is not None:
-        out += ["Homogeneous baseline parameters: " + ", ".join(
+        out += [f"Baseline `{baseline.spec.name}` parameters: " + ", ".join(
             f"{p.name} = {plus_minus(p.value, se, p.unit, note, digits=4)}"
             for p, (se, note) in zip(baseline.parameters, baseline.standard_errors)), ""]
     return out
@@ -289,47 +351,57 @@ def _model_value(value: float, se_decades: float) -> str:
 
 
 def section_alternatives(result: FitResult, baseline=None) -> list[str]:
-    """Other starts' solutions that fit almost as well (the non-uniqueness)."""
+    """Other starts' solutions that fit almost as well (the non-uniqueness): how far each is from the best."""
     if not result.alternatives:
         return []
+    best = np.log10([p.value for p in result.parameters])
     rows = []
     for a in result.alternatives:
-        vals = {p.name: p.value for p in a.parameters}
-        ea = np.array([p.value for p in a.parameters if p.name.startswith("EA")])
-        cs = ", ".join(f"{v:.4g}" for k, v in vals.items() if k == "c" or k.startswith("c_"))
-        rows.append((a.start, num(a.rms_log10_error, 4), cs, f"{math.log10(ea.max() / ea.min()):.1f}"))
+        far = np.abs(np.log10([p.value for p in a.parameters]) - best)
+        i = int(np.argmax(far))
+        rows.append((a.start, num(a.rms_log10_error, 4), f"{far[i]:.2f} ({a.parameters[i].name})"))
     return ["## Other solutions that fit almost as well", "",
-            table(("start", "RMS log10 error", "c (N·s/m)", "stiffness spread (decades)"), rows),
+            table(("start", "RMS log10 error", "largest parameter difference from the best (decades)"), rows),
             "Standard errors are computed at the best fit only: these other optima are shown without them (their "
             "distance from the best fit is itself a measure of what the data leave open).", ""]
 
 
-#: the report's sections, in order
-SECTIONS = [section_summary, section_provenance, section_datasets, section_baseline, section_shape,
-            section_prestress, section_identifiability, section_comparison, section_creep, section_stiffness,
-            section_parameters, section_errors, section_alternatives]
+#: the report's sections, in order: (name, function); the names in MODEL_SECTIONS run only where the model asks
+SECTIONS = [("summary", section_summary), ("provenance", section_provenance), ("datasets", section_datasets),
+            ("baseline", section_baseline), ("shape", section_shape), ("held", section_held),
+            ("prestress", section_prestress), ("identifiability", section_identifiability),
+            ("comparison", section_comparison), ("creep", section_creep), ("stiffness", section_stiffness),
+            ("assignments", section_assignments), ("parameters", section_parameters), ("errors", section_errors),
+            ("alternatives", section_alternatives)]
+#: sections that belong to one kind of model (Problem.report_sections names the ones that apply)
+MODEL_SECTIONS = frozenset({"prestress", "creep", "held", "assignments"})
 
 
 def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None,
                  comparison=None) -> str:
-    """A Markdown report: verdict, each data set, prestress activity, identifiability, model comparison,
-    predicted creep, parameters, errors, baseline beside it.
+    """A Markdown report of a fit of any model: verdict, each data set, identifiability, model comparison,
+    parameters, errors, the baseline beside it, and the sections of its kind of model.
 
     Parameters
     ----------
     result : FitResult
-        The (heterogeneous, possibly joint) fit.
+        The (possibly joint) fit.
     baseline : FitResult, optional
-        The homogeneous fit (``tendons="uniform"``) of the same data.
+        A baseline fit of the same data (the homogeneous cell for a Voigt fit).
     title : str, optional
     comparison : ModelComparison, optional
-        From :func:`tenscell.fitting.models.compare_models` (e.g. with held-out
-        data); computed from ``result`` and ``baseline`` when not given.
+        From :func:`tenscell.fitting.scores.compare_models` (e.g. with held-out data); computed from ``result``
+        and ``baseline`` when not given.
     """
     if title is None:
-        title = "Fit of the tensegrity model to " + " and ".join(f"`{_name(d.source)}`" for d in result.datasets)
+        title = (f"Fit of `{result.spec.name}` to " + " and ".join(f"`{_name(d.source)}`" for d in result.datasets))
+    own = set(result.problem.report_sections)
     out = [f"# {title}", ""]
-    for section in SECTIONS:
-        out += section(result, baseline, comparison=comparison) if section is section_comparison \
+    for name, section in SECTIONS:
+        if name in MODEL_SECTIONS and name not in own:
+            continue
+        if name == "stiffness" and result.stiffness_spread is None:
+            continue
+        out += section_comparison(result, baseline, comparison=comparison) if name == "comparison" \
             else section(result, baseline)
     return "\n".join(out)

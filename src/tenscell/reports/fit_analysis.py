@@ -2,7 +2,7 @@
 
 Each function renders Markdown lines from a result object's fields only
 (:class:`~tenscell.fitting.identifiability.Identifiability`,
-:class:`~tenscell.fitting.models.ModelComparison`,
+:class:`~tenscell.fitting.scores.ModelComparison`,
 :class:`~tenscell.fitting.fitted.PredictedCreep`), in words a biologist can
 read, and says what the numbers do not show.
 """
@@ -231,7 +231,7 @@ def section_identifiability(result, baseline=None) -> list[str]:
 
 def section_comparison(result, baseline=None, comparison=None) -> list[str]:
     """The model comparison: ``comparison`` if given (e.g. with held-out data), else computed here."""
-    from ..fitting.models import compare_models
+    from ..fitting.scores import compare_models
 
     if comparison is None:
         comparison = compare_models(result, homogeneous=baseline)

@@ -1,12 +1,12 @@
-"""Markdown of a mechanism fit and of the mechanisms study, rendered only from their result fields."""
+"""Markdown of the mechanisms study, rendered only from its result fields (a mechanism fit's own report is
+:func:`tenscell.reports.fit.fit_markdown`, as every fit's)."""
 from __future__ import annotations
 
-import math
 
-from ..fitting.mechanisms import PER_TENDON_VOIGT, mechanism, mechanism_names
+from ..fitting.models.catalog import PER_TENDON_VOIGT, mechanism, mechanism_names
 from ._format import num, table
 
-__all__ = ["mechanism_fit_markdown", "mechanisms_markdown", "study_table_rows", "STUDY_COLUMNS"]
+__all__ = ["mechanisms_markdown", "study_table_rows", "STUDY_COLUMNS"]
 
 
 def _held(mech, where: str = "") -> str:
@@ -14,46 +14,6 @@ def _held(mech, where: str = "") -> str:
     held = [f"`{f.law_parameter}` = {num(f.value)}" for f in mech.fields if f.layout == "fixed"]
     return (f"Held, not fitted{where} (not counted among the free parameters, and not measured by this fit): "
             + ", ".join(held) + ".") if held else ""
-
-
-def mechanism_fit_markdown(result) -> str:
-    """A fitted mechanism: verdict (against the noise where stated), parameters with both uncertainties."""
-    ident = result.identifiability()
-    se = dict(zip(ident.names, ident.standard_errors))
-    alt = result.alternative_spread()
-    aic, bic = result.information_criteria()
-    out = [f"# Fit of mechanism `{result.mechanism.name}`", "", result.mechanism.description + ".", "",
-           f"Data: {', '.join(f'`{s}`' for s in result.problem.sources)}. {result.n_free} free parameters, "
-           f"{result.problem.n_residuals} residuals. AIC {num(aic)}, BIC {num(bic)}.", "",
-           f"**{result.verdict[0].upper() + result.verdict[1:]}**: {result.message}.", ""]
-    if not result.sigma_known:
-        out += ["The data state no standard deviations: the fit is judged against the tolerance only, and the "
-                "standard errors below assume residuals of the size the fit left.", ""]
-    rows = []
-    for p in result.parameters:
-        s = se.get(p.name)
-        err = "fixed" if not p.vary else ("at its bound: not estimated" if p.at_bound else
-                                          ("not determined" if s is None or not math.isfinite(s) else f"±{100 * s:.3g} %"))
-        spread = alt.get(p.name)
-        rows.append((f"`{p.name}`", num(p.value), p.unit, err + (f" ({p.at_bound} bound)" if p.at_bound else ""),
-                     "n/a" if spread is None or not result.alternatives else f"{spread:.3g}"))
-    out += [table(("parameter", "value", "unit", "local standard error", "spread over equally good starts (decades)"),
-                  rows)]
-    if _held(result.mechanism):
-        out += [_held(result.mechanism), ""]
-    n_alt = len(result.alternatives)
-    out += [f"{n_alt} other start(s) fit as well (RMS within 10 % of the best): "
-            + ("where their spread exceeds the local error, the data allow several basins and the spread is the "
-               "honest uncertainty." if n_alt else "the local standard errors are the only uncertainty measured."),
-            ""]
-    q = result.derived
-    if result.mechanism.heterogeneous:
-        out += [f"The moduli are the average over K = {result.mechanism.K} stratified assignments of the "
-                f"distributed property to the tendons; between assignments G' varies by up to "
-                f"{q.text('assignment_spread', 0, 'decades', 3)} and G'' by up to "
-                f"{q.text('assignment_spread', 1, 'decades', 3)} (standard deviation).", ""]
-    out += [f"Tendon-stiffness spread: {q.text('stiffness_spread', 0, 'decades', 3)}.", ""]
-    return "\n".join(out)
 
 
 #: the study table's columns (CSV header; the Markdown uses the same order)

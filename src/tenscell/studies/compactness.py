@@ -4,7 +4,7 @@ The paper fits Fabry's power law with tendon stiffnesses spread over 8–9
 decades, calls that unrealistic and conjectures that more compact
 distributions could also fit. This study answers it for any data: for each
 bound ``D`` on the spread ``log10(max EA / min EA)`` it fits the model with
-``max_decades=D`` (an exact constraint; see :mod:`tenscell.fitting.problem`)
+``max_decades=D`` (an exact constraint; see :mod:`tenscell.fitting.models.voigt`)
 and records the best RMS reached. Bounds are scanned from the widest to the
 narrowest, each fit warm-started from the previous one (its stiffnesses
 compressed to the new bound) besides fresh starts, so the front is what a
@@ -140,5 +140,12 @@ def compactness_study(data, decades=DEFAULT_DECADES, *, cell=None, tendons: str 
     best = [int(np.argmin(search[: k + 1])) for k in range(len(fits))]
     fits = [fits[b] for b in best]
     sources = tuple(d.source for d in fits[0].datasets)
-    return CompactnessStudy(decades=D[order], rms=search[best], spread=np.array([r.stiffness_spread[2] for r in fits]),
+    return CompactnessStudy(decades=D[order], rms=search[best], spread=np.array([_decades(r) for r in fits]),
                             fits=tuple(fits), tolerance=float(tolerance), sources=sources, search_rms=search)
+
+
+def _decades(result) -> float:
+    """The tendon-stiffness spread (decades) of a Voigt fit."""
+    spread = result.stiffness_spread
+    assert spread is not None  # a Voigt cell has tendons
+    return float(spread[2])

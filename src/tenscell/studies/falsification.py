@@ -148,7 +148,7 @@ def unlike_sets(datasets, kinds=UNLIKE_KINDS, *, exponent_rise: float = DEFAULT_
     ValueError
         If no data set states more than one prestress (there is no prestress trend to change), or an unknown kind.
     """
-    from ..fitting.layout import as_datasets
+    from ..fitting.parameters import as_datasets
 
     ds = as_datasets(datasets)
     if not any(isinstance(d, RheologyData) and varies_with_prestress(d) for d in ds):

@@ -1,11 +1,11 @@
 """Which mechanism explains the cells: every mechanism fitted to the same data, scored on the same table.
 
 For each mechanism (the paper's per-tendon Voigt fit and every entry of
-:data:`tenscell.fitting.mechanisms.MECHANISMS`) the study fits the data sets
+:data:`tenscell.fitting.models.mechanism.MECHANISMS`) the study fits the data sets
 jointly and records
 
 * the free parameters, the tendon-stiffness spread (decades), the RMS of the
-  log10 errors per data set, AIC and BIC (:func:`tenscell.fitting.models.information_criteria`);
+  log10 errors per data set, AIC and BIC (:func:`tenscell.fitting.scores.information_criteria`);
 * how many free parameters the data determine within 10 % (local standard
   error of the ln-parameter ≤ 0.1, :mod:`tenscell.fitting.identifiability`),
   and how far the other starts that fit as well spread them;
@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..fitting.mechanisms import MECHANISMS, PER_TENDON_VOIGT
+from ..fitting.models.catalog import MECHANISMS, PER_TENDON_VOIGT
 
 if TYPE_CHECKING:
     from ..population.ensemble import EnsembleResult
@@ -72,7 +72,8 @@ class MechanismRow:
     converged: bool
     elapsed_s: float
     curves: dict = field(default_factory=dict, compare=False)  # data set -> (x, G', G'') for the figure
-    model: object = field(default=None, compare=False)  # the fitted mechanism (FittedMechanism), None per-tendon
+    model: object = field(default=None, compare=False)  # the fitted model (tenscell.fitting.fitted)
+    heterogeneous: bool = False  # a tendon property drawn from a distribution (the model has an ensemble)
 
     @property
     def determined_share(self) -> float:
@@ -193,37 +194,24 @@ def _identifiability_counts(result) -> tuple[int, int, tuple]:
 
 
 def _scores(result) -> tuple[tuple, float, float, int]:
-    """(rms per data set, AIC, BIC, free parameters) of a fit of either kind."""
-    from ..fitting.models import information_criteria
-
-    if hasattr(result, "dataset_rms"):  # a MechanismFit
-        aic, bic = result.information_criteria()
-        return tuple(result.dataset_rms), aic, bic, result.n_free
-    pb = result.problem
-    k = pb.n_free - (1 if pb.free[-1] and np.all(pb.free[pb.gauge() != 0]) else 0)  # the exact L gauge
-    sigma_known = all(d.G_storage_sd is not None for d in result.datasets)
-    aic, bic, _ = information_criteria(pb.residuals(result.theta), k, sigma_known=sigma_known, weights=pb.weights)
-    return tuple(float(x) for x in pb.dataset_rms(result.theta)), aic, bic, k
+    """(rms per data set, AIC, BIC, model parameters: free, less an exact gauge) of a fit of any model."""
+    aic, bic = result.information_criteria()
+    return result.dataset_rms, aic, bic, result.problem.n_model_parameters
 
 
 def _alternatives_spread(result) -> float:
-    if hasattr(result, "alternative_spread"):
-        return max(result.alternative_spread().values(), default=0.0)
-    vals = [np.array([p.value for p in result.parameters])] + \
-        [np.array([p.value for p in a.parameters]) for a in result.alternatives]
-    V = np.log10(np.array(vals))
-    free = np.array([p.vary for p in result.parameters])
-    return float(np.max(V[:, free].max(axis=0) - V[:, free].min(axis=0))) if len(vals) > 1 else 0.0
+    """The largest spread (decades) of a free parameter over the best fit and the other starts that fit as well."""
+    return max(result.alternative_spread().values(), default=0.0) if result.alternatives else 0.0
 
 
 def _spread(result) -> float:
-    s = result.stiffness_spread  # a MechanismFit's is in decades; a FitResult's is (min, max, decades)
-    return float(s[2]) if isinstance(s, tuple) else float(s)
+    """The tendon-stiffness spread (decades)."""
+    return float(result.stiffness_spread[2])
 
 
 def evaluate_mechanism(name: str, datasets, opts: dict, holdout) -> MechanismRow:
     """Fit one mechanism and score it (a worker's task; see the module docstring)."""
-    from ..fitting.models import split_holdout
+    from ..fitting.scores import split_holdout
 
     t0 = time.monotonic()
     result = _fit(datasets, name, opts)
@@ -240,15 +228,13 @@ def evaluate_mechanism(name: str, datasets, opts: dict, holdout) -> MechanismRow
             Gs, Gl = _model_moduli(part, held.frequency_hz, k)
             r = np.concatenate([np.log10(Gs / held.G_storage), np.log10(Gl / held.G_loss)])
             held_rms = float(np.sqrt(np.mean(r**2)))
-    spread_assign = result.assignment_spread[0] if hasattr(result, "assignment_spread") else 0.0
-    desc = result.mechanism.description if hasattr(result, "mechanism") else \
-        "the paper's fit: Voigt tendons, a stiffness per tendon, damping per family, prestress, strut length"
     return MechanismRow(
-        name=name, description=desc, n_free=n_free, stiffness_spread=_spread(result), rms=rms, aic=aic, bic=bic,
+        name=name, description=result.spec.description, n_free=n_free, stiffness_spread=_spread(result), rms=rms, aic=aic, bic=bic,
         n_determined=n_det, n_analysed=n_an, at_bound=at_bound, ripple=ripple, slope_range=srange,
-        holdout_rms=held_rms, alternatives_spread=_alternatives_spread(result), assignment_spread=spread_assign,
+        holdout_rms=held_rms, alternatives_spread=_alternatives_spread(result),
+        assignment_spread=result.assignment_spread[0],
         converged=bool(result.converged), elapsed_s=time.monotonic() - t0, curves=curves,
-        model=result.model() if hasattr(result, "mechanism") else None)
+        model=result.model, heterogeneous=result.spec.heterogeneous)
 
 
 def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 10, seed: int = 0,
@@ -277,7 +263,7 @@ def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 
     """
     from .._parallel import starmap
     from .._progress import progress_bar
-    from ..fitting.problem import as_datasets
+    from ..fitting.models.voigt import as_datasets
 
     t0 = time.monotonic()
     if ensemble:  # bad K or workers: refused before any fit
@@ -311,7 +297,7 @@ def _best_ensemble(rows, datasets, K: int, workers, scheduler, progress, notify)
     """The ensemble of the distributed mechanism with the lowest BIC at the data's prestresses and frequencies."""
     from ..population.ensemble import ensemble_at_data
 
-    distributed = [r for r in rows if r.model is not None and r.model.mechanism.heterogeneous]
+    distributed = [r for r in rows if r.heterogeneous]
     if not distributed:
         return None
     return ensemble_at_data(min(distributed, key=lambda r: r.bic).model, datasets, K, workers=workers,

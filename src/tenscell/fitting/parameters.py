@@ -3,9 +3,9 @@
 This is the first of the fit's three layers (as in lmfit: parameters →
 problem → minimizer): :func:`parameter_layout` and :func:`data_arrays` turn
 a cell, data sets and the user's options into the plain arrays of a
-:class:`~tenscell.fitting.problem.FitProblem`; the problem computes
-residuals and their Jacobians (:mod:`~tenscell.fitting.problem`,
-:mod:`~tenscell.fitting.derivatives`); :func:`tenscell.fitting.fit` searches.
+:class:`~tenscell.fitting.models.voigt.FitProblem`; the problem computes
+residuals and their Jacobians (:mod:`~tenscell.fitting.models.voigt`,
+:mod:`~tenscell.fitting.models.voigt_kernel`); :func:`tenscell.fitting.fit` searches.
 A new parametrization (a mode of :data:`TENDON_MODES`, a new parameter kind)
 is a change here only.
 
@@ -24,8 +24,9 @@ from .._checks import positive_scalar
 from ..io.data import DataError, RheologyData
 from ..model.equilibrium import Cell
 
-__all__ = ["ProblemLayout", "TENDON_MODES", "DAMPING_MODES", "required_points", "as_datasets", "parameter_layout", "data_arrays",
-           "default_bounds", "check_options", "prestress_varies"]
+__all__ = ["TENDON_MODES", "DAMPING_MODES", "required_points", "as_datasets", "parameter_layout", "data_arrays",
+           "default_bounds", "check_options", "prestress_varies",
+           "kind_bounds", "bounds_by_name", "fixed_by_name"]
 
 #: how tendon stiffnesses are parametrized
 TENDON_MODES = ("per-tendon", "per-family", "uniform")
@@ -298,101 +299,53 @@ def prestress_varies(datasets) -> bool:
     return bool(measured) and np.unique(np.concatenate(measured)).size > 1
 
 
-class ProblemLayout:
-    """The parameter and residual layout every fit problem shares (what the search and the reports read).
+def kind_bounds(kind: str, S: float, w_m: float, G_loss: float) -> tuple[float, float]:
+    """Default bounds of a parameter kind, from the data's scales (module :mod:`.problem` conventions)."""
+    if kind == "stiffness":
+        return 1e-6 * S, 1e6 * S
+    if kind == "damping":
+        return 1e-6 * S / w_m, 1e6 * S / w_m
+    if kind == "coefficient":
+        return 1e-8 * S * min(1.0, 1.0 / w_m), 1e6 * S * max(1.0, 1.0 / w_m)
+    if kind == "time":
+        return 1e-6 / w_m, 1e6 / w_m
+    if kind == "exponent":
+        return 0.01, 0.99
+    if kind == "ratio":  # TensionSpringpot's beta: from the geometric prestress stiffness dominating to negligible
+        return 1e-3, 1e5
+    if kind == "decades":
+        return 0.01, 4.0
+    if kind == "tail":  # a trap model's tail exponent: below 0.5 the m·K values span > 6 decades per stratum
+        # and K(ω) becomes too ill-conditioned for its derivatives to be trusted
+        return 0.5, 5.0
+    return 1e-8 * G_loss / w_m, 1e2 * G_loss / w_m  # viscosity (Pa·s)
 
-    A problem holds ``names`` (with ``units`` and ``descriptions``), the log-space ``lower``/``upper`` bounds, the boolean ``free`` mask, the
-    fixed log-values ``fixed_log`` (free entries overwritten by ``theta``), the data's ``omega``,
-    ``y_obs``, ``weights``, ``dataset_index`` and ``sources``, its ``residuals(theta)``, and its prestress ``group_map``.
-    :class:`tenscell.fitting.problem.FitProblem` and
-    :class:`tenscell.fitting.mechanism_problem.MechanismProblem` both are one.
-    """
 
-    names: tuple
-    units: tuple
-    descriptions: tuple
-    weights: np.ndarray
-    free: np.ndarray
-    lower: np.ndarray
-    upper: np.ndarray
-    fixed_log: np.ndarray
-    omega: np.ndarray
-    y_obs: np.ndarray
-    dataset_index: np.ndarray
-    sources: tuple
-    group_map: np.ndarray
+def bounds_by_name(names, kinds, bounds, defaults, S, w_m, G_loss):
+    bounds = dict(bounds or {})
+    unknown = [k for k in bounds if k not in names and k not in kinds]
+    if unknown:
+        raise ValueError(f"bounds: {unknown[0]!r} is neither a parameter nor a kind here (parameters: "
+                         f"{', '.join(names)}; kinds: {', '.join(dict.fromkeys(kinds))})")
+    lower, upper = np.empty(len(names)), np.empty(len(names))
+    for i, (n, k) in enumerate(zip(names, kinds)):
+        lo, hi = bounds.get(n, bounds.get(k, defaults[k] if k in defaults else kind_bounds(k, S, w_m, G_loss)))
+        if not (0 < float(lo) < float(hi) < math.inf):
+            raise ValueError(f"bounds[{n!r}]: need 0 < lower < upper < inf, got ({lo!r}, {hi!r})")
+        lower[i], upper[i] = math.log(lo), math.log(hi)
+    return lower, upper
 
-    @property
-    def n_params(self) -> int:
-        """Number of all parameters (free and fixed)."""
-        return len(self.names)
 
-    @property
-    def n_free(self) -> int:
-        """Number of free parameters (length of ``theta``)."""
-        return int(self.free.sum())
-
-    @property
-    def n_points(self) -> int:
-        """Number of moduli data points, all data sets together."""
-        return int(self.omega.size)
-
-    @property
-    def n_residuals(self) -> int:
-        """Number of data residuals."""
-        return int(self.y_obs.size)
-
-    @property
-    def n_datasets(self) -> int:
-        """Number of data sets fitted together."""
-        return len(self.sources)
-
-    @property
-    def n_groups(self) -> int:
-        """Number of distinct model prestresses."""
-        return int(self.group_map.shape[0])
-
-    @property
-    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Log-space bounds of the free parameters."""
-        return self.lower[self.free], self.upper[self.free]
-
-    def full(self, theta) -> np.ndarray:
-        """Log values of all parameters from the free ones."""
-        phi = self.fixed_log.copy()
-        phi[self.free] = theta
-        return phi
-
-    def values(self, theta) -> np.ndarray:
-        """Parameter values (SI units) of all parameters, in the order of ``names``."""
-        return np.exp(self.full(theta))
-
-    def rows(self, dataset: int) -> np.ndarray:
-        """Positions of data set ``dataset``'s moduli residuals: its G' rows then its G'' rows."""
-        pts = np.flatnonzero(self.dataset_index == dataset)
-        return np.concatenate([pts, self.n_points + pts])
-
-    def residuals(self, theta) -> np.ndarray:
-        """The weighted log10 residuals at free log-parameters ``theta``: each kind of problem computes its own."""
-        raise NotImplementedError
-
-    def rms(self, theta) -> float:
-        """RMS of the unweighted log10 residuals of all data sets (decades)."""
-        r = self.residuals(theta) / self.weights
-        return float(np.sqrt(np.mean(r**2)))
-
-    def dataset_rms(self, theta) -> np.ndarray:
-        """RMS of the unweighted log10 residuals of each data set (decades), shape (n_datasets,)."""
-        r = self.residuals(theta) / self.weights
-        return np.array([math.sqrt(float(np.mean(r[self.rows(k)] ** 2))) for k in range(self.n_datasets)])
-
-    def parameters(self, theta) -> tuple:
-        """The parameters as :class:`tenscell.fitting.FitParameter` records (SI units)."""
-        from .result import FitParameter
-
-        vals = self.values(theta)
-        lo, hi = np.exp(self.lower), np.exp(self.upper)
-        return tuple(
-            FitParameter(name=n, value=float(v), lower=float(a), upper=float(b), unit=u, vary=bool(fr), description=d)
-            for n, v, a, b, u, fr, d in zip(self.names, vals, lo, hi, self.units, self.free, self.descriptions)
-        )
+def fixed_by_name(names, lower, upper, fixed):
+    free = np.ones(len(names), dtype=bool)
+    fixed_log = 0.5 * (lower + upper)
+    for key, value in dict(fixed or {}).items():
+        if key not in names:
+            raise ValueError(f"fixed: cannot fix {key!r}; parameters here: {', '.join(names)}")
+        v = float(value)
+        i = names.index(key)
+        if not (v > 0 and lower[i] <= math.log(v) <= upper[i]):
+            raise ValueError(f"fixed[{key!r}] = {value!r} lies outside its bounds [{math.exp(lower[i]):.6g}, "
+                             f"{math.exp(upper[i]):.6g}]")
+        free[i], fixed_log[i] = False, math.log(v)
+    return free, fixed_log

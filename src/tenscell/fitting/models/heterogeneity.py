@@ -32,7 +32,7 @@ from typing import ClassVar
 import numpy as np
 import scipy.special
 
-from .._checks import positive_scalar
+from ..._checks import positive_scalar
 
 __all__ = ["Distribution", "LogNormal", "LogUniform", "PowerLaw", "DISTRIBUTIONS", "assignments"]
 

@@ -1,13 +1,13 @@
 """The model of a fit and its derivatives: moduli, creep, prestress share and elasticity, each with its analytic Jacobian.
 
-Everything here is a function of a :class:`~tenscell.fitting.problem.FitProblem`
+Everything here is a function of a :class:`~tenscell.fitting.models.voigt.FitProblem`
 ``p`` (its cell arrays and parameter layout) and a log-parameter vector
 ``phi``, through the relaxation spectrum ``K0 v = λ C0 v`` per prestress
 group (:func:`spectrum`). With ``x = Z⁻¹(−H0)``, ``y = Z⁻ᵀ D0ᵀ`` and
 ``Z = K0 + iωC0``: ``∂J/∂EA_j = −(yᵀa_j)(a_jᵀx)/l_j``,
 ``∂J/∂c_j = −iω(yᵀa_j)(a_jᵀx)``, ``∂J/∂P = −yᵀKp x``, all frequencies at
 once from a few matrix products. The residuals built from these live in
-:mod:`~tenscell.fitting.problem`.
+:mod:`~tenscell.fitting.models.voigt`.
 """
 from __future__ import annotations
 
@@ -16,11 +16,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..laws import Voigt
-from ..linear.modal import modulus, prestress_grid_modes
+from ...laws import Voigt
+from ...linear.modal import modulus, prestress_grid_modes
 
 if TYPE_CHECKING:
-    from .problem import FitProblem
+    from .voigt import FitProblem
 
 __all__ = ["spectrum", "evaluate", "log_derivatives", "activity", "static_share", "storage_elasticity",
            "creep_compliance", "modal_products"]
@@ -117,7 +117,7 @@ def evaluate(p: FitProblem, phi, jac: bool, share: bool = False, elasticity: boo
 
 def creep_compliance(p: FitProblem, spec, jac: bool):
     """Creep compliance (1/Pa) at the creep points and, if ``jac``, d ln J / d phi (module :mod:`.creep`)."""
-    from .creep import creep_derivatives, creep_from_modes
+    from .voigt_creep import creep_derivatives, creep_from_modes
 
     Jc = np.empty(p.n_creep)
     dJ = np.zeros((p.n_creep, p.n_params)) if jac else None

@@ -1,0 +1,285 @@
+"""The model protocol: a fittable model is a frozen specification that builds its problem against data; a fit of
+it gives a fitted model of the :class:`FittedModel` family.
+
+In the manner of lmfit's ``Model``: a :class:`FitModel` says *what* is
+fitted (a per-tendon Voigt cell, a mechanism, a structure-free formula, a
+population of cells); :meth:`FitModel.problem` lays its parameters out
+against data sets and returns a :class:`tenscell.fitting.problem.Problem`
+(residuals, Jacobian, starts and moves); :func:`tenscell.fitting.fit` searches
+it and returns the one result type, :class:`tenscell.fitting.FitResult`,
+whose fitted model (:mod:`tenscell.fitting.fitted`) every consumer accepts.
+
+A model round-trips through fit.json: :meth:`FitModel.to_dict` writes its
+class name and fields, :func:`model_from_dict` rebuilds it (the classes
+register themselves by subclassing).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import ClassVar
+
+import numpy as np
+
+from ..._checks import positive_scalar
+from ..._errors import TenscellError
+from ...linear.linearize import LinearModel
+from ...model.equilibrium import Cell
+
+__all__ = ["FitModel", "model_from_dict", "FittedModel", "FitFileError", "FITTED_KINDS", "cell_to_dict",
+           "cell_from_dict", "frequencies_of", "field_of", "positive_values", "prestress_from"]
+
+#: every fitted-model kind by its ``format`` tag (filled by FittedModel.__init_subclass__)
+FITTED_KINDS: dict[str, type[FittedModel]] = {}
+
+#: every FitModel subclass by class name (filled by __init_subclass__): what model_from_dict rebuilds
+_CLASSES: dict[str, type[FitModel]] = {}
+
+
+class FitModel:
+    """Base of every fittable model: a frozen dataclass with a ``name`` and a ``description``.
+
+    Class attributes
+    ----------------
+    family : str
+        ``"tensegrity"`` (a cell whose structure carries the response), ``"formula"`` (a structure-free law:
+        the baselines a tensegrity has to beat) or ``"population"``.
+    """
+
+    family: ClassVar[str] = "tensegrity"
+    name: str
+    description: str
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        _CLASSES[cls.__name__] = cls
+
+    def problem(self, data, cell=None, *, bounds: dict | None = None, fixed: dict | None = None):
+        """The :class:`~tenscell.fitting.problem.Problem` of this model against ``data`` (one data set or a list).
+
+        ``bounds``: ``{parameter name or kind: (lo, hi)}`` in SI units; ``fixed``: ``{parameter name: value}``.
+        Bad input raises ValueError (or :class:`tenscell.io.data.DataError` for the data) naming it.
+        """
+        raise NotImplementedError
+
+    @property
+    def heterogeneous(self) -> bool:
+        """Whether a property is drawn from a distribution over the tendons (the fitted model has an ensemble)."""
+        return False
+
+    @property
+    def group(self) -> str:
+        """The group the command line's help lists the model in."""
+        return "other models"
+
+    def baseline(self) -> FitModel | None:
+        """The model a fit of this one is shown beside in its report (None: none)."""
+        return None
+
+    @property
+    def structural(self) -> bool:
+        """Whether the model has a cell (a structure whose geometry and prestress carry the response)."""
+        return self.family != "formula"
+
+    def to_dict(self) -> dict:
+        """JSON-ready: the class name and every field (rebuilt by :func:`model_from_dict`)."""
+        return {"class": type(self).__name__, **dataclasses.asdict(self)}  # type: ignore[call-overload]
+
+    @classmethod
+    def from_fields(cls, fields: dict) -> FitModel:
+        """The model from the fields :meth:`to_dict` wrote (a subclass with nested fields rebuilds them)."""
+        return cls(**fields)
+
+
+def model_from_dict(obj: dict) -> FitModel:
+    """The model written by :meth:`FitModel.to_dict` (ValueError naming what is wrong)."""
+    if not isinstance(obj, dict) or obj.get("class") not in _CLASSES:
+        known = ", ".join(sorted(_CLASSES))
+        got = obj.get("class") if isinstance(obj, dict) else type(obj).__name__
+        raise ValueError(f"not a tenscell model description: class {got!r} (known: {known})")
+    cls = _CLASSES[obj["class"]]
+    fields = {k: v for k, v in obj.items() if k != "class"}
+    try:
+        return cls.from_fields(fields)
+    except TypeError as err:  # a missing or unknown field
+        raise ValueError(f"model {obj.get('name', obj['class'])!r}: {err}") from None
+
+
+# ---------------------------------------------------------------------------------------
+# what a fit of a model gives
+# ---------------------------------------------------------------------------------------
+class FitFileError(TenscellError, ValueError):
+    """A fit.json that cannot be used: unreadable, of another version, or with a missing or out-of-range field."""
+
+
+class FittedModel:
+    """What every fitted model answers (the subclasses are frozen dataclasses with these fields).
+
+    Attributes
+    ----------
+    s : float or None
+        Prestress scale (m²): the model prestress is ``s × prestress (Pa)``.
+    P : float or None
+        Model prestress (N) when the data stated no prestress.
+    prestress_pa : tuple of float
+        The data's prestresses (Pa), measured or fitted, when ``s`` is used (the default is their median).
+    source : str
+        What was fitted (for messages).
+    """
+
+    s: float | None
+    P: float | None
+    prestress_pa: tuple
+    source: str
+    #: the ``format`` tag of :meth:`to_dict` (each kind registers itself under it: :func:`fitted_from_dict`)
+    FORMAT = ""
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        if cls.FORMAT:
+            FITTED_KINDS[cls.FORMAT] = cls
+
+    @classmethod
+    def from_dict(cls, obj: dict) -> FittedModel:
+        """Rebuild from :meth:`to_dict`."""
+        raise NotImplementedError
+
+    def _check_prestress(self) -> None:
+        if (self.P is None) == (self.s is None):
+            raise ValueError("a fitted model has either a prestress P (N) or a prestress scale s (m²), not both")
+        object.__setattr__(self, "prestress_pa", tuple(float(x) for x in self.prestress_pa))
+
+    # -- the prestress --------------------------------------------------------------------
+    @property
+    def default_prestress_pa(self) -> float | None:
+        """The median measured prestress (Pa) when the model uses ``s``; None otherwise."""
+        return float(np.median(self.prestress_pa)) if self.s is not None and self.prestress_pa else None
+
+    def prestress(self, prestress_pa: float | None = None) -> float:
+        """Model prestress P (N): the fitted P, or ``s × prestress_pa`` (default the data's median prestress)."""
+        if self.s is None:
+            if prestress_pa is not None:
+                raise ValueError("this fit has a fitted prestress P (N): no data set stated its prestress, so a "
+                                 "prestress in Pa has no model equivalent")
+            assert self.P is not None  # a fit without a prestress scale fits P itself
+            return float(self.P)
+        if prestress_pa is None:
+            prestress_pa = self.default_prestress_pa
+            if prestress_pa is None:
+                raise ValueError("prestress_pa (Pa) is required: the fit scales measured prestresses by s")
+        return float(self.s) * positive_scalar("prestress", prestress_pa, "Pa")
+
+    def prestress_label(self, prestress_pa: float | None = None) -> tuple[str, float]:
+        """``(column, value)`` naming the prestress a table row is at: ``("prestress_Pa", Pa)`` for a model with a
+        prestress scale, ``("prestress_N", N)`` (the fitted model prestress) otherwise."""
+        if self.s is not None:
+            shown = prestress_pa if prestress_pa is not None else self.default_prestress_pa
+            assert shown is not None  # a model with a prestress scale keeps its data's prestresses
+            return "prestress_Pa", float(shown)
+        return "prestress_N", self.prestress(None)
+
+    def _prestress_fields(self) -> dict:
+        return {"s_m2": self.s, "P_N": self.P, "prestress_Pa": list(self.prestress_pa), "source": self.source}
+
+    # -- what each kind computes ------------------------------------------------------------
+    @property
+    def structural(self) -> bool:
+        """Whether the model has a cell (False for a structure-free formula)."""
+        return True
+
+    @property
+    def viscosity(self) -> float:
+        """A cytoplasm viscosity η (Pa·s) in parallel with the structure; 0 without one."""
+        return 0.0
+
+    def moduli(self, f_hz, prestress_pa: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """G′, G″ (Pa) at frequencies ``f_hz`` (Hz) and one prestress (Pa, see :meth:`prestress`)."""
+        raise NotImplementedError
+
+    def tendon_law(self, assignment: int = 0):
+        """The tendon law of every tendon (a :class:`tenscell.laws.TendonLaw`), for the time domain and ``show``."""
+        raise ValueError(f"{self.describe()} has no tendons: it is a structure-free formula (a baseline), not a "
+                         "tensegrity")
+
+    def linear(self, prestress_pa: float | None = None, *, P_N: float | None = None) -> LinearModel:
+        """The linear model at the fitted parameters (see :meth:`prestress`), or at model prestress ``P_N`` (N)."""
+        raise ValueError(f"{self.describe()} has no cell: it is a structure-free formula (a baseline), not a "
+                         "tensegrity")
+
+    def voigt_tendons(self, P_N: float) -> tuple[np.ndarray, np.ndarray]:
+        """(EA in N, c in N·s/m) per tendon of the Voigt tendons equivalent at rest at model prestress ``P_N``:
+        the fitted ones for Voigt tendons, the tangent stiffness and damping of the linear model otherwise
+        (what ``show`` and the time domain's Voigt law take)."""
+        raise ValueError(f"{self.describe()} has no tendons: it is a structure-free formula (a baseline), not a "
+                         "tensegrity")
+
+    def describe(self) -> str:
+        """One line: what this fitted model is."""
+        raise NotImplementedError
+
+    def to_dict(self) -> dict:
+        """JSON-ready (fit.json's ``"model"`` entry); :func:`fitted_from_dict` rebuilds it."""
+        raise NotImplementedError
+
+    def _resolve_P(self, prestress_pa, P_N) -> float:
+        return self.prestress(prestress_pa) if P_N is None else positive_scalar("P_N", P_N, "N")
+
+
+def frequencies_of(f_hz) -> np.ndarray:
+    f = np.atleast_1d(np.asarray(f_hz, dtype=float)).ravel()
+    if not (f.size and np.all(np.isfinite(f)) and np.all(f > 0)):
+        raise ValueError("frequencies must be finite numbers > 0 (Hz)")
+    return f
+
+
+def field_of(obj: dict, key: str, kind: type):
+    if key not in obj:
+        raise FitFileError(f"model.{key}: missing")
+    value = obj[key]
+    if not isinstance(value, kind):
+        raise FitFileError(f"model.{key}: expected {kind.__name__}, got {type(value).__name__}")
+    return value
+
+
+def positive_field(where: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise FitFileError(f"{where}: expected a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def positive_values(obj: dict) -> dict:
+    return {str(k): positive_field(f"model.values.{k}", v) for k, v in field_of(obj, "values", dict).items()}
+
+
+def prestress_from(obj: dict) -> dict:
+    s, P = obj.get("s_m2"), obj.get("P_N")
+    if (s is None) == (P is None):
+        raise FitFileError("model: exactly one of s_m2 (prestress scale, m²) and P_N (model prestress, N) is given")
+    pres = obj.get("prestress_Pa") or []
+    if not isinstance(pres, list):
+        raise FitFileError(f"model.prestress_Pa: expected a list of prestresses (Pa), got {type(pres).__name__}")
+    return {"s": None if s is None else positive_field("model.s_m2", s), "P": None if P is None else positive_field("model.P_N", P),
+            "prestress_pa": tuple(positive_field("model.prestress_Pa[]", p) for p in pres),
+            "source": str(obj.get("source", ""))}
+
+
+def cell_to_dict(cell: Cell, **member_values) -> dict:
+    """The JSON entries that rebuild ``cell`` (:func:`cell_from_dict`): its structure file with ``T0``
+    (and any per-member values such as ``EA``, ``c``), its parametrization and its construction parameters."""
+    from ...io.structure_files import structure_to_dict
+
+    return {"structure": structure_to_dict(cell.structure, T0=cell.T0, **member_values),
+            "parametrization": cell.coords.kind,
+            "cell_parameters": {k: (v if isinstance(v, (bool, str)) else float(v)) for k, v in cell.parameters.items()}}
+
+
+def cell_from_dict(obj: dict):
+    """``(cell, structure_file)`` from the entries :func:`cell_to_dict` wrote (the file keeps its member values)."""
+    from ...io.structure_files import structure_from_dict
+
+    sf = structure_from_dict(field_of(obj, "structure", dict))
+    from ...model.equilibrium import equilibrate
+
+    cell = equilibrate(sf.structure, obj.get("parametrization", "angles"), T0=sf.T0,
+                       parameters=obj.get("cell_parameters") or {})
+    return cell, sf

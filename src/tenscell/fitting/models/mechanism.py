@@ -1,0 +1,685 @@
+"""Mechanisms: frozen, few-parameter specifications of what sets a cell's moduli, each one fittable.
+
+A :class:`Mechanism` names a tendon law (a class of :mod:`tenscell.laws` with a
+dynamic tangent ``complex_stiffness``) and says how each of the law's
+parameters is laid out over the tendons (:class:`Field`): one value per
+family (actin / intermediate filament), one value shared by every tendon, a
+fixed value, or drawn from a named distribution
+(:mod:`tenscell.fitting.models.heterogeneity`) whose scale is per family or shared
+and whose shape (spread in decades, or a trap-model exponent) is one more
+parameter. Optionally a cytoplasm viscosity η (Pa·s) acts in parallel with the
+structure. The prestress parameters come from the data exactly as in the
+per-tendon fit (:mod:`tenscell.fitting.models.voigt`).
+
+The per-tendon stiffnesses, damping and prestress of a mechanism are those of
+the reference cell (strut length ``L_ref``, 1 m for the paper cell): the
+strut length is not a parameter, because ``(P, EA, c, L) -> (λ²P, λ²EA, λc,
+λL)`` leaves the moduli unchanged; a mechanism has no gauge.
+
+The built-in ones are in :mod:`~tenscell.fitting.models.catalog`.
+
+Against data a mechanism is a :class:`MechanismProblem`: parameter layout, moduli averaged over assignments,
+residuals, exact Jacobian (:mod:`~tenscell.fitting.models.mechanism_kernel`). For parameters ``φ`` (natural logs), each field of the :class:`Mechanism`
+gives the law parameter of every tendon in every assignment k (K × m values,
+:mod:`~tenscell.fitting.models.heterogeneity`), the law gives the dynamic tangent
+``k*_j(ω)`` at the tensions ``P·T0`` and its exact derivatives
+(``complex_stiffness_derivatives``), and the kernel
+:func:`tenscell.linear.dynamic.dynamic_compliance` gives J(ω) and the exact
+``dJ`` along any set of directions in k*. Three kinds of direction:
+
+* a mechanism parameter q: ``Σ_p (∂k*/∂x_p)·x_p·∂ln x_p/∂φ_q``;
+* the prestress: J is homogeneous of degree −1 in (P, k*) together
+  (K(ω) = P·H + Σ k*_j a_j a_jᵀ), so ``P ∂J/∂P|_k* = −J − Σ_j k*_j ∂J/∂k*_j``,
+  i.e. ``−J − dJ[k*]``, plus ``dJ[P·(∂k*/∂T)·T0]`` for the law's tension
+  dependence: exact, from the kernel alone;
+* the viscosity adds ``iωη`` to G*: its derivative is itself.
+
+The moduli are ``G* = mean_k (0.5/L)/J_k + iωη``; their spread between the
+assignments (decades, per point) is reported.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ... import laws as _laws
+from ...io.data import DataError
+from ...model.equilibrium import Cell
+from .heterogeneity import DISTRIBUTIONS, assignments
+from .mechanism_kernel import MechanismEvaluation, evaluate, law_values
+from ..parameters import bounds_by_name, fixed_by_name, _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
+from ..._results import format_repr
+from ...linear.linearize import LinearModel
+from .base import (FitFileError, FitModel, FittedModel, cell_from_dict, cell_to_dict, field_of, frequencies_of, model_from_dict,
+                   positive_values, prestress_from)
+from ..problem import PENALTY as _PENALTY, Problem, draw_start, jitter, log_residual_blocks
+
+__all__ = ["Field", "Mechanism", "KINDS", "MechanismProblem", "make_mechanism_problem", "MechanismEvaluation", "bare_problem",
+           "FittedMechanism", "MECHANISM_FORMAT"]
+
+#: what a parameter kind is, for bounds and starts: (unit, scales G when all scalable ones scale together)
+KINDS = {
+    "stiffness": ("N", True),
+    "damping": ("N·s/m", True),
+    "coefficient": ("N (at 1 rad/s)", True),
+    "time": ("s", False),
+    "exponent": ("", False),
+    "decades": ("decades", False),
+    "tail": ("", False),
+    "viscosity": ("Pa·s", True),
+    "ratio": ("", False),  # a dimensionless modulus per unit tension (TensionSpringpot's beta)
+}
+#: the layouts of a law parameter over the tendons
+LAYOUTS = ("family", "shared", "fixed")
+
+
+@dataclass(frozen=True)
+class Field:
+    """How one law parameter is laid out over the tendons.
+
+    Attributes
+    ----------
+    law_parameter : str
+        The parameter's name in the law (e.g. ``"EA"``, ``"c"``, ``"alpha"``).
+    kind : str
+        A key of :data:`KINDS` (bounds and starts).
+    layout : {"family", "shared", "fixed"}
+        One fitted value per family, one for all tendons, or ``value`` for all.
+    distribution : str or None
+        A key of :data:`~tenscell.fitting.models.heterogeneity.DISTRIBUTIONS`: the
+        layout's value(s) are the distribution's scale and one more parameter
+        (its shape, shared by the families) spreads the tendons.
+    value : float or None
+        The value of a fixed parameter (SI units).
+    """
+
+    law_parameter: str
+    kind: str
+    layout: str = "family"
+    distribution: str | None = None
+    value: float | None = None
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise ValueError(f"Field {self.law_parameter!r}: kind must be one of {', '.join(KINDS)}, got {self.kind!r}")
+        if self.layout not in LAYOUTS:
+            raise ValueError(f"Field {self.law_parameter!r}: layout must be one of {', '.join(LAYOUTS)}, "
+                             f"got {self.layout!r}")
+        if (self.layout == "fixed") != (self.value is not None):
+            raise ValueError(f"Field {self.law_parameter!r}: a value is given exactly for the fixed layout")
+        if self.distribution is not None and self.distribution not in DISTRIBUTIONS:
+            raise ValueError(f"Field {self.law_parameter!r}: distribution must be one of "
+                             f"{', '.join(DISTRIBUTIONS)}, got {self.distribution!r}")
+        if self.distribution is not None and self.layout == "fixed":
+            raise ValueError(f"Field {self.law_parameter!r}: a fixed parameter has no distribution")
+
+
+@dataclass(frozen=True)
+class Mechanism(FitModel):
+    """A fittable mechanism: a tendon law, its parameters' layout, a cytoplasm, the heterogeneity's sampling.
+
+    Attributes
+    ----------
+    name : str
+    law : str
+        Class name in :mod:`tenscell.laws` (``"Voigt"``, ...).
+    fields : tuple of Field
+        One per parameter of the law, in any order.
+    viscosity : bool
+        A cytoplasm viscosity η (Pa·s) in parallel with the structure.
+    assignments : int
+        K, the number of stratified assignments the moduli are averaged over
+        (used only when a field has a distribution).
+    seed : int
+        Seed of the assignments.
+    description : str
+    """
+
+    name: str
+    law: str
+    fields: tuple
+    viscosity: bool = False
+    assignments: int = 8
+    seed: int = 0
+    description: str = ""
+
+    def __post_init__(self):
+        names = [f.law_parameter for f in self.fields]
+        if len(set(names)) != len(names):
+            raise ValueError(f"mechanism {self.name!r}: a law parameter is laid out twice")
+        if isinstance(self.assignments, bool) or not isinstance(self.assignments, int) or self.assignments < 1:
+            raise ValueError(f"mechanism {self.name!r}: assignments must be an integer >= 1")
+
+    @property
+    def heterogeneous(self) -> bool:
+        """Whether a field is drawn from a distribution (the moduli are then averaged over K assignments)."""
+        return any(f.distribution is not None for f in self.fields)
+
+    @property
+    def K(self) -> int:
+        """Assignments actually used: :attr:`assignments` if heterogeneous, else 1."""
+        return self.assignments if self.heterogeneous else 1
+
+    @property
+    def group(self) -> str:
+        return {"Voigt": "mechanisms: Voigt tendons", "Maxwell": "mechanisms: filament turnover (Maxwell)",
+                "StandardLinearSolid": "mechanisms: standard linear solid"}.get(self.law, "mechanisms: fractional tendons")
+
+    def baseline(self):
+        """Its own structure-free formula (:func:`tenscell.fitting.models.formulas.lumped_formula`)."""
+        from .formulas import lumped_formula
+
+        return lumped_formula(self)
+
+    def problem(self, data, cell=None, *, bounds=None, fixed=None):
+        return make_mechanism_problem(data, self, cell, bounds=bounds, fixed=fixed)
+
+    @classmethod
+    def from_fields(cls, fields: dict) -> Mechanism:
+        return cls(**{**fields, "fields": tuple(Field(**f) for f in fields["fields"])})
+
+
+
+
+def _field_params(f: Field, fams: list[str]) -> list[tuple[str, str, str, str]]:
+    """(name, unit, kind, description) of a field's parameters: its scale(s), then its distribution's shape."""
+    unit = KINDS[f.kind][0]
+    what = f"{f.law_parameter} ({f.kind})"
+    if f.layout == "fixed":
+        return []
+    if f.layout == "family":
+        out = [(f"{f.law_parameter}_{fam}", unit, f.kind, f"{what} of every {fam} tendon") for fam in fams]
+    else:
+        out = [(f.law_parameter, unit, f.kind, f"{what} of every tendon")]
+    if f.distribution is not None:
+        dist = DISTRIBUTIONS[f.distribution]
+        shape, sunit = dist.parameters[1], dist.shape_unit
+        out = [(n, u, k, d.replace(f"{what} of", f"{f.distribution} {dist.parameters[0]} of {what} over"))
+               for n, u, k, d in out]
+        kind = "decades" if sunit == "decades" else "tail"
+        out.append((f"{f.law_parameter}_{shape}", sunit, kind,
+                    f"{f.distribution} {shape} of {f.law_parameter} over the tendons"))
+    return out
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class MechanismProblem(Problem):
+    """A mechanism's moduli against one or several data sets (built by :func:`make_mechanism_problem`).
+
+    Duck-types the parts of :class:`~tenscell.fitting.models.voigt.FitProblem` that
+    the search (:func:`tenscell.fitting.search.run_search`) and
+    :func:`~tenscell.fitting.identifiability.identifiability` use, and adds
+    its own starts (:meth:`initial_guess`) and moves (:meth:`perturb`).
+    """
+
+    mechanism: Mechanism
+    cell: Cell
+    names: tuple
+    units: tuple
+    descriptions: tuple
+    kinds: tuple
+    lower: np.ndarray
+    upper: np.ndarray
+    free: np.ndarray
+    fixed_log: np.ndarray
+    n_field: int  # parameters of the fields (they come first)
+    field_maps: tuple  # per field: (law parameter, D (K, m, n_params) d ln x/d φ, const (K, m)) ln x = const + D φ
+    shape_maps: tuple  # per field with a distribution: (law parameter, shape's index, distribution, u (K, m))
+    eta_index: int | None
+    L_ref: float
+    lengths: np.ndarray
+    T0: np.ndarray
+    sources: tuple
+    omega: np.ndarray
+    dataset_index: np.ndarray
+    group_index: np.ndarray
+    group_log_offset: np.ndarray
+    group_map: np.ndarray
+    group_measured: np.ndarray
+    y_obs: np.ndarray
+    weights: np.ndarray
+    prestress_start: int
+
+    tendons: str = "mechanism"
+
+    def __repr__(self) -> str:
+        return (f"MechanismProblem({self.mechanism.name}: {self.n_free} free of {self.n_params} parameters, "
+                f"{self.n_datasets} data set(s), {self.n_points} points)")
+
+    @property
+    def spec(self) -> Mechanism:
+        """The :class:`~tenscell.fitting.models.mechanism.Mechanism` of this problem."""
+        return self.mechanism
+
+    # -- layout (the rest in fitting.problem.Problem) ---------------------------
+    @property
+    def prestress_slice(self) -> slice:
+        return slice(self.prestress_start, self.n_params)
+
+    def gauge(self) -> np.ndarray:
+        """No gauge: the strut length is not a parameter (module docstring of :mod:`.mechanisms`)."""
+        return np.zeros(self.n_params)
+
+    def coordinate_map(self) -> np.ndarray:
+        return np.eye(self.n_free)
+
+    def coordinate_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.bounds
+
+    def to_coordinates(self, theta) -> np.ndarray:
+        return np.asarray(theta, dtype=float).copy()
+
+    # -- the model ---------------------------------------------------------------------
+    def law_values(self, phi) -> tuple[dict, dict]:
+        """Per law parameter: values (K, m) and d ln value / d φ (K, m, n_params), at log-parameters ``phi``."""
+        return law_values(self, phi)
+
+    def _group_P(self, phi) -> np.ndarray:
+        """Model prestress (N) of each group on the reference cell, at log-parameters ``phi``."""
+        return np.exp(self.group_log_offset + self.group_map @ phi[self.prestress_slice])
+
+    def evaluate(self, phi, omega, P, jac: bool, dP=None) -> MechanismEvaluation | None:
+        """Moduli at angular frequencies ``omega`` (rad/s) and model prestresses ``P`` (N), per point
+        (:func:`~tenscell.fitting.models.mechanism_kernel.evaluate`); None where not a stable cell."""
+        return evaluate(self, phi, omega, P, jac, dP)
+
+    # -- at the data points ----------------------------------------------------------------
+    def _at_data(self, phi, jac: bool) -> MechanismEvaluation | None:
+        P = self._group_P(phi)[self.group_index]
+        dP = None
+        if jac:
+            dP = np.zeros((self.n_points, self.n_params))
+            dP[:, self.prestress_slice] = self.group_map[self.group_index]
+        return self.evaluate(phi, self.omega, P, jac, dP)
+
+    def _evaluate_constrained(self, phi, jac: bool):
+        return self._at_data(phi, jac)
+
+    def _residuals_from(self, out) -> np.ndarray:
+        if out is None or not (np.all(out.G.real > 0) and np.all(out.G.imag > 0)):
+            return np.full(self.y_obs.size, _PENALTY)
+        return self.weights * (np.concatenate([np.log10(out.G.real), np.log10(out.G.imag)]) - self.y_obs)
+
+    def _jacobian_from(self, out) -> np.ndarray:
+        if out is None or out.dG is None:
+            return np.zeros((self.y_obs.size, self.n_free))
+        return self.weights[:, None] * log_residual_blocks(out.G, out.dG[:, self.free])
+
+    def moduli(self, theta) -> tuple[np.ndarray, np.ndarray]:
+        """Model G', G'' (Pa) at the data points; NaN where the model is not a stable cell."""
+        out = self._at_data(self.full(theta), jac=False)
+        if out is None:
+            return np.full(self.n_points, np.nan), np.full(self.n_points, np.nan)
+        return out.G.real, out.G.imag
+
+    def assignments_subset(self, lo: int, hi: int) -> "MechanismProblem":
+        """The same problem restricted to assignments ``lo .. hi-1`` (a slice of every field's and shape's map).
+
+        Each assignment's moduli depend only on its own row of the maps, so the moduli of a subset are those
+        rows of :attr:`MechanismEvaluation.G_assign`: an ensemble can be evaluated in pieces, anywhere.
+        """
+        K = self.field_maps[0][1].shape[0]
+        if not (0 <= lo < hi <= K):
+            raise ValueError(f"assignments {lo}..{hi - 1}: outside the problem's {K} assignments")
+        fields = tuple((name, D[lo:hi], const[lo:hi]) for name, D, const in self.field_maps)
+        shapes = tuple((name, idx, dist, u[lo:hi]) for name, idx, dist, u in self.shape_maps)
+        return dataclasses.replace(self, field_maps=fields, shape_maps=shapes)
+
+    def assignment_spread(self, theta) -> tuple[float, float]:
+        """Largest spread (decades) of G' and of G'' between the K assignments over the data points."""
+        out = self._at_data(self.full(theta), jac=False)
+        if out is None or out.G_assign.shape[0] < 2:
+            return 0.0, 0.0
+        Ga = out.G_assign
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = np.std(np.log10(Ga.real), axis=0), np.std(np.log10(Ga.imag), axis=0)
+        return float(np.nanmax(s[0])), float(np.nanmax(s[1]))
+
+    def feasible(self, theta) -> bool:
+        """No activity constraints: always True."""
+        return True
+
+    def stiffness_spread(self, theta) -> tuple[float, float, float]:
+        """(min, max, decades) over the tendons and assignments of the stiffness fields (stiffnesses, springpot
+        moduli): the widest field's (its own unit); (0, 0, 0) when no field is a stiffness."""
+        vals, _ = self.law_values(self.full(theta))
+        spreads = [(float(vals[f.law_parameter].min()), float(vals[f.law_parameter].max()))
+                   for f in self.mechanism.fields if f.kind in ("stiffness", "coefficient")]
+        if not spreads:
+            return 0.0, 0.0, 0.0
+        lo, hi = max(spreads, key=lambda s: s[1] / s[0])
+        return lo, hi, float(np.log10(hi / lo))
+
+    # -- the search's starts and moves ------------------------------------------------------
+    def initial_guess(self, rng: np.random.Generator, candidates: int = 24) -> np.ndarray:
+        """A start: the best of a few log-uniform draws in the middle of the bounds, scaled onto the data
+        (:func:`~tenscell.fitting.problem.draw_start`; the stiffness-like kinds of :data:`KINDS` scale G*)."""
+        return draw_start(self, rng, tuple(k for k, (_, scales) in KINDS.items() if scales), candidates)
+
+    def perturb(self, theta, rng: np.random.Generator) -> np.ndarray:
+        """A basin-hopping move: every free log-parameter jittered by about half a decade, within the bounds."""
+        return jitter(self, theta, rng)
+
+    # -- anywhere, and what the result reads -------------------------------------------------------
+    def tendon_law(self, phi, assignment: int = 0):
+        """The law of every tendon in assignment ``assignment`` at log-parameters ``phi``."""
+        K = self.field_maps[0][1].shape[0]
+        if not 0 <= int(assignment) < K:
+            raise ValueError(f"assignment must lie in 0..{K - 1}, got {assignment!r}")
+        vals, _ = self.law_values(phi)
+        return getattr(_laws, self.mechanism.law)._trusted(**{n: v[int(assignment)] for n, v in vals.items()})
+
+    def moduli_at(self, theta, f_hz, P_N) -> tuple[np.ndarray, np.ndarray]:
+        f, P = np.broadcast_arrays(np.asarray(f_hz, dtype=float), np.asarray(P_N, dtype=float))
+        out = self.evaluate(self.full(theta), 2 * np.pi * f.ravel(), P.ravel(), jac=False)
+        if out is None:
+            nan = np.full(f.shape, np.nan)
+            return nan, nan.copy()
+        return out.G.real.reshape(f.shape), out.G.imag.reshape(f.shape)
+
+    def fitted(self, theta, result):
+        pars = self.parameters(theta)
+        vals = {p.name: p.value for p in pars[: self.prestress_start]}
+        named = {p.name: p.value for p in pars}
+        s = named.get("s")
+        P = None if s is not None else next(v for n, v in named.items() if n == "P" or n.startswith("P["))
+        measured = [float(x) for x in self.group_measured if np.isfinite(x)]
+        fitted = [v for n, v in named.items() if n.startswith("P_data")]
+        return FittedMechanism(mechanism=self.mechanism, cell=self.cell, values=vals, s=s, P=P,
+                               prestress_pa=tuple(measured + fitted), source=" + ".join(self.sources))
+
+    def report_quantities(self, result) -> dict:
+        """The shape of the fit (:func:`~tenscell.fitting.curves.shape_quantities`), the tendon-stiffness spread
+        (min, max in the field's unit, decades) and the largest sd of G', G'' between assignments (decades)."""
+        from ..curves import shape_quantities
+
+        theta = result.theta
+        return {**shape_quantities(result), "stiffness_spread": np.array(self.stiffness_spread(theta)),
+                "assignment_spread": np.asarray(self.assignment_spread(theta), dtype=float)}
+
+    def summary(self, result) -> dict:
+        return {"mechanism": self.mechanism.name, "assignments_K": self.mechanism.K,
+                "stiffness_spread_decades": self.stiffness_spread(result.theta)[2],
+                "assignment_spread_decades": list(self.assignment_spread(result.theta)),
+                "held_fields": {f.law_parameter: f.value for f in self.mechanism.fields if f.layout == "fixed"}}
+
+    def describe(self) -> str:
+        return f"mechanism {self.mechanism.name}: {self.mechanism.description}, on the {self.cell.describe()}"
+
+    @property
+    def report_sections(self) -> tuple:
+        return ("held", "assignments")
+
+
+# ---------------------------------------------------------------------------------------
+# building a problem
+# ---------------------------------------------------------------------------------------
+def _layout(mech: Mechanism, cell: Cell, law_cls):
+    """Field parameters (names, units, kinds, descriptions) and the maps of :attr:`MechanismProblem.field_maps`."""
+    groups, fams = _family_groups(cell)
+    law_names = tuple(p.name for p in law_cls.parameters)
+    given = {f.law_parameter for f in mech.fields}
+    if given != set(law_names):
+        raise ValueError(f"mechanism {mech.name!r}: law {mech.law} has parameters {', '.join(law_names)}; the fields "
+                         f"lay out {', '.join(sorted(given)) or 'none'}")
+    rows: list[tuple[str, str, str, str]] = []
+    per_field: list[tuple[Field, int]] = []
+    for f in mech.fields:
+        start = len(rows)
+        rows += _field_params(f, fams)
+        per_field.append((f, start))
+    return rows, per_field, groups
+
+
+def _maps(per_field, groups, n_params: int, K: int, seed: int):
+    m = groups.size
+    field_maps, shape_maps = [], []
+    for i, (f, start) in enumerate(per_field):
+        D = np.zeros((K, m, n_params))
+        const = np.zeros((K, m))
+        if f.layout == "fixed":
+            const[:] = math.log(f.value)
+        elif f.layout == "family":
+            D[:, np.arange(m), start + groups] = 1.0
+        else:
+            D[:, :, start] = 1.0
+        if f.distribution is not None:
+            n_scale = int(groups.max()) + 1 if f.layout == "family" else 1
+            u = assignments(groups, K, seed + 7919 * i)
+            shape_maps.append((f.law_parameter, start + n_scale, f.distribution, u))
+        field_maps.append((f.law_parameter, D, const))
+    return tuple(field_maps), tuple(shape_maps)
+
+
+def make_mechanism_problem(data, model, cell: Cell | None = None, *, bounds: dict | None = None,
+                           fixed: dict | None = None) -> MechanismProblem:
+    """Set up the fit of a mechanism's moduli to one or several data sets.
+
+    Parameters
+    ----------
+    data : RheologyData or sequence of RheologyData
+        As for :func:`tenscell.fitting.fit` (creep data are not supported here).
+    model : Mechanism
+        The spec (a built-in one: :data:`~tenscell.fitting.models.catalog.MECHANISMS`).
+    cell : Cell, optional
+        The reference cell (default the paper cell).
+    bounds : dict, optional
+        ``{parameter name or kind: (lo, hi)}`` in SI units; a kind
+        (``"stiffness"``, ``"damping"``, ``"time"``, ``"exponent"``,
+        ``"decades"``, ``"viscosity"``, ``"s"``, ``"P"``, ``"P_data"``)
+        applies to every parameter of that kind.
+    fixed : dict, optional
+        ``{parameter name: value}`` (SI units) held fixed.
+
+    Raises
+    ------
+    ValueError
+        Unknown mechanism or names, bad bounds or fixed values, creep data, too few points.
+    """
+    from ...model.shapes import paper_cell
+
+    if not isinstance(model, Mechanism):  # a name is looked up in the registry (tenscell.fitting.get_model)
+        raise ValueError(f"model must be a Mechanism (look a built-in one up with tenscell.fitting.get_model), "
+                         f"got {model!r}")
+    mech = model
+    datasets = as_datasets(data)
+    if any(_is_creep(d) for d in datasets):
+        raise ValueError(f"model={mech.name!r}: creep data are fitted by the per-tendon Voigt fit only")
+    cell = paper_cell() if cell is None else cell
+    law_cls = getattr(_laws, mech.law, None)
+    if law_cls is None or not hasattr(law_cls, "complex_stiffness"):
+        raise ValueError(f"mechanism {mech.name!r}: tenscell.laws has no law {mech.law!r} with a dynamic tangent")
+    rows, per_field, groups = _layout(mech, cell, law_cls)
+    if mech.viscosity:
+        rows.append(("eta_cytoplasm", "Pa·s", "viscosity", "cytoplasm viscosity in parallel with the structure"))
+    p_names, p_units, p_desc, p_kinds, pgroups, point_group = _prestress_layout(datasets)
+    n_field = len(rows) - int(mech.viscosity)
+    names = tuple([r[0] for r in rows] + p_names)
+    units = tuple([r[1] for r in rows] + p_units)
+    kinds = tuple([r[2] for r in rows] + p_kinds)
+    descs = tuple([r[3] for r in rows] + p_desc)
+    n_points = sum(d.n for d in datasets)
+    if 2 * n_points < len(names):
+        raise DataError(f"{len(datasets)} data set(s) with {n_points} points give {2 * n_points} residuals, fewer "
+                        f"than the {len(names)} parameters of mechanism {mech.name!r}")
+    L_ref = float(cell.strut_length)
+    defaults, S, w_m, P_med = default_bounds(datasets, L_ref)
+    G_loss = float(np.median(np.concatenate([d.G_loss for d in datasets])))
+    lower, upper = bounds_by_name(names, kinds, bounds, defaults, S, w_m, G_loss)
+    free, fixed_log = fixed_by_name(names, lower, upper, fixed)
+    field_maps, shape_maps = _maps(per_field, groups, len(names), mech.K, mech.seed)
+    group_map = np.zeros((len(pgroups), len(p_names)))
+    for g, (_, _, _, links) in enumerate(pgroups):
+        for j, v in links.items():
+            group_map[g, j] = v
+    return MechanismProblem(
+        mechanism=mech, cell=cell, names=names, units=units, descriptions=descs, kinds=kinds, lower=lower,
+        upper=upper, free=free, fixed_log=fixed_log, n_field=n_field, field_maps=field_maps, shape_maps=shape_maps,
+        eta_index=n_field if mech.viscosity else None, L_ref=L_ref,
+        lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float),
+        sources=tuple(d.source for d in datasets),
+        omega=2 * np.pi * np.concatenate([d.frequency_hz for d in datasets]),
+        dataset_index=np.concatenate([np.full(d.n, k) for k, d in enumerate(datasets)]),
+        group_index=np.concatenate(point_group).astype(int),
+        group_log_offset=np.array([g[2] for g in pgroups]), group_map=group_map,
+        group_measured=np.array([g[1] for g in pgroups]),
+        y_obs=np.concatenate([np.log10(np.concatenate([d.G_storage for d in datasets])),
+                              np.log10(np.concatenate([d.G_loss for d in datasets]))]),
+        weights=np.concatenate([np.concatenate([d.weights_storage for d in datasets]),
+                                np.concatenate([d.weights_loss for d in datasets])]),
+        prestress_start=len(rows),
+    )
+
+
+def bare_problem(mech: Mechanism, cell: Cell) -> MechanismProblem:
+    """A problem without data: the mechanism's own parameters only, for :meth:`MechanismProblem.evaluate`."""
+    from ... import laws
+
+    rows, per_field, groups = _layout(mech, cell, getattr(laws, mech.law))
+    if mech.viscosity:
+        rows.append(("eta_cytoplasm", "Pa·s", "viscosity", "cytoplasm viscosity"))
+    n = len(rows)
+    field_maps, shape_maps = _maps(per_field, groups, n, mech.K, mech.seed)
+    z = np.zeros(0)
+    return MechanismProblem(
+        mechanism=mech, cell=cell, names=tuple(r[0] for r in rows), units=tuple(r[1] for r in rows),
+        descriptions=tuple(r[3] for r in rows), kinds=tuple(r[2] for r in rows), lower=np.full(n, -np.inf),
+        upper=np.full(n, np.inf), free=np.ones(n, bool), fixed_log=np.zeros(n),
+        n_field=n - int(mech.viscosity), field_maps=field_maps, shape_maps=shape_maps,
+        eta_index=n - 1 if mech.viscosity else None, L_ref=float(cell.strut_length),
+        lengths=np.asarray(cell.lengths, float), T0=np.asarray(cell.T0, float), sources=(), omega=z,
+        dataset_index=z.astype(int), group_index=z.astype(int), group_log_offset=z, group_map=np.zeros((0, 0)),
+        group_measured=z, y_obs=z, weights=z, prestress_start=n)
+
+
+# ---------------------------------------------------------------------------------------
+# the fitted mechanism
+# ---------------------------------------------------------------------------------------
+#: the ``format`` tag of a fitted mechanism in fit.json's ``"model"`` entry
+MECHANISM_FORMAT = "tenscell-fitted-mechanism"
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class FittedMechanism(FittedModel):
+    """A fitted mechanism: its law values per tendon, prestress mapping and moduli anywhere.
+
+    Attributes
+    ----------
+    mechanism : Mechanism
+    cell : Cell
+        The reference cell the parameters refer to.
+    values : dict
+        The mechanism's own parameters (fields and viscosity), SI units.
+    P, s, prestress_pa, source
+        See :class:`FittedModel`.
+    """
+
+    mechanism: Mechanism
+    cell: Cell
+    values: dict
+    s: float | None = None
+    P: float | None = None
+    prestress_pa: tuple = ()
+    source: str = ""
+    FORMAT = MECHANISM_FORMAT
+
+    def __post_init__(self):
+        self._check_prestress()
+        object.__setattr__(self, "values", {k: float(v) for k, v in self.values.items()})
+
+    def __repr__(self) -> str:
+        vals = ", ".join(f"{k} = {v:.4g}" for k, v in self.values.items())
+        pre = f"s = {self.s:.4g} m²" if self.s is not None else f"P = {self.P:.4g} N"
+        return format_repr(f"FittedMechanism {self.mechanism.name}", vals, pre)
+
+    @property
+    def spec(self):
+        """The :class:`~tenscell.fitting.models.mechanism.Mechanism`."""
+        return self.mechanism
+
+    def describe(self) -> str:
+        return f"the fitted mechanism {self.mechanism.name} ({self.mechanism.description})"
+
+    @property
+    def _problem(self):
+        # built on each call (a few small arrays), not cached: a fitted model crosses process boundaries and holds
+        # nothing that could change while it is pickled
+        return bare_problem(self.mechanism, self.cell)
+
+    @property
+    def _phi(self) -> np.ndarray:
+        return np.log([self.values[n] for n in self._problem.names])
+
+    def moduli(self, f_hz, prestress_pa: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        f = frequencies_of(f_hz)
+        pb = self._problem
+        P = np.full(f.size, self.prestress(prestress_pa))
+        out = pb.evaluate(self._phi, 2 * np.pi * f, P, jac=False)
+        if out is None:
+            raise ValueError(f"the fitted {self.mechanism.name} cell is not stable at this prestress")
+        return out.G.real, out.G.imag
+
+    @property
+    def viscosity(self) -> float:
+        """The cytoplasm viscosity η (Pa·s), 0 without one."""
+        return float(self.values.get("eta_cytoplasm", 0.0))
+
+    def tendon_law(self, assignment: int = 0):
+        """The law of every tendon in assignment ``assignment`` (0 ≤ k < K) of a distributed property."""
+        return self._problem.tendon_law(self._phi, assignment)
+
+    def voigt_tendons(self, P_N: float, assignment: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        if self.mechanism.law == "Voigt":  # the fitted values themselves
+            law = self.tendon_law(assignment)
+            m = self.cell.m
+            return np.broadcast_to(law.EA, (m,)).astype(float), np.broadcast_to(law.c, (m,)).astype(float)
+        lin = self.linear(P_N=P_N, assignment=assignment)  # the tangents at rest of the law's realization
+        return np.asarray(lin.EA, dtype=float), np.asarray(lin.c, dtype=float)
+
+    def linear(self, prestress_pa: float | None = None, *, P_N: float | None = None, assignment: int = 0,
+               band_hz=None) -> LinearModel:
+        """The linear model of assignment ``assignment`` (laws with internal dynamics are realized over
+        ``band_hz``, see :func:`tenscell.linear.linearize.linearize_law`), with the cytoplasm viscosity."""
+        from ...linear.linearize import linearize_law
+
+        return linearize_law(self.cell, self.tendon_law(assignment), self._resolve_P(prestress_pa, P_N),
+                             viscosity=self.viscosity, band_hz=band_hz)
+
+    def to_dict(self) -> dict:
+        return {"format": MECHANISM_FORMAT, "mechanism": self.mechanism.to_dict(), **cell_to_dict(self.cell),
+                "values": dict(self.values), **self._prestress_fields()}
+
+    @classmethod
+    def from_dict(cls, obj: dict) -> FittedMechanism:
+        mech = field_of(obj, "mechanism", dict)
+        if "class" not in mech:  # written by tenscell 0.2 (dataclasses.asdict of the spec, no class name)
+            mech = {"class": "Mechanism", **mech}
+        cell, _ = cell_from_dict(obj)
+        values = positive_values(obj)
+        spec = model_from_dict(mech)
+        if not isinstance(spec, Mechanism):
+            raise ValueError(f"model.mechanism: a {type(spec).__name__}, not a mechanism")
+        fitted = cls(mechanism=spec, cell=cell, values=values, **prestress_from(obj))
+        fitted.check()
+        return fitted
+
+    def check(self) -> None:
+        """FitFileError naming the value when the parameters are not the mechanism's, or a value lies outside what
+        its law accepts (e.g. a springpot exponent outside (0, 1])."""
+        names = self._problem.names
+        for n in names:
+            if n not in self.values:
+                raise FitFileError(f"model.values.{n}: missing (mechanism {self.mechanism.name} has "
+                                   f"{', '.join(names)})")
+        extra = sorted(set(self.values) - set(names))
+        if extra:
+            raise FitFileError(f"model.values.{extra[0]}: not a parameter of mechanism {self.mechanism.name} "
+                               f"({', '.join(names)})")
+        vals, _ = self._problem.law_values(self._phi)
+        try:  # the law's own checks (the hot paths build it unchecked)
+            getattr(_laws, self.mechanism.law)(**{n: v.ravel() for n, v in vals.items()})
+        except ValueError as err:
+            raise FitFileError(f"model.values: {err}") from None
