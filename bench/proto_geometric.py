@@ -105,7 +105,7 @@ def predict(pb, theta, f_hz, lumped: bool) -> np.ndarray:
     if lumped:
         P = pb.model_P(phi)[-1]
         return pb.moduli_phi(phi, w, np.full(w.size, P))
-    P = pb.group_prestress(phi)[-1]
+    P = pb.group_prestress(theta)[-1]
     out = pb.evaluate(phi, w, np.full(w.size, P), jac=False)
     return out.G if out is not None else np.full(w.size, np.nan + 1j * np.nan)
 

@@ -63,7 +63,7 @@ def mech_scores(mech, cell, train, test, lumped=False, starts=6, hops=6, fixed=N
         P = np.full(w.size, pb.model_P(phi)[0])
         G = pb.moduli_phi(phi, w, P)
     else:
-        P = np.full(w.size, pb.group_prestress(phi)[0])
+        P = np.full(w.size, pb.group_prestress(fo.theta)[0])
         out = pb.evaluate(phi, w, P, jac=False)
         G = out.G if out is not None else np.full(w.size, np.nan + 1j * np.nan)
     return max(fo.rms), rms(G, test), int(pb.free.sum()), fo.cpu_s
