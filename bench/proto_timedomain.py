@@ -32,7 +32,7 @@ import tenscell.laws as laws  # noqa: E402
 from tenscell.fitting.models.mechanism import make_mechanism_problem  # noqa: E402
 from tenscell.io.data import RheologyData  # noqa: E402
 from tenscell.linear.dynamic import dynamic_compliance  # noqa: E402
-from tenscell.linear.modal import modulus  # noqa: E402
+from tenscell.linear.assembly import modulus  # noqa: E402
 from tenscell.studies.real_cells import hl60_creep, oocyte_relaxation  # noqa: E402
 from tenscell.timedomain import invert_laplace  # noqa: E402
 

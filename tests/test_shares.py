@@ -26,7 +26,7 @@ from tenscell.fitting.shares import StructureShares, prestress_parts, structure_
 from tenscell.io import bundled
 from tenscell.laws import Springpot
 from tenscell.linear.dynamic import dynamic_compliance
-from tenscell.linear.modal import modulus
+from tenscell.linear.assembly import modulus
 
 DATA = (bundled("stamenovic2002"), bundled("fabry2001"))
 CELL = paper_cell()
@@ -49,12 +49,17 @@ def _G_at(pb, phi, P, w):
     return pb.evaluate(phi, w, np.full(w.size, P), jac=False).G
 
 
-def test_total_derivative_is_the_finite_difference_of_the_moduli():
+def _parts_at_half_newton():
+    """The problem, its log-parameters, two frequencies (rad/s), P = 0.5 N and prestress_parts there."""
     pb, th = _tension_problem()
     phi = pb.full(th)
     w = 2 * np.pi * np.array([0.1, 3.0])
-    P = 0.5
-    G, parts = prestress_parts(pb, phi, P, w)
+    G, parts = prestress_parts(pb, phi, 0.5, w)
+    return pb, phi, w, 0.5, G, parts
+
+
+def test_total_derivative_is_the_finite_difference_of_the_moduli():
+    pb, phi, w, P, G, parts = _parts_at_half_newton()
     h = 1e-4 * P
     fd = P * (_G_at(pb, phi, P + h, w) - _G_at(pb, phi, P - h, w)) / (2 * h)
     assert np.max(np.abs(parts.sum(axis=0) - fd)) < RTOL * np.max(np.abs(fd))
@@ -62,11 +67,7 @@ def test_total_derivative_is_the_finite_difference_of_the_moduli():
 
 
 def test_geometric_and_transverse_parts_are_the_finite_differences_with_the_law_frozen():
-    pb, th = _tension_problem()
-    phi = pb.full(th)
-    w = 2 * np.pi * np.array([0.1, 3.0])
-    P0 = 0.5
-    _, parts = prestress_parts(pb, phi, P0, w)
+    pb, phi, w, P0, _, parts = _parts_at_half_newton()
     v = TENSION
     l, T0 = CELL.lengths, CELL.T0
     passive = Springpot(EA=v["EA"], kappa=v["kappa"], alpha=v["alpha"])

@@ -461,7 +461,7 @@ def run_creep(args) -> int:
 def _linear_creep(lin, t):
     """The linear model's creep compliance (m/N) and local exponent at times ``t`` (s), its tables and summary."""
     from ..io.tables import finite
-    from ..linear.modal import continuum_factor
+    from ..linear.assembly import continuum_factor
     from ..timedomain import creep_spectrum, stress_relaxation
 
     spec = creep_spectrum(lin)

@@ -31,14 +31,14 @@ def _study_no_if(out: Path, log, args=None) -> None:
 
 
 def _study_sensitivity(out: Path, log, args=None) -> None:
-    from .. import plotting, sensitivity
+    from .. import plotting, studies
     from ..io.outputs import write_csv_rows, write_text
 
     from ..reports.sensitivity import sensitivity_markdown
 
     draws = getattr(args, "draws", 200)
     seed = getattr(args, "seed", 0)
-    study = sensitivity.sensitivity_study(draws, seed=seed, **getattr(args, "fitted_cell", {}))
+    study = studies.sensitivity_study(draws, seed=seed, **getattr(args, "fitted_cell", {}))
     el, table, summary, mcs = study.elasticities, study.table, study.summary, list(study.monte_carlo)
     f = el.frequency_hz
     write_csv_rows(out / "elasticities.csv", ["parameter", "group", "value", "method", "frequency_Hz",

@@ -41,7 +41,7 @@ import numpy as np
 
 from .._checks import positive_array, positive_scalar
 from .. import laws as _laws
-from ..linear.modal import modulus
+from ..linear.assembly import modulus
 
 __all__ = ["StructureShares", "structure_shares", "prestress_parts"]
 

@@ -24,8 +24,8 @@ import numpy as np
 from .._errors import option
 from .._results import dataframe, format_repr
 from .columns import parse_frame, read_text_file
-from .data import (RheologyData, _csv_lines, _error, _locations, _parse_float, _provenance, _stated_prestress,
-                   check_ranges, checked, read_csv)
+from .data import _csv_lines, _parse_float, read_csv
+from .rheology import (RheologyData, _error, _locations, _provenance, _stated_prestress, check_ranges, checked)
 from .outputs import atomic_path
 from .provenance import Provenance
 

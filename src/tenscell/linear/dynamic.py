@@ -4,7 +4,7 @@ A tendon law with internal dynamics (:class:`tenscell.laws.Maxwell`,
 :class:`~tenscell.laws.StandardLinearSolid`, :class:`~tenscell.laws.Springpot`)
 has no constant pair (K0, C0); its dynamic tangent ``k*_j(ω)``
 (:meth:`tenscell.laws.TendonLaw.complex_stiffness`) gives, with the same
-split as :func:`tenscell.linear.modal.assemble_stiffness`,
+split as :func:`tenscell.linear.assembly.assemble_stiffness`,
 
 ``K(ω) = P·Σ_j T0_j ∇²l_j + Σ_j k*_j(ω) a_j a_jᵀ``  (N/m, complex symmetric),
 
@@ -44,7 +44,8 @@ import scipy.sparse.linalg as spla
 from .._checks import positive_array, positive_scalar
 from ..laws.base import TendonLaw, angular_frequencies
 from ..model.equilibrium import Cell
-from .modal import assemble_stiffness, modulus, positive_definite_factor
+from .assembly import assemble_stiffness, modulus, stiffness_stack
+from .definite import positive_definite_factor
 from .rigid import deformation_basis
 from .._threads import hot_path
 
@@ -76,9 +77,7 @@ def dynamic_stiffness(cell: Cell, P: float, kstar) -> np.ndarray:
     if cell.sparse:
         raise ValueError(f"{cell.describe()} is sparse: its K(ω) is not formed as a dense stack; "
                          "dynamic_compliance solves it frequency by frequency")
-    A = np.asarray(cell.A)
-    H = np.asarray(cell.prestress_hessian, dtype=float)
-    return P * H[None] + (A[None] * k[:, None, :]) @ A.T
+    return stiffness_stack(cell, P, k)
 
 
 def _solves(cell: Cell, P: float, k: np.ndarray, both: bool) -> tuple[np.ndarray, np.ndarray | None]:

@@ -2,7 +2,8 @@
 
 One module per study (:mod:`~tenscell.studies.claims`, :mod:`~tenscell.studies.no_if`,
 :mod:`~tenscell.studies.references`, :mod:`~tenscell.studies.semiflexible`,
-:mod:`~tenscell.studies.stiffening`, :mod:`~tenscell.studies.compactness`); their
+:mod:`~tenscell.studies.stiffening`, :mod:`~tenscell.studies.compactness`,
+:mod:`~tenscell.studies.sensitivity`); their
 entry points and results are importable from here, with the pieces the studies of measured
 cells use: :mod:`~tenscell.studies.falsification` (data cells do not show) and
 :mod:`~tenscell.studies.real_cells` (the measured cells, read from ``../shared/data/real-cells``).
@@ -14,6 +15,7 @@ from .no_if import LossPeak, NoIFStudy, loss_peak, no_if_study
 from .real_cells import (RealCellsMissing, XieCell, hl60_creep, oocyte_relaxation, real_cells_directory, xie_cells,
                          xie_median)
 from .references import ReferencesStudy, prestress_map, references_study
+from .sensitivity import SensitivityStudy, sensitivity_study
 from .semiflexible import BucklingError, SemiflexibleStudy, linearize_semiflexible, semiflexible_study
 from .stiffening import StiffeningStudy, linearize_stiffening, stiffening_study
 
@@ -24,6 +26,7 @@ __all__ = [
     "semiflexible_study", "SemiflexibleStudy", "linearize_semiflexible", "BucklingError",
     "stiffening_study", "StiffeningStudy", "linearize_stiffening",
     "compactness_study", "CompactnessStudy",
+    "sensitivity_study", "SensitivityStudy",
     "unlike_data", "unlike_sets", "UNLIKE_KINDS",
     "xie_cells", "xie_median", "hl60_creep", "oocyte_relaxation", "real_cells_directory", "XieCell", "RealCellsMissing",
 ]

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ... import laws as _laws
-from ...linear.modal import modulus
+from ...linear.assembly import modulus
 from .heterogeneity import DISTRIBUTIONS
 
 __all__ = ["MechanismEvaluation", "law_values", "evaluate"]
