@@ -112,9 +112,14 @@ def test_jacobian_matches_finite_differences(name, joint):
     J = pb.jacobian(theta)
     Jfd = pb.jacobian_fd(theta, 1e-5)
     # central differences with step 1e-5 in ln: truncation ~1e-10 relative; round-off of the solves ~1e-11/1e-5;
-    # 1e-5 of each column's scale bounds both with margin while a wrong term (a missing chain factor) is O(1)
+    # 1e-5 of each column's scale bounds both with margin while a wrong term (a missing chain factor) is O(1).
+    # Where a start puts the tendons' moduli many decades apart (springpot-alpha-family+visc: kappa 7 decades
+    # apart), the solves' rounding grows with κ(K) and enters the quotients as eps·κ/h: it is measured as the change
+    # of the quotients between steps 1e-5 and 1e-4, and allowed twice over
+    Jfd4 = pb.jacobian_fd(theta, 1e-4)
+    noise = np.abs(Jfd - Jfd4).max(axis=0)
     scale = np.maximum(np.abs(Jfd).max(axis=0), 1e-12)
-    assert np.all(np.abs(J - Jfd).max(axis=0) <= 1e-5 * scale + 1e-9)
+    assert np.all(np.abs(J - Jfd4).max(axis=0) <= 1e-5 * scale + 2 * noise + 1e-9)
 
 
 

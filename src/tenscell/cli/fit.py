@@ -26,7 +26,8 @@ MODEL_GROUPS = {
                                   "voigt-lognormal-stiffness", "voigt-trap-damping+visc"),
     "mechanisms: filament turnover (Maxwell)": ("maxwell", "maxwell+visc"),
     "mechanisms: standard linear solid": ("sls", "sls-trap+visc"),
-    "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc"),
+    "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc",
+                                       "springpot-alpha-family+visc"),
     "structure-free formulas (baselines)": ("structural-damping", "structural-damping+newtonian",
                                             "structural-damping-prestress", "structural-damping-prestress+newtonian"),
 }
