@@ -260,9 +260,12 @@ def test_study_mechanisms_cli(tmp_path):
     assert cli_main(["study", "mechanisms", "bundled:stamenovic2002", "bundled:fabry2001", "--mechanisms",
                      "voigt-compact,springpot", "--starts", "1", "--hops", "0", "--jobs", "1", "--out", str(out)]) == 0
     rows = (out / "mechanisms.csv").read_text().strip().splitlines()
-    assert len(rows) == 3 and rows[0].startswith("mechanism,free_parameters")
+    assert len(rows) == 3 and rows[0].startswith("model,kind,free_parameters")
     md = (out / "mechanisms.md").read_text()
     assert "## The answer" in md and "## The goals" in md and (out / "mechanisms.png").stat().st_size > 0
+    # every model is judged as a referee would: its formula, out of sample, anchored, on data cells do not show
+    referee = md.split("## As a referee would judge them")[1].split("##")[0]
+    assert all(f"| {name} | " in referee for name in ("voigt-compact", "springpot"))
     assert "generated from published laws" in md  # bundled data are not measurements, and the report says so
     assert cli_main(["study", "mechanisms", "bundled:fabry2001", "--mechanisms", "nope",
                      "--out", str(tmp_path / "n")]) == 2
