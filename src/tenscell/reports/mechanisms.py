@@ -26,7 +26,7 @@ STUDY_COLUMNS = ("model", "kind", "free_parameters", "stiffness_spread_decades",
                  "out_of_sample_verdict", "prestress_scale_s_m2", "geometric_share_dGstorage_dP",
                  "geometric_share_dGloss_dP", "anchored_rms_per_dataset_decades", "anchored_BIC", "anchored_s_m2",
                  "anchored_L", "anchored_geometric_share_dGstorage_dP", "unlike_prestress_independent_ratio",
-                 "unlike_exponent_rising_ratio", "discriminates", "elapsed_s", "notes")
+                 "unlike_exponent_rising_ratio", "discriminates", "elapsed_s", "cpu_s", "cpu_main_fit_s", "notes")
 
 
 def _rms(values) -> str:
@@ -54,7 +54,7 @@ def study_table_rows(study):
                "" if a is None else _rms(a.rms), "" if a is None else a.bic, "" if a is None else a.s,
                "" if a is None else a.L, "" if a is None else a.geometric_share[0],
                _unlike_ratio(r, "prestress-independent"), _unlike_ratio(r, "exponent-rising"),
-               "" if r.discriminates is None else r.discriminates, r.elapsed_s, "; ".join(r.notes))
+               "" if r.discriminates is None else r.discriminates, r.elapsed_s, r.cpu_s, r.cpu_main_s, "; ".join(r.notes))
 
 
 def _pct(x: float) -> str:
@@ -158,7 +158,8 @@ def mechanisms_markdown(study) -> str:
            table(("goal (issue 18)", "closest model", "short by", "met"),
                  [(g, n, "0" if ok else num(miss, 3), "yes" if ok else "**no**") for g, n, miss, ok in study.goals()]),
            f"The study took {study.elapsed_s:.0f} s of wall time with {o['jobs']} worker(s) (on a shared machine "
-           "this includes waiting for the CPU).", "",
+           f"this includes waiting for the CPU) and {study.cpu_s:.0f} s of CPU in its fits: {study.cpu_main_s:.0f} s "
+           "in the main fits, the rest in the referee's refits.", "",
            "## What this does not show", "",
            "- Each model had the same small search budget; a model that missed a goal here might reach it with more "
            "starts, one that reached it does fit.",

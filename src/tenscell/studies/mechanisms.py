@@ -50,9 +50,9 @@ SLOPE_GRID_PER_DECADE = 200
 #: the frequency band of the slope goal (Hz)
 SLOPE_BAND_HZ = (0.01, 1000.0)
 #: issue 18's goals: free parameters, stiffness spread (decades), RMS per data set (decades), share determined
-#: within 10 %, slope target and its tolerance, study wall time (s)
+#: within 10 %, slope target and its tolerance; and issue 27's CPU time of the study's fits (s)
 GOALS = {"max_free": 8, "max_spread": 2.0, "max_rms": 0.02, "min_determined": 0.8, "slope": 0.20,
-         "slope_tol": 0.02, "max_time_s": 180.0}
+         "slope_tol": 0.02, "max_cpu_s": 40.0}
 #: issue 26's goals the study measures: G1 (free parameters, geometric share of dG'/dP, RMS per data set, anchored)
 #: and G2 (RMS on each unlike data set at least this many times the RMS on the cell data)
 ISSUE26_GOALS = {"max_free": 8, "min_geometric_share": 0.5, "max_rms": 0.02, "unlike_ratio": 3.0}
@@ -125,6 +125,8 @@ class MechanismRow:
     anchored: Anchored | None = None
     unlike: tuple = ()  # of Falsified
     notes: tuple = ()  # what was not run, and why
+    cpu_s: float = math.nan  # CPU seconds of every fit of this model (its worker's process time)
+    cpu_main_s: float = math.nan  # CPU seconds of its main fit alone
 
     @property
     def held_out(self) -> tuple[float, float]:
@@ -164,6 +166,16 @@ class MechanismStudy:
     ensemble: EnsembleResult | None = None  # the best distributed mechanism's (tenscell.population.ensemble)
 
     @property
+    def cpu_s(self) -> float:
+        """CPU seconds of every fit of the study (the ensemble not included)."""
+        return float(sum(r.cpu_s for r in self.rows))
+
+    @property
+    def cpu_main_s(self) -> float:
+        """CPU seconds of the main fits alone (what the study computed before the referee's columns)."""
+        return float(sum(r.cpu_main_s for r in self.rows))
+
+    @property
     def winner(self) -> MechanismRow:
         """The mechanism with the lowest BIC."""
         return min(self.rows, key=lambda r: r.bic)
@@ -179,12 +191,13 @@ class MechanismStudy:
         g = GOALS
         ref = next((r for r in self.rows if r.name == PER_TENDON_VOIGT), None)
         out = []
+        cells = [r for r in self.rows if r.structural] or list(self.rows)  # the goals are a tensegrity's
 
         def closest(label, miss):
-            best = min(self.rows, key=lambda r: (miss(r), r.bic))  # ties (several meet it): the lowest BIC
+            best = min(cells, key=lambda r: (miss(r), r.bic))  # ties (several meet it): the lowest BIC
             out.append((label, best.name, float(miss(best)), miss(best) <= 0))
 
-        compact = [r for r in self.rows if r.n_free <= g["max_free"]]
+        compact = [r for r in cells if r.n_free <= g["max_free"]]
 
         def fit_miss(r):
             return max(r.worst_rms - g["max_rms"], r.stiffness_spread - g["max_spread"], 0.0) + \
@@ -203,9 +216,8 @@ class MechanismStudy:
                 lambda r: max(abs(r.slope_range[0] - g["slope"]), abs(r.slope_range[1] - g["slope"])) - g["slope_tol"]
                 if np.all(np.isfinite(r.slope_range)) else math.inf)
         out[-1] = (*out[-1][:2], max(out[-1][2], 0.0), out[-1][2] <= 0)
-        out.append((f"the study runs in ≤ {g['max_time_s']:.0f} s (seconds over)", "(all)",
-                    max(self.elapsed_s - g["max_time_s"], 0.0),
-                    self.elapsed_s <= g["max_time_s"]))
+        out.append((f"the study's fits take ≤ {g['max_cpu_s']:.0f} s of CPU (issue 27; seconds over)", "(all)",
+                    max(self.cpu_s - g["max_cpu_s"], 0.0), self.cpu_s <= g["max_cpu_s"]))
         return out
 
     def goals_issue26(self) -> list[tuple[str, str, str, bool]]:
@@ -301,7 +313,8 @@ def _anchored(datasets, name: str, opts: dict, result) -> Anchored | None:
         return None
     r = result
     if not ANCHOR_S[0] <= s <= ANCHOR_S[1]:
-        r = _fit(datasets, name, {**opts, **REFIT}, bounds={"s": ANCHOR_S})
+        # warm: start 0 at the free fit with s moved to the anchor's nearer end (the others drawn as usual)
+        r = _fit(datasets, name, {**opts, **REFIT}, bounds={"s": ANCHOR_S}, initial=result)
     _, bic = r.information_criteria()
     return Anchored(rms=r.dataset_rms, bic=bic, s=_scale(r),
                     at_bound=tuple(p.name for p in r.parameters if p.vary and p.at_bound is not None),
@@ -320,8 +333,10 @@ def _formula(datasets, spec, opts: dict) -> tuple | None:
     return f.name, r.problem.n_model_parameters, r.dataset_rms, r.information_criteria()[1]
 
 
-def _falsify(datasets, name: str, opts: dict, rms: tuple) -> tuple:
-    """The model fitted to every unlike version of the data (none without a prestress sweep)."""
+def _falsify(datasets, name: str, opts: dict, result) -> tuple:
+    """The model fitted to every unlike version of the data (none without a prestress sweep). Start 0 begins at the
+    fit to the cell data (the unlike sets keep its grids, so its layout): a failure to fit them is then not a
+    failure of the search to find the cell's optimum again."""
     from .falsification import unlike_sets
 
     try:
@@ -330,8 +345,9 @@ def _falsify(datasets, name: str, opts: dict, rms: tuple) -> tuple:
         return ()
     out = []
     for kind, ds in sets.items():
-        r = _fit(ds, name, {**opts, **REFIT})
-        out.append(Falsified(kind=kind, rms=r.dataset_rms, ratio=max(r.dataset_rms) / max(max(rms), 1e-12)))
+        r = _fit(ds, name, {**opts, **REFIT}, initial=result)
+        out.append(Falsified(kind=kind, rms=r.dataset_rms,
+                             ratio=max(r.dataset_rms) / max(max(result.dataset_rms), 1e-12)))
     return tuple(out)
 
 
@@ -400,8 +416,9 @@ def evaluate_mechanism(name: str, datasets, opts: dict, validate: bool = True, f
     """Fit one model and score it as the module docstring says (a worker's task)."""
     from ..fitting.validation import compare_out_of_sample
 
-    t0 = time.monotonic()
+    t0, c0 = time.monotonic(), time.process_time()
     result = _fit(datasets, name, opts)
+    cpu_main = time.process_time() - c0
     spec = result.spec
     rms, aic, bic, n_free = _scores(result)
     n_det, n_an, at_bound = _identifiability_counts(result)
@@ -412,7 +429,7 @@ def evaluate_mechanism(name: str, datasets, opts: dict, validate: bool = True, f
     notes: list[str] = []
     refits = result.problem.n_free <= REFIT_MAX_FREE
     if not refits:
-        notes.append(f"{result.problem.n_free} free parameters: the held-out refits and the unlike data are not run "
+        notes.append(f"{result.problem.n_model_parameters} model parameters: the held-out refits and the unlike data are not run "
                      "(`tenscell fit --validate yes` runs the former)")
     oos = None
     if validate and refits:
@@ -422,6 +439,9 @@ def evaluate_mechanism(name: str, datasets, opts: dict, validate: bool = True, f
             oos = None
             notes.append("no split leaves enough points to refit it")
     spread = result.stiffness_spread
+    formula = _formula(datasets, spec, opts)
+    anchored = _anchored(datasets, name, opts, result)
+    unlike = _falsify(datasets, name, opts, result) if falsify and refits else ()
     return MechanismRow(
         name=name, description=spec.description, n_free=n_free, stiffness_spread=math.nan if spread is None
         else float(spread[2]), rms=rms, aic=aic, bic=bic, n_determined=n_det, n_analysed=n_an, at_bound=at_bound,
@@ -429,9 +449,8 @@ def evaluate_mechanism(name: str, datasets, opts: dict, validate: bool = True, f
         alternatives_spread=_alternatives_spread(result), assignment_spread=result.assignment_spread[0],
         converged=bool(result.converged), elapsed_s=time.monotonic() - t0, curves=curves, model=result.model,
         heterogeneous=spec.heterogeneous, structural=spec.structural, geometric_share=_shares(result),
-        s=_scale(result), formula=_formula(datasets, spec, opts), out_of_sample=oos,
-        anchored=_anchored(datasets, name, opts, result),
-        unlike=_falsify(datasets, name, opts, rms) if falsify and refits else (), notes=tuple(notes))
+        s=_scale(result), formula=formula, out_of_sample=oos, anchored=anchored, unlike=unlike, notes=tuple(notes),
+        cpu_s=time.process_time() - c0, cpu_main_s=cpu_main)
 
 
 def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 10, seed: int = 0,
