@@ -228,8 +228,9 @@ def batched_compliance(kernel: DynamicKernel, P, kstar, gradient: bool = False):
     if kernel.gram is None:
         return _batched_sparse(kernel, P, k, gradient)
     assert kernel.H is not None
-    # rows in chunks whose matrices stay within about half a megabyte: one big batch spends more in fresh memory
-    # (page faults) than in arithmetic (measured: 192 rows of the paper cell 4.9 ms at once, 1.7-1.9 ms in chunks)
+    # rows in chunks of at most 128 KiB of matrices: the C library serves larger blocks from fresh memory maps, whose
+    # page faults cost more than the arithmetic (a fit of a mechanism over 8 assignments, 192 rows per evaluation:
+    # 355k minor page faults and 1.8 s of CPU with 512 KiB chunks; 7 faults and 1.0 s with 128 KiB)
     step = max(1, _CHUNK_BYTES // (16 * kernel.H.size))
     if k.shape[0] <= step:
         return _dense_rows(kernel, P, k, gradient)
@@ -240,7 +241,7 @@ def batched_compliance(kernel: DynamicKernel, P, kstar, gradient: bool = False):
 
 
 #: the memory (bytes) of the stiffness matrices :func:`batched_compliance` forms at once
-_CHUNK_BYTES = 2**19
+_CHUNK_BYTES = 2**17
 
 
 def _dense_rows(kernel: DynamicKernel, P, k, gradient: bool):
