@@ -186,10 +186,10 @@ def dynamic_kernel(cell: Cell) -> DynamicKernel:
         A, H, rhs = N.T @ A, N.T @ H @ N, N.T @ rhs
     n = A.shape[0]
     gram = np.einsum("im,jm->mij", A, A).reshape(cell.m, n * n)
-    arrays = [np.ascontiguousarray(x) for x in (A, H, gram, rhs)]
-    for x in arrays:
+    A, H, gram, rhs = (np.ascontiguousarray(x) for x in (A, H, gram, rhs))
+    for x in (A, H, gram, rhs):
         x.setflags(write=False)
-    return DynamicKernel(cell, *arrays, same=same)
+    return DynamicKernel(cell=cell, A=A, H=H, gram=gram, rhs=rhs, same=same)
 
 
 def batched_compliance(kernel: DynamicKernel, P, kstar, gradient: bool = False):
@@ -251,7 +251,8 @@ def _dense_rows(kernel: DynamicKernel, P, k, gradient: bool):
     # real and imaginary parts in one real product (half the work of a complex one against a real table)
     parts = np.concatenate([k.real, k.imag]) @ kernel.gram
     K = np.empty((R, n, n), dtype=complex)
-    K.real = parts[:R].reshape(R, n, n) + P[:, None, None] * kernel.H
+    np.multiply(P[:, None, None], kernel.H, out=K.real)
+    K.real += parts[:R].reshape(R, n, n)
     K.imag = parts[R:].reshape(R, n, n)
     sol = np.linalg.solve(K, np.broadcast_to(kernel.rhs, (R,) + kernel.rhs.shape))
     x = sol[:, :, 0]

@@ -288,7 +288,7 @@ class MechanismProblem(Problem):
 
     # -- the model ---------------------------------------------------------------------
     @property
-    def law_class(self) -> type:
+    def law_class(self) -> type[_laws.TendonLaw]:
         """The tendon law's class (:mod:`tenscell.laws`)."""
         return getattr(_laws, self.mechanism.law)
 

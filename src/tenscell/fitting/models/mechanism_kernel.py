@@ -59,12 +59,16 @@ class Grid:
         The points it serves.
     cell : ndarray of int, shape (n,)
         Each point's place on the grid, ``u·G + g`` (its frequency's index u, its group's index g).
+    rows : slice or None
+        ``points`` as a slice when they are consecutive and in grid order (a data set's own sweep: its values are
+        copied, not gathered).
     """
 
     omega: np.ndarray
     groups: np.ndarray
     points: np.ndarray
     cell: np.ndarray
+    rows: slice | None = None  # the points as a slice, when they are consecutive and in grid order (no gathering)
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,7 +101,10 @@ def plan_points(omega, group_index) -> EvaluationPlan:
         groups = np.array(gs, dtype=int)
         pts = np.flatnonzero(np.isin(gi, groups))
         cell = np.searchsorted(f, w[pts]) * groups.size + np.searchsorted(groups, gi[pts])
-        grids.append(Grid(omega=f, groups=groups, points=pts, cell=cell))
+        n = pts.size
+        ordered = n == f.size * groups.size and np.array_equal(cell, np.arange(n)) and np.array_equal(pts, pts[0] + np.arange(n))
+        grids.append(Grid(omega=f, groups=groups, points=pts, cell=cell,
+                          rows=slice(int(pts[0]), int(pts[0]) + n) if ordered else None))
     return EvaluationPlan(group_index=gi, grids=tuple(grids))
 
 
@@ -172,19 +179,27 @@ def _tangents(problem, plan: EvaluationPlan, vals: dict, P_groups, K: int, m: in
     law_cls = problem.law_class
     for grid in plan.grids:
         shape = (grid.groups.size, K, m)
-        T = np.broadcast_to(P_groups[grid.groups][:, None, None] * problem.T0, shape).ravel()
+        T = (P_groups[grid.groups][:, None, None] * problem.T0).repeat(K, axis=1).ravel()
         l = np.broadcast_to(problem.lengths, shape).ravel()
-        law = law_cls._trusted(**{n: np.broadcast_to(v, shape).ravel() for n, v in vals.items()})
+        law = law_cls._trusted(**{n: _tile(v, grid.groups.size) for n, v in vals.items()})
         U = grid.omega.size * grid.groups.size
-        kstar[grid.points] = law.complex_stiffness(l, T, grid.omega).reshape(U, K, m)[grid.cell]
+        rows = grid.rows
+        pick = slice(None) if rows is not None else grid.cell
+        rows = grid.points if rows is None else rows
+        kstar[rows] = law.complex_stiffness(l, T, grid.omega).reshape(U, K, m)[pick]
         if jac:
             assert dk_dT is not None
             dT, dx = law.complex_stiffness_derivatives(l, T, grid.omega)
-            dk_dT[grid.points] = dT.reshape(U, K, m)[grid.cell]
+            dk_dT[rows] = dT.reshape(U, K, m)[pick]
             if dk is None:
                 dk = np.empty((dx.shape[0], N, K, m), dtype=complex)
-            dk[:, grid.points] = dx.reshape(-1, U, K, m)[:, grid.cell]
+            dk[:, rows] = dx.reshape(-1, U, K, m)[:, pick]
     return kstar, dk_dT, dk
+
+
+def _tile(values, copies: int) -> np.ndarray:
+    """``values`` (K, m) raveled, ``copies`` times over (a view when once)."""
+    return values.ravel() if copies == 1 else np.tile(values.ravel(), copies)
 
 
 def _derivatives(problem, laws, out, J, G, P, vals: dict, dln: dict, dP) -> np.ndarray:
