@@ -76,17 +76,25 @@ def _cpu(fn, repeat):
     return (time.process_time() - c) / repeat
 
 
+def _paired(fns, repeat, blocks=7):
+    """Median CPU per call of each function, timed in alternating blocks (a shared machine's load drifts)."""
+    times = [[] for _ in fns]
+    for _ in range(blocks):
+        for k, fn in enumerate(fns):
+            times[k].append(_cpu(fn, max(1, repeat // blocks)))
+    return [float(np.median(t)) for t in times]
+
+
 def _load() -> str:
     return ", ".join(f"{x:.2f}" for x in os.getloadavg()) + f" on {os.cpu_count()} cores"
 
 
 def bench_residual(problem, direct, theta, repeat):
-    print("== one evaluation at the optimum (CPU per call, one BLAS thread)")
+    print("== one evaluation at the optimum (CPU per call, one BLAS thread; medians of 7 alternating blocks)")
     with threadpool_limits(limits=1, user_api="blas"):
         dev = float(np.max(np.abs(problem.residuals(theta) - direct(theta))))
-        t_dir = _cpu(lambda: direct(theta), repeat)
-        t_res = _cpu(lambda: problem.residuals(theta), repeat)
-        t_jac = _cpu(lambda: problem.jacobian(theta), repeat)
+        t_dir, t_res, t_jac = _paired([lambda: direct(theta), lambda: problem.residuals(theta),
+                                       lambda: problem.jacobian(theta)], repeat)
     n = problem.n_free
     print(f"   residuals: direct numpy {t_dir * 1e3:.3f} ms, tenscell {t_res * 1e3:.3f} ms: ratio "
           f"{t_res / t_dir:.2f} (goal <= 1.5); largest difference {dev:.1e} decades")
@@ -162,7 +170,7 @@ def bench_rules(data):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="0,1,2")
-    ap.add_argument("--repeat", type=int, default=300, help="evaluations timed per kind")
+    ap.add_argument("--repeat", type=int, default=700, help="evaluations timed per kind")
     ap.add_argument("--study", action="store_true", help="time the whole mechanisms study (minutes)")
     ap.add_argument("--rules", action="store_true", help="count the stopping rules over the study's fits")
     args = ap.parse_args()
