@@ -148,7 +148,7 @@ def test_moduli_ensemble_writes_the_results_table(fits, capsys):
 
 @pytest.mark.parametrize("argv, word", [
     (["--ensemble", "1"], "--ensemble"),
-    (["--ensemble", "0"], "--ensemble"),
+    (["--ensemble", "0", "--workers", "2"], "--workers"),  # 0: no ensemble, as for fit and study
     (["--workers", "2"], "--workers"),
     (["--ensemble", "10", "--workers", "-1"], "--workers"),
     # the cost, before any work: 1e11 solves (over a day at any plausible µs per solve) and ~6 TB of members

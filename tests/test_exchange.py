@@ -67,7 +67,7 @@ def test_rheojax_units_are_converted_and_checked():
     d = from_rheojax(RheoData(x=f, y=G, x_units="Hz", y_units="kPa", domain="frequency"))
     np.testing.assert_allclose(d.G_storage, 200 * f ** 0.2, rtol=1e-15)
     np.testing.assert_allclose(d.frequency_hz, f, rtol=0)
-    with pytest.raises(DataError, match="does not state the unit of G'"):
+    with pytest.raises(DataError, match="no unit is stated for G'"):
         from_rheojax(RheoData(x=f, y=G, x_units="Hz", domain="frequency"))
     with pytest.raises(DataError, match="must be > 0"):
         from_rheojax(RheoData(x=f, y=-G, x_units="Hz", y_units="Pa", domain="frequency"))

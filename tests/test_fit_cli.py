@@ -94,7 +94,8 @@ def test_fitted_cell_with_inert_prestress_refuses_a_nonlinear_run_but_gives_line
 
 # --- fit: --bound, --fix, --holdout --------------------------------------------------------------
 @pytest.mark.parametrize("flag,match", [
-    (["--bound", "EA=1e3:1e-3"], "--bound: EA: the lower bound 1000 N must be below the upper bound 0.001 N"),
+    (["--bound", "EA=1e3:1e-3"], "--bound: EA=1e3:1e-3: reversed or empty interval; the lower bound 1000 N must be "
+                                 "below the upper bound 0.001 N"),
     (["--bound", "X-Y=1:2"], "unknown parameter kind 'X-Y'"),
     (["--bound", "X=1:2"], "--bound X=1:2: no parameter or parameter kind 'X'"),  # a name only a --model could have
     (["--bound", "c=1"], "c: expected LO:HI in N·s/m"),

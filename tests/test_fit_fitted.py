@@ -168,7 +168,7 @@ def test_report_has_identifiability_comparison_and_creep_sections(small_fits):
 
 def test_moduli_over_many_prestresses_equal_the_per_prestress_pipeline(small_fits):
     """FitResult.moduli batches a prestress grid (one eigensolve); each point must equal its own linear model."""
-    from tenscell.linear.modal import modulus
+    from tenscell.linear.assembly import modulus
     from tenscell.response import compliance
 
     result = small_fits[1]  # the prestress sweep: its prestress (Pa) maps to the model's

@@ -219,7 +219,7 @@ def test_laws_with_internal_dynamics_on_a_free_standing_structure(arm):
     f = np.logspace(-1, 2, 7)
     exact = tc.compliance(lin, f)  # the law's exact dynamic tangent
     m = lin.pencil.modes  # the realized pencil on the complement
-    from tenscell.linear.modal import modal_compliance
+    from tenscell.linear.spectrum import modal_compliance
 
     realized = modal_compliance(m.tau, m.weights, 2 * np.pi * f)
     # both are solves of systems with condition < 1e4 (EA/P = 50 over a decade of tensions): 1e-9 relative

@@ -41,7 +41,7 @@ def test_layouts_and_units_agree(reference):
     Gabs, phase = np.hypot(Gs, Gl), np.arctan2(Gl, Gs)
     df = pd.DataFrame({"omega": w, "Gp_kPa": Gs / 1e3, "Gpp": Gl, "tan_d": Gl / Gs, "G abs (MPa)": Gabs / 1e6,
                        "phi": np.degrees(phase), "phi_rad": phase})
-    with pytest.raises(DataError, match="column 'Gp_kPa': the file says 'kPa' but the ColumnMap says modulus_unit='Pa'"):
+    with pytest.raises(DataError, match="column 'Gp_kPa': the file says 'kPa' but modulus_unit='Pa' was given"):
         from_dataframe(df, ColumnMap("omega", storage="Gp_kPa", loss="Gpp", frequency_unit="rad/s", modulus_unit="Pa"))
     base = {"frequency": "omega", "frequency_unit": "rad/s"}
     same(from_dataframe(df, {**base, "storage": "Gp_kPa", "loss_tangent": "tan_d"}), f, Gs, Gl)
@@ -76,7 +76,8 @@ def test_package_layout_is_the_default_and_round_trips(reference):
 def test_a_unit_nobody_states_is_an_error(reference):
     f, Gs, Gl = reference
     df = pd.DataFrame({"f": f, "Gp": Gs, "Gpp": Gl})
-    with pytest.raises(DataError, match=r"<DataFrame>: column 'f': the file does not state the unit of frequency"):
+    with pytest.raises(DataError, match=r"<DataFrame>: no unit is stated for frequency \('f'\), .*; give "
+                                        r"frequency_unit= \(one of Hz, rad/s\)"):
         from_dataframe(df, {"frequency": "f", "storage": "Gp", "loss": "Gpp", "modulus_unit": "Pa"})
 
 
@@ -98,7 +99,7 @@ def test_bad_layouts_are_refused_at_construction():
         ColumnMap("f", storage="a", loss="b", frequency_unit="kHz")
     with pytest.raises(ValueError, match="standard deviations"):
         ColumnMap("f", magnitude="a", phase="b", storage_sd="s")
-    with pytest.raises(ValueError, match="columns: .*fields are"):
+    with pytest.raises(ValueError, match="columns=: 'storag' is not a field of a column map; the fields are"):
         from_dataframe(pd.DataFrame({"f": [1.0]}), {"frequency": "f", "storag": "x"})
 
 
@@ -112,7 +113,8 @@ def test_text_errors_name_line_and_column(tmp_path):
     p.write_text("freq\tGp\tGpp\n0.1\t100\t10\n1.0\t-3\t20\n")
     with pytest.raises(DataError, match=r"lab.tsv, line 3: column 'Gp': G' -3 must be > 0"):
         read_table(p, cmap)
-    with pytest.raises(DataError, match=r"lab.tsv: no such column for G'; the columns are 'freq', 'Gp', 'Gpp'"):
+    with pytest.raises(DataError, match=r"lab.tsv: no column 'Gq' for G' \(storage='Gq'\); the columns are 'freq', "
+                                        r"'Gp', 'Gpp'"):
         read_table(p, {**cmap, "storage": "Gq"})
     p.write_text("freq\tGp\tGpp\n0.1\t100\n")
     with pytest.raises(DataError, match=r"lab.tsv, line 2: expected 3 fields, found 2"):
@@ -172,8 +174,13 @@ def test_rheocompass_export():
     np.testing.assert_allclose(data.G_loss, Gl, rtol=1e-3)
     assert any("Measuring System: PP25" in c for c in data.comments)
     assert "'Angular Frequency' [rad/s]" in data.comments[-1]
-    amp = read_rheocompass(path, interval=1)
+    # chosen by its number it is refused, saying why, unless the check is accepted
+    with pytest.raises(DataError, match=r"interval 1 'interval 1' holds 6 points at one frequency \(1.592 Hz\).*"
+                                        r"accept='one-frequency'"):
+        read_rheocompass(path, interval=1)
+    amp = read_rheocompass(path, interval=1, accept="one-frequency")
     assert amp.n == 6 and np.allclose(amp.frequency_hz, 10 / (2 * np.pi), rtol=1e-3)
+    assert amp.provenance.accepted and amp.provenance.accepted[0].startswith("one-frequency:")
 
 
 def test_rheocompass_errors_name_the_line(tmp_path):

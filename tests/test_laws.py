@@ -378,7 +378,7 @@ def test_dynamic_laws_on_a_sparse_lattice():
     SLS lattice creeps through the sparse pencil and its compliance equals the kernel's."""
     from tenscell.io.structure_files import member_values
     from tenscell.linear.dynamic import dynamic_moduli
-    from tenscell.linear.modal import modal_compliance
+    from tenscell.linear.spectrum import modal_compliance
     from tenscell.model.lattices import lattice_cell
     from tenscell.linear.modal import NotPositiveDefiniteError
 

@@ -16,6 +16,7 @@ import pytest
 import scipy.sparse as sp
 
 import tenscell
+import tenscell.linear.definite as definite
 import tenscell.linear.modal as modal
 from tenscell import _threads
 from tenscell.io.structure_files import member_values
@@ -45,13 +46,13 @@ def mid():
 # ---- one factorization / decomposition per model -------------------------------------------
 def test_sparse_model_is_factorized_once_per_matrix(monkeypatch):
     calls = []
-    real = modal.factorize_spd
+    real = definite.factorize_spd
 
     def counting(A, what="the matrix", perm=None):
         calls.append(what)
         return real(A, what, perm)
 
-    monkeypatch.setattr(modal, "factorize_spd", counting)
+    monkeypatch.setattr(definite, "factorize_spd", counting)
     cell = tenscell.model.lattice_cell(4, 4, 4)
     assert cell.sparse
     lin = tenscell.linearize(cell, 1000.0, _lattice_EA(cell), 1.0)  # the check: K0's Cholesky
@@ -78,7 +79,7 @@ def test_sparse_model_is_factorized_once_per_matrix(monkeypatch):
 # prestress family; by K0's factor; a cytoplasm's own C0 (the family is not asked for it)
 def test_dense_model_is_decomposed_once(monkeypatch, c, viscosity):
     calls = []
-    real, real_syevd = np.linalg.eigh, modal._syevd
+    real, real_syevd = np.linalg.eigh, definite._syevd
 
     def counting(a, *args, **kw):
         calls.append(np.shape(a))
@@ -89,7 +90,7 @@ def test_dense_model_is_decomposed_once(monkeypatch, c, viscosity):
         return real_syevd(a, *args, **kw)
 
     monkeypatch.setattr(modal.np.linalg, "eigh", counting)
-    monkeypatch.setattr(modal, "_syevd", counting_syevd)
+    monkeypatch.setattr(definite, "_syevd", counting_syevd)
     cell = tenscell.paper_cell()
     c = np.logspace(-6, 2, cell.m) if c == "decades" else c
     lin = tenscell.linearize(cell, 1000.0, c=c, viscosity=viscosity)
@@ -172,8 +173,12 @@ def test_cholmod_detects_indefinite_K0(monkeypatch):
     lin = tenscell.linearize(tenscell.paper_cell(delta=math.radians(44.0)), 1000.0, check=False)
     with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="pivot"):
         _as_sparse(lin).pencil.check()
-    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="smallest relaxation rate -"):
-        lin.pencil.check()  # a member of the prestress family: its rates are the check
+    assert lin.pencil.family is not None  # a member of the prestress family: the same criterion, K0's Cholesky
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="smallest eigenvalue -"):
+        lin.pencil.check()
+    unchecked = tenscell.linearize(lin.cell, 1000.0, check=False)
+    with pytest.raises(tenscell.linear.NotPositiveDefiniteError, match="Cholesky factor does not exist"):
+        unchecked.pencil.modes  # noqa: B018 - the family's modes check it too, by the same criterion
     cell = lin.cell
     own = tenscell.linearize(cell, 1000.0, c=np.logspace(-6, 2, cell.m), check=False)
     assert own.pencil.family is None  # C0 too ill-conditioned to whiten by: K0's own factor is the check
@@ -297,7 +302,7 @@ def test_dense_decompositions_and_analyses_run_with_one_blas_thread(monkeypatch)
         return {i["filepath"]: i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"}
 
     seen = []
-    real, real_syevd = np.linalg.eigh, modal._syevd
+    real, real_syevd = np.linalg.eigh, definite._syevd
 
     def eigh(*a, **kw):
         seen.append(blas_threads())
@@ -313,7 +318,7 @@ def test_dense_decompositions_and_analyses_run_with_one_blas_thread(monkeypatch)
         if not two:
             pytest.skip("no BLAS library here can run two threads")
         monkeypatch.setattr(np.linalg, "eigh", eigh)
-        monkeypatch.setattr(modal, "_syevd", syevd)
+        monkeypatch.setattr(definite, "_syevd", syevd)
         lin = tenscell.linearize(tenscell.paper_cell(), P=1000.0, EA=1.0, c=1.0)
         lin.pencil.modes  # noqa: B018 - called outside any public hot path
         analytic_elasticities(tenscell.linearize(tenscell.paper_cell(), P=500.0, EA=1.0, c=1.0), [0.1])

@@ -103,7 +103,7 @@ def test_dynamic_laws_on_a_nucleated_cell():
     law = family_laws(NUC, {NUCLEUS: Voigt(EA=100.0, c=0.0)}, default=Springpot(EA=1.0, kappa=0.5, alpha=0.2))
     lin = linearize_law(NUC, law, P_EQ)
     tau, rho, _ = lin.pencil.retardation()
-    from tenscell.linear.modal import modal_compliance
+    from tenscell.linear.spectrum import modal_compliance
 
     J = tenscell.compliance(lin, F)
     assert np.max(np.abs(modal_compliance(tau, rho, 2 * np.pi * F) - J) / np.abs(J)) <= lin.realization.error * 2

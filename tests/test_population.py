@@ -175,7 +175,9 @@ def test_fit_cell_records_errors_and_prestress_sweeps():
 
     bad = fit_cell(CellSource("x", "", "x.csv", text="frequency_Hz,G_storage_Pa,G_loss_Pa\n1,-2,3\n"), 1, FAST)
     assert bad["status"] == "data_error" and "x.csv, line 2" in bad["error"] and "negative" in bad["error"]
-    few = fit_cell(CellSource("y", "", "y.csv", text="frequency_Hz,G_storage_Pa,G_loss_Pa\n1,2,3\n"), 1, FAST)
+    few = fit_cell(CellSource("y", "", "y.csv", text="frequency_Hz,G_storage_Pa,G_loss_Pa\n1,2,3\n2,3,4\n"), 1, FAST)
+    one = fit_cell(CellSource("w", "", "w.csv", text="frequency_Hz,G_storage_Pa,G_loss_Pa\n1,2,3\n"), 1, FAST)
+    assert one["status"] == "data_error" and "one frequency" in one["error"]  # not a sweep (tenscell.io.checks)
     assert few["status"] == "fit_error" and "fewer than" in few["error"]
     sweep = fit_cell(CellSource("z", "", "stamenovic", data=bundled("stamenovic2002")), 1, FAST)
     assert sweep["status"] == "ok" and sweep["kind"] == "prestress" and sweep["prestress_ref_Pa"] > 0

@@ -463,3 +463,95 @@ def test_data_files_may_follow_options(capsys, here):
     # files on both sides of the options keep the order typed; a stray option is still refused by the parser
     err = refused(["study", "no-if", "--draws", "3", "m.csv"], capsys, here, "takes no data files", "m.csv")
     refused(["study", "mechanisms", "m.csv", "--no-such-flag"], capsys, here, "--no-such-flag")
+
+
+# ---- checks before work (issue 28): output locations, standard output, where an integration starts ------------
+def _chattr(flag: str, path: Path) -> bool:
+    import shutil
+    import subprocess
+
+    if shutil.which("chattr") is None:
+        return False
+    return subprocess.run(["chattr", flag, str(path)], capture_output=True).returncode == 0
+
+
+def test_an_immutable_output_set_is_refused_before_the_work(capsys, here):
+    """It was discovered after the whole fit, as a bare '[Errno 1] Operation not permitted'."""
+    assert main(["show", "paper", "--out", "o"]) == 0
+    capsys.readouterr()
+    before = {p.name: p.read_bytes() for p in (here / "o").iterdir()}
+    if not _chattr("+i", here / "o"):
+        pytest.skip("chattr +i is not available here (needs Linux, a file system with inode flags and the "
+                    "CAP_LINUX_IMMUTABLE capability)")
+    try:
+        code = main(["show", "paper", "--out", "o"])
+        out, err = capsys.readouterr()
+    finally:
+        _chattr("-i", here / "o")
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert "--out o" in err and "immutable" in err and "Errno" not in err
+    assert {p.name: p.read_bytes() for p in (here / "o").iterdir()} == before
+
+
+def test_a_set_that_cannot_be_swapped_in_names_the_flag_and_keeps_the_previous_one(tmp_path, monkeypatch):
+    import errno
+
+    from tenscell.io import outputs
+
+    target = tmp_path / "o"
+    with outputs.OutputSet(target, command="tenscell x", flag="--out") as d:
+        (d / "a.txt").write_text("old")
+    monkeypatch.setattr(outputs, "_exchange", lambda a, b: False)
+
+    def refuse(src, dst):
+        raise PermissionError(errno.EPERM, "Operation not permitted", str(src))
+
+    monkeypatch.setattr(outputs.os, "rename", refuse)
+    expected = r"^--out .*o: the new set could not be put in place \(Operation not permitted\); the previous one"
+    with pytest.raises(outputs.OutputLocationError, match=expected), \
+            outputs.OutputSet(target, command="tenscell x", flag="--out") as d:
+        (d / "a.txt").write_text("new")
+    assert (target / "a.txt").read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["o"]  # no staging left
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (Linux)")
+@pytest.mark.parametrize("redirect", ["> /dev/full", ">&-", "1</dev/null"], ids=["full", "closed", "read-only"])
+def test_a_standard_output_that_cannot_take_the_results_is_refused_first(redirect, tmp_path):
+    """`tenscell moduli > /dev/full` showed its progress first and failed at the end."""
+    import shlex
+    import subprocess
+    import sys
+
+    env = {**__import__("os").environ, "TENSCELL_PROGRESS": "1"}
+    cmd = f"{shlex.quote(sys.executable)} -m tenscell moduli --freq 0.01:100:200 --prestress 1,2,3 {redirect}"
+    run = subprocess.run(cmd, shell=True, capture_output=False, stderr=subprocess.PIPE, text=True, env=env,
+                         cwd=tmp_path, timeout=120)
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.count("\n") == 1 and "standard output" in run.stderr and "Errno" not in run.stderr, run.stderr
+
+
+def test_a_load_the_integration_cannot_start_is_refused_from_its_first_state():
+    """check_start evaluates the state the integration starts from: its refusal is what the integration would meet
+    at once, and the amplitude it offers starts."""
+    import re
+
+    import tenscell as tc
+    from tenscell.dynamics import SimulationError, SineForce, StepForce, creep_response, oscillatory_response
+    from tenscell.dynamics.checks import check_start
+    from tenscell.laws import voigt_law
+
+    cell = tc.paper_cell()
+    law = voigt_law(cell, P=1000.0, EA=1.0, c=1.0)
+    for load, run in ((SineForce(1e9, 1.0), lambda: oscillatory_response(cell, law, 1e9, 1.0, cycles=2)),
+                      (StepForce(1e9), lambda: creep_response(cell, law, 1e9, [1e-3, 1e-2]))):
+        with pytest.raises(SimulationError) as refusal:
+            check_start(cell, law, load)
+        with pytest.raises(SimulationError, match="singular"):
+            run()  # the integration meets it too, at its first step
+        limit = float(re.search(r"starts up to about ([0-9.e+]+) N", str(refusal.value)).group(1))
+        check_start(cell, law, type(load)(limit, 1.0) if isinstance(load, SineForce) else StepForce(limit))
+        with pytest.raises(SimulationError):
+            check_start(cell, law, type(load)(1.5 * limit, 1.0) if isinstance(load, SineForce) else
+                        StepForce(1.5 * limit))
+    check_start(cell, law, SineForce(1.0, 1.0), slack="error")  # a small load passes untouched

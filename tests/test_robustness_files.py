@@ -42,7 +42,8 @@ BAD_CSV = {
     "unterminated quote": (HEADER + '"1,1,1\n').encode(),
     "ragged row": (HEADER + "1,1\n" + GOOD_ROWS).encode(),
     "too few points": (HEADER + "1,1,1\n2,1,1\n").encode(),
-    "UTF-16": (HEADER + GOOD_ROWS).encode("utf-16"),
+    # UTF-16 with its byte-order mark (Excel's "Unicode text") is read; without it, it is bytes with NULs
+    "UTF-16 without a byte-order mark": (HEADER + GOOD_ROWS).encode("utf-16-le"),
 }
 
 _STRUT = {"nodes": [[0, 0, 0], [1, 0, 0]], "struts": [[0, 1]]}
@@ -208,8 +209,11 @@ def test_binning_keeps_the_objective_and_states_its_rule():
     d = RheologyData(frequency_hz=f, G_storage=Gs, G_loss=Gl, prestress=P)
     b = d.binned(60)
     assert b.n <= 60 and b.kind == "prestress" and set(np.unique(b.prestress)) == {300.0, 1000.0}
-    assert binning_notes(b) and "5000" in binning_notes(b)[0]
+    assert binning_notes(b) and "5,000" in binning_notes(b)[0] and "√" in binning_notes(b)[0]
     assert d.binned(10_000) is d
+    # no SDs stated: the bins carry their counts as weights, not a made-up noise (the fit's noise rule needs SDs)
+    assert not b.has_sd and b.counts.sum() == n and b.provenance.points == b.n
+    np.testing.assert_allclose(b.weights_storage, np.sqrt(b.counts), rtol=0)
 
     # objective of a smooth model m(f) = a f^k: raw minus binned = within-bin scatter, whatever (a, k)
     def objective(data, a, k):

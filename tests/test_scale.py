@@ -138,8 +138,17 @@ def test_lp_self_stress_matches_svd():
         self_stress_lp(A, bad.families, bad.equal_tension_groups)
 
 
-def test_medium_lattice_uses_sparse_path_end_to_end():
-    """Above the threshold without patching: Lanczos against per-frequency sparse LU solves."""
+@pytest.mark.parametrize("order", ["amd", "geometric", "metis"])
+def test_medium_lattice_uses_sparse_path_end_to_end(monkeypatch, order):
+    """Above the threshold without patching: Lanczos against per-frequency sparse LU solves, with each ordering
+    the pencil may choose by size (the ordering changes the work, never the accuracy)."""
+    from tenscell.linear import ordering
+
+    if order != "amd":
+        monkeypatch.setattr(ordering, "MIN_SIZE", 100)
+        monkeypatch.setattr(ordering, "METIS_FROM", 100 if order == "metis" else 10 ** 9)
+        if order == "metis":
+            pytest.importorskip("pymetis")
     cell = tenscell.model.lattice_cell(5, 4, 4)
     assert cell.sparse and cell.n > equilibrium.SPARSE_THRESHOLD and cell.self_stress_dim == -1
     lin = tenscell.linearize(cell, 1000.0, _lattice_EA(cell), 1.0)
@@ -150,6 +159,7 @@ def test_medium_lattice_uses_sparse_path_end_to_end():
                       .solve(-lin.H0.astype(complex)) for fk in f])
     np.testing.assert_allclose(res.J, J_ref, rtol=1e-10)
     assert res.steps < 120 and res.error_estimate < 1e-12
+    assert (lin.pencil.ordering is None) == (order == "amd")
     # the reduced model is a model of the same kind: positive relaxation rates
     assert np.all(res.rates > 0)
 

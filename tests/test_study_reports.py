@@ -15,7 +15,8 @@ from tenscell.laws import stiffening_law
 from tenscell.dynamics import creep_response, oscillatory_response
 from tenscell.reports.sensitivity import sensitivity_markdown
 from tenscell.reports.studies import no_if_markdown, references_markdown, semiflexible_markdown, stiffening_markdown
-from tenscell.sensitivity import analytic_elasticities, sensitivity_study
+from tenscell.sensitivity import analytic_elasticities
+from tenscell.studies import sensitivity_study
 from tenscell.studies.no_if import no_if_study
 from tenscell.studies.references import references_study
 from tenscell.studies.semiflexible import semiflexible_study

@@ -267,10 +267,10 @@ def test_cylindrical_reference_lies_on_the_cylinder_and_is_valid():
 
 
 def test_cylindrical_search_reproduces_the_stored_reference():
-    p = shapes.find_cylindrical_reference()
+    p = references.find_cylindrical_reference()
     assert np.allclose(p, shapes.CYLINDRICAL_PARAMETERS, atol=1e-8)
     with pytest.raises(ValueError, match="5 entries"):
-        shapes.find_cylindrical_reference(start=(0.0, 1.0))
+        references.find_cylindrical_reference(start=(0.0, 1.0))
 
 
 def test_prestress_map_agrees_with_the_cell_constructors():

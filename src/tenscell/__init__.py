@@ -79,9 +79,8 @@ _MOVED_FROM = {
     "dynamics": ("SimulationError", "SineDisplacement", "SineForce", "StepForce", "amplitude_sweep",
                  "creep_response", "oscillatory_response", "simulate"),
     "fitting": ("FitParameter",),
-    "sensitivity": ("analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table",
-                    "sensitivity_study"),
-    "studies": ("loss_peak", "no_if_study", "prestress_map", "references_study", "linearize_semiflexible",
+    "sensitivity": ("analytic_elasticities", "elasticities", "monte_carlo", "perturbation_table"),
+    "studies": ("sensitivity_study", "loss_peak", "no_if_study", "prestress_map", "references_study", "linearize_semiflexible",
                 "semiflexible_study", "linearize_stiffening", "stiffening_study"),
 }
 _MOVED = {name: home for home, names in _MOVED_FROM.items() for name in names}

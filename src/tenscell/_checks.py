@@ -28,6 +28,8 @@ def finite_scalar(name: str, value, allowed: str = "a finite number") -> float:
 
 def positive_scalar(name: str, value, unit: str = "") -> float:
     """``value`` as a float in [1/MAGNITUDE, MAGNITUDE]; ValueError naming ``name`` and what is allowed otherwise."""
+    if type(value) in (float, np.float64) and 1.0 / MAGNITUDE <= value <= MAGNITUDE:  # hot loops (NaN fails)
+        return value
     allowed = f"a finite number > 0{(' (' + unit + ')') if unit else ''}"
     v = finite_scalar(name, value, allowed)
     if v <= 0:

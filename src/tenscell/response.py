@@ -13,10 +13,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._checks import positive_array
-from .model.equilibrium import Cell, weighted_gram
+from .model.equilibrium import Cell
 from .linear.krylov import krylov_compliance
 from .linear.linearize import LinearModel, linearize
-from .linear.modal import continuum_factor, modal_compliance, modulus, prestress_grid_compliance
+from .linear.assembly import assemble_damping, continuum_factor, modulus, spring_stiffness
+from .linear.family import prestress_grid_compliance
+from .linear.spectrum import modal_compliance
 from ._threads import hot_path
 
 __all__ = [
@@ -94,7 +96,7 @@ def viscosity_limit(lin: LinearModel) -> float:
 
     ``D0 C0⁻¹ b = Σ ρ_k/τ_k`` over the model's retardation spectrum (dense or sparse).
     """
-    from .linear.modal import ZERO_TIME
+    from .linear.spectrum import ZERO_TIME
 
     if lin.realization is not None:
         from .laws import DynamicLawError
@@ -308,8 +310,8 @@ def frequency_response(cell: Cell, f_hz, P, EA=1.0, c=1.0, *, law=None, viscosit
         # K0(P) = P·Kp + Σ EA_j a_j a_jᵀ/l_j is affine in P and C0 does not depend on it: one batched eigensolve
         EA_ = positive_array("EA", EA, (cell.m,), "N")
         c_ = positive_array("c", c, (cell.m,), "N·s/m")
-        J = prestress_grid_compliance(cell.Kp, weighted_gram(cell.A, EA_ / cell.lengths), weighted_gram(cell.A, c_),
-                                      cell.load, cell.probe, Ps, 2 * np.pi * f, describe=cell.describe())
+        J = prestress_grid_compliance(cell.Kp, spring_stiffness(cell, EA_), assemble_damping(cell, c_), cell.load,
+                                      cell.probe, Ps, 2 * np.pi * f, describe=cell.describe())
     if J is None:
         J = np.stack([compliance(linearize(cell, P=p, EA=EA, c=c), f) for p in Ps])
     return FrequencyResponse(frequency_hz=f, prestress=Ps, J=J, L=cell.strut_length)

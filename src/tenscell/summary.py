@@ -22,7 +22,7 @@ from .model.equilibrium import Cell, NotPrestressableError, equilibrate, equilib
 from .model.formfinding import rigid_body_modes
 from .linear.krylov import load_modes
 from .linear.linearize import LinearModel, NotPositiveDefiniteError, linearize
-from .linear.modal import complement_basis
+from .linear.pencil import complement_basis
 from .laws import DynamicLawError
 from .model.structure import Structure, cable_mask
 from ._threads import hot_path

@@ -44,7 +44,8 @@ import scipy.linalg
 
 from ._checks import positive_array, positive_scalar
 from .linear.linearize import LinearModel
-from .linear.modal import ZERO_TIME, continuum_factor
+from .linear.assembly import continuum_factor
+from .linear.spectrum import ZERO_TIME
 from ._threads import hot_path
 
 __all__ = [

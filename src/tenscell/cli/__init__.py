@@ -23,7 +23,7 @@ import sys
 import time
 import warnings
 
-from ._args import Parser, command_line
+from ._args import Parser, check_stdout, command_line
 
 __all__ = ["main", "build_parser", "COMMAND_MODULES", "EXIT_INTERNAL"]
 
@@ -127,6 +127,7 @@ def _run(argv, started: float, transcript: "_Transcript") -> int:
             return stop.code if isinstance(stop.code, int) else 2
         args.command_line = command_line(argv)
         args.started = started
+        check_stdout(args.command)  # results on standard output: it must take them, before any work
         with warnings.catch_warnings():
             # floating-point warnings never reach the user: inputs are range-checked and
             # results checked for finiteness where an overflow is possible
@@ -226,7 +227,10 @@ _MAX_MESSAGE = 600
 
 
 def _one_line(err: BaseException) -> str:
-    text = " ".join(str(err).split()) or type(err).__name__
+    """The error's message for the user: options spelled as flags (``_args.user_message``), on one line."""
+    from ._args import user_message
+
+    text = " ".join(user_message(err).split()) or type(err).__name__
     return text if len(text) <= _MAX_MESSAGE else text[:_MAX_MESSAGE - 1] + "…"
 
 
@@ -244,6 +248,6 @@ def _exit_now(status: int) -> None:
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()
-        except (OSError, ValueError):
+        except (OSError, ValueError, AttributeError):  # AttributeError: a closed descriptor made it None
             pass
     os._exit(status)

@@ -26,7 +26,8 @@ __all__ = [
     "Parser", "HelpFormatter", "number", "integer", "number_list", "frequencies", "member_values",
     "lattice_size", "grid_cost", "add_model_options", "add_prestress", "add_out", "hidden_alias", "add_from_fit",
     "fitted_from_args", "prestress_from_args", "model_from_args", "RANGES", "MAX_GRID_POINTS", "path",
-    "add_data_options", "data_options_from_args", "DATA_COLUMNS", "DATA_UNITS", "add_cluster_options",
+    "add_data_options", "data_options_from_args", "DATA_COLUMNS", "DATA_UNITS", "FLAG_SPELLING", "user_message",
+    "add_cluster_options",
 ]
 
 #: most (prestress, frequency) points one command evaluates: each point costs a complex
@@ -81,30 +82,32 @@ def _float(text: str) -> float:
         raise argparse.ArgumentTypeError(f"{text[:40]!r} is not a number") from None
 
 
-def _in_range(v: float, lo: float | None, hi: float | None, unit: str, *, open_lo: bool = False) -> float:
+def _in_range(v: float, lo: float | None, hi: float | None, unit: str, *, open_lo: bool = False,
+              open_hi: bool = False) -> float:
     u = f" {unit}" if unit else ""
+    allowed = _range_text(lo, hi, unit, open_lo, open_hi)
     if math.isnan(v):
-        raise argparse.ArgumentTypeError(f"got nan; expected a number{_range_text(lo, hi, unit, open_lo)}")
-    bad = (lo is not None and (v <= lo if open_lo else v < lo)) or (hi is not None and v > hi)
+        raise argparse.ArgumentTypeError(f"got nan; expected a number{allowed}")
+    bad = (lo is not None and (v <= lo if open_lo else v < lo)) or (hi is not None and (v >= hi if open_hi else v > hi))
     if bad or math.isinf(v):
-        raise argparse.ArgumentTypeError(f"{_fmt(v)}{u} is out of range; allowed{_range_text(lo, hi, unit, open_lo)}")
+        raise argparse.ArgumentTypeError(f"{_fmt(v)}{u} is out of range; allowed{allowed}")
     return v
 
 
-def _range_text(lo, hi, unit, open_lo=False) -> str:
+def _range_text(lo, hi, unit, open_lo=False, open_hi=False) -> str:
     u = f" {unit}" if unit else ""
     if lo is None and hi is None:
         return " a finite number" + (f" ({unit})" if unit else "")
     if hi is None:
         return f" {'>' if open_lo else '>='} {_fmt(lo)}{u}"
     if lo is None:
-        return f" <= {_fmt(hi)}{u}"
-    return f" {'(' if open_lo else '['}{_fmt(lo)}, {_fmt(hi)}]{u}"
+        return f" {'<' if open_hi else '<='} {_fmt(hi)}{u}"
+    return f" {'(' if open_lo else '['}{_fmt(lo)}, {_fmt(hi)}{')' if open_hi else ']'}{u}"
 
 
 def number(lo: float | None = None, hi: float | None = None, unit: str = "", *, open_lo: bool = False,
-           quantity: str | None = None):
-    """An argparse ``type``: one finite float in [lo, hi] (or (lo, hi] with ``open_lo``).
+           open_hi: bool = False, quantity: str | None = None):
+    """An argparse ``type``: one finite float in [lo, hi] (``open_lo``, ``open_hi``: the bound excluded).
 
     ``quantity`` names an entry of :data:`RANGES` to take the bounds and unit from.
     """
@@ -112,7 +115,7 @@ def number(lo: float | None = None, hi: float | None = None, unit: str = "", *, 
         lo, hi, unit = RANGES[quantity]
 
     def convert(text):
-        return _in_range(_float(text), lo, hi, unit, open_lo=open_lo)
+        return _in_range(_float(text), lo, hi, unit, open_lo=open_lo, open_hi=open_hi)
 
     convert.__name__ = "number"
     return convert
@@ -150,6 +153,18 @@ def number_list(lo=None, hi=None, unit="", *, quantity=None, max_items: int = 10
 
     convert.__name__ = "list"
     return convert
+
+
+def ensemble_size(text):
+    """An argparse ``type`` for ``--ensemble K`` (every command alike): 0 for none, or 2 to ENSEMBLE_MAX_K
+    assignments; 1 is refused (one assignment has no spread between assignments)."""
+    k = integer(0, ENSEMBLE_MAX_K, "assignments (0: none)")(text)
+    if k == 1:
+        raise argparse.ArgumentTypeError("1 assignment has no spread between assignments; give K >= 2, or 0 for none")
+    return k
+
+
+ensemble_size.__name__ = "integer"
 
 
 def frequencies(max_points: int = MAX_GRID_POINTS):
@@ -341,7 +356,7 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     """The options that choose the paper cell and its tendon properties (shared by commands)."""
     p.add_argument("--alpha-deg", type=number(-180.0, 180.0, "degrees"), default=0.0,
                    help="reference azimuth α (degrees)")
-    p.add_argument("--delta-deg", type=number(0.0, 90.0, "degrees", open_lo=True), default=None,
+    p.add_argument("--delta-deg", type=number(0.0, 90.0, "degrees", open_lo=True, open_hi=True), default=None,
                    help="reference declination δ (degrees; default 50 with IFs, the IF-free curve without)")
     p.add_argument("--EA", type=member_values("EA"), default=1.0,
                    help="tendon stiffness EA (N): one value, family=value pairs or one per tendon (comma list)")
@@ -357,8 +372,14 @@ def model_from_args(args):
     from ..model.shapes import paper_cell
 
     delta = None if args.delta_deg is None else math.radians(args.delta_deg)
-    cell = paper_cell(alpha=math.radians(args.alpha_deg), delta=delta, L=args.L,
-                      intermediate_filaments=not args.no_if)
+    try:
+        cell = paper_cell(alpha=math.radians(args.alpha_deg), delta=delta, L=args.L,
+                          intermediate_filaments=not args.no_if)
+    except ValueError as err:  # a reference the model does not have: say which flags chose it
+        chosen = [f"{flag} {_fmt(v)}" for flag, v in (("--alpha-deg", args.alpha_deg), ("--delta-deg", args.delta_deg),
+                                                      ("--L", args.L)) if v is not None]
+        chosen += ["--no-if"] if args.no_if else []
+        raise type(err)(f"{', '.join(chosen)}: {err}") from None
     EA = expand(cell.structure, _arrayish(args.EA), "--EA", "N")
     c = expand(cell.structure, _arrayish(args.c), "--c", "N·s/m")
     return cell, EA, c
@@ -386,6 +407,72 @@ DATA_UNITS = {"frequency": "frequency_unit", "modulus": "modulus_unit", "phase":
               "prestress": "prestress_unit", "time": "time_unit", "compliance": "compliance_unit"}
 
 
+#: how the command line spells an option a library message names (tenscell._errors.option): the flag with its
+#: syntax, ``{value}`` the value the message gives, after "|" what it reads when the message gives none
+FLAG_SPELLING = {
+    **{field: f"--units {quantity}={{value}}|UNIT" for quantity, field in DATA_UNITS.items()},
+    **{quantity: f"--columns {quantity}={{value}}|NAME" for quantity in DATA_COLUMNS},
+    "columns": "--columns QUANTITY=NAME (or --columns-file)",
+    "geometric_factor": "the \"geometric_factor\" field of --columns-file",
+    "step": "--step {value}|N",
+    "interval": "--step {value}|N",
+    "temperature": "--temperature {value}|C",
+    "sheet": "--sheet {value}|NAME",
+    "accept": "--accept {value}|CHECK",
+    "slack": "--slack {value}|allow",
+    "min_points": "the {value} points this fit needs (one per free parameter; fewer parameters: --tendons uniform, "
+                  "or a mechanism with --model NAME)",
+}
+
+
+def user_message(err: BaseException) -> str:
+    """The message of ``err`` for the command line: every option it names spelled as the flag
+    (:data:`FLAG_SPELLING`, ``--units modulus=UNIT`` for ``modulus_unit=``); an operating system's error as its
+    file and reason (``out/fit.json: No space left on device``), not Python's ``[Errno 28]`` form."""
+    from .._errors import TenscellError, raw_message, spelled
+
+    if isinstance(err, OSError) and not isinstance(err, TenscellError) and err.strerror:
+        where = err.filename if err.filename is not None else "writing the results"
+        return f"{where}: {err.strerror}"
+    text = raw_message(err) if isinstance(err, TenscellError) else str(err)
+    return spelled(text, FLAG_SPELLING)
+
+
+#: commands whose results go to standard output (the others write an output set and report on stderr)
+STDOUT_COMMANDS = ("moduli", "simulate", "creep", "show", "study")
+
+
+def check_stdout(command: str | None) -> None:
+    """ValueError before any work when ``command`` writes results to a standard output that cannot take them:
+    closed, open for reading only, or /dev/full (``tenscell moduli > /dev/full``)."""
+    import os
+    import stat
+
+    if command not in STDOUT_COMMANDS:
+        return
+    if sys.stdout is None:  # Python's standard output when descriptor 1 was closed (>&-)
+        raise ValueError("standard output is closed; the results go there (redirect it to a file: > FILE)")
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, ValueError, OSError):  # replaced by an object without a descriptor (captured)
+        return
+    try:
+        st = os.fstat(fd)
+    except OSError:
+        raise ValueError("standard output is closed; the results go there (redirect it to a file: > FILE)") from None
+    if stat.S_ISCHR(st.st_mode) and st.st_rdev == os.makedev(1, 7):
+        raise ValueError("standard output is /dev/full, which takes no data; redirect it to a file (> FILE) or a "
+                         "program (| ...)")
+    try:
+        import fcntl
+
+        readonly = fcntl.fcntl(fd, fcntl.F_GETFL) & os.O_ACCMODE == os.O_RDONLY
+    except (ImportError, OSError):
+        return
+    if readonly:
+        raise ValueError("standard output is open for reading only; the results go there (> FILE)")
+
+
 def _assignment(keys, flag: str, example: str):
     """An argparse ``type``: ``KEY=VALUE`` with KEY one of ``keys``."""
 
@@ -402,11 +489,17 @@ def _assignment(keys, flag: str, example: str):
     return convert
 
 
-def add_data_options(p: argparse.ArgumentParser) -> None:
-    """``--columns``, ``--units``, ``--columns-file``, ``--step``, ``--temperature``: reading a lab's own files.
+#: the reader's checks --accept can skip (tenscell.io.checks.CHECKS, written out for a quick parser; a test checks
+#: they agree)
+ACCEPT_CHECKS = ("one-frequency", "outliers", "decreasing", "point-count")
 
-    The same rules as :func:`tenscell.io.instruments.read_data`: without them a file's layout and units are
-    recognised from its content (tenscell's CSV, TRIOS, RheoCompass, a table with recognised headers)."""
+
+def add_data_options(p: argparse.ArgumentParser) -> None:
+    """``--columns``, ``--units``, ``--columns-file``, ``--step``, ``--temperature``, ``--sheet``, ``--accept``:
+    reading a lab's own files.
+
+    The same rules as :func:`tenscell.io.readers.read_data`: without them a file's layout and units are
+    recognised from its content (tenscell's CSV, TRIOS, RheoCompass, Excel, a table with recognised headers)."""
     g = p.add_argument_group("reading your own files (see docs/importing-data.md)")
     g.add_argument("--columns", action="append", default=None, metavar="QUANTITY=NAME",
                    type=_assignment(DATA_COLUMNS, "--columns", "storage=\"G' [Pa]\""),
@@ -416,43 +509,91 @@ def add_data_options(p: argparse.ArgumentParser) -> None:
                    type=_assignment(tuple(DATA_UNITS), "--units", "modulus=kPa"),
                    help="unit of QUANTITY (frequency Hz|rad/s, modulus Pa|kPa|MPa, phase deg|rad, prestress Pa|kPa, "
                         "time s|ms|min, compliance 1/Pa|1/kPa|1/MPa) when the file does not state it; repeatable")
-    g.add_argument("--columns-file", default=None, metavar="FILE.json",
-                   help="a JSON object of tenscell.ColumnMap fields (e.g. {\"frequency\": \"omega\", "
+    g.add_argument("--columns-file", default=None, metavar="FILE.json", type=path("a JSON file"),
+                   help="a JSON object of tenscell.io.ColumnMap fields (e.g. {\"frequency\": \"omega\", "
                         "\"frequency_unit\": \"rad/s\", ...}); --columns and --units override it")
-    g.add_argument("--step", default=None, metavar="N|NAME",
-                   help="TRIOS step or RheoCompass interval to read (number or name) when the file holds several")
+    g.add_argument("--step", default=None, metavar="N|NAME", type=_step,
+                   help="TRIOS step or RheoCompass interval to read (its number, or its name) when the file holds "
+                        "several")
     g.add_argument("--temperature", type=number(-273.15, 1e4, "°C"), default=None, metavar="C",
                    help="read the TRIOS step or RheoCompass interval at this temperature (°C)")
+    g.add_argument("--sheet", default=None, metavar="NAME", type=path("a sheet name"),
+                   help="the sheet of an Excel workbook to read (default the first)")
+    g.add_argument("--accept", action="append", default=None, choices=ACCEPT_CHECKS, metavar="CHECK",
+                   help="read data that a reader's check refuses, when you know they are right (repeatable): "
+                        "one-frequency (moduli at one frequency), outliers (a value decades from its neighbours), "
+                        "decreasing (a creep compliance that decreases), point-count (a TRIOS step shorter or "
+                        "longer than its 'Number of points'); recorded in what was read")
+
+
+def _step(text):
+    text = str(text).strip()
+    if not text:
+        raise argparse.ArgumentTypeError("empty value; expected a step's number or name")
+    if text.isdigit():
+        if int(text) < 1:
+            raise argparse.ArgumentTypeError(f"{text}: steps are numbered from 1")
+        return int(text)
+    return text
+
+
+_step.__name__ = "step"
 
 
 def data_options_from_args(args) -> dict:
-    """keyword arguments of :func:`tenscell.io.instruments.read_data` from :func:`add_data_options`' flags
-    (ValueError, naming the flag, for a file that cannot be read or contradictory choices)."""
+    """keyword arguments of :func:`tenscell.io.readers.read_data` from :func:`add_data_options`' flags, the column
+    map checked before any file is read (ValueError naming the flag otherwise)."""
     import json
 
     fields: dict = {}
-    if getattr(args, "columns_file", None):
+    source = getattr(args, "columns_file", None)
+    if source:
         try:
-            with open(args.columns_file, encoding="utf-8") as fh:
+            with open(source, encoding="utf-8") as fh:
                 loaded = json.load(fh)
-        except (OSError, ValueError) as err:
-            raise ValueError(f"--columns-file {args.columns_file}: {err}") from None
+        except OSError as err:
+            raise ValueError(f"--columns-file {source}: {err.strerror or err}") from None
+        except json.JSONDecodeError as err:
+            raise ValueError(f"--columns-file {source}, line {err.lineno}: not JSON ({err.msg})") from None
+        except (UnicodeDecodeError, ValueError) as err:
+            raise ValueError(f"--columns-file {source}: not a JSON text file ({type(err).__name__})") from None
         if not isinstance(loaded, dict):
-            raise ValueError(f"--columns-file {args.columns_file}: expected a JSON object of ColumnMap fields")
+            raise ValueError(f"--columns-file {source}: expected a JSON object of column-map fields "
+                             "({\"frequency\": \"omega\", \"frequency_unit\": \"rad/s\", ...})")
         fields.update(loaded)
     fields.update(dict(getattr(args, "columns", None) or ()))
     units = {DATA_UNITS[k]: v for k, v in (getattr(args, "units", None) or ())}
     if getattr(args, "step", None) is not None and getattr(args, "temperature", None) is not None:
         raise ValueError("--step and --temperature both choose the step; give one")
-    step = getattr(args, "step", None)
-    out = {"columns": fields or None, "step": int(step) if step is not None and step.strip().isdigit() else step,
-           "temperature": getattr(args, "temperature", None)}
+    out = {"columns": fields or None, "step": getattr(args, "step", None),
+           "temperature": getattr(args, "temperature", None), "sheet": getattr(args, "sheet", None),
+           "accept": tuple(getattr(args, "accept", None) or ())}
     if units:
         if fields:
             fields.update(units)
         else:
             out["units"] = units
+    _check_column_map(fields or None, units, source)
     return out
+
+
+def _check_column_map(fields, units, source) -> None:
+    """The map these flags give, built once before any file is read: an unknown field or unit is refused here."""
+    if fields is None and not units:
+        return
+    from ..io.columns import ColumnMap
+
+    known = list(ColumnMap.__dataclass_fields__)
+    for key in fields or ():
+        if key not in known:
+            where = f"--columns-file {source}" if source else "--columns"
+            raise ValueError(f"{where}: {key!r} is not a field of a column map; the fields are {', '.join(known)}")
+    if fields is not None:
+        ColumnMap(**fields)  # ColumnMapError naming the field as its flag
+        return
+    creep = ("time_unit", "compliance_unit")
+    ColumnMap(frequency="f", storage="a", loss="b", **{k: v for k, v in units.items() if k not in creep})
+    ColumnMap(time="t", compliance="j", **{k: v for k, v in units.items() if k in creep})
 
 
 def add_cluster_options(p) -> None:

@@ -52,8 +52,9 @@ def register(sub) -> None:
                         "traces are written)")
     hidden_alias(p, "--amplitudes", "sweep_amplitudes", type=number_list(lo, hi, "N", max_items=200))
     p.add_argument("--freq", type=_one_frequency, required=True, metavar="F", help="forcing frequency f (Hz)")
-    p.add_argument("--cycles", type=integer(1, 10_000), default=None,
-                   help="cycles to simulate (default: adaptive, until two consecutive cycles agree)")
+    p.add_argument("--cycles", type=_cycles, default=None,
+                   help="cycles to simulate, at least 2: the last two are compared to judge the periodic state "
+                        "(default: adaptive, until two consecutive cycles agree)")
     p.add_argument("--control", choices=("force", "displacement"), default="force",
                    help="prescribe the force or the probe displacement")
     # the harmonic analysis reads 20 harmonics, which takes more than 40 samples per period (Nyquist)
@@ -78,6 +79,17 @@ def register(sub) -> None:
     add_model_options(p)
     _add_law_options(p)
     p.set_defaults(func=run_creep)
+
+
+def _cycles(text):
+    n = integer(1, 10_000, "cycles")(text)
+    if n < 2:
+        raise argparse.ArgumentTypeError(f"{n} cycle: at least 2, since the last two cycles are compared to judge "
+                                         "whether the state is periodic")
+    return n
+
+
+_cycles.__name__ = "integer"
 
 
 def _window(text):
@@ -106,8 +118,9 @@ def law_from_args(args):
         cell, EA, c = model_from_args(args)
         P = prestress_from_args(args)
     else:
-        (model, P), cell = fitted, fitted[0].cell
-        EA, c = model.EA, model.c
+        model, P = fitted
+        EA, c = time_domain_tendons(model, P, args.from_fit)
+        cell = model.cell
     args.prestress_N = P
     if args.beta == 1.0:
         law = voigt_law(cell, P=P, EA=EA, c=c)
@@ -116,6 +129,24 @@ def law_from_args(args):
         law = power_dashpot_law(cell, P=P, EA=EA, c=c, beta=args.beta, **kw)
     rtol = args.rtol if args.rtol is not None else (1e-8 if args.beta == 1.0 else 1e-6)
     return cell, law, {"rtol": rtol, "slack": args.slack}
+
+
+def time_domain_tendons(model, P: float, path):
+    """(EA, c) of the Voigt tendons the nonlinear time domain integrates for a fitted model (ValueError in one line
+    for a model it cannot: no cell, tendons with internal dynamics, a cytoplasm in parallel)."""
+    if not model.structural:
+        raise ValueError(f"--from-fit {path}: {model.describe()} has no cell to simulate: it is a structure-free "
+                         "formula (use `tenscell moduli --from-fit`)")
+    law = model.tendon_law()
+    if law.dynamic:
+        raise ValueError(f"--from-fit {path}: the nonlinear time domain integrates tendon laws without internal "
+                         f"state; {model.describe()} has {type(law).__name__} tendons (internal dynamics): use "
+                         "`tenscell moduli --from-fit` for its moduli")
+    if model.viscosity:
+        raise ValueError(f"--from-fit {path}: {model.describe()} has a cytoplasm viscosity in parallel with the "
+                         "structure, which the nonlinear time domain does not integrate: use `tenscell moduli "
+                         "--from-fit` for its moduli")
+    return model.voigt_tendons(P)
 
 
 def check_resolvable_prestrain(cell, law, rtol: float, flag: str) -> None:
@@ -220,7 +251,8 @@ def simulate_cost(cell, law, f: float, amplitudes, cycles: int | None, kw: dict)
 def _simulate_setup(args):
     """Every check of `tenscell simulate` before its work: (output set, cell, law, amplitudes swept, the
     keyword arguments of oscillatory_response)."""
-    from ..dynamics import EquationsOfMotion, SineForce
+    from ..dynamics import EquationsOfMotion, SineDisplacement, SineForce
+    from ..dynamics.checks import check_start
     from ..io.outputs import OutputSet
 
     check_samples(args.samples, args.cycles)
@@ -232,6 +264,14 @@ def _simulate_setup(args):
     check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
     check_resolvable_frequency(cell, law, args.freq, solver["rtol"])
     EquationsOfMotion(cell, law, SineForce(1.0, args.freq))  # refuses a singular damping matrix before any output
+    load = SineForce if args.control == "force" else SineDisplacement
+    unit = "N" if args.control == "force" else "m"
+    if args.control == "displacement" and args.amplitude[0] >= cell.strut_length:
+        raise ValueError(f"--amplitude {args.amplitude[0]:g} m with --control displacement: the probe would move "
+                         f"farther than the cell's struts are long ({cell.strut_length:g} m); a displacement "
+                         "amplitude is a small fraction of the cell")
+    for a in dict.fromkeys([args.amplitude[0], *(sweep_amps or ())]):  # where each run starts, before the first runs
+        check_start(cell, law, load(a, args.freq), slack=args.slack, name=f"--amplitude {a:g} {unit}")
     kw = dict(control=args.control, cycles=args.cycles, samples_per_cycle=args.samples, **solver)
     cost = simulate_cost(cell, law, args.freq, [args.amplitude[0], *(sweep_amps or ())], args.cycles, kw)
     if cost is not None:
@@ -363,6 +403,7 @@ def creep_cost(eq, cell, force: float, steps: int, points: int):
 def _creep_setup(args):
     """Every check of `tenscell creep` before its work: (output set, times, cell, law, solver options, step forces)."""
     from ..dynamics import EquationsOfMotion, StepForce
+    from ..dynamics.checks import check_start
     from ..io.outputs import OutputSet
 
     if not args.t_min < args.t_max:
@@ -375,6 +416,8 @@ def _creep_setup(args):
     if len(amplitudes):
         check_resolvable_prestrain(cell, law, solver["rtol"], "--from-fit" if args.from_fit else "--prestress")
     eq = EquationsOfMotion(cell, law, StepForce(1.0))  # refuses a singular damping matrix before any output
+    for F in dict.fromkeys(amplitudes):  # where each step starts, before the first is integrated
+        check_start(cell, law, StepForce(float(F)), slack=args.slack, name=f"--amplitude {F:g} N (a step force)")
     cost = creep_cost(eq, cell, max(amplitudes, default=0.0), len(amplitudes), t.size)
     if cost is not None:
         announce(check(cost, "--amplitude × --points"))
@@ -418,7 +461,7 @@ def run_creep(args) -> int:
 def _linear_creep(lin, t):
     """The linear model's creep compliance (m/N) and local exponent at times ``t`` (s), its tables and summary."""
     from ..io.tables import finite
-    from ..linear.modal import continuum_factor
+    from ..linear.assembly import continuum_factor
     from ..timedomain import creep_spectrum, stress_relaxation
 
     spec = creep_spectrum(lin)

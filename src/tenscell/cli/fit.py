@@ -11,7 +11,7 @@ import contextlib
 import time
 from pathlib import Path
 
-from ._args import (ENSEMBLE_MAX_K, RANGES, add_cluster_options, add_data_options, add_out, data_options_from_args,
+from ._args import (RANGES, add_cluster_options, add_data_options, add_out, data_options_from_args, ensemble_size,
                     integer, number)
 
 #: the fit's parametrizations (the same tuples as tenscell.fitting.TENDON_MODES / DAMPING_MODES,
@@ -75,12 +75,10 @@ def register(sub) -> None:
                    help="stiffness per tendon (as in the paper), per family, or one for all")
     p.add_argument("--damping", choices=DAMPING_MODES, default="uniform",
                    help="damping c: one for all (as in the paper) or per family")
-    p.add_argument("--model", choices=MECHANISM_NAMES, default=None,
-                   help="fit a mechanism instead of the per-tendon Voigt cell (tenscell.fitting.models.mechanism; "
-                        "writes fit.json, report.md, fit.png; --fix/--bound take its parameter names or kinds)")
+    p.add_argument("--model", choices=MODEL_NAMES, default=None, metavar="NAME", help=_model_help())
     e = p.add_argument_group("ensemble (with --model of a mechanism whose tendon values are drawn from a "
                              "distribution)")
-    e.add_argument("--ensemble", type=integer(0, ENSEMBLE_MAX_K), default=0, metavar="K",
+    e.add_argument("--ensemble", type=ensemble_size, default=0, metavar="K",
                    help="evaluate the fitted mechanism over K assignments at the data's prestresses and frequencies "
                         "(ensemble.csv, .png, .md: mean, spread between assignments, the fit's own average; "
                         "0: none), on the population engine")
@@ -107,8 +105,9 @@ def register(sub) -> None:
     p.add_argument("--baseline-starts", type=integer(1, 10_000), default=2,
                    help="starts for the homogeneous baseline fit")
     p.add_argument("--max-points", type=integer(4, 100_000), default=100,
-                   help="fit at most this many points: denser data is binned in log frequency per prestress "
-                        "(weighted log means; the rule is in tenscell.io.thinning and the report)")
+                   help="fit at most this many points: denser data is binned in log frequency (moduli) or log time "
+                        "(creep) per prestress (weighted log means; the rule and the weights are in "
+                        "tenscell.io.thinning and the report)")
     add_out(p)
     p.set_defaults(func=run)
 
@@ -135,17 +134,19 @@ def _bound(text):
                                          "(or, with --model, a parameter name of the mechanism)")
     # a mechanism's parameter names (--model) are checked against the mechanism before any fitting
     unit = BOUND_UNITS.get(kind, "")
+    u = f" {unit}" if unit else ""
     parts = value.split(":")
     if len(parts) != 2:
         raise argparse.ArgumentTypeError(f"{kind}: expected LO:HI in {unit or 'SI units'}, got {value[:40]!r}")
     try:
+        lo, hi = (number()(x) for x in parts)  # numbers first: a reversed interval is named as such
+        if not lo < hi:
+            raise argparse.ArgumentTypeError(f"{kind}={value}: reversed or empty interval; the lower bound {lo:g}{u} "
+                                             f"must be below the upper bound {hi:g}{u} (LO:HI)")
         check = number(*BOUND_RANGES[kind], unit) if kind in BOUND_RANGES else number(0.0, None, "", open_lo=True)
         lo, hi = (check(x) for x in parts)
     except argparse.ArgumentTypeError as err:
-        raise argparse.ArgumentTypeError(f"{kind}: {err}") from None
-    if not lo < hi:
-        u = f" {unit}" if unit else ""
-        raise argparse.ArgumentTypeError(f"{kind}: the lower bound {lo:g}{u} must be below the upper bound {hi:g}{u}")
+        raise argparse.ArgumentTypeError(str(err) if str(err).startswith(f"{kind}=") else f"{kind}: {err}") from None
     return kind, (lo, hi)
 
 
@@ -263,16 +264,26 @@ def add_constraints(p) -> None:
                    help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
 
 
+#: the data-reading flags that choose what to read in a file, by their keyword in data_options_from_args
+_CHOOSING = {"columns": "--columns/--columns-file", "units": "--units", "step": "--step",
+             "temperature": "--temperature", "sheet": "--sheet"}
+
+
 def read_data_arg(text: str, min_points: int, options: dict | None = None):
     """A data file (moduli or creep compliance; tenscell's CSV, an instrument export or a table with recognised
-    headers, see :func:`tenscell.io.instruments.read_data`), or ``bundled:NAME`` for a data set shipped with
-    tenscell. ``options``: :func:`~tenscell.cli._args.data_options_from_args` (column map, units, step)."""
+    headers, see :func:`tenscell.io.readers.read_data`), or ``bundled:NAME`` for a data set shipped with
+    tenscell. ``options``: :func:`~tenscell.cli._args.data_options_from_args` (column map, units, step, checks
+    accepted)."""
     from ..io.data import bundled
-    from ..io.instruments import read_data
+    from ..io.readers import read_data
 
-    if text.lower().startswith("bundled:"):
-        return bundled(text.split(":", 1)[1])
     options = dict(options or {})
+    if text.lower().startswith("bundled:"):
+        given = [flag for key, flag in _CHOOSING.items() if options.get(key)]
+        if given:
+            raise ValueError(f"{given[0]} says how to read a file; {text} is a data set shipped with tenscell, in "
+                             "its own layout")
+        return bundled(text.split(":", 1)[1])
     units = options.pop("units", None) or {}
     return read_data(text, min_points=min_points, **options, **units)
 
@@ -319,6 +330,27 @@ def read_datasets(paths, prestress_options, min_points: int, options: dict | Non
                 raise ValueError(f"--prestress: {err}") from None
         datasets.append(d)
     return datasets
+
+
+def read_inputs(args, min_points: int) -> tuple[list, list[str]]:
+    """The fit command's data and what to say about them: every file read with the data flags, the stated
+    prestresses attached, data denser than ``--max-points`` binned; with one line per file saying what was read
+    (layout, step, temperature, conversions: :meth:`~tenscell.io.provenance.Provenance.line`) and how it was
+    binned, for the command to print once every check has passed (a refusal stays one line)."""
+    from ..io.thinning import bin_datasets
+
+    datasets = read_datasets(args.data, args.prestress, min_points, data_options_from_args(args))
+    binned = bin_datasets(datasets, args.max_points)
+    lines = []
+    for path, data, thin in zip(args.data, datasets, binned):
+        lines.append(data.provenance.line())
+        if thin is not data:
+            axis = "time" if getattr(data, "kind", None) == "creep" else "frequency"
+            weights = "each bin weighing as one point" if thin.counts is None and not thin.has_sd else \
+                "each bin weighing √(its points)" if not thin.has_sd else "weighted by the stated SDs"
+            lines.append(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log {axis} (--max-points "
+                         f"{args.max_points}; {weights})")
+    return list(binned), lines
 
 
 def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=None):
@@ -449,23 +481,18 @@ def run(args) -> int:
     from .._parallel import background, jobs_for
     from .._progress import stage
     from ..io.outputs import OutputSet
-    from ..io.thinning import bin_datasets
 
     spec = spec_from_args(args)
     check_contradictions(args)
     _check_ensemble(args, spec)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
-    datasets = read_datasets(args.data, args.prestress, _min_points(spec), data_options_from_args(args))
-    binned = bin_datasets(datasets, args.max_points)  # moduli only: creep data are kept as they are
-    for path, data, thin in zip(args.data, datasets, binned):
-        if thin is not data:
-            stage(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log frequency "
-                  f"(--max-points {args.max_points})")
-    datasets = list(binned)
+    datasets, read_lines = read_inputs(args, _min_points(spec))
     held = None
     if args.holdout is not None:
         datasets, held = _split_holdout(args, datasets)
     space = search_space(args, datasets, spec)  # bad input: before any fitting
+    for line in read_lines:  # what was read, now that every check has passed
+        stage(line)
     args.jobs = jobs_for(args.starts, args.jobs)
     stage(f"fitting {sum(d.n for d in datasets)} points with {spec.name}: {args.starts} start(s), "
           f"{args.jobs} process(es)")

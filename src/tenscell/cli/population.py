@@ -83,7 +83,7 @@ def _register_study(sub) -> None:
     kinds.required = True
     mc = kinds.add_parser("monte-carlo", help="simultaneous ±spread perturbations of every parameter")
     mc.add_argument("--draws", type=integer(1, 10**9), required=True, help="number of draws")
-    mc.add_argument("--spread", type=number(0.0, 1.0, open_lo=True), default=0.10,
+    mc.add_argument("--spread", type=number(0.0, 1.0, open_lo=True, open_hi=True), default=0.10,
                     help="uniform ±spread of every factor (fraction < 1)")
     mc.add_argument("--parameters", choices=("all", "material"), default="all",
                     help="perturb EA_j, c_j, P and the geometry (all) or only the material parameters")
@@ -379,10 +379,10 @@ def _with_column_map(sources, options: dict):
     """With --columns/--units/--step/--temperature, each cell's file read by tenscell.io.read_data in this process
     (its own headers and units; a file that cannot be read is that cell's failure, as for tenscell's layout)."""
     units = options.pop("units", None) or {}
-    if not any(v is not None for v in options.values()) and not units:
+    if not any(v is not None and v != () for v in options.values()) and not units:
         return sources
     from ..io.data import DataError, RheologyData
-    from ..io.instruments import read_data
+    from ..io.readers import read_data
     from ..population.sources import CellSource
 
     out = []

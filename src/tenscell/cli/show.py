@@ -104,6 +104,8 @@ def run(args) -> int:
     out = OutputSet(args.out or default_out, command=args.command_line, flag="--out")
     save = check_output_file(args.save, "--save") if args.save else None
 
+    import numpy as np
+
     from .. import plotting
     from .._progress import stage
     from ..io.outputs import write_text
@@ -112,9 +114,22 @@ def run(args) -> int:
     from ..summary import relaxation_modes, summarize
 
     fitted = fitted_from_args(args, _SHOW_MODEL_DEFAULTS)
+    no_modes = ""
     if fitted is not None:
         (model, P), stem = fitted, "fit"
-        obj, EA, c = model.cell, model.EA, model.c
+        if not model.structural:
+            raise ValueError(f"--from-fit {args.from_fit}: {model.describe()} has no structure to show: it is a "
+                             "structure-free formula")
+        obj = model.cell
+        EA, c = model.voigt_tendons(P)  # a law with internal dynamics: its tangents at rest
+        if not (c > 0).all():
+            # tendons with internal dynamics (a springpot's continuous spectrum) have no dashpot of their own: the
+            # summary's verdict (rank, self-stress, stability) depends on K0 only, and no modes are computed from a
+            # damping that is not the model's
+            c = np.ones_like(EA)
+            args.modes = 0
+            no_modes = (f"slowest modes  not computed: {model.describe()} has tendons with internal dynamics, not a "
+                        "dashpot per tendon\n")
     else:
         stem, obj, EA, c = show_target(args)
         P = prestress_from_args(args)
@@ -140,7 +155,7 @@ def run(args) -> int:
     if big:
         stage(f"{stem}: {structure.n_tendons:,} members; summary and linearization")
     summary, cell, lin = summarize(target, P=P, EA=EA, c=c)
-    text = summary.text()
+    text = summary.text() + no_modes
     modes = None
     if lin is not None and args.modes > 0:
         if big:

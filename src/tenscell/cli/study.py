@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ._args import ENSEMBLE_MAX_K, add_data_options, add_out, data_options_from_args, integer, number, number_list, path
+from ._args import add_data_options, add_out, data_options_from_args, ensemble_size, integer, number, number_list, path
 from .fit import stated_prestress
 from ._args import add_cluster_options
 
@@ -31,14 +31,14 @@ def _study_no_if(out: Path, log, args=None) -> None:
 
 
 def _study_sensitivity(out: Path, log, args=None) -> None:
-    from .. import plotting, sensitivity
+    from .. import plotting, studies
     from ..io.outputs import write_csv_rows, write_text
 
     from ..reports.sensitivity import sensitivity_markdown
 
     draws = getattr(args, "draws", 200)
     seed = getattr(args, "seed", 0)
-    study = sensitivity.sensitivity_study(draws, seed=seed, **getattr(args, "fitted_cell", {}))
+    study = studies.sensitivity_study(draws, seed=seed, **getattr(args, "fitted_cell", {}))
     el, table, summary, mcs = study.elasticities, study.table, study.summary, list(study.monte_carlo)
     f = el.frequency_hz
     write_csv_rows(out / "elasticities.csv", ["parameter", "group", "value", "method", "frequency_Hz",
@@ -245,7 +245,7 @@ def register(sub) -> None:
     m.add_argument("--mechanisms", metavar="NAMES", default=None,
                    help="comma list of mechanisms (default all; see `tenscell fit --model`)")
     m.add_argument("--hops", type=integer(0, 10_000), default=10, help="basin-hopping moves per start")
-    m.add_argument("--ensemble", type=integer(0, ENSEMBLE_MAX_K), default=None, metavar="K",
+    m.add_argument("--ensemble", type=ensemble_size, default=None, metavar="K",
                    help=f"evaluate the distributed mechanism with the lowest BIC over K assignments of its tendon "
                         f"values at the data's prestresses and frequencies (ensemble.csv, .png, .md; default "
                         f"{STUDY_ENSEMBLE_K}; 0: none; 1 is refused: one assignment has no spread)")
@@ -300,6 +300,9 @@ def run(args) -> int:
     if args.name == "mechanisms" and args.mechanisms is not None:
         from ..fitting.models.catalog import mechanism_names
 
+        if not [m for m in args.mechanisms.split(",") if m.strip()]:
+            raise ValueError(f"--mechanisms {args.mechanisms!r}: no mechanism named; give a comma list of names "
+                             f"({', '.join(mechanism_names())}), or leave the flag out for all of them")
         bad = [m for m in args.mechanisms.split(",") if m.strip() and m.strip() not in mechanism_names()]
         if bad:
             raise ValueError(f"--mechanisms: unknown mechanism {bad[0]!r}; known: {', '.join(mechanism_names())}")
@@ -316,6 +319,8 @@ def run(args) -> int:
         from .fit import read_datasets
 
         args.datasets = read_datasets(args.data, args.prestress, 1, data_options_from_args(args))
+        for data in args.datasets:  # what was read: layout, step, temperature, conversions
+            stage(data.provenance.line())
     if args.name == "sensitivity" and args.draws > _QUICK_DRAWS:
         from ._cost import Cost, announce, check
         from .population import monte_carlo_rate

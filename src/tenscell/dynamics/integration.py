@@ -5,9 +5,11 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from .._checks import finite_scalar, positive_scalar
+from .._errors import option
 from ..laws import TendonLaw
 from ..model.equilibrium import Cell, tangent_stiffness
 from .equations import EquationsOfMotion, SimulationError, SlackEvent
+from .loads import describe
 from .results import Simulation
 
 __all__ = ["simulate"]
@@ -166,7 +168,7 @@ def _switches(sol, cables: np.ndarray, taut0: np.ndarray, fam, loading, t_start:
         j = int(cables[k])
         raise SimulationError(
             f"tendon {j} ({fam[j]}) would go into compression at t={float(sol.t_events[k][0]):.6g} s "
-            f"(load {loading!r}); run with slack='allow' to let it go slack"
+            f"under {describe(loading)}; run with {option('slack', 'allow')} to let it go slack"
         )
     events = []
     for k, j in enumerate(map(int, cables)):

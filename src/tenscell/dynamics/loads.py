@@ -14,7 +14,7 @@ import numpy as np
 
 from .._checks import finite_scalar, positive_scalar
 
-__all__ = ["SineForce", "SineDisplacement", "StepForce", "LOADS"]
+__all__ = ["SineForce", "SineDisplacement", "StepForce", "LOADS", "describe"]
 
 
 @dataclass(frozen=True)
@@ -83,6 +83,14 @@ class SineDisplacement(_Sinusoid):
 
     controls = "displacement"
     _unit = "m"
+
+
+def describe(loading) -> str:
+    """A load in words, for messages: ``"a force amplitude of 300 N at 1 Hz"``, ``"a step force of 30 N"``."""
+    if isinstance(loading, StepForce):
+        return f"a step force of {loading.amplitude:g} N"
+    kind, unit = ("force", "N") if loading.controls == "force" else ("displacement", "m")
+    return f"a {kind} amplitude of {loading.amplitude:g} {unit} at {loading.frequency_hz:g} Hz"
 
 
 @dataclass(frozen=True)

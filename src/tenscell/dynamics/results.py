@@ -10,7 +10,7 @@ import numpy as np
 from .._checks import positive_scalar
 from .._results import dataframe, format_repr
 from ..linear.linearize import LinearModel
-from ..linear.modal import modulus
+from ..linear.assembly import modulus
 from ..model.equilibrium import Cell
 from ..response import compliance
 

@@ -1,18 +1,21 @@
 """``tenscell.fitting.fit``: any model, through one search, to one result type."""
 from __future__ import annotations
 
+import math
 import time
+
+import numpy as np
 
 from .._checks import positive_scalar
 from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
 from .models import get_model
 from .models.voigt import VoigtModel
 from .parameters import as_datasets
-from .records import noise_rms
-from .result import FitResult, build_result
-from .search import count, run_search
+from .records import FitAlternative, accepted, noise_note, noise_rms
+from .result import AS_WELL, FitResult
+from .search import best_chain, count, merged_history, run_search
 
-__all__ = ["fit", "VOIGT_OPTIONS", "prepare"]
+__all__ = ["fit", "VOIGT_OPTIONS", "prepare", "build_result"]
 
 #: the options that describe the Voigt cell (VoigtModel's fields): refused with another model
 VOIGT_OPTIONS = {"tendons": "per-tendon", "damping": "uniform", "min_prestress_share": None, "max_decades": None,
@@ -129,3 +132,37 @@ def prepare(data, cell, max_points, spec=None):
             raise ValueError(f"cell: model {spec.name!r} is a structure-free formula: it has no cell")
         return datasets, None
     return datasets, (paper_cell() if cell is None else cell)
+
+
+def build_result(problem, datasets, chains, stop: str, tolerance: float, seed, t_begin: float) -> FitResult:
+    """The :class:`FitResult` of a finished search (:func:`tenscell.fitting.search.run_search`'s chains)."""
+    best = best_chain(chains)
+    theta = best.theta if best.met_theta is None else best.met_theta
+    assert theta is not None  # every chain that ran holds a point
+    r = problem.residuals(theta) / problem.weights
+    rms = float(np.sqrt(np.mean(r**2)))
+    per_set = problem.dataset_rms(theta)
+    noise = noise_rms(datasets)
+    cutoff = max(tolerance, AS_WELL * rms)
+    alternatives = tuple(
+        FitAlternative(start=ch.start, rms_log10_error=ch.rms, parameters=problem.parameters(ch.theta))
+        for ch in sorted(chains, key=lambda ch: (ch.rms, ch.start))
+        if ch is not best and ch.theta is not None and ch.rms <= cutoff
+    )
+    history, history_theta = merged_history(chains)
+    which = "" if len(datasets) == 1 else " on every data set"
+    verdict = (f"reached rms {per_set.max():.4g} <= tolerance {tolerance:g}{which}" if per_set.max() <= tolerance
+               else f"did not reach the tolerance{which}: rms {per_set.max():.4g} > {tolerance:g}")
+    note = noise_note(per_set, noise, tolerance)
+    verdict += f"; {note}" if note else ""
+    message = (f"{verdict} (best of {len(chains)} start(s), start {best.start} after {best.hops} hop(s); "
+               f"search stopped: {stop}; optimizer: {best.message})")
+    return FitResult(
+        parameters=problem.parameters(theta), residuals=r, rms_log10_error=rms, tolerance=tolerance,
+        converged=accepted(per_set, noise, tolerance), message=message, datasets=tuple(datasets), problem=problem,
+        theta=theta, starts=len(chains), seed=seed, elapsed_s=time.monotonic() - t_begin,
+        n_evaluations=sum(ch.nfev for ch in chains), alternatives=alternatives, history=history,
+        # a start the search stopped before it ran has no RMS (NaN, null in fit.json), not an infinite one
+        start_rms=tuple(ch.rms if ch.theta is not None else math.nan for ch in chains),
+        history_theta=history_theta, stop_reason=stop,
+    )

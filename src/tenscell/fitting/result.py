@@ -22,10 +22,10 @@ import numpy as np
 from .._results import CORRELATION_THRESHOLD, dataframe, format_repr, plus_minus
 from ..io.data import RheologyData
 from .problem import Problem
-from .records import (CreepFit, DatasetFit, accepted, data_axis, error_fields, information_criteria, noise_rms,
+from .records import (CreepFit, DatasetFit, data_axis, error_fields, information_criteria, noise_rms,
                       verdict_text)
 
-__all__ = ["FitResult", "FIT_NULL_MEANS", "report_quantities", "build_result"]
+__all__ = ["FitResult", "FIT_NULL_MEANS", "report_quantities", "AS_WELL"]
 
 #: most correlations report() lists (all are in correlations() and fit.json)
 _MAX_CORRELATIONS = 20
@@ -583,7 +583,7 @@ def _residual_lines(f) -> list[str]:
 def _provenance(d) -> dict:
     """What was read for data set ``d``: its source and, where the reader recorded it, the step, temperature and
     unit conversions (:attr:`tenscell.io.data.RheologyData.provenance`)."""
-    return {"source": d.source, **dict(getattr(d, "provenance", None) or {})}
+    return {"source": d.source, **(dict(d.provenance) if d.provenance is not None else {})}
 
 
 def _rms(r) -> float | None:
@@ -593,42 +593,3 @@ def _rms(r) -> float | None:
 
 def _short(source: str) -> str:
     return source.replace("\\", "/").rsplit("/", 1)[-1]
-
-
-def build_result(problem, datasets, chains, stop: str, tolerance: float, seed, t_begin: float) -> FitResult:
-    """The :class:`FitResult` of a finished search (:func:`tenscell.fitting.search.run_search`'s chains)."""
-    import time
-
-    from .records import FitAlternative, noise_note
-    from .search import best_chain, merged_history
-
-    best = best_chain(chains)
-    theta = best.theta if best.met_theta is None else best.met_theta
-    assert theta is not None  # every chain that ran holds a point
-    r = problem.residuals(theta) / problem.weights
-    rms = float(np.sqrt(np.mean(r**2)))
-    per_set = problem.dataset_rms(theta)
-    noise = noise_rms(datasets)
-    cutoff = max(tolerance, AS_WELL * rms)
-    alternatives = tuple(
-        FitAlternative(start=ch.start, rms_log10_error=ch.rms, parameters=problem.parameters(ch.theta))
-        for ch in sorted(chains, key=lambda ch: (ch.rms, ch.start))
-        if ch is not best and ch.theta is not None and ch.rms <= cutoff
-    )
-    history, history_theta = merged_history(chains)
-    which = "" if len(datasets) == 1 else " on every data set"
-    verdict = (f"reached rms {per_set.max():.4g} <= tolerance {tolerance:g}{which}" if per_set.max() <= tolerance
-               else f"did not reach the tolerance{which}: rms {per_set.max():.4g} > {tolerance:g}")
-    note = noise_note(per_set, noise, tolerance)
-    verdict += f"; {note}" if note else ""
-    message = (f"{verdict} (best of {len(chains)} start(s), start {best.start} after {best.hops} hop(s); "
-               f"search stopped: {stop}; optimizer: {best.message})")
-    return FitResult(
-        parameters=problem.parameters(theta), residuals=r, rms_log10_error=rms, tolerance=tolerance,
-        converged=accepted(per_set, noise, tolerance), message=message, datasets=tuple(datasets), problem=problem,
-        theta=theta, starts=len(chains), seed=seed, elapsed_s=time.monotonic() - t_begin,
-        n_evaluations=sum(ch.nfev for ch in chains), alternatives=alternatives, history=history,
-        # a start the search stopped before it ran has no RMS (NaN, null in fit.json), not an infinite one
-        start_rms=tuple(ch.rms if ch.theta is not None else math.nan for ch in chains),
-        history_theta=history_theta, stop_reason=stop,
-    )

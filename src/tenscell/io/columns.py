@@ -21,13 +21,13 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
-from .._errors import TenscellError
+from .._errors import TenscellError, option
 from .._ranges import RANGES, range_problem
 
 if TYPE_CHECKING:
     import pandas as pd
 
-__all__ = ["DataError", "ColumnMap", "guess_columns", "KNOWN_HEADERS", "Parsed", "parse", "parse_frame", "frame_table",
+__all__ = ["DataError", "ColumnMapError", "ColumnMap", "guess_columns", "KNOWN_HEADERS", "Parsed", "parse", "parse_frame", "frame_table",
            "FREQUENCY_UNITS", "MODULUS_UNITS", "PHASE_UNITS", "PRESTRESS_UNITS", "TIME_UNITS", "COMPLIANCE_UNITS"]
 
 
@@ -38,6 +38,11 @@ class DataError(TenscellError, ValueError):
     the file where one applies (comment and blank lines are counted), and the
     problem.
     """
+
+
+class ColumnMapError(TenscellError, ValueError):
+    """A :class:`ColumnMap` that cannot be (an unknown field, unit or combination of columns): the options are
+    wrong, whatever the file holds."""
 
 
 #: frequency units -> factor to Hz
@@ -136,19 +141,27 @@ class ColumnMap:
     geometric_factor: float | None = None
 
     def __post_init__(self) -> None:
+        for name in _QUANTITIES:
+            column = getattr(self, name)
+            if column is not None and (not isinstance(column, str) or not column.strip()):
+                raise ColumnMapError(f"{option(name, column)}: a column is named by a non-empty string")
         for name in _UNIT_FIELDS:
             table = _units_table(name)
             unit = getattr(self, name)
             if unit is not None and unit not in table:
-                raise ValueError(f"{name}: {unit!r} is not one of {', '.join(table)}")
+                raise ColumnMapError(f"{option(name, unit)} is not one of {', '.join(table)}")
         if (self.modulus_unit == "ratio") != (self.geometric_factor is not None):
-            raise ValueError("geometric_factor: give it (Pa per unit of the ratio) exactly when modulus_unit='ratio'")
-        if self.geometric_factor is not None and not (math.isfinite(self.geometric_factor)
-                                                      and self.geometric_factor > 0):
-            raise ValueError(f"geometric_factor must be a finite number > 0 (Pa per unit), got {self.geometric_factor!r}")
+            raise ColumnMapError(f"{option('geometric_factor')} (Pa per unit of the ratio) is given exactly when "
+                                 f"{option('modulus_unit', 'ratio')}")
+        if self.geometric_factor is not None and (
+                isinstance(self.geometric_factor, bool) or not isinstance(self.geometric_factor, (int, float))
+                or not (math.isfinite(self.geometric_factor) and self.geometric_factor > 0)):
+            raise ColumnMapError(f"{option('geometric_factor', self.geometric_factor)}: must be a finite number > 0 "
+                                 "(Pa per unit of the ratio)")
         layout = self.layout
         if (self.storage_sd or self.loss_sd) and layout != "storage+loss":
-            raise ValueError("storage_sd, loss_sd: standard deviations are read only with G' and G'' columns")
+            raise ColumnMapError(f"{option('storage_sd')}, {option('loss_sd')}: standard deviations are read only "
+                                 "with G' and G'' columns")
 
     @property
     def layout(self) -> str:
@@ -158,16 +171,19 @@ class ColumnMap:
         creep = {k for k in ("time", "compliance") if getattr(self, k)}
         if creep or self.compliance_sd:
             if given or self.frequency or creep != {"time", "compliance"}:
-                raise ValueError("columns: a creep map gives time and compliance (and no frequency or moduli); "
-                                 f"got {', '.join(sorted(given | creep | ({'frequency'} if self.frequency else set())))}")
+                got = sorted(given | creep | ({"frequency"} if self.frequency else set()))
+                raise ColumnMapError(f"{option('columns')}: a creep map gives time and compliance (and no frequency "
+                                     f"or moduli); got {', '.join(got)}")
             return "creep"
         if not self.frequency:
-            raise ValueError("columns: give frequency (with G', G'' or an equivalent pair) or time with compliance")
+            raise ColumnMapError(f"{option('columns')}: give frequency (with G', G'' or an equivalent pair) or time "
+                                 "with compliance")
         for layout, need in _LAYOUTS.items():
             if given == need:
                 return layout
-        raise ValueError(f"columns: {', '.join(sorted(given)) or 'no moduli'} is not a layout tenscell reads; give "
-                         "storage and loss, storage or loss with loss_tangent, or magnitude with phase or loss_tangent")
+        raise ColumnMapError(f"{option('columns')}: {', '.join(sorted(given)) or 'no moduli'} is not a layout "
+                             "tenscell reads; give storage and loss, storage or loss with loss_tangent, or magnitude "
+                             "with phase or loss_tangent")
 
     def columns(self) -> dict[str, str]:
         """Quantity -> column name, for the quantities this map reads."""
@@ -226,9 +242,9 @@ def _unit_in_name(name: str) -> tuple[str, str | None]:
     if m and m.group(2).strip().lower() not in _NOT_UNITS:
         return m.group(1).strip(), m.group(2)
     m = _SUFFIX.search(name)
-    if m:
+    if m and m.start() > 0:
         unit = m.group(1).replace("_per_", "/")
-        return name, "1/" + unit[4:] if unit.startswith("per_") else unit
+        return name[:m.start()], "1/" + unit[4:] if unit.startswith("per_") else unit
     return name, None
 
 
@@ -247,24 +263,42 @@ def _canonical_unit(text: str) -> str | None:
 
 
 def _resolve(table: _Table, cmap: ColumnMap) -> dict[str, tuple[int, str]]:
-    """Quantity -> (column index, unit), checking that every column exists and every unit is known."""
+    """Quantity -> (column index, unit), checking that every column exists and every unit is known.
+
+    Every unit the file leaves unstated is asked for in one message (not one per run).
+    """
     stripped = [n.strip() for n in table.names]
     bare = [_unit_in_name(n)[0] for n in stripped]
-    out = {}
+    found: dict[str, int] = {}
     for quantity, column in cmap.columns().items():
         col = column.strip()
         if col in stripped:
-            j = stripped.index(col)
+            found[quantity] = stripped.index(col)
         elif bare.count(col) == 1:  # the map names "G'" and the header says "G' [kPa]"
-            j = bare.index(col)
+            found[quantity] = bare.index(col)
         else:
-            raise _error(table, f"no such column for {_NAMES[quantity]}; the columns are "
-                                f"{', '.join(repr(n) for n in stripped)}")
-        out[quantity] = (j, _unit_of(table, cmap, quantity, j))
+            listed = ", ".join(repr(n) for n in stripped if n)
+            raise _error(table, f"no column {col!r} for {_NAMES[quantity]} ({option(quantity, col)}); "
+                                + (f"the columns are {listed}" if listed else "the header names no columns"))
+    out: dict[str, tuple[int, str]] = {}
+    unstated = []
+    for quantity, j in found.items():
+        unit = _unit_of(table, cmap, quantity, j)
+        if unit is None:
+            unstated.append(quantity)
+        else:
+            out[quantity] = (j, unit)
+    if unstated:
+        fields_ = list(dict.fromkeys(_QUANTITIES[q] for q in unstated))
+        named = " and ".join(f"{_NAMES[q]} ({table.names[found[q]].strip()!r})" for q in unstated)
+        asks = " and ".join(f"{option(f)} (one of {', '.join(_units_table(f))})" for f in fields_)
+        raise _error(table, f"no unit is stated for {named}, neither in its header nor in a units row; give {asks}")
     return out
 
 
-def _unit_of(table: _Table, cmap: ColumnMap, quantity: str, j: int) -> str:
+def _unit_of(table: _Table, cmap: ColumnMap, quantity: str, j: int) -> str | None:
+    """The unit of column ``j`` holding ``quantity``: stated by the map, else written in the file; None when
+    neither says it (the caller asks for every such unit at once)."""
     field = _QUANTITIES[quantity]
     if not field:
         return ""
@@ -275,17 +309,16 @@ def _unit_of(table: _Table, cmap: ColumnMap, quantity: str, j: int) -> str:
     in_file = None if written is None else _canonical_unit(written)
     column = table.names[j].strip()
     if written is not None and in_file is None and stated is None:
-        raise _error(table, f"unit {written!r} of {_NAMES[quantity]} is not one tenscell converts; state "
-                            f"{field}= in the ColumnMap", column=column)
+        raise _error(table, f"unit {written!r} of {_NAMES[quantity]} is not one tenscell converts; state it with "
+                            f"{option(field)} (one of {', '.join(_units_table(field))})", column=column)
     if stated is not None:
         if in_file not in (None, "") and in_file != stated and stated != "ratio":
-            raise _error(table, f"the file says {written!r} but the ColumnMap says {field}={stated!r}", column=column)
+            raise _error(table, f"the file says {written!r} but {option(field, stated)} was given", column=column)
         return stated
     if in_file in (None, "") and quantity == "frequency" and _unit_in_name(column)[0].lower() in _ANGULAR:
         return "rad/s"  # an angular frequency is in rad/s by definition, not by assumption
     if in_file in (None, ""):
-        raise _error(table, f"the file does not state the unit of {_NAMES[quantity]}; give {field}= "
-                            f"(one of {', '.join(_units_table(field))})", column=column)
+        return None
     if in_file not in _units_table(field):
         raise _error(table, f"unit {written!r} does not fit {_NAMES[quantity]} (expected one of "
                             f"{', '.join(_units_table(field))})", column=column)
@@ -414,6 +447,8 @@ class Parsed:
     source: str
     comments: tuple
     where: tuple = ()  # each value row's place in its source ("line 12", "row 3", "index 'a'"), for range errors
+    columns: tuple = ()  # (quantity, the header as in the source, the unit it was read in), for the provenance
+    notes: tuple = ()  # what was done while reading (points dropped), for the provenance
 
 
 def parse(table: _Table, cmap: ColumnMap, min_points: int) -> Parsed:
@@ -425,7 +460,7 @@ def parse(table: _Table, cmap: ColumnMap, min_points: int) -> Parsed:
     if not table.rows:
         raise _error(table, "no data rows")
     if len(table.rows) < min_points:
-        raise _error(table, f"{len(table.rows)} data points, fewer than min_points={min_points}")
+        raise _error(table, f"{len(table.rows)} data points, fewer than {option('min_points', min_points)}")
     v = _columns(table, cmap, resolved)
     how = "; ".join(f"{_NAMES[q]} = {table.names[j].strip()!r}" + (f" [{u}]" if u else "")
                     for q, (j, u) in resolved.items())
@@ -435,8 +470,9 @@ def parse(table: _Table, cmap: ColumnMap, min_points: int) -> Parsed:
         v["storage"], v["loss"] = _moduli(v, cmap.layout)
         if cmap.layout != "storage+loss":
             _check_formed(table, cmap, resolved, v)
+    used = tuple((q, table.names[j].strip(), u) for q, (j, u) in resolved.items())
     return Parsed(cmap.layout, v, table.source, (*table.comments, *notes, f"imported by tenscell: {how}"),
-                  tuple(table.where))
+                  tuple(table.where), used, notes)
 
 
 def frame_table(df: pd.DataFrame, source: str) -> _Table:
@@ -469,11 +505,14 @@ def _without_onset(table: _Table, j: int) -> tuple[_Table, tuple[str, ...]]:
 def _as_map(columns: ColumnMap | Mapping[str, Any] | None, units: Mapping[str, Any]) -> ColumnMap:
     if columns is None:
         columns = {"frequency": "frequency_Hz", "storage": "G_storage_Pa", "loss": "G_loss_Pa"}
-    try:
-        cmap = columns if isinstance(columns, ColumnMap) else ColumnMap(**dict(columns))
-        return replace(cmap, **units) if units else cmap
-    except TypeError as err:  # an unknown field name
-        raise ValueError(f"columns: {err}; the fields are {', '.join(f.name for f in fields(ColumnMap))}") from None
+    known = {f.name for f in fields(ColumnMap)}
+    given = {} if isinstance(columns, ColumnMap) else dict(columns)
+    unknown = [k for k in (*given, *units) if k not in known]
+    if unknown:
+        raise ColumnMapError(f"{option('columns')}: {unknown[0]!r} is not a field of a column map; the fields are "
+                             f"{', '.join(f.name for f in fields(ColumnMap))}")
+    cmap = columns if isinstance(columns, ColumnMap) else ColumnMap(**given)
+    return replace(cmap, **units) if units else cmap
 
 
 # ---- headers that say what they hold ----------------------------------------------------------
@@ -483,8 +522,9 @@ KNOWN_HEADERS: dict[str, tuple[str, ...]] = {
     "frequency": ("angular frequency", "angular_frequency", "ω", "omega", "frequency", "freq", "f",
                   "frequency_hz"),
     "storage": ("storage modulus", "storage_modulus", "g'", "g′", "g_storage", "g_storage_pa", "gp",
-                "g_prime"),
-    "loss": ("loss modulus", "loss_modulus", "g''", "g″", 'g"', "g_loss", "g_loss_pa", "gpp", "g_double_prime"),
+                "g_prime", "gprime"),
+    "loss": ("loss modulus", "loss_modulus", "g''", "g″", 'g"', "g_loss", "g_loss_pa", "gpp", "g_double_prime",
+             "gdoubleprime"),
     "loss_tangent": ("tan(delta)", "tan(δ)", "tan δ", "tan delta", "tan_delta", "loss factor", "damping factor"),
     "magnitude": ("complex modulus", "|g*|", "g*", "|g|", "g_abs", "g_abs_pa"),
     "phase": ("phase angle", "δ", "phase", "phase_deg"),
@@ -527,12 +567,36 @@ def guess_columns(names: Sequence[str]) -> ColumnMap | None:
     return None
 
 
-def _read_text(path: Path) -> str:
+def read_text_file(path, *, newline: str | None = "") -> str:
+    """A data file's text: UTF-8 (a byte-order mark dropped), UTF-16 with its byte-order mark (Excel's "Unicode
+    text"), else Windows-1252 (spreadsheets in Western locales) when the bytes hold no NUL (binary files do).
+    ``newline`` as for :func:`open` ("" keeps line ends for ``splitlines``, None turns them into "\n").
+
+    Raises DataError naming the file and the operating system's reason (``No such file or directory``).
+    """
     try:
-        with open(path, encoding="utf-8-sig", newline="") as fh:
-            return fh.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise DataError(f"{path}: cannot read file: {exc}") from exc
+        with open(path, "rb") as fh:
+            raw = fh.read()
+    except OSError as exc:
+        raise DataError(f"{path}: cannot read the file: {exc.strerror or type(exc).__name__}") from None
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        encodings: tuple[str, ...] = ("utf-16",)
+    elif b"\x00" in raw:  # valid UTF-8 may hold a NUL; a single-byte encoding would read any binary file
+        encodings = ("utf-8-sig",)
+    else:
+        encodings = ("utf-8-sig", "cp1252", "latin-1")
+    for encoding in encodings:
+        try:
+            text = raw.decode(encoding)
+        except UnicodeDecodeError:
+            continue
+        return text if newline == "" else text.replace("\r\n", "\n").replace("\r", "\n")
+    raise DataError(f"{path}: not a text file (binary bytes); tenscell reads text exports (CSV, TSV, TRIOS and "
+                    "RheoCompass text) and Excel workbooks (.xlsx)")
+
+
+def _read_text(path: Path) -> str:
+    return read_text_file(path)
 
 
 def _text_table(path: Path, sep: str | None, header_line: int | None, units_line: bool, decimal: str) -> _Table:
@@ -579,7 +643,8 @@ def _excel_table(path: Path, sheet: str | int | None, header_row: int | None, un
     try:
         book = openpyxl.load_workbook(path, read_only=True, data_only=True)
     except Exception as exc:  # openpyxl raises many types for a bad file
-        raise DataError(f"{path}: cannot read workbook: {exc}") from exc
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else "not an Excel workbook (.xlsx)"
+        raise DataError(f"{path}: cannot read the workbook: {reason}") from None
     try:
         names_ = book.sheetnames
         if sheet is None:

@@ -21,11 +21,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._errors import option
 from .._results import dataframe, format_repr
-from .columns import parse_frame
-from .data import (RheologyData, _csv_lines, _error, _locations, _parse_float, _stated_prestress, check_ranges,
-                   read_csv)
+from .columns import parse_frame, read_text_file
+from .data import _csv_lines, _parse_float, read_csv
+from .rheology import (RheologyData, _error, _locations, _provenance, _stated_prestress, check_ranges, checked)
 from .outputs import atomic_path
+from .provenance import Provenance
 
 __all__ = ["CreepData", "read_creep_csv", "write_creep_csv", "is_creep_header", "read_measurements"]
 
@@ -58,6 +60,11 @@ class CreepData:
     comments : tuple of str
     locations : tuple of str, optional
         Where each point is in `source` (e.g. ``"line 12"``), for messages.
+    provenance : Provenance, optional
+        What the data were read from and how (:class:`tenscell.io.provenance.Provenance`); readers set it.
+    counts : array_like, shape (n,), optional
+        How many measured points each point stands for (binned data, :mod:`tenscell.io.thinning`); None: one
+        each. Without standard deviations a point weighs √count in a fit.
 
     Every value must lie in the range tenscell accepts for its quantity (the
     table :data:`tenscell._ranges.RANGES` that the command-line flags use):
@@ -78,12 +85,14 @@ class CreepData:
     source: str = "<memory>"
     comments: tuple = ()
     locations: tuple[str, ...] | None = None
+    provenance: Provenance | None = None
+    counts: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         source = str(self.source)
         object.__setattr__(self, "source", source)
         n = None
-        for name in ("time_s", "compliance", "compliance_sd", "prestress"):
+        for name in ("time_s", "compliance", "compliance_sd", "prestress", "counts"):
             value = getattr(self, name)
             if value is None:
                 continue
@@ -107,6 +116,7 @@ class CreepData:
                      locations)
         object.__setattr__(self, "locations", locations)
         object.__setattr__(self, "comments", tuple(str(c) for c in self.comments))
+        object.__setattr__(self, "provenance", _provenance(self.provenance, source, self.n))
 
     kind = "creep"
 
@@ -122,16 +132,31 @@ class CreepData:
 
     @property
     def weights(self) -> np.ndarray:
-        """Weights of the log10 J residuals: ``J ln10/sd(J)`` (1/sd(log10 J) to first order), or ones."""
+        """Weights of the log10 J residuals: ``J ln10/sd(J)`` (1/sd(log10 J) to first order), or √counts (ones
+        when each point is one measurement)."""
         if self.compliance_sd is None:
-            return np.ones(self.n)
+            return np.ones(self.n) if self.counts is None else np.sqrt(self.counts)
         return self.compliance * math.log(10.0) / self.compliance_sd
+
+    def binned(self, max_points: int | None = None, weighting: str = "bins") -> "CreepData":
+        """At most ``max_points`` points by log-time binning (:func:`tenscell.io.thinning.bin_log_time`; without
+        SDs each bin weighs as one point, or √(its points) with ``weighting="counts"``).
+
+        Returns ``self`` when it has no more points than that; the binned data's provenance and comments state
+        the rule, the counts and the weights.
+        """
+        from .thinning import DEFAULT_MAX_POINTS, bin_log_time
+
+        return bin_log_time(self, DEFAULT_MAX_POINTS if max_points is None else max_points, weighting)
 
     def with_prestress(self, prestress_pa: float) -> "CreepData":
         """A copy that states the prestress (Pa) at which the creep was measured (links it in a joint fit)."""
         p = _stated_prestress(self, prestress_pa)
+        assert self.provenance is not None  # set by __post_init__
         return CreepData(time_s=self.time_s, compliance=self.compliance, compliance_sd=self.compliance_sd,
-                         prestress=np.full(self.n, p), source=self.source, comments=self.comments)
+                         prestress=np.full(self.n, p), source=self.source, comments=self.comments,
+                         locations=self.locations, provenance=self.provenance.noted(f"prestress stated: {p:g} Pa"),
+                         counts=self.counts)
 
     def __repr__(self) -> str:
         t, J = self.time_s, self.compliance
@@ -143,7 +168,7 @@ class CreepData:
         )
 
     @classmethod
-    def from_dataframe(cls, df, columns=None, *, source: str = "<DataFrame>", min_points: int = 1,
+    def from_dataframe(cls, df, columns=None, *, source: str = "<DataFrame>", min_points: int = 1, accept=(),
                        **units) -> "CreepData":
         """Measured creep compliance from a pandas DataFrame with your own column names and units.
 
@@ -156,10 +181,18 @@ class CreepData:
         if parsed.layout != "creep":
             raise _error(source, "the columns hold moduli, not creep compliance; use "
                                  "tenscell.RheologyData.from_dataframe")
+        return cls.from_parsed(parsed, Provenance(file=source, layout="DataFrame"), accept)
+
+    @classmethod
+    def from_parsed(cls, parsed, provenance: Provenance, accept=(), what: str | None = None) -> "CreepData":
+        """The creep compliance a parsed table holds (:class:`tenscell.io.columns.Parsed`), with the provenance as
+        the reader knows it (completed with the columns read), through the checks of :mod:`tenscell.io.checks`."""
         v = parsed.values
-        return cls(time_s=v["time"], compliance=v["compliance"], compliance_sd=v.get("compliance_sd"),
+        data = cls(time_s=v["time"], compliance=v["compliance"], compliance_sd=v.get("compliance_sd"),
                    prestress=v.get("prestress"), source=parsed.source, comments=parsed.comments,
-                   locations=parsed.where)
+                   locations=parsed.where or None, provenance=provenance.read(parsed))
+        headers = {q: h for q, h, _ in parsed.columns if q == "compliance"}
+        return checked(data, accept, headers, what)
 
     def to_dataframe(self):
         """``time_s``, ``creep_compliance_per_Pa`` (and the SD and prestress columns when present)."""
@@ -218,41 +251,46 @@ def _parse(text: str, source: str) -> CreepData:
     if not rows:
         raise _error(source, "no data rows after the header")
     arr = dict(zip(columns, np.array(rows, dtype=float).T))
+    units = {_TIME: ("time", "s"), _J: ("compliance", "1/Pa"), _J_SD: ("compliance_sd", "1/Pa"),
+             _PRESTRESS: ("prestress", "Pa")}
+    provenance = Provenance(file=source, layout="tenscell creep CSV", points=len(rows),
+                            columns=tuple((units[c][0], c, units[c][1]) for c in columns))
     return CreepData(time_s=arr[_TIME], compliance=arr[_J], compliance_sd=arr.get(_J_SD),
-                     prestress=arr.get(_PRESTRESS), source=source, comments=tuple(comments), locations=tuple(lines))
+                     prestress=arr.get(_PRESTRESS), source=source, comments=tuple(comments), locations=tuple(lines),
+                     provenance=provenance)
 
 
 def _read_text(path) -> tuple[str, str]:
     source = os.fsdecode(os.fspath(path))
-    try:
-        with open(source, encoding="utf-8-sig") as fh:
-            return fh.read(), source
-    except (OSError, UnicodeDecodeError) as exc:
-        raise _error(source, f"cannot read file: {exc}") from exc
+    return read_text_file(source, newline=None), source
 
 
-def read_creep_csv(path, *, min_points: int = 1) -> CreepData:
+def read_creep_csv(path, *, min_points: int = 1, accept=()) -> CreepData:
     """Read a creep compliance file (layout in the module docstring).
+
+    ``accept``: checks of :mod:`tenscell.io.checks` to skip (``"decreasing"``, ``"outliers"``).
 
     Raises
     ------
     DataError
         Missing or unreadable file, unknown/duplicate/missing columns, a bad
-        value (with its line number), or fewer than ``min_points`` rows.
+        value (with its line number), fewer than ``min_points`` rows, or a
+        compliance a check refuses (one that decreases with time, a value
+        many decades from its neighbours).
     """
     text, source = _read_text(path)
     data = _parse(text, source)
     if data.n < min_points:
-        raise _error(source, f"{data.n} data point(s), fewer than the {min_points} the fit needs")
-    return data
+        raise _error(source, f"{data.n} data point(s), fewer than {option('min_points', min_points)}")
+    return checked(data, accept, {"compliance": _J})
 
 
-def read_measurements(path, *, min_points: int = 1) -> RheologyData | CreepData:
+def read_measurements(path, *, min_points: int = 1, accept=()) -> RheologyData | CreepData:
     """Read moduli (:func:`tenscell.io.data.read_csv`) or creep compliance, whichever layout the header names."""
     text, source = _read_text(path)
     if is_creep_header(text, source):
-        return read_creep_csv(path, min_points=min_points)
-    return read_csv(path, min_points=min_points)
+        return read_creep_csv(path, min_points=min_points, accept=accept)
+    return read_csv(path, min_points=min_points, accept=accept)
 
 
 def write_creep_csv(data: CreepData, path) -> None:

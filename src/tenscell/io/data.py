@@ -25,15 +25,19 @@ from __future__ import annotations
 import csv
 import math
 import os
-from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
-from .._ranges import RANGES, range_problem
-from .columns import DataError, parse_frame
+from .._errors import option
+from .._ranges import range_problem
+from .columns import DataError, read_text_file
 from .outputs import atomic_path
+from .provenance import Provenance
+from .rheology import (_ABS, _ABS_SD, _ALL_COLUMNS, _CANONICAL, _CARTESIAN_COLUMNS, _COLUMN_QUANTITY, _FREQUENCY,
+                       _LOSS, _LOSS_SD, _PHASE, _PHASE_SD, _POLAR_COLUMNS, _PRESTRESS, _QUANTITY_OF, _STORAGE,
+                       _STORAGE_SD, _UNIT_OF, RheologyData, _error, checked)
 
 __all__ = [
     "DataError",
@@ -46,341 +50,12 @@ __all__ = [
     "generated_note",
 ]
 
-# Canonical spellings, used for writing and in messages; matching is on the
-# lower-cased form.
-_FREQUENCY = "frequency_Hz"
-_PRESTRESS = "prestress_Pa"
-_STORAGE = "G_storage_Pa"
-_LOSS = "G_loss_Pa"
-_STORAGE_SD = "G_storage_sd_Pa"
-_LOSS_SD = "G_loss_sd_Pa"
-_ABS = "G_abs_Pa"
-_PHASE = "phase_deg"
-_ABS_SD = "G_abs_sd_Pa"
-_PHASE_SD = "phase_sd_deg"
-
-_CARTESIAN_COLUMNS = (_STORAGE, _LOSS, _STORAGE_SD, _LOSS_SD)
-_POLAR_COLUMNS = (_ABS, _PHASE, _ABS_SD, _PHASE_SD)
-_ALL_COLUMNS = (_PRESTRESS, _FREQUENCY) + _CARTESIAN_COLUMNS + _POLAR_COLUMNS
-_CANONICAL = {name.lower(): name for name in _ALL_COLUMNS}
-
-# Column -> quantity of the one ranges table (tenscell._ranges) its values must lie in; the phase has
-# its own range, [0, 90] deg, checked with the row.
-_COLUMN_QUANTITY = {
-    _FREQUENCY: "frequency", _PRESTRESS: "prestress", _STORAGE: "modulus", _LOSS: "modulus",
-    _STORAGE_SD: "modulus", _LOSS_SD: "modulus", _ABS: "modulus", _ABS_SD: "modulus",
-}
-# RheologyData field -> its column in the package's layout
-_FIELD_COLUMN = {"frequency_hz": _FREQUENCY, "prestress": _PRESTRESS, "G_storage": _STORAGE, "G_loss": _LOSS,
-                 "G_storage_sd": _STORAGE_SD, "G_loss_sd": _LOSS_SD}
-
 # Short name -> file in the package's data directory. A tuple, not a dict,
 # so that no caller can alter the registry.
 _BUNDLED = (
     ("fabry2001", "fabry2001_hasm_powerlaw.csv"),
     ("stamenovic2002", "stamenovic2002_hasm_0p1Hz.csv"),
 )
-
-
-def _error(source: str, problem: str, line: int | None = None) -> DataError:
-    where = f"{source}, line {line}" if line is not None else f"{source}"
-    return DataError(f"{where}: {problem}")
-
-
-def _locations(source: str, locations, n: int) -> tuple[str, ...] | None:
-    """``locations`` checked: None, or one str per point."""
-    if locations is None:
-        return None
-    if isinstance(locations, str) or len(locations) != n or not all(isinstance(x, str) for x in locations):
-        raise _error(source, f"locations must be one str per point ({n}), got {locations!r:.80}")
-    return tuple(locations)
-
-
-def check_ranges(source: str, columns: dict, locations: tuple[str, ...] | None) -> None:
-    """Every value within the range of its quantity (:data:`tenscell._ranges.RANGES`), else DataError.
-
-    ``columns``: column name -> (values, quantity, unit or None for the table's). The message names
-    ``source``, the location of the first offending point (its index without ``locations``), the
-    column, the value in its unit and the range: one line.
-    """
-    first = None
-    for column, (values, quantity, unit) in columns.items():
-        lo, hi, _ = RANGES[quantity]
-        for i in np.flatnonzero((values < lo) | (values > hi))[:1]:
-            if first is None or i < first[0]:
-                first = (int(i), column, quantity, unit, float(values[i]))
-    if first is not None:
-        i, column, quantity, unit, value = first
-        where = f"{source}, {locations[i]}" if locations is not None else f"{source}: point {i}"
-        raise DataError(f"{where}: column {column!r}: {range_problem(quantity, value, unit)}")
-
-
-@dataclass(frozen=True, eq=False, repr=False)
-class RheologyData:
-    """Measured complex shear modulus of cells, as storage and loss moduli.
-
-    Array fields are stored as read-only float64 copies. ``eq=False``
-    because element-wise array comparison has no single truth value; compare
-    the arrays themselves.
-
-    Parameters
-    ----------
-    frequency_hz : array_like, shape (n,)
-        Oscillation frequency f in Hz (not angular frequency); > 0.
-    G_storage : array_like, shape (n,)
-        Storage modulus G' in Pa; > 0.
-    G_loss : array_like, shape (n,)
-        Loss modulus G'' in Pa; > 0.
-    prestress : array_like, shape (n,), optional
-        Cytoskeletal prestress in Pa (> 0) for a prestress sweep; None for a
-        frequency sweep.
-    G_storage_sd, G_loss_sd : array_like, shape (n,), optional
-        Standard deviations of G' and G'' in Pa (> 0), or None if unknown.
-    source : str, optional
-        File path or name the data came from; used in error messages.
-    comments : tuple of str, optional
-        Comment lines of the file, without the leading ``#``, stripped.
-        Must not contain line breaks.
-    kind : {"frequency", "prestress", None}, optional
-        ``"prestress"`` when `prestress` is given, else ``"frequency"``.
-        Derived when None; an inconsistent value is an error.
-    locations : tuple of str, optional
-        Where each point is in `source`, in the order given (e.g. ``"line 12"``
-        of a file, ``"row 7"`` of a sheet): readers pass it so that an error
-        names the line. Not kept (None) once the points are reordered.
-
-    Every value must lie in the range tenscell accepts for its quantity (the
-    table :data:`tenscell._ranges.RANGES` that the command-line flags use):
-    frequency 1e-12..1e12 Hz, moduli, their SDs and prestress 1e-30..1e30 Pa.
-
-    The points are stored in a canonical order (by prestress, then frequency),
-    whatever order they were given in, so that results depend on the data set
-    and not on the order of its rows.
-
-    Raises
-    ------
-    DataError
-        If arrays are not 1-D of equal non-zero length, contain NaN or inf,
-        or have non-positive frequencies, prestresses, moduli or SDs, or a
-        value outside its range (naming the column and the location).
-    """
-
-    frequency_hz: np.ndarray
-    G_storage: np.ndarray
-    G_loss: np.ndarray
-    prestress: np.ndarray | None = None
-    G_storage_sd: np.ndarray | None = None
-    G_loss_sd: np.ndarray | None = None
-    source: str = "<memory>"
-    comments: tuple[str, ...] = ()
-    kind: str | None = None
-    locations: tuple[str, ...] | None = None
-
-    def __post_init__(self) -> None:
-        source = str(self.source)
-        # object.__setattr__ because the dataclass is frozen; normalising
-        # here means every instance, however built, satisfies the invariants.
-        object.__setattr__(self, "source", source)
-
-        def as_array(name: str, value, *, optional: bool) -> np.ndarray | None:
-            if value is None:
-                if optional:
-                    return None
-                raise _error(source, f"{name} is required")
-            try:
-                arr = np.array(value, dtype=np.float64)
-            except (TypeError, ValueError) as exc:
-                raise _error(source, f"{name} is not numeric: {exc}") from exc
-            if arr.ndim != 1:
-                raise _error(source, f"{name} must be 1-D, got shape {arr.shape}")
-            if not np.all(np.isfinite(arr)):
-                bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-                raise _error(source, f"{name}[{bad}] = {arr[bad]} is not finite")
-            if np.any(arr <= 0):
-                bad = int(np.flatnonzero(arr <= 0)[0])
-                raise _error(source, f"{name}[{bad}] = {arr[bad]} must be > 0")
-            arr.flags.writeable = False
-            return arr
-
-        arrays = {
-            "frequency_hz": as_array("frequency_hz", self.frequency_hz, optional=False),
-            "G_storage": as_array("G_storage", self.G_storage, optional=False),
-            "G_loss": as_array("G_loss", self.G_loss, optional=False),
-            "prestress": as_array("prestress", self.prestress, optional=True),
-            "G_storage_sd": as_array("G_storage_sd", self.G_storage_sd, optional=True),
-            "G_loss_sd": as_array("G_loss_sd", self.G_loss_sd, optional=True),
-        }
-        lengths = {k: len(v) for k, v in arrays.items() if v is not None}
-        if len(set(lengths.values())) != 1:
-            raise _error(source, f"arrays have different lengths: {lengths}")
-        if lengths["frequency_hz"] == 0:
-            raise _error(source, "no data points")
-        locations = _locations(source, self.locations, lengths["frequency_hz"])
-        check_ranges(source, {col: (a, _COLUMN_QUANTITY[col], "Pa" if col == _PRESTRESS else None)
-                              for k, a in arrays.items() if a is not None for col in (_FIELD_COLUMN[k],)}, locations)
-        # canonical row order (prestress, then frequency, then the values): the same data set gives
-        # the same object, and the same fit, whatever the order of the rows in its file
-        keys = [a for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
-                if (a := arrays[k]) is not None]
-        order = np.lexsort(keys)
-        if np.any(order != np.arange(order.size)):
-            for name, arr in arrays.items():
-                if arr is not None:
-                    arr = arr[order]
-                    arr.flags.writeable = False
-                    arrays[name] = arr
-            locations = None if locations is None else tuple(locations[i] for i in order)
-        for name, arr in arrays.items():
-            object.__setattr__(self, name, arr)
-        object.__setattr__(self, "locations", locations)
-
-        if isinstance(self.comments, str):
-            raise _error(source, "comments must be a sequence of strings, not a str")
-        comments = tuple(self.comments)
-        for c in comments:
-            if not isinstance(c, str):
-                raise _error(source, f"comment {c!r} is not a str")
-            # A line break would turn the rest of the comment into a data
-            # line when written by write_csv.
-            if "\n" in c or "\r" in c:
-                raise _error(source, f"comment {c!r} contains a line break")
-        object.__setattr__(self, "comments", comments)
-
-        expected_kind = "frequency" if arrays["prestress"] is None else "prestress"
-        if self.kind is None:
-            object.__setattr__(self, "kind", expected_kind)
-        elif self.kind != expected_kind:
-            raise _error(
-                source,
-                f"kind={self.kind!r} is inconsistent with prestress "
-                f"{'absent' if arrays['prestress'] is None else 'present'} "
-                f"(expected {expected_kind!r})",
-            )
-
-    @property
-    def n(self) -> int:
-        """Number of data points."""
-        return int(self.frequency_hz.shape[0])
-
-    def binned(self, max_points: int | None = None) -> "RheologyData":
-        """At most ``max_points`` points by log-frequency binning (see :mod:`tenscell.io.thinning`).
-
-        Returns ``self`` when it has no more points than that.
-        """
-        from .thinning import DEFAULT_MAX_POINTS, bin_log_frequency
-
-        return bin_log_frequency(self, DEFAULT_MAX_POINTS if max_points is None else max_points)
-
-    def with_prestress(self, prestress_pa: float) -> "RheologyData":
-        """A copy that states the prestress (Pa) at which the data were measured (a constant ``prestress`` column).
-
-        A frequency sweep that states its prestress can be fitted jointly
-        with prestress sweeps on one prestress scale
-        (:func:`tenscell.fitting.fit`). Raises DataError if the data already
-        state prestresses, or for a non-positive value.
-        """
-        p = _stated_prestress(self, prestress_pa)
-        return RheologyData(frequency_hz=self.frequency_hz, G_storage=self.G_storage, G_loss=self.G_loss,
-                            prestress=np.full(self.n, p), G_storage_sd=self.G_storage_sd,
-                            G_loss_sd=self.G_loss_sd, source=self.source, comments=self.comments)
-
-    @property
-    def has_sd(self) -> bool:
-        """True when both G' and G'' carry standard deviations (the fit's residuals are then in their units)."""
-        return self.G_storage_sd is not None and self.G_loss_sd is not None
-
-    @property
-    def weights_storage(self) -> np.ndarray:
-        """Weights for residuals of log10 G', shape (n,).
-
-        ``G' ln(10) / sd(G')``, the inverse of the first-order SD of log10 G',
-        if `G_storage_sd` is given; otherwise ones.
-        """
-        return _log_weights(self.G_storage, self.G_storage_sd, self.n)
-
-    @property
-    def weights_loss(self) -> np.ndarray:
-        """Weights for residuals of log10 G'', shape (n,).
-
-        ``G'' ln(10) / sd(G'')``, the inverse of the first-order SD of
-        log10 G'', if `G_loss_sd` is given; otherwise ones.
-        """
-        return _log_weights(self.G_loss, self.G_loss_sd, self.n)
-
-    # ---- notebook conventions (tenscell._results) and DataFrames in --------------
-    @classmethod
-    def from_dataframe(cls, df, columns=None, *, source: str = "<DataFrame>", min_points: int = 1,
-                       **units) -> RheologyData:
-        """Measured moduli from a pandas DataFrame with your own column names and units.
-
-        See :func:`tenscell.io.importers.from_dataframe` (``columns`` is a
-        :class:`~tenscell.io.importers.ColumnMap` or a dict of its fields;
-        default recognised from the column names). A map that reads creep
-        compliance is refused here: use ``CreepData.from_dataframe``.
-        """
-        parsed = parse_frame(df, columns, source, min_points, units)
-        if parsed.layout == "creep":
-            raise DataError(f"{source}: the columns hold creep compliance, not moduli; use "
-                            "tenscell.io.CreepData.from_dataframe")
-        v = parsed.values
-        return cls(frequency_hz=v["frequency"], G_storage=v["storage"], G_loss=v["loss"], prestress=v.get("prestress"),
-                   G_storage_sd=v.get("storage_sd"), G_loss_sd=v.get("loss_sd"), source=parsed.source,
-                   comments=parsed.comments, locations=parsed.where)
-
-    def __repr__(self) -> str:
-        from .._results import format_repr, span
-
-        sweep = (f"prestress sweep, P {span(self.prestress, 'Pa')}" if self.prestress is not None
-                 else "frequency sweep")
-        sd = "with" if self.G_storage_sd is not None else "without"
-        return format_repr(
-            f"RheologyData: {self.n} points, {sweep}",
-            f"f {span(self.frequency_hz, 'Hz')}; G' {span(self.G_storage, 'Pa')}; G'' {span(self.G_loss, 'Pa')}",
-            f"{sd} standard deviations; source {self.source}",
-        )
-
-    def to_dataframe(self):
-        """``[prestress_Pa,] frequency_Hz, G_storage_Pa, G_loss_Pa[, G_storage_sd_Pa, G_loss_sd_Pa]``."""
-        from .._results import dataframe
-
-        cols = {} if self.prestress is None else {_PRESTRESS: self.prestress}
-        cols.update({_FREQUENCY: self.frequency_hz, _STORAGE: self.G_storage, _LOSS: self.G_loss})
-        if self.G_storage_sd is not None:
-            cols[_STORAGE_SD] = self.G_storage_sd
-        if self.G_loss_sd is not None:
-            cols[_LOSS_SD] = self.G_loss_sd
-        return dataframe(cols, {"source": self.source, "comments": self.comments})
-
-    def plot(self, ax=None, **kw):
-        """G' (filled) and G'' (open circles) against f (log-log) or prestress (:func:`tenscell.plotting.measured`)."""
-        from .._results import plotter
-
-        measured = plotter("measured")
-
-        return measured(self, ax=ax, **kw)
-
-
-def _stated_prestress(data, prestress_pa) -> float:
-    """The prestress (Pa) a data set is said to be measured at, checked (DataError naming the source)."""
-    if data.prestress is not None:
-        raise _error(data.source, "the data already state their prestress (a prestress column)")
-    try:
-        p = float(prestress_pa)
-    except (TypeError, ValueError):
-        raise _error(data.source, f"prestress {prestress_pa!r} is not a number (Pa)") from None
-    if not (math.isfinite(p) and p > 0):
-        raise _error(data.source, f"prestress {prestress_pa!r} Pa must be a finite number > 0")
-    problem = range_problem("prestress", p, "Pa")  # the range of a prestress_Pa column
-    if problem is not None:
-        raise _error(data.source, f"stated prestress: {problem}")
-    return p
-
-
-def _log_weights(G: np.ndarray, sd: np.ndarray | None, n: int) -> np.ndarray:
-    # sd(log10 G) ~= sd(G) / (G ln 10) to first order.
-    if sd is None:
-        return np.ones(n)
-    return G * math.log(10.0) / sd
 
 
 def _parse_float(text: str) -> float | None:
@@ -451,10 +126,16 @@ def _parse_header(raw: list[str], source: str, line: int) -> list[str]:
 
 
 def _csv_lines(text: str, source: str, comments: list[str]):
-    """Yield ``(line number, fields)`` of every non-blank, non-comment line; comments go to ``comments``."""
+    """Yield ``(line number, fields)`` of every non-blank, non-comment line; comments go to ``comments``.
+
+    The separator is the header's (the first such line): a comma, else a semicolon or a tab (as spreadsheets
+    write CSV in locales with a decimal comma); with a semicolon or a tab a decimal comma in the values is read
+    as a decimal point.
+    """
     # Split on "\n" only (the file was opened in universal-newline mode), so
     # that line numbers agree with what an editor shows; str.splitlines()
     # would also break on form feeds and other rare separators.
+    delimiter: str | None = None
     for lineno, line in enumerate(text.split("\n"), start=1):
         stripped = line.strip()
         if not stripped:
@@ -462,13 +143,17 @@ def _csv_lines(text: str, source: str, comments: list[str]):
         if stripped.startswith("#"):
             comments.append(stripped[1:].strip())
             continue
+        header = delimiter is None
+        if header:
+            delimiter = next((d for d in (",", ";", "\t") if d in stripped), ",")
         try:
-            yield lineno, next(csv.reader([line], strict=True))
+            fields = next(csv.reader([line], delimiter=delimiter or ",", strict=True))
         except csv.Error as exc:
             raise _error(source, f"malformed CSV: {exc}", lineno) from exc
+        yield lineno, fields if header or delimiter == "," else [f.replace(",", ".") for f in fields]
 
 
-def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
+def _parse_text(text: str, source: str, min_points: int, accept=(), layout: str = "tenscell CSV") -> RheologyData:
     comments: list[str] = []
     columns: list[str] | None = None
     header_line = 0
@@ -512,8 +197,7 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
     if n < min_points:
         raise _error(
             source,
-            f"{n} data point{'s' if n != 1 else ''}, fewer than min_points={min_points} "
-            f"(a fit needs at least as many points as free parameters)",
+            f"{n} data point{'s' if n != 1 else ''}, fewer than {option('min_points', min_points)}",
         )
 
     arr = {c: np.asarray(v, dtype=np.float64) for c, v in values.items()}
@@ -525,7 +209,9 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
         G_storage, G_loss = arr[_STORAGE], arr[_LOSS]
         storage_sd, loss_sd = arr.get(_STORAGE_SD), arr.get(_LOSS_SD)
 
-    return RheologyData(
+    provenance = Provenance(file=source, layout=layout, points=n,
+                            columns=tuple((_QUANTITY_OF[c], c, _UNIT_OF.get(c, "")) for c in columns))
+    data = RheologyData(
         frequency_hz=arr[_FREQUENCY],
         G_storage=G_storage,
         G_loss=G_loss,
@@ -535,7 +221,9 @@ def _parse_text(text: str, source: str, min_points: int) -> RheologyData:
         source=source,
         comments=tuple(comments),
         locations=tuple(f"line {k}" for k in row_lines),
+        provenance=provenance,
     )
+    return checked(data, accept, {"storage": _STORAGE, "loss": _LOSS} if _STORAGE in arr else {})
 
 
 def _check_row(row: dict[str, float], source: str, lineno: int) -> None:
@@ -608,7 +296,7 @@ def _polar_to_cartesian(
     return G_storage, G_loss, storage_sd, loss_sd
 
 
-def read_csv(path: str | os.PathLike[str], *, min_points: int = 1) -> RheologyData:
+def read_csv(path: str | os.PathLike[str], *, min_points: int = 1, accept=()) -> RheologyData:
     """Read a rheology data file.
 
     Parameters
@@ -619,12 +307,16 @@ def read_csv(path: str | os.PathLike[str], *, min_points: int = 1) -> RheologyDa
     min_points : int, optional
         Minimum number of data points required, e.g. the number of free
         parameters of the model to be fitted. Default 1.
+    accept : str or sequence of str, optional
+        Checks of :mod:`tenscell.io.checks` to skip (``"one-frequency"``,
+        ``"outliers"``): read data they would refuse.
 
     Returns
     -------
     RheologyData
-        With ``source`` set to `path`, and ``comments`` holding every ``#``
-        line of the file (before or after the header) in file order.
+        With ``source`` set to `path`, ``comments`` holding every ``#``
+        line of the file (before or after the header) in file order, and its
+        ``provenance``.
 
     Raises
     ------
@@ -633,30 +325,26 @@ def read_csv(path: str | os.PathLike[str], *, min_points: int = 1) -> RheologyDa
         data rows; has unknown, duplicate, missing or mixed-layout columns;
         a row with the wrong number of fields; a non-numeric, NaN or infinite
         value; a non-positive frequency, prestress, modulus or SD; a phase
-        outside [0, 90] deg or at 0 or 90 deg (a zero modulus); or fewer
-        than `min_points` rows.
+        outside [0, 90] deg or at 0 or 90 deg (a zero modulus); fewer
+        than `min_points` rows; or data a check of :mod:`tenscell.io.checks`
+        refuses (one frequency, a value many decades from its neighbours).
     """
     source = os.fspath(path)
     if isinstance(source, bytes):
         source = os.fsdecode(source)
-    try:
-        # utf-8-sig drops the byte-order mark spreadsheet programs often add,
-        # which would otherwise become part of the first column name.
-        with open(source, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except (OSError, UnicodeDecodeError) as exc:
-        raise _error(source, f"cannot read file: {exc}") from exc
-    return _parse_text(text, source, min_points)
+    # the byte-order mark spreadsheet programs often add is dropped (it would become part of the first name)
+    text = read_text_file(source, newline=None)
+    return _parse_text(text, source, min_points, accept)
 
 
-def parse_text(text: str, source: str = "<text>", *, min_points: int = 1) -> RheologyData:
+def parse_text(text: str, source: str = "<text>", *, min_points: int = 1, accept=()) -> RheologyData:
     """Parse rheology data from CSV text (what :func:`read_csv` does after reading the file).
 
     For data that arrive as text rather than as a file, e.g. one cell's rows
     of a long table sent to a worker. ``source`` names the data in error
     messages; see :func:`read_csv` for the layouts and the errors raised.
     """
-    return _parse_text(text, str(source), min_points)
+    return _parse_text(text, str(source), min_points, accept)
 
 
 def _format(x: float) -> str:
@@ -760,7 +448,7 @@ def bundled(name: str) -> RheologyData:
         text = resource.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise _error(source, f"cannot read bundled file: {exc}") from exc
-    return _parse_text(text, source, min_points=1)
+    return _parse_text(text, source, min_points=1, layout="bundled with tenscell")
 
 
 def generated_note(data) -> str | None:

@@ -48,10 +48,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping
 
 from .columns import (COMPLIANCE_UNITS, FREQUENCY_UNITS, KNOWN_HEADERS, MODULUS_UNITS, PHASE_UNITS, PRESTRESS_UNITS,
-                      TIME_UNITS, ColumnMap, DataError, Parsed, _as_map, _excel_table, _Table, _text_table,
-                      guess_columns, parse, parse_frame)
+                      TIME_UNITS, ColumnMap, DataError, _as_map, _excel_table, _Table, _text_table, frame_table,
+                      guess_columns, parse)
 from .creep_data import CreepData
 from .data import RheologyData
+from .provenance import Provenance
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -60,26 +61,27 @@ __all__ = ["ColumnMap", "from_dataframe", "read_table", "guess_columns", "KNOWN_
            "MODULUS_UNITS", "PHASE_UNITS", "PRESTRESS_UNITS", "TIME_UNITS", "COMPLIANCE_UNITS", "DataError"]
 
 
-def build(parsed: Parsed) -> RheologyData | CreepData:
-    """The data object a parsed table holds: CreepData for the creep layout, RheologyData otherwise."""
-    v = parsed.values
-    if parsed.layout == "creep":
-        return CreepData(time_s=v["time"], compliance=v["compliance"], compliance_sd=v.get("compliance_sd"),
-                         prestress=v.get("prestress"), source=parsed.source, comments=parsed.comments,
-                         locations=parsed.where)
-    return RheologyData(frequency_hz=v["frequency"], G_storage=v["storage"], G_loss=v["loss"],
-                        prestress=v.get("prestress"), G_storage_sd=v.get("storage_sd"), G_loss_sd=v.get("loss_sd"),
-                        source=parsed.source, comments=parsed.comments, locations=parsed.where)
-
-
-def _data(table: _Table, cmap: ColumnMap, min_points: int) -> RheologyData | CreepData:
-    """The data set a table holds under a map: moduli (RheologyData) or creep compliance (CreepData)."""
-    return build(parse(table, cmap, min_points))
+def build(table: _Table, cmap: ColumnMap, min_points: int = 1, provenance: Provenance | None = None, accept=(),
+          *, what: str | None = None, want: str | None = None) -> RheologyData | CreepData:
+    """The data a table holds under a map, as every reader ends: parsed (:func:`tenscell.io.columns.parse`),
+    built (CreepData for the creep layout, RheologyData otherwise) with its provenance (``provenance`` as the
+    reader knows it, completed with the columns and units read), and checked (:mod:`tenscell.io.checks`;
+    ``accept`` skips checks, ``what`` names the step in their messages). ``want`` (``"moduli"`` or
+    ``"creep"``) refuses the other kind."""
+    parsed = parse(table, cmap, min_points)
+    cls = CreepData if parsed.layout == "creep" else RheologyData
+    if want is not None and (cls is CreepData) != (want == "creep"):
+        held, other = ("creep compliance", "tenscell.io.CreepData") if cls is CreepData else \
+            ("moduli", "tenscell.RheologyData")
+        raise DataError(f"{parsed.source}: the columns hold {held}, not {want}; use {other}.from_dataframe")
+    base = provenance or Provenance(file=parsed.source, layout="table")
+    return cls.from_parsed(parsed, base, accept, what)
 
 
 # ---- sources ----------------------------------------------------------------------------------
 def from_dataframe(df: pd.DataFrame, columns: ColumnMap | Mapping[str, Any] | None = None, *,
-                   source: str = "<DataFrame>", min_points: int = 1, **units: Any) -> RheologyData | CreepData:
+                   source: str = "<DataFrame>", min_points: int = 1, accept=(), want: str | None = None,
+                   **units: Any) -> RheologyData | CreepData:
     """Measured moduli (or creep compliance) from a pandas DataFrame.
 
     Parameters
@@ -95,6 +97,10 @@ def from_dataframe(df: pd.DataFrame, columns: ColumnMap | Mapping[str, Any] | No
         Name used in error messages and recorded as the data's source.
     min_points : int
         Fewest rows accepted.
+    accept : str or sequence of str, optional
+        Checks of :mod:`tenscell.io.checks` to skip.
+    want : {"moduli", "creep"}, optional
+        Refuse the other kind of data.
     **units
         Unit fields of :class:`ColumnMap` (``frequency_unit="rad/s"``...), overriding the map's.
 
@@ -103,12 +109,15 @@ def from_dataframe(df: pd.DataFrame, columns: ColumnMap | Mapping[str, Any] | No
     RheologyData or CreepData
         CreepData when the map reads ``time`` and ``compliance``.
     """
-    return build(parse_frame(df, columns, source, min_points, units))
+    table = frame_table(df, source)
+    cmap = _as_map(columns if columns is not None else guess_columns(table.names), units)
+    return build(table, cmap, min_points, Provenance(file=source, layout="DataFrame"), accept, want=want)
 
 
 def read_table(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, Any] | None, *, sep: str | None = None,
                header_line: int | None = None, units_line: bool = False, decimal: str = ".",
-               sheet: str | int | None = None, min_points: int = 1, **units: Any) -> RheologyData | CreepData:
+               sheet: str | int | None = None, min_points: int = 1, accept=(),
+               **units: Any) -> RheologyData | CreepData:
     """Measured moduli (or creep compliance) from a CSV, TSV or Excel file with your own column names.
 
     Parameters
@@ -132,6 +141,8 @@ def read_table(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, A
         Excel sheet name or 0-based index; default the first.
     min_points : int
         Fewest data rows accepted.
+    accept : str or sequence of str, optional
+        Checks of :mod:`tenscell.io.checks` to skip (``"outliers"``...).
     **units
         Unit fields of :class:`ColumnMap`, overriding the map's.
 
@@ -139,7 +150,7 @@ def read_table(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, A
     -------
     RheologyData or CreepData
         ``comments`` hold the file's ``#`` lines and a line recording the
-        columns and units used.
+        columns and units used; ``provenance`` says the same.
 
     Raises
     ------
@@ -152,8 +163,10 @@ def read_table(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, A
     p = Path(path)
     if p.suffix.lower() in (".xlsx", ".xlsm"):
         table = _excel_table(p, sheet, header_line, units_line)
+        layout = f"Excel sheet {table.source.rsplit('[', 1)[-1].rstrip(']')!r}"
     else:
         table = _text_table(p, sep, header_line, units_line, decimal)
-    return _data(table, cmap, min_points)
+        layout = "table"
+    return build(table, cmap, min_points, Provenance(file=str(path), layout=layout), accept)
 
 

@@ -193,7 +193,47 @@ def check_output_dir(path, flag: str = "--out") -> Path:
                 f"{flag} {path}: inside the output set {ancestor} (of `{found.get('command') or 'tenscell'}`), "
                 "which its next run replaces as a whole; choose a directory outside it")
     _check_parent(path, flag)
+    if path.is_dir():
+        _check_replaceable(path, flag)
     return path
+
+
+#: Linux inode flags (linux/fs.h) that forbid renaming or removing a directory: immutable, append-only
+_FS_IOC_GETFLAGS, _FS_IMMUTABLE_FL, _FS_APPEND_FL = 0x80086601, 0x10, 0x20
+
+
+def _locked(path: Path) -> str | None:
+    """"immutable" or "append-only" when the file system forbids renaming ``path`` (chattr +i / +a), else None
+    (also where the flags cannot be read: another OS or file system)."""
+    try:
+        import array
+        import fcntl
+
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except (ImportError, OSError):
+        return None
+    try:
+        buf = array.array("l", [0])
+        fcntl.ioctl(fd, _FS_IOC_GETFLAGS, buf, True)
+    except OSError:
+        return None
+    finally:
+        os.close(fd)
+    flags = buf[0]
+    return "immutable" if flags & _FS_IMMUTABLE_FL else "append-only" if flags & _FS_APPEND_FL else None
+
+
+def _check_replaceable(path: Path, flag: str) -> None:
+    """A previous set at ``path`` can be swapped out at the end of the run (checked now, not after the work)."""
+    locked = _locked(path)
+    if locked is not None:
+        raise OutputLocationError(f"{flag} {path}: the directory is {locked} (chattr), so a run cannot replace it; "
+                                  f"choose another directory, or lift the flag (chattr -{locked[0]} {path})")
+    parent = path.absolute().parent
+    st = parent.stat()
+    if st.st_mode & 0o1000 and os.geteuid() not in (0, path.stat().st_uid, st.st_uid):
+        raise OutputLocationError(f"{flag} {path}: belongs to another user in the sticky directory {parent}, so a "
+                                  "run cannot replace it; choose another directory")
 
 
 def read_manifest(directory) -> dict | None:
@@ -357,6 +397,11 @@ class OutputSet:
             try:
                 self._write_manifest(staging)
                 self._commit(staging)
+            except OSError as err:
+                shutil.rmtree(staging, ignore_errors=True)
+                raise OutputLocationError(f"{self.flag} {self.target}: the new set could not be put in place "
+                                          f"({err.strerror or type(err).__name__}); the previous one is as it "
+                                          "was") from err
             except BaseException:
                 shutil.rmtree(staging, ignore_errors=True)
                 raise

@@ -4,7 +4,7 @@ A tendon law with internal dynamics (:class:`tenscell.laws.Maxwell`,
 :class:`~tenscell.laws.StandardLinearSolid`, :class:`~tenscell.laws.Springpot`)
 has no constant pair (K0, C0); its dynamic tangent ``k*_j(ω)``
 (:meth:`tenscell.laws.TendonLaw.complex_stiffness`) gives, with the same
-split as :func:`tenscell.linear.modal.assemble_stiffness`,
+split as :func:`tenscell.linear.assembly.assemble_stiffness`,
 
 ``K(ω) = P·Σ_j T0_j ∇²l_j + Σ_j k*_j(ω) a_j a_jᵀ``  (N/m, complex symmetric),
 
@@ -52,7 +52,8 @@ import scipy.sparse.linalg as spla
 from .._checks import positive_array, positive_scalar
 from ..laws.base import TendonLaw, angular_frequencies
 from ..model.equilibrium import Cell
-from .modal import assemble_stiffness, modulus, positive_definite_factor
+from .assembly import assemble_stiffness, gram_table, modulus, stiffness_rows, stiffness_stack
+from .definite import positive_definite_factor
 from .rigid import deformation_basis
 from .._threads import hot_path
 
@@ -85,9 +86,7 @@ def dynamic_stiffness(cell: Cell, P: float, kstar) -> np.ndarray:
     if cell.sparse:
         raise ValueError(f"{cell.describe()} is sparse: its K(ω) is not formed as a dense stack; "
                          "dynamic_compliance solves it frequency by frequency")
-    A = np.asarray(cell.A)
-    H = np.asarray(cell.prestress_hessian, dtype=float)
-    return P * H[None] + (A[None] * k[:, None, :]) @ A.T
+    return stiffness_stack(cell, P, k)
 
 
 def _solves(cell: Cell, P: float, k: np.ndarray, both: bool) -> tuple[np.ndarray, np.ndarray | None]:
@@ -184,8 +183,7 @@ def dynamic_kernel(cell: Cell) -> DynamicKernel:
     N = deformation_basis(cell)
     if N is not None:  # free-standing: the complement of the rigid-body motions, as in _solves
         A, H, rhs = N.T @ A, N.T @ H @ N, N.T @ rhs
-    n = A.shape[0]
-    gram = np.einsum("im,jm->mij", A, A).reshape(cell.m, n * n)
+    gram = gram_table(A)
     A, H, gram, rhs = (np.ascontiguousarray(x) for x in (A, H, gram, rhs))
     for x in (A, H, gram, rhs):
         x.setflags(write=False)
@@ -247,14 +245,8 @@ _CHUNK_BYTES = 2**17
 def _dense_rows(kernel: DynamicKernel, P, k, gradient: bool):
     """:func:`batched_compliance` on a dense cell, for one chunk of rows."""
     assert kernel.H is not None and kernel.A is not None and kernel.rhs is not None and kernel.gram is not None
-    R, n = k.shape[0], kernel.H.shape[0]
-    # real and imaginary parts in one real product (half the work of a complex one against a real table)
-    parts = np.concatenate([k.real, k.imag]) @ kernel.gram
-    K = np.empty((R, n, n), dtype=complex)
-    np.multiply(P[:, None, None], kernel.H, out=K.real)
-    K.real += parts[:R].reshape(R, n, n)
-    K.imag = parts[R:].reshape(R, n, n)
-    sol = np.linalg.solve(K, np.broadcast_to(kernel.rhs, (R,) + kernel.rhs.shape))
+    K = stiffness_rows(kernel.H, kernel.gram, P, k)
+    sol = np.linalg.solve(K, np.broadcast_to(kernel.rhs, (k.shape[0],) + kernel.rhs.shape))
     x = sol[:, :, 0]
     y = x if kernel.same else sol[:, :, 1]
     J = x @ kernel.rhs[:, -1]

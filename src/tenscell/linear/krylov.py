@@ -20,9 +20,9 @@ frequency nor a dense eigensolve is affordable. Instead, with a real shift
 
   a Gauss quadrature of the load's spectral measure, which is how creep,
   relaxation, the relaxation spectrum and the slowest modes of a sparse model
-  are computed (:mod:`tenscell.linear.modal`). ``1 − σθ > 0`` for every Ritz
+  are computed (:mod:`tenscell.linear.pencil`). ``1 − σθ > 0`` for every Ritz
   value exactly when K0 is positive definite on the Krylov space.
-* the run is kept (cached on the model's :class:`~tenscell.linear.modal.Pencil`)
+* the run is kept (cached on the model's :class:`~tenscell.linear.pencil.Pencil`)
   and extended only when a later request needs more accuracy, so every
   frequency, time and mode uses the same factorization and the same steps.
 
@@ -50,11 +50,12 @@ import numpy as np
 
 from .._checks import positive_array
 from .._threads import hot_path
+from .spectrum import ritz_is_zero
 
 if TYPE_CHECKING:  # pragma: no cover
     from .linearize import LinearModel
 
-__all__ = ["KrylovResponse", "LanczosRun", "converge", "krylov_compliance", "default_shift", "load_modes", "DEFAULT_BAND_HZ"]
+__all__ = ["KrylovResponse", "LanczosRun", "CreepChange", "converge", "krylov_compliance", "default_shift", "load_modes", "DEFAULT_BAND_HZ"]
 
 #: the paper's frequency band (Hz); its default shift serves analyses that have no band of their own
 DEFAULT_BAND_HZ = (1e-2, 1e3)
@@ -301,7 +302,7 @@ def krylov_compliance(lin: "LinearModel", f_hz, *, tol: float = 1e-12, shift: fl
 def load_modes(lin: "LinearModel", k: int = 3, tol: float = 1e-6, max_steps: int = 150):
     """The ``k`` slowest relaxation modes that the load excites, for sparse models.
 
-    The model's unshifted Lanczos run (:meth:`tenscell.linear.modal.Pencil.lanczos_runs`, σ = 0,
+    The model's unshifted Lanczos run (:meth:`tenscell.linear.pencil.Pencil.lanczos_runs`, σ = 0,
     with the factor of K0 that the positive-definiteness check made) from the load: its Ritz pairs
     with the largest θ = 1/λ converge first, so a few dozen solves give the slowest modes in the
     Krylov space of the load.
@@ -356,3 +357,37 @@ def load_modes(lin: "LinearModel", k: int = 3, tol: float = 1e-6, max_steps: int
     theta = run.ritz()[0][top]
     rates = (1.0 - sigma * theta) / theta
     return rates, run.ritz_vectors(top), resid
+
+
+class CreepChange:
+    """Relative change of the reduced creep compliance since the previous check (the run's error estimate)."""
+
+    def __init__(self):
+        self.prev: tuple[np.ndarray, np.ndarray] | None = None
+
+    def __call__(self, run: LanczosRun) -> float:
+        if run.steps == 0:
+            return 0.0 if run.broke_down else math.inf
+        try:
+            tau, rho = run.spectrum()
+        except FloatingPointError:
+            return 0.0  # reported by Pencil.retardation
+        if run.broke_down:
+            return 0.0  # the Krylov space is invariant: the reduced model is exact
+        prev, self.prev = self.prev, (tau, rho)
+        if prev is None:
+            return math.inf
+        pos = tau[~ritz_is_zero(tau)]
+        if pos.size == 0:
+            return math.inf
+        t = np.logspace(math.log10(pos.min()) - 1, math.log10(pos.max()) + 1, 48)
+        now, before = _creep_features(tau, rho, t), _creep_features(*prev, t)
+        return float(np.max(np.abs(now - before) / np.maximum(np.abs(now), 1e-300)))
+
+
+def _creep_features(tau, rho, t):
+    """J(t) on the grid, J(∞) and Σ_{τ>0} ρ/τ (the initial creep rate per unit force)."""
+    zero = ritz_is_zero(tau)
+    tp, rp = tau[~zero], rho[~zero]
+    J = rho[zero].sum() + (-np.expm1(-np.multiply.outer(t, 1.0 / tp))) @ rp
+    return np.concatenate([J, [rho.sum(), (rp / tp).sum()]])

@@ -25,12 +25,13 @@ import scipy.sparse as sp
 from .._checks import positive_array, positive_scalar
 from ..laws import DynamicLawError, LinearSpring, TendonLaw, Voigt
 from ..laws.base import DEFAULT_REALIZATION_TOL, Realization
-from ..model.equilibrium import Cell, tangent_stiffness, weighted_gram
+from .._errors import NotPositiveDefiniteError
+from ..model.equilibrium import Cell, tangent_stiffness
+from .assembly import assemble_damping, assemble_stiffness, spring_stiffness
 from .dynamic import cytoplasm_damping, viscosity_value
-from .modal import (
-    NotPositiveDefiniteError, Pencil, PrestressFamily, RelaxationSpectrum, assemble_damping, assemble_stiffness,
-    relaxation_spectrum,
-)
+from .family import PrestressFamily
+from .pencil import Pencil
+from .spectrum import RelaxationSpectrum, relaxation_spectrum
 from .._threads import hot_path
 from .ordering import coordinate_locations
 from .rigid import deformation_basis, unresisted_share
@@ -140,7 +141,7 @@ class LinearModel:
 
     @cached_property
     def pencil(self) -> Pencil:
-        """The pencil (K0, C0) with its decompositions, each computed once for this model (:mod:`tenscell.linear.modal`);
+        """The pencil (K0, C0) with its decompositions, each computed once for this model (:mod:`tenscell.linear.pencil`);
         for a free-standing structure the pencil on the complement of its rigid-body motions (``basis``)."""
         return self._new_pencil()
 
@@ -267,7 +268,7 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     -----
     A loop over prestresses reuses what does not depend on P: on a dense
     cell its supports hold, the models of one set of tendons belong to one
-    :class:`tenscell.linear.modal.PrestressFamily` (``K0 = P·Kp + Km``, C0
+    :class:`tenscell.linear.family.PrestressFamily` (``K0 = P·Kp + Km``, C0
     whitened once; the cell keeps the family of the tendons it last served),
     so each model costs one eigensolve and its check is that every
     relaxation rate is positive. For a whole grid of prestresses,
@@ -276,36 +277,108 @@ def linearize(cell: Cell, P: float = 1000.0, EA=1.0, c=1.0, *, check: bool = Tru
     (``bench/bench_sweep.py`` times both against the floor).
     """
     P = positive_scalar("P (prestress)", P, "N")
+    if not viscosity:  # the fast path of prestress loops: the tendons the cell's kept family last served
+        kept = _kept_tendons(cell, EA, c)
+        lin = None if kept is None else kept.model(cell, P, check)
+        if lin is not None:
+            return lin
     m = cell.m
-    EA = positive_array("EA", EA, (m,), "N")
-    c = positive_array("c", c, (m,), "N·s/m")
+    EA_v = positive_array("EA", EA, (m,), "N")
+    c_v = positive_array("c", c, (m,), "N·s/m")
     # validated above: skip the law's own checks on this hot path (parameter sweeps, fits)
     # a cytoplasm adds to C0: that model is not a member of the tendons' family (its pencil is its own)
-    family = None if viscosity else _prestress_family(cell, EA, c)
-    lin = _from_law(cell, P, Voigt._trusted(EA=EA, c=c), check=check, EA=EA, family=family)
+    family = None if viscosity else _prestress_family(cell, EA_v, c_v, EA, c)
+    lin = _from_law(cell, P, Voigt._trusted(EA=EA_v, c=c_v), check=check, EA=EA_v, family=family)
     return with_cytoplasm(lin, viscosity) if viscosity else lin
 
 
 #: the largest dense cell whose family is kept (five n×n matrices of its own, 10 MB at 500 coordinates): beyond it the
 #: eigensolve dominates each model and the family would save little
 _FAMILY_MAX_N = 500
-#: per cell, the prestress family of the tendons it last served. A cache only: a model's numbers do not depend on
-#: whether its family was found here or built anew (weak keys: it lives as long as the cell)
+#: per cell, the prestress family of the Voigt tendons it last served, with those tendons validated (a
+#: :class:`_KeptTendons`). A cache only: a model's numbers do not depend on whether its family was found here or
+#: built anew. Bound: one record per live dense cell of at most ``_FAMILY_MAX_N`` coordinates (weak keys: it lives
+#: as long as the cell), five n×n matrices and a few n-vectors, 10 MB at 500 coordinates
 _families: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
-def _prestress_family(cell: Cell, EA: np.ndarray, c: np.ndarray) -> PrestressFamily | None:
+@dataclass(frozen=True, eq=False)
+class _KeptTendons:
+    """One cell's prestress family and the Voigt tendons it serves, validated once (read-only arrays).
+
+    ``EA_in``, ``c_in``: the scalars the tendons were given as (None for arrays), so that a loop passing the same
+    numbers is recognised without validating them again; arrays are recognised by their values.
+    """
+
+    key: tuple
+    family: PrestressFamily | None
+    EA: np.ndarray
+    c: np.ndarray
+    EA_in: float | None
+    c_in: float | None
+    law: Voigt
+    H0: np.ndarray
+    load: np.ndarray
+
+    def matches(self, EA, c) -> bool:
+        return _same(EA, self.EA_in, self.EA) and _same(c, self.c_in, self.c)
+
+    def model(self, cell: Cell, P: float, check: bool) -> LinearModel | None:
+        """The model at prestress ``P`` (N) of a member of this family: Eq. 11 rest lengths, ``K0 = P·Kp + Km``;
+        None when there is no family or a member's rest length would not be positive (the general path reports it)."""
+        family = self.family
+        if family is None:
+            return None
+        d = self.EA + P * cell.T0
+        if not d.min() > 0:
+            return None
+        l0 = cell.lengths * self.EA / d  # Eq. 11, as Voigt.rest_lengths writes it
+        # every field is known valid: set them without the frozen dataclass's field-by-field __init__
+        lin = object.__new__(LinearModel)
+        lin.__dict__.update(cell=cell, P=P, EA=self.EA, c=self.c, K0=family.stiffness(P), C0=family.C0, H0=self.H0,
+                            D0=np.asarray(cell.probe), l0=l0, law=self.law._placed(l0), viscosity=0.0,
+                            realization=None, basis=None)
+        pencil = lin.__dict__["pencil"] = Pencil(lin.K0, family.C0, self.load, lin.D0, describe=f"{cell.describe()} at "
+                                                 f"P={P:.6g}", hint=_STABILITY_HINT, family=(family, P))
+        if check:
+            pencil.check()
+        return lin
+
+
+def _same(given, scalar: float | None, validated: np.ndarray) -> bool:
+    """Whether tendon values ``given`` are those a record was validated from (a scalar, or equal array values)."""
+    if type(given) in (float, int):
+        return scalar is not None and given == scalar
+    return type(given) is np.ndarray and given.shape == validated.shape and bool(np.array_equal(given, validated))
+
+
+def _kept_tendons(cell: Cell, EA, c) -> _KeptTendons | None:
+    """The cell's kept record when it serves these tendons (no validation needed), else None."""
+    kept = _families.get(cell)
+    return kept if kept is not None and kept.matches(EA, c) else None
+
+
+def _prestress_family(cell: Cell, EA: np.ndarray, c: np.ndarray, EA_in=None, c_in=None) -> PrestressFamily | None:
     """C0 whitened once for every prestress of these Voigt tendons (EA in N, c in N·s/m), for a dense cell its
-    supports hold; None for a sparse or free-standing cell or an ill-conditioned C0 (the model's own K0 path)."""
+    supports hold; None for a sparse or free-standing cell or a C0 the conditioning rule refuses (the model's own K0
+    path)."""
     if cell.sparse or cell.n > _FAMILY_MAX_N or deformation_basis(cell) is not None:
         return None
     key = (EA.tobytes(), c.tobytes())
     kept = _families.get(cell)
-    if kept is not None and kept[0] == key:
-        return kept[1]
-    family = PrestressFamily.build(cell.Kp, weighted_gram(cell.A, EA / cell.lengths), assemble_damping(cell, c),
-                                   cell.load, cell.probe)
-    _families[cell] = (key, family)
+    if kept is not None and kept.key == key:
+        return kept.family
+    family = PrestressFamily.build(cell.Kp, spring_stiffness(cell, EA), assemble_damping(cell, c), cell.load,
+                                   cell.probe)
+    EA_r, c_r = np.array(EA, dtype=float), np.array(c, dtype=float)
+    load = np.array(cell.load, dtype=float)
+    H0 = -load
+    for arr in (EA_r, c_r, H0, load):
+        arr.flags.writeable = False
+    _families[cell] = _KeptTendons(key=key, family=family, EA=EA_r, c=c_r, law=Voigt._trusted(EA=EA_r, c=c_r), H0=H0,
+                                   load=load,
+                                   EA_in=EA_in if type(EA_in) in (float, int) else None,
+                                   c_in=c_in if type(c_in) in (float, int) else None)
     return family
 
 

@@ -1,33 +1,126 @@
-"""Fill-reducing orderings for the sparse Cholesky factorization (internal).
+"""Fill-reducing orderings for the sparse Cholesky factorization (internal), chosen by size.
 
-Geometric nested dissection (George 1973): every set of unknowns is cut by
-the median plane across its longest extent, the unknowns on the side of the
-cut with fewer matrix entries reaching across it form the separator, and separators are
-numbered after the two halves they separate, recursively. On the 3D lattices
-of :mod:`tenscell.model.lattices` it gives less fill and fewer flops than
-CHOLMOD's default (AMD): measured at 32,076 coordinates in
-``bench/bench_scale.py``.
+:func:`fill_reducing` picks one ordering per sparse pencil, shared by the
+factors of K0 and of every K0 + σC0:
 
-Why our own: CHOLMOD's nested dissection needs METIS, which the cvxopt wheels
-do not include; no maintained wheel of scikit-sparse exists for this Python;
-``pymetis`` crashed (segmentation fault) at 32k coordinates when it was tried.
-Why vectorized by levels: all sets of one level are cut together with a few
-sorts and reductions, so the ordering costs about as much as one assembly of
-the matrix (about 20 ms at 32k coordinates) instead of a Python loop over sets
-(1 s).
+* below :data:`MIN_SIZE` coordinates, none: CHOLMOD's own AMD does as well;
+* up to :data:`METIS_FROM` coordinates, or when pymetis is not installed,
+  **geometric nested dissection** (:func:`nested_dissection`, George 1973):
+  every set of unknowns is cut by the median plane across its longest
+  extent, the unknowns on the side of the cut with fewer matrix entries
+  reaching across it form the separator, and separators are numbered after
+  the two halves they separate, recursively. Vectorized by levels (all sets
+  of one level are cut together with a few sorts and reductions), it costs
+  about as much as one assembly of the matrix (0.05 s at 32,076 coordinates);
+* from :data:`METIS_FROM` coordinates, **METIS's multilevel nested
+  dissection** (:func:`metis_dissection`, through pymetis, the ``large``
+  extra) of the graph whose vertices are the structure's *locations* (the
+  coordinates of one node move together and share their neighbours) weighted
+  by their coordinates, given as METIS wants it: the symmetric adjacency
+  ``xadj/adjncy`` of both triangles, no diagonal (passing one triangle of K0,
+  as an earlier attempt did, is what crashed it).
+
+The crossover, measured on the 3D lattices of ``bench/bench_scale.py``
+(docs/large-structures.md has the table): METIS's factor of K0 has 1.2×,
+1.4× and 1.4× less fill than the geometric one at 32k, 48k and 107k
+coordinates (7.35·10⁶ against 8.95·10⁶ nonzeros at 32,076), its numeric
+factorization is 1.3–1.9× faster and each Lanczos solve 1.2–1.3× faster;
+ordering the location graph costs 0.1 s at 32k and 0.4 s at 107k (the
+coordinate graph took 0.38 and 1.4 s). Ordering, two factorizations and 41
+solves took 0.34 s with METIS against 0.43 s at 16,281 coordinates, and 0.15
+against 0.12 s at 11,520, where the fills are equal: hence :data:`METIS_FROM`.
+
+Why not CHOLMOD's own nested dissection: the cvxopt wheels build CHOLMOD
+without METIS, and no maintained wheel of scikit-sparse exists for this Python.
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["coordinate_locations", "nested_dissection", "MIN_SIZE"]
+__all__ = ["coordinate_locations", "fill_reducing", "nested_dissection", "metis_dissection", "MIN_SIZE",
+           "METIS_FROM"]
 
 #: sets of at most this many unknowns are not cut further (dense enough to factor as one block)
 LEAF = 64
 #: below this many unknowns CHOLMOD's AMD is as good (measured: equal fill at 1,896 coordinates, 1.6x more at
 #: 11,520) and the ordering is not computed
 MIN_SIZE = 5000
+#: from this many unknowns METIS's nested dissection (when pymetis is installed) replaces the geometric one
+#: (measured: ordering + two factorizations + 41 solves took 0.12 s geometric against 0.15 s METIS at 11,520
+#: coordinates, 0.43 against 0.34 s at 16,281: docs/large-structures.md)
+METIS_FROM = 15000
+
+
+def fill_reducing(A, points: np.ndarray | None) -> np.ndarray | None:
+    """The fill-reducing permutation for a sparse symmetric pattern ``A`` (n × n), chosen by size; None for AMD.
+
+    Parameters
+    ----------
+    A : sparse matrix, shape (n, n)
+        Structurally symmetric; only its pattern is read (the union of K0's and C0's).
+    points : ndarray, shape (n, 3), or None
+        A location (m) for each unknown (:func:`coordinate_locations`); without them, AMD.
+
+    Returns
+    -------
+    ndarray of int, shape (n,), or None
+        ``perm`` (row ``i`` of the factored matrix is row ``perm[i]`` of A), or None for CHOLMOD's AMD.
+    """
+    n = A.shape[0]
+    if points is None or n < MIN_SIZE:
+        return None
+    if n >= METIS_FROM and _pymetis() is not None:
+        return metis_dissection(A, points)
+    return nested_dissection(A, points)
+
+
+def _pymetis():
+    """The pymetis module, or None when it is not installed (the geometric ordering serves instead)."""
+    try:
+        import pymetis
+    except ImportError:
+        return None
+    return pymetis
+
+
+def metis_dissection(A, points: np.ndarray) -> np.ndarray:
+    """METIS's multilevel nested dissection of a sparse pattern, on the graph of its unknowns' locations.
+
+    Unknowns at one location (the coordinates of one node) form one vertex, weighted by their number,
+    adjacent to every location one of them couples to: a graph 3× smaller than the matrix's, ordered
+    4× faster with the same fill. The unknowns of one location are numbered together.
+
+    Parameters
+    ----------
+    A : sparse matrix, shape (n, n)
+        Structurally symmetric; only its pattern is read.
+    points : ndarray, shape (n, d)
+        A location for each unknown (m).
+
+    Returns
+    -------
+    ndarray of int, shape (n,)
+        ``perm`` as :func:`nested_dissection` returns it.
+    """
+    pymetis = _pymetis()
+    if pymetis is None:  # pragma: no cover - fill_reducing asks only when it is there
+        raise ImportError("metis_dissection needs pymetis: pip install 'tenscell[large]'")
+    n = A.shape[0]
+    group, count = _locations(np.asarray(points, dtype=float).reshape(n, -1))
+    i, j = _edges(A)
+    gi, gj = group[i], group[j]
+    keep = gi != gj
+    g = count.size
+    # both triangles, no diagonal, duplicates merged: the symmetric adjacency METIS expects
+    G = sp.coo_matrix((np.ones(2 * int(keep.sum())), (np.concatenate([gi[keep], gj[keep]]),
+                                                      np.concatenate([gj[keep], gi[keep]]))), shape=(g, g)).tocsr()
+    G.sum_duplicates()
+    adjacency = pymetis.CSRAdjacency(G.indptr.astype(np.int64), G.indices.astype(np.int64))
+    gperm = np.asarray(pymetis.nested_dissection(adjacency=adjacency, vweights=count.astype(np.int64))[0])
+    rank = np.empty(g, dtype=np.int64)
+    rank[gperm] = np.arange(g)
+    return np.argsort(rank[group], kind="stable")
 
 
 def coordinate_locations(coords) -> np.ndarray:
@@ -49,6 +142,22 @@ def coordinate_locations(coords) -> np.ndarray:
         np.add.at(acc, idx[:, k], x)
         np.add.at(cnt, idx[:, k], 1.0)
     return acc[:-1] / np.maximum(cnt[:-1], 1.0)[:, None]
+
+
+def _locations(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct location of each unknown (an index) and the number of unknowns at each location.
+
+    One lexicographic sort of the rows (``np.unique(axis=0)`` sorts a structured view, 3× slower here).
+    """
+    order = np.lexsort(points.T[::-1])
+    p = points[order]
+    first = np.empty(points.shape[0], dtype=bool)
+    first[:1] = True
+    np.any(p[1:] != p[:-1], axis=1, out=first[1:])
+    sorted_group = np.cumsum(first) - 1
+    group = np.empty_like(sorted_group)
+    group[order] = sorted_group
+    return group, np.bincount(sorted_group)
 
 
 def _edges(A) -> tuple[np.ndarray, np.ndarray]:

@@ -6,9 +6,9 @@ non-collinear ones) has ``k`` infinitesimal rigid-body motions ``R`` (n × k,
 along them, so K0 and C0 are singular there and no compliance exists. As the
 peers' tangent-stiffness analyses do, :func:`~tenscell.linear.linearize.linearize`
 then works on the orthonormal complement ``N`` of ``R``
-(:func:`~tenscell.linear.modal.complement_basis`, ``q = N r``): the model's
+(:func:`~tenscell.linear.pencil.complement_basis`, ``q = N r``): the model's
 pencil is ``(NᵀK0N, NᵀC0N)`` with load ``NᵀH0`` and probe ``NᵀD0``
-(:meth:`~tenscell.linear.modal.Pencil.restricted`), whose stiffness
+(:meth:`~tenscell.linear.pencil.Pencil.restricted`), whose stiffness
 eigenvalues are the non-zero ones of K0. The part of the load along ``R`` —
 the net force and moment of a load on an unsupported body — is resisted by
 nothing and left out; :func:`unresisted_share` says how much of it there is.
@@ -19,7 +19,7 @@ import weakref
 
 import numpy as np
 
-from .modal import complement_basis
+from .pencil import complement_basis
 
 __all__ = ["deformation_basis", "unresisted_share", "solve_full", "resolvent_full"]
 

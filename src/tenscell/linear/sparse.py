@@ -38,9 +38,9 @@ class SparseCholesky:
     right-hand sides, one vector or an ``(n, k)`` block.
     """
 
-    def __init__(self, factor, n: int, matrix=None, perm=None):
+    def __init__(self, factor, n: int, source=None, perm=None):
         self._factor = factor
-        self._matrix = matrix
+        self._source = source  # the scipy matrix factored (for the fill diagnostic; not a copy)
         self._perm = perm
         self.n = n
 
@@ -61,8 +61,9 @@ class SparseCholesky:
         from cvxopt import cholmod
 
         # CHOLMOD converts a factor in place to hand it out, so read it from a throwaway one
-        F = _symbolic(self._matrix, self._perm)
-        cholmod.numeric(self._matrix, F)
+        M = _to_cvxopt(self._source)
+        F = _symbolic(M, self._perm)
+        cholmod.numeric(M, F)
         return len(cholmod.getfactor(F))
 
 
@@ -139,4 +140,5 @@ def factorize_spd(A, what: str = "the matrix", perm: np.ndarray | None = None) -
             f"{what} is not positive definite (its Cholesky factorization meets a pivot <= 0 at column {col} "
             "of the reordered matrix)", col,
         ) from None
-    return SparseCholesky(F, n, M, perm)
+    del M  # CHOLMOD keeps its own copy in the factor: the lower triangle need not stay alive
+    return SparseCholesky(F, n, A, perm)

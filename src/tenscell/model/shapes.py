@@ -221,7 +221,7 @@ def paper_cell(
 # imported here rather than at the top so this section merges cleanly with other additions
 from types import MappingProxyType  # noqa: E402
 
-from .equilibrium import point_vector, self_stress_basis, weighted_gram  # noqa: E402
+from .equilibrium import point_vector, self_stress_basis  # noqa: E402
 from .structure import STRUT  # noqa: E402
 
 __all__ += [
@@ -231,7 +231,6 @@ __all__ += [
     "cylindrical_nodes",
     "cylindrical_structure",
     "cylindrical_cell",
-    "find_cylindrical_reference",
     "CYLINDRICAL_PARAMETERS",
 ]
 
@@ -350,7 +349,7 @@ def _rotation_z(angle: float) -> np.ndarray:
 # node permutation of a +120° turn about b3: A1→A3→A2→A1, C likewise, B2→B1→B3→B2, D likewise
 _TURN = {0: 2, 2: 1, 1: 0, 3: 5, 5: 4, 4: 3, 8: 6, 6: 10, 10: 8, 9: 7, 7: 11, 11: 9, 12: 12}
 
-#: threefold-symmetric cylindrical reference found by :func:`find_cylindrical_reference` (L = 1):
+#: threefold-symmetric cylindrical reference found by :func:`tenscell.studies.references.find_cylindrical_reference` (L = 1):
 #: (θ_C1, θ_B1, θ_D1) azimuths of C1, B1, D1 on the cylinder (rad), then the heights z_B1 and z_N (in units of L)
 CYLINDRICAL_PARAMETERS = (-0.07299678835782628, 3.2753075343084035, -0.4754664633822025, 1.1394623955534753, 0.5692268252971129)
 
@@ -426,125 +425,6 @@ def cylindrical_cell(params=None, L: float = 1.0, parametrization: str = "angles
     st = cylindrical_structure(params, L)
     names = ("theta_C1", "theta_B1", "theta_D1", "zB1_over_L", "zN_over_L")
     return equilibrate(st, parametrization, parameters={**dict(zip(names, map(float, params))), "L": float(L)})
-
-
-def _turn_orbits(structure: Structure) -> np.ndarray:
-    """Orbit number of each tendon under the +120° turn; the 12 IFs share one orbit (equal IF tension)."""
-    key = {frozenset(t): j for j, t in enumerate(structure.tendons)}
-    orbit = -np.ones(structure.n_tendons, dtype=int)
-    n = 0
-    for j in range(structure.n_tendons):
-        if orbit[j] >= 0:
-            continue
-        k = j
-        for _ in range(3):
-            orbit[k] = n
-            a, b = structure.tendons[k]
-            k = key[frozenset((_TURN[a], _TURN[b]))]
-        n += 1
-    ifs = structure.family_indices(INTERMEDIATE_FILAMENT)
-    orbit[ifs] = orbit[ifs].min()
-    _, orbit = np.unique(orbit, return_inverse=True)
-    return orbit
-
-
-def _cylindrical_residual(base: Structure, orbit: np.ndarray):
-    """``z -> (A(q)·T, ‖T‖ − 1)`` for z = (5 shape parameters, class tensions): equilibrium of the cylindrical cell."""
-
-    def residual(z):
-        try:
-            nodes = cylindrical_nodes(z[:5], 1.0)
-        except ValueError:
-            return np.full(25, 1e3)
-        st = Structure(nodes=nodes, struts=base.struts, tendons=base.tendons, families=base.families,
-                       fixed=base.fixed, load=base.load, probe=base.probe)
-        co = make_coordinates(st, "angles")
-        A = equilibrium_matrix(member_geometry(co, co.q0), sparse=False)
-        T = z[5:][orbit]
-        return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
-
-    return residual
-
-
-def find_cylindrical_reference(
-    start=None, *, min_tension: float = 0.02, stiffness_check=(1000.0, 1.0), n_starts: int = 10, seed: int = 0
-) -> tuple[float, ...]:
-    """Form-find a threefold-symmetric prestressable cell with every strut end on a cylinder.
-
-    Unknowns: the 5 shape parameters of :func:`cylindrical_nodes` (L = 1)
-    and the tensions of the 8 symmetry classes of tendons (7 actin orbits of
-    the +120° turn and one common IF tension). Equations: equilibrium
-    ``A(q)·T = 0`` (24 rows), ``‖T‖ = 1``, with every class tension ≥
-    ``min_tension``: a bound-constrained nonlinear least-squares problem
-    (``scipy.optimize.least_squares``), underdetermined, so it has a family
-    of solutions; the first one reached from ``start`` whose K0 is positive
-    definite is returned. If the solution reached from ``start`` is unstable,
-    the search restarts from seeded random perturbations of it (σ = 0.3 in
-    every parameter).
-
-    Parameters
-    ----------
-    start : sequence of 5 floats, optional
-        Default: the spherical reference (α = 0, δ = 50°) projected onto the
-        cylinder (same azimuths and heights of C1, B1, D1, N).
-    min_tension : float
-        Lower bound of each normalized class tension (dimensionless).
-    stiffness_check : (P, EA)
-        The reference must have K0 = P·Kp + Σ EA a aᵀ/l positive definite at
-        this prestress (N) and stiffness (N).
-    n_starts : int
-        Number of starts in all (the first is ``start`` itself).
-    seed : int
-        Seed of the random restarts.
-
-    Returns
-    -------
-    tuple of 5 floats
-        Parameters for :func:`cylindrical_cell`.
-
-    Raises
-    ------
-    NotPrestressableError
-        If no start leads to a stable, prestressable reference.
-    """
-    base = paper_structure(0.0, DEFAULT_DELTA, 1.0, intermediate_filaments=True)
-    orbit = _turn_orbits(base)
-    n_orb = int(orbit.max()) + 1
-    if start is None:
-        x = paper_nodes(0.0, DEFAULT_DELTA, 1.0)
-        az = lambda v: math.atan2(v[1], v[0])  # noqa: E731
-        start = (az(x[3]), az(x[6]), az(x[7]), x[6, 2], x[12, 2])
-    p0 = np.array([finite_scalar("start", v) for v in start], dtype=float)
-    if p0.shape != (5,):
-        raise ValueError(f"start must have 5 entries (θ_C1, θ_B1, θ_D1, z_B1/L, z_N/L), got {p0.size}")
-    P, EA = stiffness_check
-    residual = _cylindrical_residual(base, orbit)
-
-    from scipy.optimize import least_squares  # here, not at import (see if_free_delta)
-
-    lb = np.concatenate([np.full(5, -np.inf), np.full(n_orb, min_tension)])
-    rng = np.random.default_rng(seed)
-    reasons = []
-    for k in range(max(int(n_starts), 1)):
-        p = p0 if k == 0 else p0 + 0.3 * rng.standard_normal(5)
-        z0 = np.concatenate([p, np.full(n_orb, 1.0 / math.sqrt(base.n_tendons))])
-        res = least_squares(residual, z0, bounds=(lb, np.inf), xtol=1e-15, ftol=1e-15, gtol=1e-15)
-        eq = float(np.linalg.norm(residual(res.x)))
-        if eq > 1e-12:
-            reasons.append(f"start {k}: no equilibrium (residual {eq:.2g})")
-            continue
-        params = tuple(float(v) for v in res.x[:5])
-        try:
-            cell = cylindrical_cell(params)
-        except ValueError as err:
-            reasons.append(f"start {k}: {type(err).__name__}")
-            continue
-        K0 = P * cell.Kp + weighted_gram(cell.A, np.full(cell.m, float(EA)) / cell.lengths)
-        lam = float(np.linalg.eigvalsh(K0)[0])
-        if lam > 0:
-            return params
-        reasons.append(f"start {k}: unstable (smallest K0 eigenvalue {lam:.3g})")
-    raise NotPrestressableError("no stable cylindrical reference found: " + "; ".join(reasons))
 
 
 # ---- the nucleus ----------------------------------------------------------------------------------------

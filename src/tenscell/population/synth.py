@@ -204,7 +204,7 @@ def _model(model: str) -> str:
 def _tensegrity_cell(rng, medians, spread, cond, cell, fams, f):
     """Draw one tensegrity cell: its parameters and noise-free complex modulus (Pa) at ``f``."""
     from ..linear.linearize import linearize
-    from ..linear.modal import modulus
+    from ..linear.assembly import modulus
     from ..response import compliance
 
     p = {k: medians[k] * cond.factor(k) * 10 ** (spread * rng.standard_normal()) for k in _TENSEGRITY_UNITS}

@@ -83,6 +83,8 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
               if f.prestress_fitted_pa is not None else "")
         what = "creep compliance J(t)" if f.axis == "time" else f"{f.axis} sweep"
         lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {what}{at}.")
+        if f.data.provenance is not None:
+            lines.append(f"     Read: {f.data.provenance.line()}.")
         lines += [f"     Thinned: {note}." for note in binning_notes(f.data)]
     lines += [
         f"- Model `{result.spec.name}`: {pr.describe()}; {pr.n_free} free parameters against {pr.n_residuals} "

@@ -1,4 +1,4 @@
-"""Markdown report of the sensitivity study (:class:`tenscell.sensitivity.SensitivityStudy`).
+"""Markdown report of the sensitivity study (:class:`tenscell.studies.SensitivityStudy`).
 
 Rendered from the study's fields only: the base point, the size of the
 changes and the bound checked are the run's own.

@@ -2,13 +2,15 @@
 
 One module per study (:mod:`~tenscell.studies.claims`, :mod:`~tenscell.studies.no_if`,
 :mod:`~tenscell.studies.references`, :mod:`~tenscell.studies.semiflexible`,
-:mod:`~tenscell.studies.stiffening`, :mod:`~tenscell.studies.compactness`); their
+:mod:`~tenscell.studies.stiffening`, :mod:`~tenscell.studies.compactness`,
+:mod:`~tenscell.studies.sensitivity`); their
 entry points and results are importable from here.
 """
 from .claims import homogeneous_study, paper_claims
 from .compactness import CompactnessStudy, compactness_study
 from .no_if import LossPeak, NoIFStudy, loss_peak, no_if_study
 from .references import ReferencesStudy, prestress_map, references_study
+from .sensitivity import SensitivityStudy, sensitivity_study
 from .semiflexible import BucklingError, SemiflexibleStudy, linearize_semiflexible, semiflexible_study
 from .stiffening import StiffeningStudy, linearize_stiffening, stiffening_study
 
@@ -19,4 +21,5 @@ __all__ = [
     "semiflexible_study", "SemiflexibleStudy", "linearize_semiflexible", "BucklingError",
     "stiffening_study", "StiffeningStudy", "linearize_stiffening",
     "compactness_study", "CompactnessStudy",
+    "sensitivity_study", "SensitivityStudy",
 ]

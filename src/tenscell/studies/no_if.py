@@ -15,7 +15,7 @@ import scipy.optimize
 from .._checks import positive_scalar
 from .._results import dataframe, format_repr
 from ..linear.linearize import LinearModel, linearize
-from ..linear.modal import continuum_factor, modulus
+from ..linear.assembly import continuum_factor, modulus
 from ..model.equilibrium import Cell
 from ..model.shapes import paper_cell
 from ..response import FrequencyResponse, compliance, frequency_response

@@ -12,17 +12,22 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._checks import positive_scalar
+from .._checks import finite_scalar, positive_scalar
 from .._results import dataframe, format_repr
+from ..linear.assembly import voigt_stiffness
+from ..linear.definite import is_positive_definite
 from ..linear.linearize import NotPositiveDefiniteError, linearize
-from ..model.equilibrium import NotPrestressableError
-from ..model.shapes import cylindrical_cell, if_free_delta, paper_cell, regular_cell
-from ..model.structure import INTERMEDIATE_FILAMENT
+from ..model.coordinates import make_coordinates
+from ..model.equilibrium import NotPrestressableError, equilibrium_matrix, member_geometry
+from ..model.shapes import (DEFAULT_DELTA, cylindrical_cell, cylindrical_nodes, if_free_delta, paper_cell,
+                            paper_nodes, paper_structure, regular_cell)
+from ..model.shapes import _TURN  # the node permutation of the cell's +120° turn, which cylindrical_nodes builds on
+from ..model.structure import INTERMEDIATE_FILAMENT, Structure
 from ..response import frequency_response
 from ._common import grid
 
 __all__ = ["ReferenceMap", "prestress_map", "ReferencesStudy", "references_study", "VALID", "NOT_PRESTRESSABLE",
-           "NOT_STABLE"]
+           "NOT_STABLE", "find_cylindrical_reference"]
 
 
 #: status codes of :func:`prestress_map`
@@ -223,3 +228,121 @@ def references_study(
     responses = {k: frequency_response(v, f, Ps, EA=EA, c=c) for k, v in cells.items()}
     return ReferencesStudy(map=mp, if_free_curve=np.array(curve).reshape(-1, 2), cells=cells, responses=responses,
                            EA=float(EA), c=float(c))
+
+
+# ---- the cylindrical reference: form-finding with the stability test of linear/ ----------------------------
+def _turn_orbits(structure: Structure) -> np.ndarray:
+    """Orbit number of each tendon under the +120° turn; the 12 IFs share one orbit (equal IF tension)."""
+    key = {frozenset(t): j for j, t in enumerate(structure.tendons)}
+    orbit = -np.ones(structure.n_tendons, dtype=int)
+    n = 0
+    for j in range(structure.n_tendons):
+        if orbit[j] >= 0:
+            continue
+        k = j
+        for _ in range(3):
+            orbit[k] = n
+            a, b = structure.tendons[k]
+            k = key[frozenset((_TURN[a], _TURN[b]))]
+        n += 1
+    ifs = structure.family_indices(INTERMEDIATE_FILAMENT)
+    orbit[ifs] = orbit[ifs].min()
+    _, orbit = np.unique(orbit, return_inverse=True)
+    return orbit
+
+
+def _cylindrical_residual(base: Structure, orbit: np.ndarray):
+    """``z -> (A(q)·T, ‖T‖ − 1)`` for z = (5 shape parameters, class tensions): equilibrium of the cylindrical cell."""
+
+    def residual(z):
+        try:
+            nodes = cylindrical_nodes(z[:5], 1.0)
+        except ValueError:
+            return np.full(25, 1e3)
+        st = Structure(nodes=nodes, struts=base.struts, tendons=base.tendons, families=base.families,
+                       fixed=base.fixed, load=base.load, probe=base.probe)
+        co = make_coordinates(st, "angles")
+        A = equilibrium_matrix(member_geometry(co, co.q0), sparse=False)
+        T = z[5:][orbit]
+        return np.concatenate([A @ T, [np.linalg.norm(T) - 1.0]])
+
+    return residual
+
+
+def find_cylindrical_reference(
+    start=None, *, min_tension: float = 0.02, stiffness_check=(1000.0, 1.0), n_starts: int = 10, seed: int = 0
+) -> tuple[float, ...]:
+    """Form-find a threefold-symmetric prestressable cell with every strut end on a cylinder.
+
+    Unknowns: the 5 shape parameters of :func:`cylindrical_nodes` (L = 1)
+    and the tensions of the 8 symmetry classes of tendons (7 actin orbits of
+    the +120° turn and one common IF tension). Equations: equilibrium
+    ``A(q)·T = 0`` (24 rows), ``‖T‖ = 1``, with every class tension ≥
+    ``min_tension``: a bound-constrained nonlinear least-squares problem
+    (``scipy.optimize.least_squares``), underdetermined, so it has a family
+    of solutions; the first one reached from ``start`` whose K0 is positive
+    definite is returned. If the solution reached from ``start`` is unstable,
+    the search restarts from seeded random perturbations of it (σ = 0.3 in
+    every parameter).
+
+    Parameters
+    ----------
+    start : sequence of 5 floats, optional
+        Default: the spherical reference (α = 0, δ = 50°) projected onto the
+        cylinder (same azimuths and heights of C1, B1, D1, N).
+    min_tension : float
+        Lower bound of each normalized class tension (dimensionless).
+    stiffness_check : (P, EA)
+        The reference must have K0 = P·Kp + Σ EA a aᵀ/l positive definite at
+        this prestress (N) and stiffness (N).
+    n_starts : int
+        Number of starts in all (the first is ``start`` itself).
+    seed : int
+        Seed of the random restarts.
+
+    Returns
+    -------
+    tuple of 5 floats
+        Parameters for :func:`cylindrical_cell`.
+
+    Raises
+    ------
+    NotPrestressableError
+        If no start leads to a stable, prestressable reference.
+    """
+    base = paper_structure(0.0, DEFAULT_DELTA, 1.0, intermediate_filaments=True)
+    orbit = _turn_orbits(base)
+    n_orb = int(orbit.max()) + 1
+    if start is None:
+        x = paper_nodes(0.0, DEFAULT_DELTA, 1.0)
+        az = lambda v: math.atan2(v[1], v[0])  # noqa: E731
+        start = (az(x[3]), az(x[6]), az(x[7]), x[6, 2], x[12, 2])
+    p0 = np.array([finite_scalar("start", v) for v in start], dtype=float)
+    if p0.shape != (5,):
+        raise ValueError(f"start must have 5 entries (θ_C1, θ_B1, θ_D1, z_B1/L, z_N/L), got {p0.size}")
+    P, EA = stiffness_check
+    residual = _cylindrical_residual(base, orbit)
+
+    from scipy.optimize import least_squares  # here, not at import: only this search needs it
+
+    lb = np.concatenate([np.full(5, -np.inf), np.full(n_orb, min_tension)])
+    rng = np.random.default_rng(seed)
+    reasons = []
+    for k in range(max(int(n_starts), 1)):
+        p = p0 if k == 0 else p0 + 0.3 * rng.standard_normal(5)
+        z0 = np.concatenate([p, np.full(n_orb, 1.0 / math.sqrt(base.n_tendons))])
+        res = least_squares(residual, z0, bounds=(lb, np.inf), xtol=1e-15, ftol=1e-15, gtol=1e-15)
+        eq = float(np.linalg.norm(residual(res.x)))
+        if eq > 1e-12:
+            reasons.append(f"start {k}: no equilibrium (residual {eq:.2g})")
+            continue
+        params = tuple(float(v) for v in res.x[:5])
+        try:
+            cell = cylindrical_cell(params)
+        except ValueError as err:
+            reasons.append(f"start {k}: {type(err).__name__}")
+            continue
+        if is_positive_definite(voigt_stiffness(cell, P, np.full(cell.m, float(EA)))):  # the one criterion
+            return params
+        reasons.append(f"start {k}: unstable (K0 = P·Kp + Σ EA a aᵀ/l is not positive definite)")
+    raise NotPrestressableError("no stable cylindrical reference found: " + "; ".join(reasons))

@@ -11,7 +11,7 @@ from .._checks import positive_array, positive_scalar
 from .._results import dataframe, format_repr
 from ..laws import Voigt
 from ..linear.linearize import LinearModel, linearize, linearize_law
-from ..linear.modal import modulus
+from ..linear.assembly import modulus
 from ..model.equilibrium import Cell
 from ..model.shapes import paper_cell, semiflexible_paper_cell
 from ..model.structure import STRUT

@@ -15,7 +15,7 @@ from .._checks import positive_scalar
 from .._results import dataframe, format_repr
 from ..laws import stiffening_law
 from ..linear.linearize import LinearModel, linearize_law
-from ..linear.modal import modulus
+from ..linear.assembly import modulus
 from ..model.equilibrium import Cell
 from ..model.shapes import paper_cell
 from ..model.structure import INTERMEDIATE_FILAMENT

@@ -187,6 +187,11 @@ class FittedModel:
         """Whether the model has a cell (False for a structure-free formula)."""
         return True
 
+    @property
+    def viscosity(self) -> float:
+        """A cytoplasm viscosity η (Pa·s) in parallel with the structure; 0 without one."""
+        return 0.0
+
     def moduli(self, f_hz, prestress_pa: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """G′, G″ (Pa) at frequencies ``f_hz`` (Hz) and one prestress (Pa, see :meth:`prestress`)."""
         raise NotImplementedError
@@ -199,6 +204,13 @@ class FittedModel:
     def linear(self, prestress_pa: float | None = None, *, P_N: float | None = None) -> LinearModel:
         """The linear model at the fitted parameters (see :meth:`prestress`), or at model prestress ``P_N`` (N)."""
         raise ValueError(f"{self.describe()} has no cell: it is a structure-free formula (a baseline), not a "
+                         "tensegrity")
+
+    def voigt_tendons(self, P_N: float) -> tuple[np.ndarray, np.ndarray]:
+        """(EA in N, c in N·s/m) per tendon of the Voigt tendons equivalent at rest at model prestress ``P_N``:
+        the fitted ones for Voigt tendons, the tangent stiffness and damping of the linear model otherwise
+        (what ``show`` and the time domain's Voigt law take)."""
+        raise ValueError(f"{self.describe()} has no tendons: it is a structure-free formula (a baseline), not a "
                          "tensegrity")
 
     def describe(self) -> str:

@@ -41,7 +41,7 @@ from ...io.data import DataError
 from ..parameters import _is_creep, as_datasets, bounds_by_name, fixed_by_name, kind_bounds
 from ..problem import PENALTY, Problem, draw_start, jitter, log_residual_blocks
 from ..._results import format_repr
-from .base import FitModel, FittedModel, field_of, frequencies_of, model_from_dict, positive_values, prestress_from
+from .base import FitFileError, FitModel, FittedModel, field_of, frequencies_of, model_from_dict, positive_values, prestress_from
 
 __all__ = ["Formula", "FormulaProblem", "FittedFormula", "FORMULA_FORMAT", "FORMULAS", "TERMS", "lumped_formula", "structural_damping_moduli", "PHI0"]
 
@@ -456,4 +456,12 @@ class FittedFormula(FittedModel):
         formula = model_from_dict(field_of(obj, "formula", dict))
         if not isinstance(formula, Formula):
             raise ValueError(f"model.formula: a {type(formula).__name__}, not a formula")
-        return cls(formula=formula, values=positive_values(obj), **prestress_from(obj))
+        values = positive_values(obj)
+        rows = formula.parameter_rows
+        for name, _, kind in rows:
+            if name not in values:
+                raise FitFileError(f"model.values.{name}: missing (formula {formula.name} has "
+                                   f"{', '.join(r[0] for r in rows)})")
+            if kind == "exponent" and not values[name] < 1:
+                raise FitFileError(f"model.values.{name}: an exponent must lie in (0, 1), got {values[name]!r}")
+        return cls(formula=formula, values=values, **prestress_from(obj))

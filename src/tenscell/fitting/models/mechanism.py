@@ -54,7 +54,7 @@ from ..parameters import bounds_by_name, fixed_by_name, _family_groups, _is_cree
 from ..._results import format_repr
 from ...linear.dynamic import DynamicKernel, dynamic_kernel
 from ...linear.linearize import LinearModel
-from .base import (FitModel, FittedModel, cell_from_dict, cell_to_dict, field_of, frequencies_of, model_from_dict,
+from .base import (FitFileError, FitModel, FittedModel, cell_from_dict, cell_to_dict, field_of, frequencies_of, model_from_dict,
                    positive_values, prestress_from)
 from ..problem import PENALTY as _PENALTY, Problem, draw_start, jitter, log_residual_blocks
 
@@ -655,6 +655,14 @@ class FittedMechanism(FittedModel):
         """The law of every tendon in assignment ``assignment`` (0 ≤ k < K) of a distributed property."""
         return self._problem.tendon_law(self._phi, assignment)
 
+    def voigt_tendons(self, P_N: float, assignment: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        if self.mechanism.law == "Voigt":  # the fitted values themselves
+            law = self.tendon_law(assignment)
+            m = self.cell.m
+            return np.broadcast_to(law.EA, (m,)).astype(float), np.broadcast_to(law.c, (m,)).astype(float)
+        lin = self.linear(P_N=P_N, assignment=assignment)  # the tangents at rest of the law's realization
+        return np.asarray(lin.EA, dtype=float), np.asarray(lin.c, dtype=float)
+
     def linear(self, prestress_pa: float | None = None, *, P_N: float | None = None, assignment: int = 0,
                band_hz=None) -> LinearModel:
         """The linear model of assignment ``assignment`` (laws with internal dynamics are realized over
@@ -678,4 +686,24 @@ class FittedMechanism(FittedModel):
         spec = model_from_dict(mech)
         if not isinstance(spec, Mechanism):
             raise ValueError(f"model.mechanism: a {type(spec).__name__}, not a mechanism")
-        return cls(mechanism=spec, cell=cell, values=values, **prestress_from(obj))
+        fitted = cls(mechanism=spec, cell=cell, values=values, **prestress_from(obj))
+        fitted.check()
+        return fitted
+
+    def check(self) -> None:
+        """FitFileError naming the value when the parameters are not the mechanism's, or a value lies outside what
+        its law accepts (e.g. a springpot exponent outside (0, 1])."""
+        names = self._problem.names
+        for n in names:
+            if n not in self.values:
+                raise FitFileError(f"model.values.{n}: missing (mechanism {self.mechanism.name} has "
+                                   f"{', '.join(names)})")
+        extra = sorted(set(self.values) - set(names))
+        if extra:
+            raise FitFileError(f"model.values.{extra[0]}: not a parameter of mechanism {self.mechanism.name} "
+                               f"({', '.join(names)})")
+        vals, _ = self._problem.law_values(self._phi)
+        try:  # the law's own checks (the hot paths build it unchecked)
+            getattr(_laws, self.mechanism.law)(**{n: v.ravel() for n, v in vals.items()})
+        except ValueError as err:
+            raise FitFileError(f"model.values: {err}") from None

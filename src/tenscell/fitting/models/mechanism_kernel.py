@@ -28,8 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ...linear.assembly import continuum_factor
 from ...linear.dynamic import batched_compliance
-from ...linear.modal import continuum_factor
 from .heterogeneity import DISTRIBUTIONS
 
 __all__ = ["MechanismEvaluation", "Grid", "EvaluationPlan", "plan_points", "law_values", "evaluate",

@@ -91,6 +91,9 @@ class FittedCell(FittedModel):
 
         return Voigt(EA=self.EA, c=self.c)
 
+    def voigt_tendons(self, P_N: float) -> tuple[np.ndarray, np.ndarray]:
+        return np.asarray(self.EA), np.asarray(self.c)
+
     def linear(self, prestress_pa: float | None = None, *, P_N: float | None = None) -> LinearModel:
         return linearize(self.cell, P=self._resolve_P(prestress_pa, P_N), EA=self.EA, c=self.c)
 

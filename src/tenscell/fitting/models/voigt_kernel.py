@@ -17,7 +17,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...laws import Voigt
-from ...linear.modal import modulus, prestress_grid_modes
+from ...linear.assembly import modulus
+from ...linear.family import prestress_grid_modes
 
 if TYPE_CHECKING:
     from .voigt import FitProblem

@@ -84,7 +84,7 @@ class VoigtResults:
         """G', G'' (Pa) at ``f_hz`` (Hz) and model prestresses ``P_N`` (N, at the fitted strut length), broadcast:
         many prestresses in one batched eigensolve over the grid (up to :data:`GRID_POINTS`), else one
         linearization per prestress."""
-        from ...linear.modal import modulus
+        from ...linear.assembly import modulus
         from ...response import compliance, frequency_response
 
         EA, c, L = self.tendon_values(theta)
