@@ -76,6 +76,10 @@ EXCEPTIONS: dict[tuple[str, str], str] = {
     ("timedomain", "stress_relaxation"): "zeros of J(s) from the retardation spectrum: a (k+1)×(k+1) modal matrix, "
                                          "not a structure matrix",
     ("fitting.identifiability", "identifiability"): "SVD of the fit's Jacobian (parameter space)",
+    ("fitting.models.population", "_block_analysis"): "SVDs of a population fit's Jacobian block by block (each "
+                                                       "cell's own columns, the reduced shared columns) and the "
+                                                       "inverse of the unseen shared directions' small Gram matrix "
+                                                       "(parameter space)",
 }
 
 

@@ -268,3 +268,13 @@ def test_an_assignment_that_is_not_a_stable_cell_is_left_out_and_counted(monkeyp
     keep = np.arange(12) != 5
     np.testing.assert_allclose(r.members[keep], ref.members[keep], rtol=1e-13)  # the others, solved one by one
     np.testing.assert_allclose(r.mean.real, ref.members[keep].real.mean(axis=0), rtol=1e-13)
+
+
+def test_an_ensemble_shows_its_spread_in_a_notebook(large):
+    import html as _html
+
+    out = _html.unescape(large._repr_html_())
+    rs, rl = large.relative_spread()
+    zs, zl = large.reference_z()
+    assert f"EnsembleResult: {large.mechanism}" in out and f"{large.K} ({large.n_failed} not a stable cell)" in out
+    assert f"G′ {100 * rs:.3g} %, G″ {100 * rl:.3g} %" in out and f"within {zs:.2g} (G′) and {zl:.2g} (G″)" in out

@@ -43,6 +43,59 @@ def test_xarray_round_trip():
     assert back.L == resp.L and back.viscosity == resp.viscosity
 
 
+def test_netcdf_round_trip_with_the_core_install_alone(tmp_path):
+    # scipy's netCDF-3 writer (a core dependency) is the engine when neither h5netcdf nor netCDF4 is installed; the
+    # complex compliance is written as its real and imaginary parts, so it round-trips exactly
+    pytest.importorskip("xarray")
+    code = ("import sys\nfor m in ('h5netcdf', 'netCDF4'):\n    sys.modules[m] = None\n"
+            "import numpy as np, tenscell as tc\nfrom tenscell._optional import netcdf_engine\n"
+            "r = tc.frequency_response(tc.paper_cell(), np.logspace(-1, 2, 7), [500.0, 1000.0])\n"
+            f"r.to_netcdf({str(tmp_path / 'grid.nc')!r})\n"
+            f"b = type(r).from_netcdf({str(tmp_path / 'grid.nc')!r})\n"
+            "print(netcdf_engine(), np.array_equal(b.J, r.J), b.L == r.L, b.viscosity == r.viscosity)\n")
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["scipy", "True", "True", "True"]
+
+
+def test_from_xarray_reads_a_complex_J_too():
+    xr = pytest.importorskip("xarray")
+    resp = tc.frequency_response(tc.paper_cell(), np.logspace(-1, 2, 5), [800.0])
+    ds = resp.to_xarray()
+    old = ds.drop_vars(["J_real", "J_imag"]).assign(J=(("prestress", "frequency"), resp.J, {"units": "m/N"}))
+    assert isinstance(old, xr.Dataset)
+    np.testing.assert_array_equal(type(resp).from_xarray(old).J, resp.J)
+
+
+@pytest.mark.parametrize("module, hint", [("rheojax.core.data", "pip install rheojax"),
+                                          ("xarray", "pip install 'tenscell[exchange]'"),
+                                          ("openpyxl", "pip install 'tenscell[excel]'")])
+def test_every_missing_dependency_names_an_install_that_brings_it(module, hint):
+    # every hint is a command that installs the module: an extra that lists it (pyproject.toml), or the package
+    import subprocess
+    import sys
+    import tomllib
+
+    from tenscell._optional import EXTRAS
+
+    with open(Path(__file__).parents[1] / "pyproject.toml", "rb") as fh:
+        extras = tomllib.load(fh)["project"]["optional-dependencies"]
+    for name, (command, _) in EXTRAS.items():
+        if "tenscell[" in command:
+            extra = command.split("[")[1].split("]")[0]
+            assert any(r.split(">")[0].split("[")[0].replace("-", "_") in (name, "dask") for r in extras[extra]), name
+        else:
+            assert command == f"pip install {name}"
+    top = module.split(".")[0]
+    code = (f"import sys; sys.modules[{top!r}] = None\n"
+            "from tenscell._optional import require, MissingDependency\n"
+            f"try:\n    require({module!r})\nexcept MissingDependency as e:\n    print(e)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert "\n" not in out and hint in out
+
+
 def test_rheojax_round_trips_for_moduli_and_creep():
     sweep = tc.read_data(DATA / "trios_lims_temperature_steps.txt", step=2)
     rd = to_rheojax(sweep, cls=RheoData)

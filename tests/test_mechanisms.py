@@ -112,12 +112,15 @@ def test_jacobian_matches_finite_differences(name, joint):
     theta = pb.initial_guess(np.random.default_rng(2))
     J = pb.jacobian(theta)
     Jfd = pb.jacobian_fd(theta, 1e-5)
-    # central differences with step 1e-5 in ln: truncation ~1e-10 relative; round-off: the residuals of two exact
-    # solves of these K (condition up to ~1e5) differ by up to ~1e-13 decades (measured 6e-14), i.e. ~1e-8 after
-    # dividing by the step. 1e-5 of each column's scale plus 1e-8 bounds both with margin, while a wrong term (a
-    # missing chain factor) is O(1) of its column (the smallest column here is ~3e-4)
+    # central differences with step 1e-5 in ln: truncation ~1e-10 relative; round-off of the solves ~1e-11/1e-5;
+    # 1e-5 of each column's scale bounds both with margin while a wrong term (a missing chain factor) is O(1).
+    # Where a start puts the tendons' moduli many decades apart (springpot-alpha-family+visc: kappa 7 decades
+    # apart), the solves' rounding grows with κ(K) and enters the quotients as eps·κ/h: it is measured as the change
+    # of the quotients between steps 1e-5 and 1e-4, and allowed twice over
+    Jfd4 = pb.jacobian_fd(theta, 1e-4)
+    noise = np.abs(Jfd - Jfd4).max(axis=0)
     scale = np.maximum(np.abs(Jfd).max(axis=0), 1e-12)
-    assert np.all(np.abs(J - Jfd).max(axis=0) <= 1e-5 * scale + 1e-8)
+    assert np.all(np.abs(J - Jfd4).max(axis=0) <= 1e-5 * scale + 2 * noise + 1e-9)
 
 
 

@@ -125,3 +125,41 @@ def test_png_bytes_are_what_save_writes(resp, tmp_path):
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     assert data == (tmp_path / "f.png").read_bytes()
     assert not plt.get_fignums()  # both closed their figure
+
+
+
+
+def test_a_large_lattice_and_its_modes_are_drawn_as_the_same_section():
+    # above max_members both figures draw the members in one slab across y (midpoints within the slab, every
+    # member outside it left out), one collection per family, and say how many of how many they drew
+    block = tc.model.lattice_cell(4, 4, 3).structure
+    S, T = np.asarray(block.struts, dtype=int).reshape(-1, 2), np.asarray(block.tendons, dtype=int)
+    n = len(S) + len(T)
+    most = n // 5
+    x = block.nodes
+    mid_y = 0.5 * (x[np.r_[S[:, 0], T[:, 0]], 1] + x[np.r_[S[:, 1], T[:, 1]], 1])
+    centre = 0.5 * (x[:, 1].min() + x[:, 1].max())
+    half = np.sort(np.abs(mid_y - centre))[most - 1]
+    expected = int((np.abs(mid_y - centre) <= half).sum())
+    assert most <= expected < n / 2
+
+    ax = plotting.structure_3d(block, max_members=most)
+    families = {c.get_label() for c in ax.collections if c.get_label() and not c.get_label().startswith("_")}
+    member_collections = [c for c in ax.collections if c.get_label() in
+                          ("struts (microtubules)", "actin", "intermediate filaments")]
+    assert len(member_collections) == len(families - {"anchors", "load"})  # one collection per family
+    seg = np.concatenate([np.asarray(c._segments3d, dtype=float) for c in member_collections])
+    assert len(seg) == expected
+    assert np.all(np.abs(seg[:, :, 1].mean(axis=1) - centre) <= half + 1e-12)
+    assert f"{expected:,} of {n:,} members drawn" in ax.get_title()
+
+    modes = np.random.default_rng(0).normal(size=(2, len(x), 3))
+    panels = plotting.relaxation_modes_3d(block, [1.0, 2.0], modes, max_members=most)
+    for p in panels:
+        lines = [c for c in p.collections if type(c).__name__ == "Line3DCollection" and c.get_alpha() == 0.35]
+        assert sum(len(c._segments3d) for c in lines) == expected
+        assert f"{expected:,} of {n:,} members drawn" in p.get_title()
+    assert "section" in panels[0].figure._suptitle.get_text()
+    # below the threshold every member is drawn and the titles say nothing of a section
+    every = plotting.relaxation_modes_3d(block, [1.0, 2.0], modes, max_members=n)
+    assert "members drawn" not in every[0].get_title()

@@ -25,6 +25,7 @@ import pytest
 from tenscell.population import (
     PopulationFitOptions, cell_seed, fit_population, read_sources, recovery, synth_population,
 )
+from tenscell import _parallel
 from tenscell.population import _engine
 from tenscell.population.run import WorkDirError, fit_cell
 from tenscell.population.sources import CellSource, SourceError
@@ -414,15 +415,97 @@ def test_scheduler_address_forms(tmp_path):
 
 
 # ---- the engine: where tasks run, batching ----------------------------------------------------------
-def test_cluster_pays_and_batch_size():
-    """A cluster never pays with one worker, pays for long enough work, and batches never starve a worker."""
-    assert not _engine.cluster_pays(10**6, 10.0, 1)
-    assert not _engine.cluster_pays(1, 0.01, 8)  # start-up dominates
-    assert _engine.cluster_pays(1000, 1.0, 2)
+def _use(cpus: int, busy: float) -> "_parallel.CpuUse":
+    return _parallel.CpuUse(wall_s=1.0, cpu_s=1.0, cpus=cpus, busy_elsewhere=busy, source="test")
+
+
+def test_a_cluster_only_where_it_pays():
+    """No cluster without two free CPUs or for work that would not pay each worker's start-up; a long run on a
+    quiet machine gets one worker per free CPU; a cluster chosen is estimated faster by the margin."""
+    big = 10**4  # tasks of 1 s: hours of work
+    assert _engine.plan(big, 1.0, _use(1, 0.0)).workers == 0  # one CPU
+    for cpus in (2, 4, 16):
+        assert _engine.plan(big, 1.0, _use(cpus, cpus - 1.0)).workers == 0  # one CPU free: this process has it
+        assert _engine.plan(big, 1.0, _use(cpus, float(cpus))).workers == 0  # every CPU busy elsewhere
+        assert _engine.plan(big, 1.0, _use(cpus, 0.0)).workers == cpus  # quiet: one worker per CPU
+        assert _engine.plan(big, 1.0, _use(cpus, 2.2)).workers <= max(0, round(cpus - 2.2))
+    # the workers' start-up must be paid by their share of the work
+    least = 2 * _engine.WORK_PER_START * _engine.WORKER_START_CPU_S
+    assert _engine.plan(1, 0.99 * least, _use(8, 0.0)).workers == 0
+    for tasks, t, cpus, busy in ((200, 0.17, 2, 0.0), (10**5, 0.01, 8, 3.0), (40, 5.0, 4, 1.0)):
+        p = _engine.plan(tasks, t, _use(cpus, busy))
+        assert p.workers >= 2 and p.cluster_s * (1 + _engine.PAY_MARGIN) <= p.here_s
+        assert p.workers * _engine.WORK_PER_START * _engine.WORKER_START_CPU_S <= tasks * t
+    # more load elsewhere never asks for more workers
+    for cpus in (2, 4, 8):
+        n = [_engine.plan(200, 0.5, _use(cpus, b)).workers for b in np.linspace(0, cpus, 17)]
+        assert all(a >= b for a, b in zip(n, n[1:])), n
+
+
+def test_an_ensemble_of_a_thousand_assignments_stays_here_at_any_load():
+    # 20 chunks of 50 assignments at 0.14 s CPU each (3 prestresses x 61 frequencies, measured): four run while
+    # the engine samples, the other 16 (2.2 s of CPU) never pay a cluster's start-up
+    for cpus in (2, 4, 8, 64):
+        for busy in np.linspace(0.0, cpus, 9):
+            assert _engine.plan(16, 0.14, _use(cpus, float(busy))).workers == 0
+
+
+def test_plan_says_what_it_measured_and_decided():
+    here = _engine.plan(16, 0.14, _use(2, 0.3)).describe()
+    assert "16 more tasks of 0.14 s CPU" in here and "0.3 busy" in here and "in this process" in here
+    away = _engine.plan(200, 0.17, _use(2, 0.0)).describe()
+    assert "cluster of 2 workers" in away and "\n" not in away
+    assert "(one CPU)" in _engine.plan(10**4, 1.0, _use(1, 0.0)).describe()
+    assert "fewer than 2 CPUs are free" in _engine.plan(10**4, 1.0, _use(4, 2.8)).describe()
+    assert "start-up" in _engine.plan(16, 0.14, _use(4, 0.0)).describe()
+
+
+def test_batch_size():
+    """Batches never starve a worker thread and hold about TASK_SECONDS of CPU."""
     for n, t, threads in ((1, 0.2, 2), (199, 0.2, 2), (10**5, 1e-4, 2), (40, 5.0, 8)):
         k = _engine.batch_size(n, t, threads)
         assert 1 <= k and (k == 1 or n // k >= 4 * threads)
     assert _engine.batch_size(10**4, 0.2, 2) == round(_engine.TASK_SECONDS / 0.2)
+
+
+def test_cpu_window_subtracts_this_process_from_the_busy_time(monkeypatch):
+    """Over 1 s on 2 CPUs (200 ticks), 150 busy ticks of which this process's 0.5 s is 50: the others used 1 CPU."""
+    ticks = iter([(1000, 5000), (1150, 5200)])
+    clock = iter([10.0, 11.0])
+    cpu = iter([3.0, 3.5])
+    monkeypatch.setattr(_parallel, "_affinity", lambda: {0, 1})
+    monkeypatch.setattr(_parallel, "_cpu_ticks", lambda cpus: next(ticks))
+    monkeypatch.setattr(_parallel, "_CLK_TCK", 100.0)
+    monkeypatch.setattr(_parallel.time, "perf_counter", lambda: next(clock))
+    monkeypatch.setattr(_parallel.time, "process_time", lambda: next(cpu))
+    use = _parallel.CpuWindow().stop()
+    assert (use.source, use.cpus, use.wall_s, use.cpu_s) == ("/proc/stat", 2, 1.0, 0.5)
+    assert use.busy_elsewhere == pytest.approx(1.0) and use.free == pytest.approx(1.0)
+
+
+def test_cpu_window_sees_this_process_and_the_others():
+    """This process's own busy loop is not counted as other work; a busy child process is."""
+    w = _parallel.CpuWindow()
+    t = time.process_time()
+    while time.process_time() - t < 0.2:  # 0.2 s of this process's CPU, however long a loaded machine takes
+        pass
+    mine = w.stop()
+    assert mine.cpu_s >= 0.2 and 0.0 <= mine.busy_elsewhere <= mine.cpus
+    # others' share and this process's together fill at most every CPU (10 ms ticks: a little rounding)
+    assert mine.busy_elsewhere + mine.cpu_s / mine.wall_s <= mine.cpus + 0.25
+    if mine.source != "/proc/stat" or mine.cpus < 2:
+        pytest.skip("no /proc/stat or one CPU: the load average stands in for the measurement")
+    spin = subprocess.Popen([sys.executable, "-c", "import time\nt = time.time()\nwhile time.time() - t < 5: pass"])
+    try:
+        time.sleep(0.3)  # the child is up and spinning
+        w = _parallel.CpuWindow()
+        time.sleep(0.5)
+        other = w.stop()
+    finally:
+        spin.kill()
+        spin.wait()
+    # the spinning child keeps about one CPU busy; whatever else runs on the machine only adds to it
+    assert other.busy_elsewhere >= 0.7 and other.cpu_s < 0.05
 
 
 def test_small_work_runs_here_and_says_so(population):
@@ -576,3 +659,13 @@ def test_ctrl_c_on_large_study_is_one_line(tmp_path, port_8787_taken):
                          "--workers", "2"], ready)
     assert code == 130
     _one_interrupt_line(err, kept=True)
+
+
+def test_a_population_shows_itself_in_a_notebook(serial):
+    # _repr_html_: cells per condition (fitted / converged / failed) and the per-condition medians, escaped
+    html = serial._repr_html_()
+    t = serial.table
+    assert html.startswith('<div class="tenscell-repr">') and f"PopulationResult: {serial.n_cells} cells" in html
+    for cond in set(t["condition"]):
+        assert f"<td style=\"text-align: left\">{cond or '(none)'}</td>" in html
+    assert "interquartile range" in html and "<script" not in html

@@ -37,6 +37,19 @@ def test_building_the_paper_cell_needs_no_optimizer_or_plotting():
     assert not {"scipy.optimize", "matplotlib", "pandas"} & _loaded_after("import tenscell; tenscell.paper_cell()")
 
 
+def test_moduli_loads_only_what_it_computes_with():
+    # tenscell moduli needs numpy, scipy.linalg and scipy.sparse; scipy.optimize (0.1-0.16 s of CPU to import, used
+    # by one nnls call of the springpots' Prony fit) and the plotting, table and cluster libraries are not loaded
+    code = ("import contextlib, io, sys\nfrom tenscell.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()) as text:\n    assert main(['moduli']) == 0\n"
+            "assert text.getvalue().startswith('prestress_Pa,frequency_Hz')\n"
+            "unused = ('scipy.optimize', 'scipy.special', 'scipy.integrate', 'scipy.stats', 'matplotlib', 'pandas', "
+            "'dask', 'distributed', 'pyarrow')\n"
+            "print('loaded:', *(m for m in unused if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["loaded:"], out.stdout
+
+
 def test_every_public_name_resolves_to_its_module():
     for name in tenscell.__all__:
         obj = getattr(tenscell, name)

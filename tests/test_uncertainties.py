@@ -80,7 +80,13 @@ def test_every_parameter_shows_its_error(fitted):
         assert np.isnan(row["stderr"]) and row["stderr_note"], row  # never a bare value: the note says why
     lines = fitted.report().split("[[Parameters]]")[1].split("[[Correlations]]")[0].splitlines()
     shown = [line for line in lines if line.strip() and not line.strip().startswith(("(", "[["))]
-    assert len(shown) == len(fitted.parameters) and all("+/-" in line for line in shown)
+    # each value with its error (+/- x, or a factor ×/÷ beyond 50 %), or "(—)" and the reason once under the table
+    assert len(shown) == len(fitted.parameters) and all(("+/-" in line) or ("×/÷" in line) or ("(—)" in line)
+                                                        for line in shown)
+    reasons = [line for line in lines if line.strip().startswith("(—) not determined:")]
+    undetermined = [p.name for p, (se, _) in zip(fitted.parameters, fitted.standard_errors) if se is None]
+    assert sorted(n.strip() for line in reasons for n in line.split(": ")[1].split(",")) == \
+        sorted(undetermined)
     for a, b, r in fitted.correlations():
         assert abs(r) >= CORRELATION_THRESHOLD
         i, j = ident.labels.index(a), ident.labels.index(b)

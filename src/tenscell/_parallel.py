@@ -17,6 +17,11 @@ processes and returns the results in order. What it guarantees, and why:
   order) is re-raised in the main process after the workers are stopped.
 
 ``jobs=1`` runs everything in this process (no pool), with the same results.
+
+:class:`CpuWindow` measures, over a stretch of this process's own work, its CPU
+time and how many of its CPUs other processes kept busy meanwhile: what a
+decision to start workers needs (the population engine's), where the wall clock
+and the load average mislead on a shared machine.
 """
 from __future__ import annotations
 
@@ -25,9 +30,12 @@ import os
 import signal
 import sys
 import threading
+import time
+from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator, Literal, Sequence
 
-__all__ = ["starmap", "Workers", "background", "sigint_deferred", "usable_cpus", "jobs_for", "GRACE_S"]
+__all__ = ["starmap", "Workers", "background", "sigint_deferred", "usable_cpus", "jobs_for", "GRACE_S", "CpuWindow",
+           "CpuUse"]
 
 #: seconds terminated workers get to exit before they are killed
 GRACE_S = 0.5
@@ -41,6 +49,115 @@ def usable_cpus() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except (AttributeError, OSError):  # pragma: no cover - not Linux
         return max(1, os.cpu_count() or 1)
+
+
+@dataclass(frozen=True)
+class CpuUse:
+    """What a :class:`CpuWindow` measured.
+
+    Attributes
+    ----------
+    wall_s : float
+        Elapsed time (s).
+    cpu_s : float
+        CPU time of this process, every thread, user + system (s).
+    cpus : int
+        CPUs this process may run on (:func:`usable_cpus`).
+    busy_elsewhere : float
+        CPUs (of ``cpus``) that other processes kept busy on average over the window, 0 to ``cpus``.
+    source : str
+        ``"/proc/stat"`` (measured over the window) or ``"load average"`` (the 1-minute load average less this
+        process, where /proc/stat is missing or the window too short to count on it).
+    """
+
+    wall_s: float
+    cpu_s: float
+    cpus: int
+    busy_elsewhere: float
+    source: str
+
+    @property
+    def free(self) -> float:
+        """CPUs no other process used: ``cpus - busy_elsewhere`` (this process's own use counts as free)."""
+        return max(0.0, self.cpus - self.busy_elsewhere)
+
+
+#: shortest window (s) over which /proc/stat's busy counts (10 ms ticks per CPU) are trusted; below it the
+#: load average is used
+MIN_WINDOW_S = 0.1
+
+
+class CpuWindow:
+    """Measure this process's CPU time and the CPUs others kept busy, from construction to :meth:`stop`.
+
+    ``w = CpuWindow(); work(); use = w.stop()``. On Linux the busy time of this
+    process's CPUs is read from ``/proc/stat`` at both ends and this process's
+    own CPU time subtracted, so ``busy_elsewhere`` is what other processes used
+    *during* the window (the 1-minute load average lags by a minute and counts
+    processes waiting for disk). Elsewhere, or for a window shorter than
+    :data:`MIN_WINDOW_S`, it is the load average less this process.
+    """
+
+    def __init__(self) -> None:
+        self._cpus = sorted(_affinity())
+        #: when the window opened (``time.perf_counter()``, s)
+        self.started = time.perf_counter()
+        self._cpu = time.process_time()
+        self._stat = _cpu_ticks(self._cpus)
+
+    def stop(self) -> CpuUse:
+        """What was used from construction until now (the window can be stopped more than once)."""
+        wall, cpu = time.perf_counter() - self.started, time.process_time() - self._cpu
+        after = _cpu_ticks(self._cpus)
+        n = len(self._cpus)
+        if self._stat is not None and after is not None and wall >= MIN_WINDOW_S:
+            busy, total = after[0] - self._stat[0], after[1] - self._stat[1]
+            if total > 0:
+                per_cpu = total / n  # elapsed ticks of one CPU
+                others = (busy - cpu * _CLK_TCK) / per_cpu
+                return CpuUse(wall, cpu, n, float(min(max(others, 0.0), n)), "/proc/stat")
+        try:
+            load = os.getloadavg()[0]
+        except OSError:  # pragma: no cover - no load average: assume a quiet machine
+            load = 0.0
+        return CpuUse(wall, cpu, n, float(min(max(load - 1.0, 0.0), n)), "load average")
+
+
+def _affinity() -> set[int]:
+    try:
+        return set(os.sched_getaffinity(0))
+    except (AttributeError, OSError):  # pragma: no cover - not Linux
+        return set(range(os.cpu_count() or 1))
+
+
+try:
+    _CLK_TCK = float(os.sysconf("SC_CLK_TCK"))
+except (AttributeError, ValueError, OSError):  # pragma: no cover - not POSIX
+    _CLK_TCK = 100.0
+
+
+def _cpu_ticks(cpus: list[int]) -> tuple[int, int] | None:
+    """(busy, total) ticks of the given CPUs since boot, from /proc/stat; None where it cannot be read.
+
+    Busy is user + nice + system + irq + softirq + steal (steal: time the hypervisor gave to other machines);
+    total adds idle and iowait.
+    """
+    try:
+        with open("/proc/stat") as f:
+            lines = f.read().splitlines()
+    except OSError:
+        return None
+    wanted = {f"cpu{i}" for i in cpus}
+    busy = total = 0
+    seen = 0
+    for line in lines:
+        name, _, rest = line.partition(" ")
+        if name in wanted:
+            v = [int(x) for x in rest.split()[:8]]
+            v += [0] * (8 - len(v))
+            b = v[0] + v[1] + v[2] + v[5] + v[6] + v[7]
+            busy, total, seen = busy + b, total + b + v[3] + v[4], seen + 1
+    return (busy, total) if seen == len(cpus) else None
 
 
 def jobs_for(tasks: int, jobs: int | None = None) -> int:

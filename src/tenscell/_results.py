@@ -45,7 +45,8 @@ if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = ["format_repr", "dataframe", "span", "counts", "UNIT_SUFFIXES", "DIMENSIONLESS", "has_unit", "plotter",
-           "register_plotters", "reporter", "register_reporters", "plus_minus", "CORRELATION_THRESHOLD"]
+           "register_plotters", "reporter", "register_reporters", "plus_minus", "ln_error", "CORRELATION_THRESHOLD",
+           "LN_FACTOR_FROM", "MAX_LISTED_CORRELATIONS", "correlation_text"]
 
 #: unit suffixes of DataFrame columns (SI, written out without symbols so they are valid identifiers)
 UNIT_SUFFIXES = (
@@ -97,25 +98,59 @@ def has_unit(column: str) -> bool:
     return column in DIMENSIONLESS or column.endswith(UNIT_SUFFIXES)
 
 
-#: correlations at least this strong (in absolute value) are listed beside the standard errors (lmfit lists 0.1;
-#: a fit with tens of stiffnesses has hundreds of weaker ones, which say little)
-CORRELATION_THRESHOLD = 0.7
+#: correlations at least this strong (in absolute value) are listed beside the standard errors, strongest first:
+#: lmfit's default (``fit_report(min_correl=0.1)``); fit.json keeps every such pair, a text shows the strongest
+#: :data:`MAX_LISTED_CORRELATIONS` and says how many more there are
+CORRELATION_THRESHOLD = 0.1
+#: most correlation pairs a report or repr lists ("and N more" after them)
+MAX_LISTED_CORRELATIONS = 20
+#: a relative error of an ln-parameter at least this large is shown as a factor ×/÷ f, not as ±x %: the fit works in
+#: ln-parameters, so one standard error moves the value by a factor exp(σ) (±103 % would suggest a negative value)
+LN_FACTOR_FROM = 0.5
 
 
-def plus_minus(value: float, stderr: float | None, unit: str = "", note: str = "", digits: int = 6) -> str:
+def ln_error(sigma_ln: float | None) -> str:
+    """One standard error of a positive quantity fitted in its logarithm: ``"±4.8 %"`` below
+    :data:`LN_FACTOR_FROM`, else the factor ``"×/÷ 2.8"`` (exp σ); ``""`` when there is none (not determined)."""
+    if sigma_ln is None or not math.isfinite(sigma_ln):
+        return ""
+    if sigma_ln < LN_FACTOR_FROM:
+        return f"±{100 * sigma_ln:.2g} %"
+    return f"×/÷ {math.exp(min(sigma_ln, 700.0)):.3g}"
+
+
+def correlation_text(pairs, limit: int = MAX_LISTED_CORRELATIONS) -> list[str]:
+    """``C(a, b) = +0.9412`` for the strongest ``limit`` pairs (``pairs`` as :meth:`FitResult.correlations` gives
+    them, strongest first), then ``"... and N more"`` when there are more."""
+    shown = [f"C({a}, {b}) = {r:+.4f}" for a, b, r in pairs[:limit]]
+    if len(pairs) > limit:
+        shown.append(f"... and {len(pairs) - limit} more")
+    return shown
+
+
+def plus_minus(value: float, stderr: float | None, unit: str = "", note: str = "", digits: int = 6, *,
+               ln: bool = False) -> str:
     """A value with its standard error in lmfit's convention, ``"0.231 +/- 0.0133 (5.76%)"``, then the unit.
 
     Without a standard error: ``"0.231 +/- not determined"``; ``note`` (why:
     at a bound, fixed, not seen by the data; or which combination the error is
     of) follows, so that no value is shown without what is known of its
     uncertainty.
+
+    ``ln=True`` marks a positive quantity whose error is that of its logarithm (a fitted parameter, a tendon
+    stiffness): an error of :data:`LN_FACTOR_FROM` of the value or more is then a factor, ``"6.675 N ×/÷ 2.8"``.
+    Otherwise an error larger than the value is said as a multiple of it (``"(18× the value)"``), not as a
+    percentage in the thousands.
     """
     u = f" {unit}" if unit else ""
     shown = f"{value:.{digits}g}"
     if stderr is None or not math.isfinite(stderr):
         return f"{shown}{u} +/- not determined" + (f" {note}" if note else "")
-    rel = f" ({100 * stderr / abs(value):.2f}%)" if value else ""
-    return f"{shown} +/- {stderr:.{max(digits - 2, 2)}g}{rel}{u}" + (f" {note}" if note else "")
+    rel = stderr / abs(value) if value else math.inf
+    if ln and value > 0 and rel >= LN_FACTOR_FROM:
+        return f"{shown}{u} {ln_error(rel)}" + (f" {note}" if note else "")
+    share = "" if not value else f" ({100 * rel:.2f}%)" if rel < 1 else f" ({rel:.2g}× the value)"
+    return f"{shown} +/- {stderr:.{max(digits - 2, 2)}g}{share}{u}" + (f" {note}" if note else "")
 
 
 #: renderers by later-stage package and name: tenscell.plotting's drawing functions, tenscell.reports'

@@ -187,16 +187,37 @@ class FrequencyResponse:
             f"G' {span(self.G_storage, 'Pa')}; G'' {span(self.G_loss, 'Pa')}",
         )
 
+    def _repr_html_(self) -> str:
+        from ._results import reporter
+
+        return reporter("frequency_response_html")(self)  # the grid and G', G'' at three frequencies
+
     def to_xarray(self):
-        """The grid as an ``xarray.Dataset`` (dims ``prestress`` in N, ``frequency`` in Hz; ``J`` in m/N,
-        ``G_storage``, ``G_loss`` in Pa, ``loss_tangent``); xarray is optional (``pip install xarray``).
+        """The grid as an ``xarray.Dataset`` (dims ``prestress`` in N, ``frequency`` in Hz; ``J_real``, ``J_imag``
+        in m/N (the compliance's real and imaginary parts: every netCDF engine writes them), ``G_storage``,
+        ``G_loss`` in Pa, ``loss_tangent``); xarray is optional (``pip install 'tenscell[exchange]'``).
         :meth:`from_xarray` reads it back exactly."""
         return _to_xarray(self)
 
     @classmethod
     def from_xarray(cls, ds) -> "FrequencyResponse":
-        """The response a :meth:`to_xarray` dataset holds."""
+        """The response a :meth:`to_xarray` dataset holds (or one with a complex ``J``)."""
         return _from_xarray(cls, ds)
+
+    def to_netcdf(self, path) -> None:
+        """Write :meth:`to_xarray` to the netCDF file ``path`` with the best engine installed (h5netcdf, netCDF4,
+        or scipy's netCDF-3 writer, which comes with tenscell's core); needs xarray (``tenscell[exchange]``)."""
+        from ._optional import netcdf_engine
+
+        self.to_xarray().to_netcdf(path, engine=netcdf_engine())
+
+    @classmethod
+    def from_netcdf(cls, path) -> "FrequencyResponse":
+        """The response a :meth:`to_netcdf` file holds (exactly: float64 real and imaginary parts)."""
+        from ._optional import require
+
+        with require("xarray").open_dataset(path) as ds:
+            return _from_xarray(cls, ds.load())
 
     def to_dataframe(self):
         """Long format, one row per (P, f): ``prestress_N, frequency_Hz, G_storage_Pa, G_loss_Pa, loss_tangent``.
@@ -245,10 +266,13 @@ def _to_xarray(resp):
     dims = ("prestress", "frequency")
     return xr.Dataset(
         data_vars={
-            "J": (dims, np.asarray(resp.J), {"units": "m/N", "long_name": "compliance J(ω) of the probe"}),
-            "G_storage": (dims, resp.G_storage, {"units": "Pa", "long_name": "storage modulus G′"}),
-            "G_loss": (dims, resp.G_loss, {"units": "Pa", "long_name": "loss modulus G″"}),
-            "loss_tangent": (dims, resp.loss_tangent, {"units": "1", "long_name": "loss tangent G″/G′"}),
+            # real and imaginary parts: netCDF-3 (scipy's writer, always installed) has no complex type
+            "J_real": (dims, np.asarray(resp.J).real, {"units": "m/N", "long_name": "compliance J(omega), real part"}),
+            "J_imag": (dims, np.asarray(resp.J).imag, {"units": "m/N",
+                                                       "long_name": "compliance J(omega), imaginary part"}),
+            "G_storage": (dims, resp.G_storage, {"units": "Pa", "long_name": "storage modulus G'"}),
+            "G_loss": (dims, resp.G_loss, {"units": "Pa", "long_name": "loss modulus G''"}),
+            "loss_tangent": (dims, resp.loss_tangent, {"units": "1", "long_name": "loss tangent G''/G'"}),
         },
         coords={"prestress": ("prestress", np.asarray(resp.prestress), {"units": "N", "long_name": "prestress P"}),
                 "frequency": ("frequency", np.asarray(resp.frequency_hz), {"units": "Hz", "long_name": "frequency f"})},
@@ -257,16 +281,18 @@ def _to_xarray(resp):
 
 
 def _from_xarray(cls, ds):
-    """The response a :func:`_to_xarray` dataset holds."""
-    for name in ("J", "prestress", "frequency"):
+    """The response a :func:`_to_xarray` dataset holds (``J_real``/``J_imag``, or a complex ``J``)."""
+    parts = ("J_real", "J_imag") if "J_real" in ds.variables else ("J",)
+    for name in (*parts, "prestress", "frequency"):
         if name not in ds.variables:
             raise ValueError(f"dataset: no {name!r}; expected what FrequencyResponse.to_xarray() writes")
-    J = ds["J"].transpose("prestress", "frequency")
-    units = {k: ds[k].attrs.get("units") for k in ("J", "prestress", "frequency")}
-    if units != {"J": "m/N", "prestress": "N", "frequency": "Hz"}:
+    units = {k: ds[k].attrs.get("units") for k in (*parts, "prestress", "frequency")}
+    if units != {**dict.fromkeys(parts, "m/N"), "prestress": "N", "frequency": "Hz"}:
         raise ValueError(f"dataset: units {units}; expected J m/N, prestress N, frequency Hz")
+    J = [np.asarray(ds[k].transpose("prestress", "frequency").values) for k in parts]
     return cls(frequency_hz=np.asarray(ds["frequency"].values, dtype=float),
-               prestress=np.asarray(ds["prestress"].values, dtype=float), J=np.asarray(J.values, dtype=complex),
+               prestress=np.asarray(ds["prestress"].values, dtype=float),
+               J=(J[0] + 1j * J[1]) if len(J) == 2 else np.asarray(J[0], dtype=complex),
                L=float(ds.attrs["L_m"]), viscosity=float(ds.attrs.get("viscosity_Pa_s", 0.0)))
 
 

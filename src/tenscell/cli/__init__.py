@@ -42,6 +42,36 @@ COMMAND_MODULES = (
 )
 
 
+#: the end of `tenscell --help`: the question a lab asks first and what to type, then the exit statuses (kept as
+#: written: the commands must not be broken across lines)
+_EPILOG = """\
+Which mechanism explains my cells? Fit every mechanism to your own files
+(CSV/TSV/Excel tables, TA TRIOS or Anton Paar RheoCompass exports, creep
+tables; several files are fitted jointly) and compare them on one table
+(it prints its estimated time before it starts):
+
+  tenscell study mechanisms MY_SWEEP.csv MY_PRESTRESS_SWEEP.csv --out mechanisms/
+
+Then fit one mechanism, reported beside its own structure-free formula
+({model} is the recommended first model; `tenscell fit --help`
+lists every --model), and ask it about prestresses and frequencies it never saw
+(with a frequency sweep alone, leave --prestress out):
+
+  tenscell fit MY_SWEEP.csv MY_PRESTRESS_SWEEP.csv --model {model} --out fit/
+  tenscell moduli --from-fit fit/fit.json --prestress 500,1000 --freq 0.01:100:41
+
+The paper itself: `tenscell reproduce`.
+
+Exit status: 0 success; 1 a fit that did not reach its tolerance; 2 bad input
+(one line naming the flag or the file and line, nothing computed or written);
+{internal} an internal error (a bug, not your input: one line naming a log file);
+130 interrupted (Ctrl-C)."""
+
+
+class _TopHelp(argparse.RawDescriptionHelpFormatter):
+    """The top-level help: the epilog as written (its command lines intact)."""
+
+
 def _version() -> str:
     from .. import __version__
     return __version__
@@ -49,12 +79,13 @@ def _version() -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser with every subcommand (imports only the standard library)."""
+    from .fit import RECOMMENDED_MODEL
+
     parser = Parser(
         prog="tenscell",
         description="Tensegrity models of the cytoskeleton: moduli G'(f, P), G''(f, P), fits and studies.",
-        epilog="Exit status: 0 success; 1 a fit that did not reach its tolerance; 2 bad input (one line naming the "
-               f"flag or the file and line, nothing computed or written); {EXIT_INTERNAL} an internal error (a bug, "
-               "not your input: one line naming a log file); 130 interrupted (Ctrl-C).",
+        epilog=_EPILOG.format(model=RECOMMENDED_MODEL, internal=EXIT_INTERNAL),
+        formatter_class=_TopHelp,
     )
     parser.add_argument("--version", action="version", version=f"tenscell {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)

@@ -26,7 +26,8 @@ MODEL_GROUPS = {
                                   "voigt-lognormal-stiffness", "voigt-trap-damping+visc"),
     "mechanisms: filament turnover (Maxwell)": ("maxwell", "maxwell+visc"),
     "mechanisms: standard linear solid": ("sls", "sls-trap+visc"),
-    "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc"),
+    "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc",
+                                       "springpot-alpha-family+visc"),
     "structure-free formulas (baselines)": ("structural-damping", "structural-damping+newtonian",
                                             "structural-damping-prestress", "structural-damping-prestress+newtonian"),
 }
@@ -91,6 +92,11 @@ def register(sub) -> None:
     p.add_argument("--fix", action="append", type=_fixed, metavar="NAME=VALUE", default=None,
                    help="hold a parameter fixed, by its name in fit.json, in SI units (repeatable): e.g. --fix L=1, "
                         "--fix c=0.5, --fix P=20, --fix c_actin=2, --fix EA_intermediate_filament=0.3")
+    p.add_argument("--validate", choices=("auto", "yes", "no"), default="auto",
+                   help="refit the model and its structure-free baselines (its own formula, the structural-damping "
+                        "law with and without a Newtonian term) on held-out splits of the data (frequency sweeps cut "
+                        "at 1, 10, 30 Hz; prestress sweeps without some prestresses) and rank them in the report by "
+                        "their held-out error; auto: for every model but the 36-parameter per-tendon cell")
     p.add_argument("--holdout", type=_holdout, metavar="FMIN:FMAX", default=None,
                    help="train on the points outside FMIN..FMAX Hz and report every model's error on the held-out "
                         "points (one frequency sweep)")
@@ -353,8 +359,11 @@ def read_inputs(args, min_points: int) -> tuple[list, list[str]]:
     return list(binned), lines
 
 
-def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=None):
+def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=None, validation=None):
     """Everything a fit writes, computed before any file is touched: {extension: writer(path)}.
+
+    ``validation`` (optional): the model and its baselines out of sample
+    (:func:`tenscell.fitting.validation.compare_out_of_sample`), in fit.json and the report.
 
     ``timing`` (optional): the command's own clock, stored in fit.json as is.
     ``figure`` (optional): a future of the figure's PNG bytes (:func:`fit_png`,
@@ -374,10 +383,12 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=No
 
         comparison = compare_models(result, homogeneous=baseline)
     doc["model_comparison"] = comparison.to_dict()
+    doc["out_of_sample"] = None if validation is None else validation.to_dict()
     if timing is not None:
         doc["timing"] = timing
     header, rows = fit_table(result, baseline)
-    markdown = fit_markdown(result, None if own else baseline, title=title, comparison=comparison)
+    markdown = fit_markdown(result, None if own else baseline, title=title, comparison=comparison,
+                            validation=validation)
     if figure is None:  # drawn here: only then does this process import the plotting stack (0.35 s)
         from .. import plotting
         from ..plotting.fits import fit_panels
@@ -512,7 +523,9 @@ def run(args) -> int:
         from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
-        outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure)
+        validation = _validation(args, spec, datasets, space)
+        outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure,
+                              validation=validation)
     ensemble = _ensemble(args, result, datasets)
     with out as d:
         for ext, name in FIT_FILES.items():
@@ -524,6 +537,27 @@ def run(args) -> int:
     print(f"tenscell fit: {spec.name}: rms log10 error {each} (tolerance {result.tolerance:g}): {result.verdict}"
           f"{base}; {result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0 if result.converged else 1
+
+
+#: free parameters above which --validate auto skips the refits (the per-tendon cell: 36 parameters per refit)
+VALIDATE_AUTO_MAX_PARAMETERS = 12
+
+
+def _validation(args, spec, datasets, space):
+    """The model and its structure-free baselines out of sample (``--validate``), or None."""
+    from .._progress import stage
+    from ..fitting.validation import compare_out_of_sample, standard_baselines
+
+    if args.validate == "no":
+        return None
+    if args.validate == "auto" and spec.problem(datasets).n_free > VALIDATE_AUTO_MAX_PARAMETERS:
+        stage(f"out of sample: not run for {spec.name} ({VALIDATE_AUTO_MAX_PARAMETERS}+ parameters per refit; "
+              "--validate yes runs it)")
+        return None
+    validation = compare_out_of_sample(spec, datasets, standard_baselines(datasets), model_options=space,
+                                       notify=stage, starts=2, seed=args.seed, hops=8, patience=3,
+                                       tolerance=args.tolerance, max_points=None)
+    return validation if validation.splits else None  # no split leaves enough points to fit every model
 
 
 def _min_points(spec) -> int:

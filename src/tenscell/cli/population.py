@@ -8,7 +8,7 @@ from ._args import (add_cluster_options, add_data_options, add_out, data_options
                     number_list,
                     path)
 from ._cost import Cost, announce, check, measure
-from .fit import DAMPING_MODES, TENDON_MODES
+from .fit import DAMPING_MODES, MODEL_GROUPS, RECOMMENDED_MODEL, TENDON_MODES
 #: synthetic population generators (tenscell.population.synth.MODELS)
 MODELS = ("tensegrity", "powerlaw")
 #: suffix of the work directory kept beside --out while a run is under way
@@ -69,7 +69,39 @@ def _register_fit(sub) -> None:
                    help="generating parameters to check recovery against (default: INPUT/_generating_parameters.csv "
                         "when present)")
     add_data_options(p)
+    _add_joint_options(p)
     p.set_defaults(func=run_fit)
+
+
+#: the models a joint fit takes: every model of one cell without a gauge (not the paper's Voigt cell, whose strut
+#: length is one)
+JOINT_MODELS = tuple(n for group, names in MODEL_GROUPS.items() if not group.startswith("the paper") for n in names)
+#: the files of a joint fit's output set
+JOINT_FILES = ("fit.json", "fit.csv", "cells.csv", "report.md", "fit.png")
+
+
+def _add_joint_options(p) -> None:
+    g = p.add_argument_group("joint fit: every cell at once, with shared and per-cell parameters")
+    g.add_argument("--joint", action="store_true",
+                   help="fit one model to every cell at once: each cell has its own value of the --per-cell "
+                        "parameter(s), every other parameter is shared by the population (writes fit.json, fit.csv, "
+                        "cells.csv, report.md, fit.png; see docs/populations.md)")
+    g.add_argument("--model", choices=JOINT_MODELS, default=None, metavar="NAME",
+                   help=f"the model of one cell in a joint fit (default {RECOMMENDED_MODEL}): a mechanism or a "
+                        f"structure-free formula of `tenscell fit --model` ({', '.join(JOINT_MODELS)})")
+    g.add_argument("--per-cell", type=_names, default=None, metavar="NAME[,NAME]",
+                   help="the model's parameter(s) each cell has its own value of, one or two (default: P, the "
+                        "prestress, for a mechanism; G0, the modulus scale, for a formula)")
+
+
+def _names(text: str) -> tuple:
+    import argparse
+
+    names = tuple(t.strip() for t in str(text).split(","))
+    if not all(names) or len(set(names)) != len(names):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected distinct parameter names separated by commas, e.g. P "
+                                         "or P,kappa")
+    return names
 
 
 def _register_study(sub) -> None:
@@ -349,6 +381,8 @@ def run_fit(args) -> int:
     from ..population.run import PopulationFitOptions, fit_population
     from ..population.sources import read_sources
 
+    if _check_joint(args):
+        return run_joint(args)
     out, work = _open_run(args, "run")
     options = PopulationFitOptions(tendons=args.tendons, damping=args.damping, starts=args.starts, hops=args.hops,
                                    tolerance=args.tolerance)
@@ -373,6 +407,152 @@ def run_fit(args) -> int:
     print(f"tenscell fit-population: {len(t)} cells, {n_ok} fitted ({int(t['converged'].sum())} converged), "
           f"{len(t) - n_ok} failed; {result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0
+
+
+def _check_joint(args) -> bool:
+    """True for a joint fit (``--joint``); an option that does not apply is refused in one line, before any work."""
+    if not args.joint:
+        for flag, value in (("--model", args.model), ("--per-cell", args.per_cell)):
+            if value is not None:
+                raise ValueError(f"{flag}: an option of the joint fit: add --joint (without it each cell is fitted on "
+                                 "its own, laid out by --tendons/--damping)")
+        return False
+    given = (("--tendons", args.tendons != "per-family"), ("--damping", args.damping != "uniform"),
+             ("--resume", args.resume), ("--work-dir", args.work_dir is not None), ("--truth", args.truth is not None),
+             ("--scheduler", args.scheduler is not None))
+    for flag, on in given:
+        if on:
+            raise ValueError(f"{flag}: not an option of the joint fit (--joint: one search over every cell, in this "
+                             "machine's processes; --model and --per-cell say what is fitted, --workers N runs its "
+                             "starts in N processes)")
+    if args.per_cell is not None and len(args.per_cell) > 2:
+        raise ValueError(f"--per-cell {','.join(args.per_cell)}: one or two parameters per cell (each cell's data "
+                         "must determine them beside the shared ones)")
+    return True
+
+
+def _joint_data(sources):
+    """Every cell's moduli, read before any fit: a cell that cannot be read is refused, naming it (one line)."""
+    from ..io.data import DataError, RheologyData
+
+    conditions = sorted({s.condition for s in sources})
+    if len(conditions) > 1:
+        raise ValueError(f"--joint: the input holds {len(conditions)} conditions ({', '.join(map(repr, conditions))}): "
+                         "a joint fit shares its parameters between the cells of one population; fit each "
+                         "condition's cells on their own (INPUT/CONDITION)")
+    if len(sources) < 2:
+        raise ValueError(f"--joint: the input holds {len(sources)} cell; a joint fit needs two or more")
+    out = []
+    for src in sources:
+        try:
+            data = src.load()
+        except DataError as err:
+            raise ValueError(f"--joint: {err} (a joint fit needs every cell; remove or mend it)") from None
+        if not isinstance(data, RheologyData) or data.kind != "frequency":
+            raise ValueError(f"--joint: {src.source}: not a frequency sweep of G', G''; a joint fit takes one "
+                             "frequency sweep per cell")
+        out.append(data)
+    return out
+
+
+def _joint_model(args, datasets):
+    """The Population of ``--model`` and ``--per-cell`` and its problem against the cells (names checked here)."""
+    from ..fitting import Population, get_model
+
+    base = get_model(args.model or RECOMMENDED_MODEL)
+    per_cell = args.per_cell
+    if per_cell is None:
+        names = base.problem(datasets[0]).names
+        per_cell = ("G0",) if "G0" in names else ("P",) if "P" in names else ("s",)
+    try:
+        population = Population(base, per_cell=per_cell)
+        return population, population.problem(datasets)
+    except ValueError as err:
+        text = str(err)
+        if text.startswith("per_cell"):
+            raise ValueError(f"--per-cell {','.join(per_cell)}{text.removeprefix('per_cell')}") from None
+        raise
+
+
+#: evaluations of every cell in one start or move of a joint fit, at most: the search's run over all cells (12-54
+#: in bench/bench_popmodel.py, 59 Xie cells and 200 synthetic ones), and the cells' own fit before it (at most
+#: tenscell.fitting.models.population.CELL_FIT_EVALUATIONS = 25)
+_EVALUATIONS_PER_RUN = 45 + 25
+
+
+def _joint_cost(problem, args, jobs: int) -> Cost:
+    """One evaluation of every cell's residuals and Jacobian timed here, scaled to the search's runs."""
+    import numpy as np
+
+    from .._threads import limited
+
+    # a realistic point at no fitting cost: the base model's own start on the reference cell, shared by every cell
+    ref = problem.cells[problem.reference_cell]
+    phi_ref = ref.full(ref.initial_guess(np.random.default_rng(args.seed)))
+    phi = problem.fixed_log.copy()
+    phi[: problem.n_shared] = phi_ref[problem.base_shared]
+    phi[problem.n_shared:] = np.tile(phi_ref[problem.base_own], problem.n_cells)
+
+    def once():
+        problem._jacobian_from(problem._evaluate_constrained(phi, jac=True))
+
+    with limited():
+        per = measure(once, max_calls=3)
+    runs = args.starts * (1 + args.hops)
+    nnz = problem.sparsity().nnz
+    # memory: the Jacobian's values and indices in COO and CSR form, a few copies (about 100 bytes per nonzero)
+    return Cost("evaluation", runs * _EVALUATIONS_PER_RUN, per, min(jobs, args.starts),
+                memory_bytes=100.0 * nnz, detail=f"of {problem.n_cells} cells (at most; {args.starts} start(s) × "
+                                                     f"{1 + args.hops} run(s))")
+
+
+def run_joint(args) -> int:
+    """``fit-population --joint``: one population model over every cell, written as one output set."""
+    import numpy as np
+
+    from .. import fitting
+    from .._parallel import jobs_for
+    from .._progress import stage
+    from ..io.outputs import OutputSet, write_bytes, write_csv_rows, write_json, write_text
+    from ..io.tables import fit_table
+    from ..population.sources import read_sources
+
+    out = OutputSet(args.out, command=args.command_line, flag="--out")
+    sources = _with_column_map(read_sources(args.input), data_options_from_args(args))
+    datasets = _joint_data(sources)
+    population, problem = _joint_model(args, datasets)
+    jobs = 1 if args.workers == 0 else jobs_for(args.starts, args.workers)  # --workers 0: in this process
+    cost = check(_joint_cost(problem, args, jobs), "INPUT", hint="fewer cells, --starts or --hops")
+    if cost.seconds > 10:
+        announce(cost)
+    stage(f"joint fit of {population.name} to {problem.n_cells} cells: {problem.n_free} free parameters "
+          f"({problem.n_shared} shared), {args.starts} start(s), {jobs} process(es)")
+    result = fitting.fit(datasets, model=population, starts=args.starts, hops=args.hops, seed=args.seed, jobs=jobs,
+                         tolerance=args.tolerance, max_points=None)
+    from ..fitting.population_scores import population_cells
+    from ..reports.population_fit import population_fit_markdown
+    from .. import plotting
+    from ..plotting.population import population_fit_figure
+
+    title = f"Joint fit of {population.name} to {problem.n_cells} cells of {Path(str(args.input).rstrip('/')).name}"
+    doc = result.to_dict()
+    cells = population_cells(result)
+    cells.insert(1, "cell_id", [s.cell for s in sources])
+    header, rows = fit_table(result, result)
+    report = population_fit_markdown(result, cells, title=title)
+    png = plotting.png_bytes(population_fit_figure(result, cells, title=title))
+    with out as d:
+        write_json(d / "fit.json", doc)
+        write_csv_rows(d / "fit.csv", header, rows)
+        write_text(d / "cells.csv", cells.to_csv(index=False))
+        write_text(d / "report.md", report)
+        write_bytes(d / "fit.png", png)
+    shared = ", ".join(f"{p.name} = {p.value:.4g}" for p in result.parameters[: problem.n_shared])
+    print(f"tenscell fit-population --joint: {population.name}, {problem.n_cells} cells: rms log10 error "
+          f"{result.rms_log10_error:.4f} (worst cell {float(np.max(result.dataset_rms)):.4f}; tolerance "
+          f"{result.tolerance:g}): {result.verdict}; shared {shared}; {result.elapsed_s:.1f} s; wrote {out.target}/",
+          file=sys.stderr)
+    return 0 if result.converged else 1
 
 
 def _with_column_map(sources, options: dict):

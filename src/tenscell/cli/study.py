@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import math
+import os
+import time
 from pathlib import Path
 
 from ._args import add_data_options, add_out, data_options_from_args, ensemble_size, integer, number, number_list, path
@@ -173,6 +175,71 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     log(written)
 
 
+#: model evaluations (residuals and Jacobian: one unit of a fit's work) one start of a mechanism's fit takes in
+#: the mechanisms study per basin-hopping move allowed (--hops + 1 least-squares runs at most), the median over the
+#: built-in mechanisms, and the per-tendon fit's (30 hops at least, polished 4x as long), both counted on the bundled
+#: data (bench/calibrate_study_cost.py prints them; 2 cores, load about 9)
+EVALUATIONS_PER_START_HOP = {"mechanism": 20.0, "voigt-per-tendon": 34.0}
+
+
+def _cpu_per_call(fn, calls: int = 5) -> float:
+    """CPU seconds of one call of ``fn`` (the mean of ``calls`` after one warm-up): what the work costs, whatever
+    share of the CPUs the machine gives it now."""
+    fn()
+    t0 = time.process_time()
+    for _ in range(calls):
+        fn()
+    return max(time.process_time() - t0, 1e-9) / calls
+
+
+def cpu_share(workers: int) -> float:
+    """The share of one CPU each of ``workers`` new processes can expect now: the CPUs over everything runnable
+    (the load average plus them), at most 1. On a shared machine a short timed call is served at once while a
+    long run waits its turn, so wall time is estimated from CPU time and this share."""
+    try:
+        load = os.getloadavg()[0]
+    except (OSError, AttributeError):  # pragma: no cover - no load average on this platform
+        return 1.0
+    return min(1.0, (os.cpu_count() or 1) / max(load + workers, 1.0))
+
+
+def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, holdout: bool):
+    """The mechanisms study's cost (:class:`tenscell.cli._cost.Cost`): the CPU time of one model evaluation of each
+    mechanism, timed here at a start of its fit with the BLAS threads the search uses, × the evaluations its fit is
+    expected to take (:data:`EVALUATIONS_PER_START_HOP` × starts × hops), twice with a held-out refit, over ``jobs``
+    workers at the CPU share the machine's load leaves them (:func:`cpu_share`)."""
+    import numpy as np
+
+    from .._threads import limited
+    from ..fitting import get_model
+    from ..fitting.entry import prepare
+    from ..fitting.models.catalog import PER_TENDON_VOIGT
+    from ..fitting.models.voigt import VoigtModel
+    from ..studies.mechanisms import PER_TENDON_HOPS
+    from ._cost import Cost
+
+    cpu, evaluations = 0.0, 0
+    with limited():
+        for name in names:
+            per_tendon = name == PER_TENDON_VOIGT
+            spec = VoigtModel(tendons="per-tendon", damping="per-family") if per_tendon else get_model(name)
+            problem = spec.problem(*prepare(datasets, None, 100, spec))
+            theta = problem.initial_guess(np.random.default_rng(0))
+            rate = EVALUATIONS_PER_START_HOP["voigt-per-tendon" if per_tendon else "mechanism"]
+            n = int(round(rate * starts * ((max(hops, PER_TENDON_HOPS) if per_tendon else hops) + 1)
+                          * (2 if holdout else 1)))
+            cpu += n * _cpu_per_call(lambda pb=problem, th=theta: pb.jacobian(th))
+            evaluations += n
+    workers = min(jobs, len(names))
+    share = cpu_share(workers)
+    per = cpu / max(evaluations, 1)
+    return Cost("model evaluation", max(evaluations, 1), per / share, workers,
+                detail=f"({len(names)} model(s) × {starts} start(s) × up to {hops} hop(s)"
+                       + (", each fitted twice: all data and held out" if holdout else "")
+                       + f"; {per * 1e3:.2g} ms of CPU each, at {share:.0%} of a CPU per worker: load "
+                         f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs)")
+
+
 #: studies that fit data files given on the command line (not part of `reproduce`'s variants stage)
 DATA_STUDIES = ("compactness", "mechanisms")
 
@@ -219,7 +286,7 @@ def register(sub) -> None:
                                    "each bound on its spread); mechanisms DATA... (every mechanism — per-tendon and "
                                    "compact Voigt, Maxwell, SLS, springpot, cytoplasm, distributions — fitted to the "
                                    "same data: parameters, RMS, AIC/BIC, identifiability, G' slope ripple, held-out "
-                                   "error).")
+                                   "error; it prints its estimated time first and refuses a run beyond a day).")
     p.add_argument("name", choices=sorted(STUDIES), help="which study")
     p.add_argument("data", nargs="*", help="compactness, mechanisms: file(s) of measured moduli (as for `tenscell "
                                            "fit`), or bundled:NAME")
@@ -285,6 +352,20 @@ def _check_ensemble_options(args) -> None:
         reach_scheduler(args.scheduler)
 
 
+def _announce_mechanisms_cost(args) -> None:
+    """The mechanisms study's estimate as one line before its fits; refused beyond a day (naming the flags)."""
+    from .._parallel import jobs_for
+    from ..fitting.models.catalog import MECHANISMS, PER_TENDON_VOIGT
+    from ..studies.mechanisms import _frequency_sweep
+    from ._cost import announce, check
+
+    names = (PER_TENDON_VOIGT, *MECHANISMS) if args.mechanisms is None else \
+        tuple(m.strip() for m in args.mechanisms.split(",") if m.strip())
+    cost = mechanisms_cost(args.datasets, names, args.starts, args.hops, jobs_for(len(names), args.jobs),
+                           holdout=_frequency_sweep(args.datasets) is not None)
+    announce(check(cost, "--starts", hint="give fewer --starts or --hops, or fewer --mechanisms NAMES"))
+
+
 def run(args) -> int:
     import sys
     import time
@@ -327,6 +408,8 @@ def run(args) -> int:
 
         per = monte_carlo_rate("all", 0.1, args.seed)
         announce(check(Cost("draw", 2 * args.draws, per, 1, detail="(two Monte Carlo sets of --draws)"), "--draws"))
+    if args.name == "mechanisms":
+        _announce_mechanisms_cost(args)
     t = time.perf_counter()
     stage(f"study {args.name} ...")
     with out as d:

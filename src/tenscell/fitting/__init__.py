@@ -5,7 +5,8 @@ In the manner of lmfit, every fit has the same layers:
 - :mod:`~tenscell.fitting.models`: what is fitted — a :class:`~tenscell.fitting.models.base.FitModel` builds its
   problem against data; one registry (:data:`MODELS`, :func:`get_model`) holds the paper's Voigt cell
   (:mod:`~.models.voigt`), the few-parameter mechanisms (:mod:`~.models.mechanism`) and the structure-free
-  formulas every tensegrity has to beat (:mod:`~.models.formulas`);
+  formulas every tensegrity has to beat (:mod:`~.models.formulas`); a :class:`Population` fits any of them to many
+  cells at once, with shared and per-cell parameters (:mod:`~.models.population`);
 - :mod:`~tenscell.fitting.parameters` and :mod:`~tenscell.fitting.problem`: the parameters' layout (names, units,
   bounds, fixes, the data's prestress groups) and the protocol every problem follows (residuals, Jacobian, starts,
   moves, and what the result reads);
@@ -16,13 +17,17 @@ In the manner of lmfit, every fit has the same layers:
   against other models and held-out data (:mod:`~tenscell.fitting.scores`);
 - :mod:`~tenscell.fitting.fitted`: the fitted model every consumer takes (``moduli``, ``creep``, ``simulate``,
   ``show --from-fit``, ensembles) and fit.json.
+- :mod:`~tenscell.fitting.shares`: what the structure carries, the geometric prestress stiffness's share of dG′/dP
+  and dG″/dP against the law's tension terms (:func:`structure_shares`).
 
 :func:`fit` runs them: ``fit(data)`` is the paper's per-tendon fit, ``fit(data, model=NAME)`` any other model.
 The Markdown report is :func:`tenscell.reports.fit.fit_markdown`.
 """
 from .entry import fit
 from .fitted import FittedCell, FittedFormula, FittedMechanism, FittedModel, load_fit
-from .models import GROUPS, MODELS, RECOMMENDED, FitModel, Formula, Mechanism, VoigtModel, get_model, model_names
+from .models import (GROUPS, MODELS, RECOMMENDED, FitModel, Formula, Mechanism, Population, VoigtModel, get_model,
+                     model_names)
+from .models.population import FittedPopulation
 from .models.catalog import MECHANISMS, PER_TENDON_VOIGT, mechanism_names
 from .models.mechanism import Field
 from .models.voigt import DAMPING_MODES, TENDON_MODES, FitProblem, make_problem, required_points
@@ -30,6 +35,7 @@ from .prestress import PrestressActivity, prestress_activity
 from .records import DatasetFit, FitAlternative, FitCurve, FitParameter, data_axis
 from .curves import frequency_slopes, model_curve, prestress_slopes
 from .result import FitResult
+from .shares import StructureShares, structure_shares
 
 #: one result type for every model: a mechanism's fit is a FitResult (the name of tenscell 0.2)
 MechanismFit = FitResult
@@ -42,6 +48,7 @@ __all__ = [
     "VoigtModel",
     "Mechanism",
     "Formula",
+    "Population",
     "Field",
     "MODELS",
     "GROUPS",
@@ -62,6 +69,7 @@ __all__ = [
     "FittedCell",
     "FittedMechanism",
     "FittedFormula",
+    "FittedPopulation",
     "load_fit",
     "PrestressActivity",
     "prestress_activity",
@@ -74,4 +82,6 @@ __all__ = [
     "required_points",
     "MechanismFit",
     "load_any_fit",
+    "StructureShares",
+    "structure_shares",
 ]

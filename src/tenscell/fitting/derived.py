@@ -74,11 +74,12 @@ class DerivedQuantities:
         se = float(self.stderr[key][i])
         return (se if math.isfinite(se) else None), self.notes[key][i]
 
-    def text(self, key: str, i: int = 0, unit: str = "", digits: int = 4) -> str:
+    def text(self, key: str, i: int = 0, unit: str = "", digits: int = 4, *, ln: bool = False) -> str:
         """Value ``i`` of ``key`` as ``"value +/- stderr (percent) unit"`` (lmfit's convention) or
-        ``"value +/- not determined (why)"``."""
+        ``"value +/- not determined (why)"``; ``ln=True`` for a positive quantity set by ln-parameters (a large
+        error is then a factor ×/÷, :func:`tenscell._results.plus_minus`)."""
         se, note = self.error(key, i)
-        return plus_minus(float(self.values[key][i]), se, unit, note, digits)
+        return plus_minus(float(self.values[key][i]), se, unit, note, digits, ln=ln)
 
     def to_dict(self) -> dict:
         """JSON-ready: per quantity, its values, standard errors (null when not determined) and notes."""

@@ -41,7 +41,7 @@ import numpy as np
 from .._results import format_repr
 from .._threads import hot_path
 
-__all__ = ["Identifiability", "Combination", "identifiability", "GAUGE", "NULL_SHARE"]
+__all__ = ["Identifiability", "Combination", "identifiability", "errors_from_covariance", "GAUGE", "NULL_SHARE"]
 
 #: the exact strut-length invariance of the linear moduli
 GAUGE = "(P, EA, c, L) -> (λ²P, λ²EA, λc, λL)"
@@ -380,6 +380,14 @@ def _uncertainties(V: np.ndarray, s: np.ndarray, rank: int, p: int,
     seen, unseen = V[:, :rank], V[:, rank:]
     null_share = np.sqrt(np.sum(unseen**2, axis=1)) if p else np.zeros(0)
     cov_unit = (seen / s[:rank] ** 2) @ seen.T if rank else np.zeros((p, p))  # (JᵀJ)⁺ truncated at the rank
+    se, corr = errors_from_covariance(cov_unit, null_share, sigma)
+    return se, null_share, corr
+
+
+def errors_from_covariance(cov_unit: np.ndarray, null_share: np.ndarray,
+                           sigma: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """Standard errors of ln (inf where more than :data:`NULL_SHARE` of a parameter lies in the unseen combinations,
+    NaN where σ is unknown) and correlations, from a covariance in units of σ² and the null-space shares."""
     d = np.sqrt(np.clip(np.diag(cov_unit), 0.0, None))
     determinable = null_share <= NULL_SHARE
     se = np.where(determinable, d * (sigma if sigma is not None else np.nan), np.inf)
@@ -387,7 +395,7 @@ def _uncertainties(V: np.ndarray, s: np.ndarray, rank: int, p: int,
         corr = cov_unit / np.outer(d, d)
     corr[~determinable, :] = np.nan
     corr[:, ~determinable] = np.nan
-    return se, null_share, corr
+    return se, corr
 
 
 def _combinations(V: np.ndarray, s: np.ndarray, rank: int, labels: tuple[str, ...],

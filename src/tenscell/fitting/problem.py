@@ -16,13 +16,18 @@ plain arrays only (so that it can be sent to worker processes) and answers
   ``jacobian(theta)`` follow;
 * the **search's moves**: ``initial_guess(rng)`` and ``perturb(theta, rng)``;
 * **anywhere**: ``moduli_at(theta, f_hz, P_N)``, the model's G′, G″ at any
-  frequencies and model prestresses;
+  frequencies and model prestresses (``dataset_moduli_at`` those of one data set's own parameters, where a model
+  has parameters per data set: :mod:`tenscell.fitting.models.population`);
 * what the **result** reads: ``fitted(theta, result)`` (the fitted model,
   :mod:`tenscell.fitting.fitted`), ``report_quantities(result)`` (the numbers
   the report derives, each given a standard error by
   :mod:`~tenscell.fitting.derived`), ``summary(result)`` (the model's own
   entries of fit.json), ``stiffness_spread(theta)``,
-  ``assignment_spread(theta)`` and ``describe()``.
+  ``assignment_spread(theta)``, ``describe()`` and ``identifiability(theta, ...)``.
+
+A problem whose Jacobian is block-sparse (many data sets, each with parameters of its own) says so by
+``sparse_jacobian = True``: ``_jacobian_from`` then returns a :mod:`scipy.sparse` matrix and the search solves
+its trust-region steps iteratively (LSMR), at a cost linear in the number of nonzeros.
 
 Every fit is in natural-log parameters: ``theta`` holds the logs of the free
 parameters in the order of ``names``; ``phi`` those of all parameters.
@@ -73,6 +78,8 @@ class Problem:
     creep_dataset: np.ndarray  # per creep point: its data set (the models with creep data have them)
     creep_group: np.ndarray  # per creep point: its prestress group
     # and every subclass has ``cell``: the reference cell (None for a structure-free formula)
+    #: ``_jacobian_from`` returns a scipy.sparse matrix (the search then solves its steps by LSMR)
+    sparse_jacobian = False
 
     # -- the model ------------------------------------------------------------------------
     @property
@@ -275,6 +282,17 @@ class Problem:
     def moduli_at(self, theta, f_hz, P_N) -> tuple[np.ndarray, np.ndarray]:
         """Model G', G'' (Pa) at frequencies ``f_hz`` (Hz) and model prestresses ``P_N`` (N), broadcast together."""
         raise NotImplementedError
+
+    def dataset_moduli_at(self, theta, f_hz, P_N, dataset: int) -> tuple[np.ndarray, np.ndarray]:
+        """Like :meth:`moduli_at`, with the parameters of data set ``dataset`` (the same for every data set unless
+        the model has parameters per data set)."""
+        return self.moduli_at(theta, f_hz, P_N)
+
+    def identifiability(self, theta, *, sigma_known: bool = False, rtol: float = 1e-8):
+        """What the data determine at ``theta`` (:func:`tenscell.fitting.identifiability.identifiability`)."""
+        from .identifiability import identifiability
+
+        return identifiability(self, theta, sigma_known=sigma_known, rtol=rtol)
 
     def fitted(self, theta, result):
         """The fitted model (:mod:`tenscell.fitting.fitted`) at ``theta``; ``result`` gives the data's prestresses."""

@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .._results import CORRELATION_THRESHOLD, dataframe, format_repr, plus_minus
+from .._results import CORRELATION_THRESHOLD, dataframe, format_repr, reporter
 from ..io.data import RheologyData
 from .problem import Problem
 from .records import (CreepFit, DatasetFit, data_axis, error_fields, information_criteria, noise_rms,
@@ -27,8 +27,6 @@ from .records import (CreepFit, DatasetFit, data_axis, error_fields, information
 
 __all__ = ["FitResult", "FIT_NULL_MEANS", "report_quantities", "AS_WELL"]
 
-#: most correlations report() lists (all are in correlations() and fit.json)
-_MAX_CORRELATIONS = 20
 #: what a null in FitResult.to_dict() (and fit.json) stands for; written into the document as "null_means"
 FIT_NULL_MEANS = (
     "null: no value. start_rms: a start the search never ran (an earlier start met the target first); "
@@ -39,6 +37,8 @@ FIT_NULL_MEANS = (
     "computed number that is not finite: its value is listed under non_finite")
 #: other starts whose RMS is within this factor of the best (or the tolerance) count as fitting "as well"
 AS_WELL = 1.1
+#: data sets the repr lists by name (a population's cells beyond them are summarized)
+_REPR_SETS = 6
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -296,9 +296,12 @@ class FitResult:
         f = np.atleast_1d(np.asarray(f_hz, dtype=float))
         if prestress_pa is not None:
             Pm = np.atleast_1d(self.prestress_model(prestress_pa))
+            if dataset is None:
+                return self.problem.moduli_at(self.theta, f, Pm)
         else:
-            Pm = self.prestress_model(dataset=self.single_prestress_dataset() if dataset is None else dataset)
-        return self.problem.moduli_at(self.theta, f, Pm)
+            dataset = self.single_prestress_dataset() if dataset is None else dataset
+            Pm = self.prestress_model(dataset=dataset)
+        return self.problem.dataset_moduli_at(self.theta, f, Pm, dataset)
 
     def _default_prestress_N(self) -> float:
         """Model prestress (N) of the first single-prestress data set, else at the first data set's median."""
@@ -335,15 +338,11 @@ class FitResult:
         the default tolerance's analysis is computed once."""
         if rtol == 1e-8:
             return self._identifiability
-        from .identifiability import identifiability
-
-        return identifiability(self.problem, self.theta, sigma_known=self.sigma_known, rtol=rtol)
+        return self.problem.identifiability(self.theta, sigma_known=self.sigma_known, rtol=rtol)
 
     @cached_property
     def _identifiability(self):
-        from .identifiability import identifiability
-
-        return identifiability(self.problem, self.theta, sigma_known=self.sigma_known, rtol=1e-8)
+        return self.problem.identifiability(self.theta, sigma_known=self.sigma_known, rtol=1e-8)
 
     @property
     def standard_errors(self) -> tuple[tuple[float | None, str], ...]:
@@ -410,7 +409,10 @@ class FitResult:
 
     # -- conventions ----------------------------------------------------------------------
     def __repr__(self) -> str:
-        sets = ", ".join(f"{_short(f.data.source)} {f.rms_log10_error:.3g}" for f in self.fits)
+        sets = ", ".join(f"{_short(f.data.source)} {f.rms_log10_error:.3g}" for f in self.fits[:_REPR_SETS])
+        if len(self.fits) > _REPR_SETS:  # a population of cells: the first few, the worst, the count
+            worst = max(self.fits, key=lambda f: f.rms_log10_error)
+            sets += f", … (worst {_short(worst.data.source)} {worst.rms_log10_error:.3g}; {len(self.fits)} in all)"
         return format_repr(
             f"FitResult: {self.label} ({self.problem.describe()}), {len(self.datasets)} data set(s), "
             f"{sum(d.n for d in self.datasets)} points, {self.problem.n_free} free parameters",
@@ -418,6 +420,9 @@ class FitResult:
             f"{self.verdict}; per data set: {sets}",
             f"{self.starts} start(s), seed {self.seed}, {self.elapsed_s:.1f} s; stopped: {self.stop_reason}",
         )
+
+    def _repr_html_(self) -> str:
+        return reporter("fit_html")(self)  # verdict, quality, provenance, parameters with ± (reports/html.py)
 
     def to_dataframe(self):
         """Data, model and log10 errors at every point of every data set (columns with units).
@@ -522,62 +527,15 @@ class FitResult:
         return doc
 
     def report(self) -> str:
-        """A readable plain-text report (in the spirit of lmfit's ``fit_report``)."""
-        lines = [
-            "[[Fit statistics]]",
-            *(f"    data {f.index}:             {f.data.source} ({f.data.n} points, {f.axis}): "
-              f"rms {f.rms_log10_error:.5f}" for f in self.fits),
-            f"    model:              {self.spec.name}: {self.problem.describe()}",
-            f"    free parameters:    {self.problem.n_free} (residuals: {self.problem.n_residuals})",
-            f"    rms log10 error:    {self.rms_log10_error:.5f} (tolerance {self.tolerance:g}): " + self.verdict,
-            f"    starts:             {self.starts} (seed {self.seed}), {self.n_evaluations} model evaluations, "
-            f"{self.elapsed_s:.1f} s",
-            f"    message:            {self.message}",
-        ]
-        if self.stiffness_spread is not None:
-            q, u = self.derived, self.problem.units[0]
-            lines.append(f"    stiffness spread:   {q.text('stiffness_spread', 0, u, 3)} .. "
-                         f"{q.text('stiffness_spread', 1, u, 3)} ({q.text('stiffness_spread', 2, 'decades', 3)})")
-        lines.append("[[Parameters]] (value +/- standard error, in the unit shown; see identifiability())")
-        width = max(len(p.name) for p in self.parameters)
-        if self.identifiability().gauge_removed:
-            lines.append("    (L is an exact gauge of the moduli: the errors are those of EA/L², c/L, P/L² at the "
-                         "fitted L)")
-        for p, (se, note) in zip(self.parameters, self.standard_errors):
-            lines.append(f"    {p.name + ':':<{width + 1}} {plus_minus(p.value, se, p.unit, note)}  "
-                         f"[{p.lower:.3g}, {p.upper:.3g}]  {p.description}")
-        strong = self.correlations()
-        lines.append(f"[[Correlations]] (unreported correlations are < {CORRELATION_THRESHOLD:.3f})")
-        lines += [f"    C({a}, {b}) = {r:+.4f}" for a, b, r in strong[:_MAX_CORRELATIONS]]
-        if len(strong) > _MAX_CORRELATIONS:
-            lines.append(f"    ... and {len(strong) - _MAX_CORRELATIONS} more (FitResult.correlations())")
-        if not strong:
-            lines.append("    none")
-        for f in self.fits:
-            lines += _residual_lines(f)
-        if self.alternatives:
-            lines.append(f"[[Alternatives]] {len(self.alternatives)} other start(s) fit almost as well:")
-            lines += [f"    start {a.start}: rms {a.rms_log10_error:.5f}" for a in self.alternatives]
-        return "\n".join(lines) + "\n"
+        """A readable plain-text report (in the spirit of lmfit's ``fit_report``; :func:`tenscell.reports.fit_text`)."""
+        from .._results import reporter
+
+        return reporter("fit_text")(self)
 
 
 def report_quantities(result: FitResult) -> dict:
     """The report's derived numbers of ``result`` (module level: a worker process evaluates a share of them)."""
     return result.problem.report_quantities(result)
-
-
-def _residual_lines(f) -> list[str]:
-    """The text report's residual table of one data set (moduli: G' and G''; creep: J)."""
-    d = f.data
-    out = [f"[[Residuals log10(model/data): data {f.index}]]"]
-    if f.axis == "time":
-        out.append(f"    {'t (s)':>10}  {'J':>10}")
-        out += [f"    {d.time_s[i]:>10.4g}  {f.residuals[i]:>+10.5f}" for i in range(d.n)]
-        return out
-    xname = "P (Pa)" if f.axis == "prestress" else "f (Hz)"
-    out.append(f"    {xname:>10}  {'G_storage':>10}  {'G_loss':>10}")
-    out += [f"    {f.x[i]:>10.4g}  {f.residuals[i]:>+10.5f}  {f.residuals[d.n + i]:>+10.5f}" for i in range(d.n)]
-    return out
 
 
 def _provenance(d) -> dict:

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import positive_scalar
-from .._results import dataframe, format_repr
+from .._results import dataframe, format_repr, reporter
 from .._threads import hot_path
 from ..io.data import DataError, RheologyData
 from .models.formulas import PHI0, structural_damping_moduli
@@ -183,6 +183,9 @@ class ModelComparison:
                  + ("" if s.holdout_rms_log10_error is None else f", held out {s.holdout_rms_log10_error:.3g}")
                  for s in self.scores]
         return format_repr(f"ModelComparison of {len(self.scores)} models on {self.n_residuals} residuals", *lines[:5])
+
+    def _repr_html_(self) -> str:
+        return reporter("comparison_html")(self)  # one row per model, the preferred ones named (reports/html.py)
 
     def to_dict(self) -> dict:
         return {"models": [s.to_dict() for s in self.scores], "n_residuals": self.n_residuals,

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._errors import option
-from .._results import dataframe, format_repr
+from .._results import dataframe, format_repr, reporter
 from .columns import parse_frame, read_text_file
 from .data import _csv_lines, _parse_float, read_csv
 from .rheology import (RheologyData, _error, _locations, _provenance, _stated_prestress, check_ranges, checked)
@@ -166,6 +166,9 @@ class CreepData:
             + ("" if self.prestress is None else f", prestress {self.prestress.min():.4g} .. "
                f"{self.prestress.max():.4g} Pa"),
         )
+
+    def _repr_html_(self) -> str:
+        return reporter("data_html")(self)  # what, where from (provenance), first and last points (reports/html.py)
 
     @classmethod
     def from_dataframe(cls, df, columns=None, *, source: str = "<DataFrame>", min_points: int = 1, accept=(),

@@ -337,6 +337,11 @@ class RheologyData:
             f"{sd} standard deviations; source {self.source}",
         )
 
+    def _repr_html_(self) -> str:
+        from .._results import reporter  # as __repr__: the conventions are imported when a result is shown
+
+        return reporter("data_html")(self)  # what, where from (provenance), first and last points (reports/html.py)
+
     def to_dataframe(self):
         """``[prestress_Pa,] frequency_Hz, G_storage_Pa, G_loss_Pa[, G_storage_sd_Pa, G_loss_sd_Pa]``."""
         from .._results import dataframe

@@ -58,8 +58,8 @@ from .rigid import deformation_basis
 from .._threads import hot_path
 
 __all__ = ["dynamic_stiffness", "dynamic_compliance", "dynamic_moduli", "dynamic_complex_modulus",
-           "check_static_stability", "cytoplasm_damping", "exact_compliance", "DynamicKernel", "dynamic_kernel",
-           "batched_compliance"]
+           "check_static_stability", "cytoplasm_damping", "exact_compliance", "laplace_compliance", "DynamicKernel",
+           "dynamic_kernel", "batched_compliance"]
 
 
 def _kstar(cell: Cell, kstar) -> np.ndarray:
@@ -394,3 +394,19 @@ def exact_compliance(lin, f_hz) -> np.ndarray:
     if lin.viscosity:
         J = J / (1.0 + 1j * w * (2.0 * cell.strut_length * lin.viscosity) * J)
     return J.reshape(np.shape(f))
+
+
+@hot_path
+def laplace_compliance(lin, s) -> np.ndarray:
+    """``J(s) = D0 K(s)⁻¹ b`` (m/N) of a linear model from its law's exact ``k*(s)`` (and its cytoplasm), shape (n_s,).
+
+    ``s`` (1/s): complex Laplace variables off the negative real axis (``J(iω)`` is :func:`exact_compliance`). For
+    passive laws ``K(s)`` is invertible there, so an exact inversion of ``J(s)/s`` (creep) or ``1/(s·J(s))``
+    (relaxation) may use any contour around that axis (:mod:`tenscell.timedomain`).
+    """
+    cell = lin.cell
+    z = np.atleast_1d(np.asarray(s, dtype=complex)).ravel()
+    J = dynamic_compliance(cell, lin.P, lin.law.laplace_stiffness(cell.lengths, lin.P * cell.T0, z))
+    if lin.viscosity:
+        J = J / (1.0 + z * (2.0 * cell.strut_length * lin.viscosity) * J)
+    return J

@@ -1,4 +1,5 @@
-"""Figures of cell populations: parameter distributions per condition, population moduli bands, ensembles.
+"""Figures of cell populations: parameter distributions per condition, population moduli bands, ensembles, a
+population fitted as one (:func:`population_fit_figure`).
 
 Nothing here computes physics: the functions draw a population table
 (:attr:`tenscell.population.PopulationResult.table`) or result.
@@ -13,7 +14,7 @@ import numpy as np
 
 from ._style import colors, label_moduli, legend_outside, new_axes, new_panels, styled
 
-__all__ = ["parameter_distributions", "population_moduli", "ensemble_moduli"]
+__all__ = ["parameter_distributions", "population_moduli", "ensemble_moduli", "population_fit_figure"]
 
 _LABELS = {
     "EA_actin_N": "EA actin (N)", "EA_intermediate_filament_N": "EA IF (N)", "c_Ns_per_m": "c (N·s/m)",
@@ -164,3 +165,53 @@ def ensemble_moduli(result, ax=None, title: str | None = None):
                  f"circles: the fit's {result.reference_K}-assignment average", fontsize="small")
     ax.legend(fontsize="x-small")
     return ax
+
+
+@styled
+def population_fit_figure(result, cells, ax=None, title: str | None = None, n: int = 100):
+    """A population fitted as one: every cell's G′ (left), G″ (middle), data (points) and fitted model (lines), the
+    typical cell in black; right, each cell's exponent against its stiffness, measured (open) and fitted (filled).
+
+    Parameters
+    ----------
+    result : FitResult
+        Of a :class:`~tenscell.fitting.models.population.Population`.
+    cells : pandas.DataFrame
+        :func:`tenscell.fitting.population_scores.population_cells` of ``result``.
+    ax : three Axes, optional
+    n : int
+        Frequencies of each model curve.
+
+    Returns
+    -------
+    ndarray of three Axes
+    """
+    axes = new_panels(ax, 3, (11.0, 3.4), title=title)
+    pb = result.problem
+    order = np.argsort(np.argsort(cells["stiffness_model_Pa"].to_numpy()))
+    palette = plt.get_cmap("viridis")(np.linspace(0.05, 0.95, max(pb.n_cells, 2)))
+    for k, d in enumerate(result.datasets):
+        c = palette[order[k]]
+        f = np.logspace(math.log10(d.frequency_hz.min()), math.log10(d.frequency_hz.max()), n)
+        Gs, Gl = result.moduli(f, dataset=k)
+        for a, G, data in ((axes[0], Gs, d.G_storage), (axes[1], Gl, d.G_loss)):
+            a.loglog(f, G, color=c, lw=0.6, alpha=0.6)
+            a.loglog(d.frequency_hz, data, "o", ms=2, color=c, alpha=0.6)
+    d0 = result.datasets[pb.reference_cell]
+    f = np.logspace(math.log10(d0.frequency_hz.min()), math.log10(d0.frequency_hz.max()), n)
+    Gs, Gl = result.moduli(f)
+    axes[0].loglog(f, Gs, "k", lw=2, label="typical cell")
+    axes[1].loglog(f, Gl, "k", lw=2)
+    axes[0].set_title("G′: data (points), fit (lines)")
+    axes[1].set_title("G″")
+    label_moduli(axes[:2], "f (Hz)")
+    a = axes[2]
+    a.semilogx(cells["stiffness_measured_Pa"], cells["exponent_measured"], "o", mfc="none", color="0.3", ms=4,
+               label="measured")
+    a.semilogx(cells["stiffness_model_Pa"], cells["exponent_model"], "o", color="C1", ms=3, label="fitted cell")
+    a.set_xlabel(f"G′ at {cells.attrs.get('anchor_Hz', 10):g} Hz (Pa)")
+    a.set_ylabel("exponent (springpot, 1–100 Hz)")
+    a.set_title("exponent against stiffness")
+    a.legend(fontsize=8)
+    axes[0].legend(fontsize=8, loc="lower right")
+    return np.asarray(axes)

@@ -9,9 +9,12 @@ One place for what every distributed run needs:
 * :func:`stream` — submit tasks, a batch per Dask task, through a bounded
   window and yield each result as it completes, so that 10⁵ tasks never sit
   in the cluster at once and the caller can write each result as it arrives;
-* :func:`run_tasks` — what the commands use: times the first task here, then
-  batches the rest so that each Dask task holds about two seconds of work,
-  or keeps them all here when a local cluster would not pay for its start-up.
+* :func:`run_tasks` — what the commands use: runs the first tasks here,
+  measuring their CPU time and the CPUs other processes keep busy
+  (:class:`tenscell._parallel.CpuWindow`), and from those decides
+  (:func:`plan`) whether a local cluster, and of how many workers, pays for
+  its start-up — each worker charged its own — or every task stays here;
+  the rest go to the cluster in batches of about two seconds of CPU each.
 
 A worker that dies while running a task is replaced (by its nanny on a local
 cluster) and the scheduler reruns the task elsewhere; after
@@ -25,15 +28,17 @@ import contextlib
 import itertools
 import logging
 import os
+import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
 from .._errors import TenscellError
-from .._parallel import usable_cpus
+from .._parallel import CpuUse, CpuWindow, usable_cpus
 
-__all__ = ["cluster", "stream", "run_tasks", "cluster_pays", "batch_size", "batch_sizes", "check_scheduler", "TaskLost", "SchedulerLost", "n_threads", "open_work_dir",
-           "WorkDirError"]
+__all__ = ["cluster", "stream", "run_tasks", "plan", "Plan", "batch_size", "batch_sizes", "check_scheduler",
+           "TaskLost", "SchedulerLost", "n_threads", "open_work_dir", "WorkDirError"]
 
 
 class WorkDirError(TenscellError, ValueError):
@@ -149,10 +154,25 @@ def _warm_workers(client, modules: tuple[str, ...]) -> None:
 #: environment of a local cluster's worker processes: one BLAS/OpenMP thread, as every hot path of the main
 #: process runs (Dask's default also sets MALLOC_TRIM_THRESHOLD_, which the main process does not have)
 WORKER_ENVIRON = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
-#: Dask settings of a local cluster's workers: no statistical profiler. It samples the task thread's stack every
-#: 10 ms and takes the GIL to do it; tenscell's fits are many short numpy calls, and a cell's fit took 9.5 % longer
-#: in a Dask worker than in a plain worker process (30 cells, 5.82 s against 5.20 s, bench/bench_population.py)
-WORKER_CONFIG = {"distributed.worker.profile.enabled": False}
+#: Dask settings of a local cluster (its scheduler and nannies in this process, its workers): what a few
+#: long-running batches of tenscell tasks do not need, measured in CPU of an idle 1-worker cluster over 10 s
+#: (bench/bench_population.py): this process 0.25 s -> 0.05 s, the worker 0.15 s -> 0.03 s (1.5-2.5 % of a
+#: core each -> 0.3-0.5 %).
+#:
+#: * no statistical profiler: it samples the task thread's stack every 10 ms and takes the GIL to do it; a
+#:   cell's fit took 9.5 % longer in a Dask worker than in a plain worker process with it (30 cells);
+#: * the event-loop health check every second, not every 20 ms (it warns after 3 s blocked: still seen);
+#: * the system monitor (CPU, memory, disk I/O for the dashboard and heartbeats) every 2 s, not 0.5 s;
+#: * the memory monitor (pause at 80 %, terminate at 95 % of the memory limit) every second, not every
+#:   100 ms (it runs in this process, one psutil call per worker);
+#: * no active memory manager: it moves replicas of data between workers every 2 s; tasks here share none.
+WORKER_CONFIG = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "1s",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.scheduler.active-memory-manager.start": False,
+}
 
 
 @contextlib.contextmanager
@@ -270,19 +290,113 @@ def n_threads(client) -> int:
     return max(1, sum(client.nthreads().values()))
 
 
-#: seconds of work a Dask task is given by batching (each task costs about 0.07 s on a small machine, measured)
+#: CPU seconds of work a Dask task is given by batching: a task costs about 2.3 ms of CPU in this process and
+#: the worker together (200 trivial tasks on a 1-worker cluster: 0.24 s + 0.22 s), 0.1 % of two seconds
 TASK_SECONDS = 2.0
-#: seconds a local cluster takes to be ready (measured on 2 cores: 1.5 s idle, 3–4 s at load 10); the
-#: in-process path is chosen when the whole work is too short to pay for it
-CLUSTER_START_S = 3.0
+#: CPU seconds one local worker takes to be ready: a new interpreter importing distributed and the task's
+#: modules (0.74-0.76 s measured on 2 cores; bench/bench_population.py prints this machine's)
+WORKER_START_CPU_S = 0.8
+#: CPU seconds this process takes to import distributed and start a scheduler (0.23 s + 0.05 s measured),
+#: charged when distributed is not imported yet
+SCHEDULER_START_CPU_S = 0.3
+#: wall seconds a local cluster takes to be ready beyond its CPU (spawning processes, connecting them):
+#: 0.2-0.6 s measured
+CLUSTER_LATENCY_S = 0.5
+#: CPU a cluster adds per second of task work: its scheduler, nannies and heartbeats (0.3-0.5 % of a core per
+#: process with :data:`WORKER_CONFIG`), the tasks' transfers and the last batches' imbalance, rounded up
+CLUSTER_OVERHEAD = 0.02
+#: each worker started must be given at least this many times its start-up CPU in work: a cluster's start-up
+#: is then at most a tenth of what it runs
+WORK_PER_START = 10.0
+#: a cluster is started only when estimated this much faster (wall) than this process: room for the
+#: estimate's error, so that the default never makes a run slower
+PAY_MARGIN = 0.25
+#: seconds of tasks run here, and measured, before deciding (one task at least, however long)
+SAMPLE_S = 0.5
 
 
-def cluster_pays(n_tasks: int, task_s: float, n_workers: int) -> bool:
-    """Whether ``n_tasks`` of ``task_s`` seconds each finish sooner on a new ``n_workers`` cluster than here."""
-    if n_workers < 2:
-        return False
-    serial = n_tasks * task_s
-    return CLUSTER_START_S + serial / n_workers < serial
+@dataclass(frozen=True)
+class Plan:
+    """Where :func:`run_tasks` runs the rest of the tasks when the caller did not say (:func:`plan`).
+
+    Attributes
+    ----------
+    workers : int
+        Local Dask workers to start; 0: every task here.
+    tasks : int
+        Tasks left to run.
+    task_cpu_s : float
+        Measured CPU seconds per task (this process, every thread).
+    use : CpuUse
+        What was measured while the first tasks ran: CPUs, how many others kept busy.
+    here_s : float
+        Estimated wall seconds of the rest in this process.
+    cluster_s : float or None
+        Estimated wall seconds on the cluster considered (None: not even one of 2 workers fits the free CPUs
+        or pays for its start-up).
+    """
+
+    workers: int
+    tasks: int
+    task_cpu_s: float
+    use: CpuUse
+    here_s: float
+    cluster_s: float | None
+
+    def describe(self) -> str:
+        """One line: what was measured and what was decided, in the user's terms."""
+        u = self.use
+        head = (f"{self.tasks} more tasks of {self.task_cpu_s:.2g} s CPU each; {u.cpus} CPU(s), "
+                f"{u.busy_elsewhere:.1f} busy with other work")
+        if self.workers:
+            return (f"{head}: a local Dask cluster of {self.workers} workers (about {self.cluster_s:.0f} s against "
+                    f"{self.here_s:.0f} s in this process)")
+        if self.cluster_s is None:
+            if u.cpus < 2:
+                why = "one CPU"
+            elif int(u.free + 0.5) < 2:
+                why = "fewer than 2 CPUs are free"
+            else:
+                why = (f"each worker would get less than {WORK_PER_START:g}x its start-up (about "
+                       f"{WORKER_START_CPU_S:g} s CPU) in work")
+        else:
+            why = f"about {self.cluster_s:.1f} s on a local Dask cluster against {self.here_s:.1f} s here"
+        return f"{head}: they run in this process ({why})"
+
+
+def _share(use: CpuUse, processes: int) -> float:
+    """Fraction of a CPU each of ``processes`` busy processes of ours gets beside the others' measured load."""
+    return min(1.0, use.cpus / max(use.busy_elsewhere + processes, 1e-9))
+
+
+def plan(tasks: int, task_cpu_s: float, use: CpuUse, *, distributed_imported: bool = False) -> Plan:
+    """Whether ``tasks`` of ``task_cpu_s`` CPU seconds each finish sooner on a new local cluster, and on how many workers.
+
+    Workers: at most the CPUs free of other work (``use.free``, rounded), and
+    each must be given at least :data:`WORK_PER_START` times its own start-up
+    CPU (:data:`WORKER_START_CPU_S`) in work. The cluster is chosen when its
+    estimated wall time — its start-up (each worker's imports at the share of
+    a CPU it gets, the latency, importing distributed here unless
+    ``distributed_imported``) plus the work spread over the workers with
+    :data:`CLUSTER_OVERHEAD` — is below this process's by :data:`PAY_MARGIN`.
+    Wall times are CPU times divided by the share of a CPU a process gets beside
+    the others' load, so a loaded machine stretches both sides.
+    """
+    work = max(0, int(tasks)) * max(float(task_cpu_s), 0.0)
+    here = work / _share(use, 1)
+    most = min(use.cpus, int(use.free + 0.5), int(work / (WORK_PER_START * WORKER_START_CPU_S)))
+    if most < 2:
+        return Plan(0, int(tasks), float(task_cpu_s), use, here, None)
+
+    def wall(n: int) -> float:
+        s = _share(use, n)
+        start = WORKER_START_CPU_S / s + CLUSTER_LATENCY_S
+        start += 0.0 if distributed_imported else SCHEDULER_START_CPU_S / _share(use, 1)
+        return start + work * (1.0 + CLUSTER_OVERHEAD) / (n * s)
+
+    n = min(range(2, most + 1), key=wall)
+    best = wall(n)
+    return Plan(n if best * (1.0 + PAY_MARGIN) <= here else 0, int(tasks), float(task_cpu_s), use, here, best)
 
 
 def batch_size(n_tasks: int, task_s: float, n_threads: int) -> int:
@@ -296,38 +410,55 @@ def run_tasks(fn: Callable, items: Iterable[tuple[object, tuple]], *, client=Non
               notify: Callable[[str], None] | None = None, placed: dict | None = None) -> Iterator[tuple[Any, Any]]:
     """Run ``fn(*args)`` for each ``(tag, args)``, on Dask or here; yield ``(tag, result)`` as each completes.
 
-    The first task runs here and is timed: it sets the batch size (tasks of
-    about :data:`TASK_SECONDS` each, so Dask's per-task cost is noise), and,
-    when neither ``client``, ``scheduler`` nor ``workers`` is given, whether a
-    local cluster pays at all (:func:`cluster_pays`); when it does not, every
-    task runs here and ``notify`` gets one line saying so. ``workers=0`` runs
-    everything here. Results do not depend on where a task ran. ``placed``,
-    if given, receives ``workers``: the Dask workers used (0: this process).
+    The first task runs here and its CPU time sets the batch size (Dask tasks of
+    about :data:`TASK_SECONDS` of CPU each, so Dask's per-task cost is noise).
+    When neither ``client``, ``scheduler`` nor ``workers`` is given, tasks keep
+    running here for :data:`SAMPLE_S` while the CPUs other processes use are
+    measured, and :func:`plan` decides whether a local cluster pays and of how
+    many workers; ``notify`` gets one line saying what was decided and why.
+    ``workers=0`` runs everything here. Results do not depend on where a task
+    ran. ``placed``, if given, receives ``workers``: the Dask workers used (0:
+    this process), and ``plan``: the :class:`Plan` when one was made.
     """
     placed = {} if placed is None else placed
     placed["workers"] = 0
     items = list(items)
     if not items:
         return
-    here = workers == 0 and client is None and scheduler is None
-    t = time.perf_counter()
-    tag, args = items[0]
-    yield tag, fn(*args)
-    task_s, rest = time.perf_counter() - t, items[1:]
+    if workers == 0 and client is None and scheduler is None:
+        yield from ((tag, fn(*args)) for tag, args in items)
+        return
+    deciding = client is None and scheduler is None and workers is None
+    window, done = CpuWindow(), 0
+    cpu: list[float] = []  # CPU seconds of each task run here
+    # tasks here until the sample is long enough to judge (deciding) or the first one (sizing the batches)
+    while done < len(items) and (not cpu or (deciding and time.perf_counter() - window.started < SAMPLE_S)):
+        tag, args = items[done]
+        c = time.process_time()
+        result = fn(*args)
+        cpu.append(time.process_time() - c)
+        done += 1
+        yield tag, result
+    rest = items[done:]
     if not rest:
+        if deciding and notify is not None:
+            notify(f"all {done} tasks ran in this process in {time.perf_counter() - window.started:.2g} s, "
+                   "while it measured them (less than a local Dask cluster takes to start)")
         return
-    n = usable_cpus() if workers is None else int(workers)
-    if not here and client is None and scheduler is None and workers is None and not cluster_pays(len(rest), task_s, n):
-        here = True
+    # the first task pays for first-use costs (imports, caches): the later ones, when there are any, say more
+    task_cpu = sum(cpu[1:]) / (len(cpu) - 1) if len(cpu) > 1 else cpu[0]
+    if deciding:
+        p = plan(len(rest), task_cpu, window.stop(), distributed_imported="distributed" in sys.modules)
+        placed["plan"] = p
         if notify is not None:
-            notify(f"{len(items)} tasks of about {task_s:.2g} s run in this process: on {n} CPU(s), starting a "
-                   f"local Dask cluster (about {CLUSTER_START_S:g} s) would not pay")
-    if here:
-        yield from ((tag, fn(*args)) for tag, args in rest)
-        return
+            notify(p.describe())
+        if p.workers == 0:
+            yield from ((tag, fn(*args)) for tag, args in rest)
+            return
+        workers = p.workers
     with cluster(client=client, workers=workers, scheduler=scheduler, warm=warm) as c:
         placed["workers"] = len(c.nthreads())
-        yield from stream(c, fn, rest, name=name, batch=batch_size(len(rest), task_s, n_threads(c)))
+        yield from stream(c, fn, rest, name=name, batch=batch_size(len(rest), task_cpu, n_threads(c)))
 
 
 def batch_sizes(n_items: int, batch: int, n_threads: int) -> list[int]:

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._checks import positive_array
-from .._results import dataframe, format_repr, plotter
+from .._results import dataframe, format_repr, plotter, reporter
 from .studies import _whole
 
 __all__ = ["EnsembleResult", "mechanism_ensemble", "ensemble_at_data", "DEFAULT_K", "MAX_K", "CHUNK"]
@@ -174,6 +174,9 @@ class EnsembleResult:
             f"the fit's {self.reference_K}-assignment average: within {zs:.2g} (G′) and {zl:.2g} (G″) sampling "
             "standard errors of the ensemble mean",
             f"{self.n_failed} assignment(s) not a stable cell; seed {self.seed}; {self.elapsed_s:.1f} s in {where}")
+
+    def _repr_html_(self) -> str:
+        return reporter("ensemble_html")(self)  # spread between assignments, the fit's average (reports/html.py)
 
     def to_dataframe(self):
         """One row per (prestress, frequency): mean, sd, standard error, 5–95 % band and the fit's average (Pa)."""

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from .._optional import require
-from .._results import format_repr
+from .._results import format_repr, reporter
 
 __all__ = ["PopulationResult", "condition_summary", "recovery", "FIXED_COLUMNS", "SUMMARY_COLUMNS", "read_table",
            "CURVE_FREQUENCIES"]
@@ -162,6 +162,9 @@ class PopulationResult:
             f"model: tendons {self.options.tendons}, damping {self.options.damping}; seed {self.seed}",
             f"{self.elapsed_s:.1f} s on {self.n_workers or 'no'} Dask worker(s), {self.n_resumed} resumed",
         )
+
+    def _repr_html_(self) -> str:
+        return reporter("population_html")(self)  # cells per condition and the medians (reports/html.py)
 
     def to_dataframe(self):
         """The tidy per-cell table (a copy)."""

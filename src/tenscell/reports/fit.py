@@ -21,7 +21,7 @@ from ..fitting.records import noise_rms
 from ..fitting.result import FitResult
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
-from .._results import CORRELATION_THRESHOLD, plus_minus
+from .._results import CORRELATION_THRESHOLD, correlation_text, ln_error, plus_minus
 from ._format import num, table
 from .fit_analysis import section_comparison, section_creep, section_identifiability, section_provenance
 
@@ -211,7 +211,8 @@ def section_stiffness(result: FitResult, baseline=None) -> list[str]:
     full = result.stiffness_spread
     extra = ("" if inner is None or inner == full else
              f"; {inner[0]:.3g} .. {inner[1]:.3g} {unit} ({inner[2]:.1f} decades) without those at bounds")
-    line = (f"Tendon stiffnesses span {q.text('stiffness_spread', 0, unit)} to {q.text('stiffness_spread', 1, unit)}: "
+    line = (f"Tendon stiffnesses span {q.text('stiffness_spread', 0, unit, ln=True)} to "
+            f"{q.text('stiffness_spread', 1, unit, ln=True)}: "
             f"{q.text('stiffness_spread', 2, 'decades', 3)}{extra}.")
     pr = result.problem
     if isinstance(pr, FitProblem):  # the Voigt cell's stiffness groups and its bound on their spread
@@ -249,8 +250,7 @@ def parameter_error(value: float, se: float | None) -> str:
     fit works in ln-parameters, so a large error is a factor, not a difference); "" when not determined."""
     if se is None or not math.isfinite(se) or not value:
         return ""
-    rel = se / abs(value)
-    return f"±{100 * rel:.2g} %" if rel < 0.5 else f"×/÷ {math.exp(min(rel, 700.0)):.3g}"
+    return ln_error(se / abs(value))
 
 
 def section_parameters(result: FitResult, baseline=None) -> list[str]:
@@ -288,10 +288,8 @@ def section_parameters(result: FitResult, baseline=None) -> list[str]:
                 "names (EA/L², c/L, P/L²) at the fitted L.", ""]
     strong = result.correlations()
     if strong:
-        shown_pairs = strong[:20]
-        out += [f"Correlations with |ρ| ≥ {CORRELATION_THRESHOLD:g} ({len(strong)}; all in `fit.json`): "
-                + ", ".join(f"C({a}, {b}) = {r:+.3f}" for a, b, r in shown_pairs)
-                + (" …" if len(strong) > len(shown_pairs) else "") + ".", ""]
+        out += [f"Correlations with |ρ| ≥ {CORRELATION_THRESHOLD:g}, strongest first ({len(strong)}; all in "
+                "`fit.json`): " + ", ".join(correlation_text(strong, limit=10)) + ".", ""]
     else:
         out += [f"No correlation between determined parameters reaches |ρ| = {CORRELATION_THRESHOLD:g}.", ""]
     if result.n_at_bound:
@@ -299,7 +297,7 @@ def section_parameters(result: FitResult, baseline=None) -> list[str]:
                 "limit, not an estimate.", ""]
     if baseline is not None:
         out += [f"Baseline `{baseline.spec.name}` parameters: " + ", ".join(
-            f"{p.name} = {plus_minus(p.value, se, p.unit, note, digits=4)}"
+            f"{p.name} = {plus_minus(p.value, se, p.unit, note, digits=4, ln=True)}"
             for p, (se, note) in zip(baseline.parameters, baseline.standard_errors)), ""]
     return out
 
@@ -311,6 +309,11 @@ def section_errors(result: FitResult, baseline=None) -> list[str]:
     se = result.model_standard_errors()  # decades of log10 G' / G'' / J, per residual
     out.append("Model values with their standard errors (linearized at the optimum, from the parameters' "
                "covariance: `FitResult.model_standard_errors()`).")
+    if not np.isfinite(se).any() or (baseline is not None and not np.isfinite(baseline.model_standard_errors()).any()):
+        # said once here, not in every cell of the tables below
+        whose = "the model values" if not np.isfinite(se).any() else "the baseline's values"
+        out.append(f"Not determined for {whose} (shown without ±): the noise level σ is unknown (no standard "
+                   "deviations in the data, and as many seen parameter combinations as residuals).")
     out.append("")
     for f in result.fits:
         d = f.data
@@ -346,8 +349,9 @@ def section_errors(result: FitResult, baseline=None) -> list[str]:
 
 def _model_value(value: float, se_decades: float) -> str:
     """A model value with its standard error, from that of its log10 (first order: value·ln10·se)."""
-    se = value * math.log(10.0) * se_decades if math.isfinite(se_decades) else None
-    return plus_minus(value, se, "", "" if se is not None else "(σ unknown)", 4)
+    if not math.isfinite(se_decades):
+        return num(value, 4)  # σ unknown: said once above the table (section_errors)
+    return plus_minus(value, value * math.log(10.0) * se_decades, "", "", 4)
 
 
 def section_alternatives(result: FitResult, baseline=None) -> list[str]:
@@ -377,8 +381,27 @@ SECTIONS = [("summary", section_summary), ("provenance", section_provenance), ("
 MODEL_SECTIONS = frozenset({"prestress", "creep", "held", "assignments"})
 
 
+def section_out_of_sample(validation) -> list[str]:
+    """The model and its structure-free baselines refitted on held-out splits, ranked, with the verdict."""
+    if validation is None:
+        return []
+    rows = [(f"**{r.model}**" if r.model == validation.model else r.model,
+             "tensegrity" if r.structural else "structure-free",
+             "n/a" if r.n_params < 0 else r.n_params, num(r.mean, 3), num(r.worst, 3),
+             *(num(x, 3) for x in r.rms)) for r in validation.rows]
+    return ["## Out of sample: the model against its baselines", "",
+            "Every model refitted on each split's training data (frequency sweeps trained at or below a cut-off, "
+            "prestress sweeps without some prestresses) and scored by the RMS of its log10 errors on the points it "
+            "did not see (decades); best first.", "",
+            table(("model", "kind", "parameters", "mean held-out RMS", "worst", *validation.splits), rows),
+            f"**Verdict**: {validation.verdict}.", "",
+            "*What this does not show*: held-out errors on data generated from a published law measure how well a "
+            "model extrapolates that law, not the cell; a model that fits the training data better can still "
+            "extrapolate worse.", ""]
+
+
 def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: str | None = None,
-                 comparison=None) -> str:
+                 comparison=None, validation=None) -> str:
     """A Markdown report of a fit of any model: verdict, each data set, identifiability, model comparison,
     parameters, errors, the baseline beside it, and the sections of its kind of model.
 
@@ -392,6 +415,8 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
     comparison : ModelComparison, optional
         From :func:`tenscell.fitting.scores.compare_models` (e.g. with held-out data); computed from ``result``
         and ``baseline`` when not given.
+    validation : OutOfSampleComparison, optional
+        The model and its baselines out of sample (:func:`tenscell.fitting.validation.compare_out_of_sample`).
     """
     if title is None:
         title = (f"Fit of `{result.spec.name}` to " + " and ".join(f"`{_name(d.source)}`" for d in result.datasets))
@@ -404,4 +429,6 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
             continue
         out += section_comparison(result, baseline, comparison=comparison) if name == "comparison" \
             else section(result, baseline)
+        if name == "comparison":
+            out += section_out_of_sample(validation)
     return "\n".join(out)

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..fitting.identifiability import GAUGE
-from .._results import plus_minus
+from .._results import ln_error, plus_minus
 from ._format import num, pct, table
 
 __all__ = ["identifiability_section", "comparison_section", "creep_section", "provenance_line",
@@ -21,12 +21,8 @@ __all__ = ["identifiability_section", "comparison_section", "creep_section", "pr
 
 
 def _factor(se: float) -> str:
-    """A standard error in ln units as '±x %' (small) or '×/÷ f' (large)."""
-    if se is None or not np.isfinite(se):
-        return "not determined"
-    if se < 0.2:
-        return f"±{pct(se, 1)}"
-    return f"×/÷ {num(math.exp(min(se, 700.0)), 3)}"
+    """A standard error in ln units as '±x %' (small) or '×/÷ f' (large), as every report gives it."""
+    return ln_error(se) or "not determined"
 
 
 def provenance_line(data) -> str | None:

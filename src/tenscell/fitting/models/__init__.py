@@ -4,7 +4,8 @@
   (:mod:`~.voigt_kernel`, :mod:`~.voigt_creep`);
 * :mod:`~.mechanism` — few-parameter mechanisms (a tendon law, its parameters' layout, a cytoplasm, distributed
   properties: :mod:`~.heterogeneity`) and their problem (:mod:`~.mechanism_kernel`);
-* :mod:`~.formulas` — structure-free formulas: the baselines a tensegrity has to beat.
+* :mod:`~.formulas` — structure-free formulas: the baselines a tensegrity has to beat;
+* :mod:`~.population` — populations: any of these over many cells, with shared and per-cell parameters.
 
 :data:`MODELS` holds every built-in model by name; :func:`get_model` looks one up (a
 :class:`~.base.FitModel` passes through). A new mechanism on an existing law is one entry of the catalog
@@ -16,9 +17,10 @@ from .base import FitModel, model_from_dict
 from .formulas import FORMULAS, Formula
 from .catalog import MECHANISMS, PER_TENDON_VOIGT
 from .mechanism import Field, Mechanism
+from .population import Population
 from .voigt import VoigtModel
 
-__all__ = ["FitModel", "VoigtModel", "Mechanism", "Field", "Formula", "MODELS", "GROUPS", "RECOMMENDED",
+__all__ = ["FitModel", "VoigtModel", "Mechanism", "Field", "Formula", "Population", "MODELS", "GROUPS", "RECOMMENDED",
            "get_model", "model_names", "model_from_dict", "PER_TENDON_VOIGT", "baseline_of"]
 
 #: the recommended model for a lab's first fit (the mechanisms study's best few-parameter mechanism on the bundled

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..._checks import positive_scalar
 from ..._errors import TenscellError
+from ..._results import reporter
 from ...linear.linearize import LinearModel
 from ...model.equilibrium import Cell
 
@@ -74,6 +75,11 @@ class FitModel:
 
     def baseline(self) -> FitModel | None:
         """The model a fit of this one is shown beside in its report (None: none)."""
+        return None
+
+    def formula(self) -> FitModel | None:
+        """This model's own structure-free formula: its terms lumped into one element with the same prestress
+        coupling, the baseline a tensegrity must beat out of sample (None for a formula itself)."""
         return None
 
     @property
@@ -216,6 +222,9 @@ class FittedModel:
     def describe(self) -> str:
         """One line: what this fitted model is."""
         raise NotImplementedError
+
+    def _repr_html_(self) -> str:
+        return reporter("fitted_model_html")(self)  # what it is, its values, its prestress (reports/html.py)
 
     def to_dict(self) -> dict:
         """JSON-ready (fit.json's ``"model"`` entry); :func:`fitted_from_dict` rebuilds it."""

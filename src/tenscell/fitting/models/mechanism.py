@@ -171,6 +171,9 @@ class Mechanism(FitModel):
 
     def baseline(self):
         """Its own structure-free formula (:func:`tenscell.fitting.models.formulas.lumped_formula`)."""
+        return self.formula()
+
+    def formula(self):
         from .formulas import lumped_formula
 
         return lumped_formula(self)

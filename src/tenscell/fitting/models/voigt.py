@@ -130,6 +130,14 @@ class VoigtModel(FitModel):
             return None
         return VoigtModel("uniform")
 
+    def formula(self) -> FitModel | None:
+        """Voigt tendons lumped into one element with a modulus proportional to P (what P·Kp gives without a
+        structure): E0 + a·P + iωη."""
+        from .formulas import Formula
+
+        return Formula("voigt (lumped)", ("aP", "E0", "newtonian"),
+                       "the structure-free formula of the Voigt cell: a·P + E0 + iωη")
+
     @property
     def constrained(self) -> bool:
         """Whether an activity constraint or a bound on the stiffness spread shapes the search space."""
