@@ -746,7 +746,7 @@ def profile_intervals(result, parameters="auto", *, points: int = DEFAULT_POINTS
     out = []
     for name, reason in todo:
         if notify is not None:
-            notify(f"profile of {name} ({reason}): {points} values and up to {4 * refine} refinements")
+            notify(f"profile of {name}: {reason}; {points} values and up to {4 * refine} refinements")
         out.append(profile_parameter(result, name, points=points, refine=refine, reason=reason, hops=hops,
                                      max_nfev=max_nfev, progress=progress))
     return ProfileSet(profiles=tuple(out), not_run="" if out else "nothing to profile: every parameter is bounded by "

@@ -470,48 +470,54 @@ class StructureSummary:
     scale: PrestressScale
 
     def share_text(self, part: str = "geometric", modulus_part: str = "storage", i: int = 0) -> str:
-        """``"2.1 % ± 0.3 %"``: a share at frequency ``i`` with its standard error, as a percentage."""
+        """``"2.1 ± 0.01 %"``: a share at frequency ``i`` with its standard error, both in percent."""
         q = self.quantities
         key = f"{part}_{modulus_part}"
         v = float(q.values[key][i])
         if not math.isfinite(v):
             return "undefined (no change over the range)"
         se, note = q.error(key, i)
-        err = f" ± {100 * se:.2g} %" if se is not None else (f" {note}" if note else "")
-        return f"{100 * v:.3g} %{err}"
+        if se is None:
+            return f"{100 * v:.3g} % (± not determined{' ' + note if note else ''})"
+        return f"{100 * v:.3g} ± {100 * se:.2g} %"
+
+    def share_verdict(self) -> str:
+        """Who carries dG'/dP, in words ("" for the Voigt cell, whose tendons have no tension terms)."""
+        if self.shares is None:
+            return ""
+        g = self.quantities.values["geometric_storage"]
+        terms = TENSION_TERMS.get(self.law or "", "the tendon law's tension terms")
+        f = self.shares.frequency_hz
+        at = f"at {f[0]:.3g} Hz" if f.size == 1 else f"at {f[0]:.3g}–{f[-1]:.3g} Hz"
+        over = (f"over {self.shares.prestress_pa[0]:.4g}–{self.shares.prestress_pa[-1]:.4g} Pa"
+                if np.all(np.isfinite(self.shares.prestress_pa)) else
+                f"at the fitted P = {self.shares.prestress_n[0]:.4g} N (locally)")
+        share = (f"{self.share_text('geometric', 'storage')} of the change of G′ and "
+                 f"{self.share_text('geometric', 'loss')} of G″ {over} {at}")
+        if np.all(~np.isfinite(g)):
+            return f"G′ does not change with the prestress {over}: there is no change to share."
+        if np.nanmax(g) < PASSENGER_SHARE:
+            return (f"**The structure is a passenger**: the geometric prestress stiffness P·Kp carries {share}; the "
+                    f"rest is carried by {terms}. The prestress acts through the tendon law, not through the paper's "
+                    "mechanism.")
+        if np.nanmin(g) >= CARRIES_SHARE:
+            return f"**The structure carries the prestress dependence**: the geometric prestress stiffness P·Kp carries {share}."
+        return (f"The structure and the tendon law share the prestress dependence: the geometric prestress stiffness "
+                f"P·Kp carries {share}; the rest is carried by {terms}.")
+
+    def scale_verdict(self) -> str:
+        """The fitted prestress against the measured one, in words ("" when no data set states its prestress)."""
+        sc = self.scale
+        if sc.s is None:
+            return ""
+        where = "inside" if sc.anchored else "outside"
+        return (f"The fitted prestress is {100 * sc.ratio:.3g} % of the measured one (s = {sc.s:.3g} m²); in the "
+                f"paper's convention the cell's strut length is L = {sc.L_paper:.3g} m, {where} the anchored range "
+                f"{ANCHORED_L[0]:g}–{ANCHORED_L[1]:g} m.")
 
     def verdict(self) -> str:
         """The finding in words: who carries dG'/dP, and whether the prestress is anchored."""
-        out = []
-        if self.shares is not None:
-            g = self.quantities.values["geometric_storage"]
-            terms = TENSION_TERMS.get(self.law or "", "the tendon law's tension terms")
-            f = self.shares.frequency_hz
-            at = f"at {f[0]:.3g} Hz" if f.size == 1 else f"at {f[0]:.3g}–{f[-1]:.3g} Hz"
-            over = (f"over {self.shares.prestress_pa[0]:.4g}–{self.shares.prestress_pa[-1]:.4g} Pa"
-                    if np.all(np.isfinite(self.shares.prestress_pa)) else
-                    f"at the fitted P = {self.shares.prestress_n[0]:.4g} N (locally)")
-            share = f"{self.share_text('geometric', 'storage')} of the change of G′ and " \
-                    f"{self.share_text('geometric', 'loss')} of G″ {over} {at}"
-            if np.all(~np.isfinite(g)):
-                out.append(f"G′ does not change with the prestress {over}: there is no change to share.")
-            elif np.nanmax(g) < PASSENGER_SHARE:
-                out.append(f"**The structure is a passenger**: the geometric prestress stiffness P·Kp carries {share}; "
-                           f"{terms} carry the rest. The prestress acts through the tendon law, not through the "
-                           "paper's mechanism.")
-            elif np.nanmin(g) >= CARRIES_SHARE:
-                out.append(f"**The structure carries the prestress dependence**: the geometric prestress stiffness "
-                           f"P·Kp carries {share}.")
-            else:
-                out.append(f"The structure and the tendon law share the prestress dependence: the geometric "
-                           f"prestress stiffness P·Kp carries {share}; {terms} carry the rest.")
-        sc = self.scale
-        if sc.s is not None:
-            where = "inside" if sc.anchored else "outside"
-            out.append(f"The fitted prestress is {100 * sc.ratio:.3g} % of the measured one (s = {sc.s:.3g} m²); in the "
-                       f"paper's convention the cell's strut length is L = {sc.L_paper:.3g} m, {where} the anchored "
-                       f"range {ANCHORED_L[0]:g}–{ANCHORED_L[1]:g} m.")
-        return " ".join(out)
+        return " ".join(t for t in (self.share_verdict(), self.scale_verdict()) if t)
 
     def __repr__(self) -> str:
         return format_repr(f"StructureSummary of {self.model}", self.verdict())
