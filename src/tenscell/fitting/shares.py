@@ -366,6 +366,8 @@ class PrestressScale:
         The fitted model prestress (N) when no data set states one.
     profile_s : tuple or None
         ``(lower, upper)`` of s at 95 % from its profile likelihood (None: no profile; an end None: open).
+    s_at_bound : str or None
+        ``"lower"`` or ``"upper"`` when s sits at a bound of the fit (then L_paper is a limit, not an estimate).
     """
 
     s: float | None
@@ -376,6 +378,7 @@ class PrestressScale:
     fitted_pa: tuple
     P_N: float | None = None
     profile_s: tuple | None = None
+    s_at_bound: str | None = None
 
     @property
     def L_paper(self) -> float | None:
@@ -415,6 +418,7 @@ class PrestressScale:
                 "anchored": self.anchored, "measured_prestress_Pa": list(self.measured_pa),
                 "fitted_prestress_Pa": [{"dataset": k, "value": v, "stderr": e} for k, v, e in self.fitted_pa],
                 "fitted_model_prestress_N": self.P_N,
+                "s_at_bound": self.s_at_bound,
                 "profile_s_95": None if self.profile_s is None else list(self.profile_s),
                 "profile_L_paper_95": None if self.profile_L is None else list(self.profile_L)}
 
@@ -443,7 +447,7 @@ def prestress_scale(result) -> PrestressScale | None:
         except KeyError:
             span = None
     return PrestressScale(s=named["s"].value, s_error_ln=rel, s_note=note, L_cell=L_cell, measured_pa=measured,
-                          fitted_pa=fitted, profile_s=span)
+                          fitted_pa=fitted, profile_s=span, s_at_bound=named["s"].at_bound)
 
 
 @dataclass(frozen=True, eq=False, repr=False)

@@ -68,9 +68,8 @@ def section_combinations(result, baseline=None) -> list[str]:
         out += ["Each parameter the data determine is determined on its own: no product of two parameters is "
                 "determined while its factors are not.", ""]
     if loose or bound:
-        what = ", ".join(loose + [f"{n} (at a bound)" for n in bound])
-        out += [f"Not determined by the local analysis: {what}; their profile intervals are under *Profile "
-                "likelihood* below.", ""]
+        what = "; ".join(t for t in (_names(loose), _names(bound) + " (at a bound)" if bound else "") if t)
+        out += [f"Not determined by the local analysis: {what}; see *Profile likelihood* below.", ""]
     return out
 
 
@@ -102,17 +101,26 @@ def _scale_lines(sc) -> list[str]:
     L_err = ln_error(sc.L_paper_error_ln)
     inside = "inside" if sc.anchored else "**outside**"
     lo, hi = min(sc.measured_pa), max(sc.measured_pa)
+    s_range = (f"s ∈ [{ANCHORED_L[1] ** -2:g}, {ANCHORED_L[0] ** -2:g}] m²" if sc.L_cell == 1.0 else
+               f"s/L_cell² ∈ [{ANCHORED_L[1] ** -2:g}, {ANCHORED_L[0] ** -2:g}]")
     out = [f"**The fitted prestress against the measured one.** The data state {num(lo)}–{num(hi)} Pa; the model "
-           f"prestress on the fit's cell (strut length {num(sc.L_cell)} m) is s × the measured one with s = {err}: "
-           f"{_pct(sc.ratio)} of it. In the paper's convention (the model prestress in N equal to the measured "
-           f"prestress in Pa, moved along the exact gauge) the cell's strut length is L = L_cell/√s = "
-           f"**{num(sc.L_paper, 3)} m** {L_err}, {inside} the anchored range {ANCHORED_L[0]:g}–{ANCHORED_L[1]:g} m "
-           f"(s ∈ [{sc.L_cell**2 / ANCHORED_L[1]**2:g}, {sc.L_cell**2 / ANCHORED_L[0]**2:g}] m²)."]
+           f"prestress P (N) on the fit's cell (strut length {num(sc.L_cell, 4)} m) is s × the measured one with "
+           f"s = {err}: P/L_cell² is {_pct(sc.ratio)} of the measured prestress. In the paper's convention (the model "
+           f"prestress in N equal to the measured prestress in Pa, moved along the exact gauge) the cell's strut "
+           f"length is L = L_cell/√s = **{num(sc.L_paper, 3)} m**{' ' + L_err if L_err else ''}, {inside} the "
+           f"anchored range {ANCHORED_L[0]:g}–{ANCHORED_L[1]:g} m ({s_range})."
+           + (f" s sits at its {sc.s_at_bound} bound: this L is a limit, not an estimate." if sc.s_at_bound else "")]
     if sc.profile_L is not None:
         short, long_ = sc.profile_L
-        out.append(f"At 95 % (the profile of s) the strut length lies between "
-                   f"{'0 (not bounded)' if short is None else num(short, 3)} and "
-                   f"{'∞ (not bounded)' if long_ is None else num(long_, 3)} m.")
+        if short is None and long_ is None:
+            span = "is not bounded within the bounds of s"
+        elif short is None:
+            span = f"is at most {num(long_, 3)} m (not bounded below within the bounds of s)"
+        elif long_ is None:
+            span = f"is at least {num(short, 3)} m (not bounded above within the bounds of s)"
+        else:
+            span = f"lies between {num(short, 3)} and {num(long_, 3)} m"
+        out.append(f"At 95 % (the profile of s) the strut length {span}.")
     for k, v, e in sc.fitted_pa:
         out.append(f"Data set {k} states no prestress; the fit places it at {plus_minus(v, e, 'Pa', '', 4)} (a fitted "
                    "parameter, not a measurement).")
@@ -162,17 +170,30 @@ def section_structure(result, baseline=None) -> list[str]:
 
 
 # ---- profile intervals ----------------------------------------------------------------------------------------
+def _needed_text(needed) -> str:
+    """``"EA, c (not determined locally); P (at its lower bound)"``: names grouped by reason, at most 8 per reason."""
+    by: dict[str, list[str]] = {}
+    for name, reason in needed:
+        key = "not determined locally" if reason.startswith("not determined locally") else reason
+        by.setdefault(key, []).append(name)
+    return "; ".join(_names(names) + f" ({reason})" for reason, names in by.items())
+
+
+def _names(names, limit: int = 8) -> str:
+    return ", ".join(names[:limit]) + (f" … ({len(names)} in all)" if len(names) > limit else "")
+
+
 def profile_lines(profile, needed=()) -> list[str]:
     """Profile-likelihood intervals (:class:`~tenscell.fitting.profile.ProfileSet`) as Markdown lines."""
     out = ["## Profile likelihood: what the data say where the local analysis cannot", ""]
     if profile is None:
-        listed = "; ".join(f"{n} ({r})" for n, r in needed)
-        return out + [f"Parameters the local analysis cannot bound: {listed}. Their profile intervals were not "
-                      "computed (`FitResult.compute_profile()`, `tenscell fit --profile yes`).", ""]
+        return out + [f"Parameters the local analysis cannot bound: {_needed_text(needed)}. Their profile intervals "
+                      "were not computed (`FitResult.compute_profile()`, `tenscell fit --profile yes`).", ""]
     if profile.not_run:
-        listed = "; ".join(f"{n} ({r})" for n, r in profile.needed)
-        return out + [f"Profile intervals {profile.not_run}." + (f" Parameters the local analysis cannot bound: "
-                                                                   f"{listed}." if listed else ""), ""]
+        if not profile.needed:
+            return []
+        return out + [f"Profile intervals {profile.not_run}. Parameters the local analysis cannot bound: "
+                      f"{_needed_text(profile.needed)}.", ""]
     rows = [(p.name, p.reason, f"{num(p.value, 4)} {p.unit}".strip(), p.interval(0.6827).text(p.unit),
              p.interval(0.95).text(p.unit), p.refits) for p in profile]
     out += ["Each parameter below was held at values over its bounds (log-spaced, each crossing refined by "
@@ -185,8 +206,10 @@ def profile_lines(profile, needed=()) -> list[str]:
             best = p.values[int(np.argmin(p.delta))]
             out.append(f"A refit with {p.name} = {num(best)} fits better than the fit itself by Δ(−2 ln L) = "
                        f"{num(p.improved, 3)}: the {'held value' if p.held else 'search'} is not the data's best.")
-        if p.held_others:
-            out.append(f"{p.name}'s profile holds {', '.join(p.held_others)} at the fitted value (an exact gauge).")
+    held = sorted({n for p in profile for n in p.held_others})
+    if held:
+        out.append(f"Every profile holds {', '.join(held)} at the fitted value: an exact gauge of the moduli, which "
+                   "the data do not see.")
     out += ["", f"Cost: {profile.refits} refits in {profile.cpu_s:.1f} s of CPU (each the other parameters refitted "
             "from the neighbouring point's values: one start and a short basin-hopping budget).", "",
             "*What this does not show*: a refit with a short budget can stop above the best fit at its value, which "
