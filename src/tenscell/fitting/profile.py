@@ -433,6 +433,7 @@ class _Setup:
     phi: np.ndarray  # the fit's log-parameters in this problem's layout
     hold: np.ndarray  # mask of parameters held beside the profiled one (L under the gauge)
     sigma_known: bool
+    value: float  # the fitted (or held) value, SI units
 
 
 def _m2lnL(problem, theta, sigma_known: bool) -> tuple[float, float]:
@@ -491,12 +492,16 @@ class _Profiler:
         return xs, m2, rms, phis
 
 
-def _scan(prof: _Profiler, lo: float, hi: float, points: int) -> None:
-    """Refit at ``points`` log-spaced values over [lo, hi] (ln units), outward from the fit's own value."""
+def _scan(prof: _Profiler, lo: float, hi: float, points: int, se: float | None) -> None:
+    """Refit at ``points`` log-spaced values over [lo, hi] (ln units), outward from the fit's own value, and where
+    the local analysis puts the thresholds (``x0 ± √t·se``, when it gives a standard error ``se`` of ln)."""
     # a grid point within rounding of the fit's own value is that value (no refit where the fit is)
     grid = [prof.x0 if abs(x - prof.x0) <= 1e-9 * max(1.0, abs(x)) else float(x) for x in np.linspace(lo, hi, points)]
-    up = [x for x in grid if x > prof.x0]
-    down = [x for x in grid[::-1] if x < prof.x0]
+    if se is not None and math.isfinite(se) and se > 0:
+        grid += [x for _, t in LEVELS for x in (prof.x0 - math.sqrt(t) * se, prof.x0 + math.sqrt(t) * se)
+                 if lo < x < hi]
+    up = sorted(x for x in grid if x > prof.x0)
+    down = sorted((x for x in grid if x < prof.x0), reverse=True)
     for x in up + down:  # each warm-started from its refitted neighbour nearer the fit (continuation)
         prof.at(x)
 
@@ -536,8 +541,9 @@ def _interval(xs, d, level: float, t: float, bounds) -> ProfileInterval:
         if b is None:  # within the threshold up to the bound: open on this side
             ends.append(None)
             continue
-        (xa, da), (xb, db) = (xs[b[0]], d[b[0]]), (xs[b[1]], d[b[1]])
-        w = (t - da) / (db - da) if db != da else 0.5
+        # √Δ is linear in ln θ where the profile is quadratic (the large-sample limit): interpolate it, not Δ
+        (xa, ra), (xb, rb) = (xs[b[0]], math.sqrt(max(d[b[0]], 0.0))), (xs[b[1]], math.sqrt(d[b[1]]))
+        w = (math.sqrt(t) - ra) / (rb - ra) if rb != ra else 0.5
         ends.append(float(math.exp(xa + w * (xb - xa))))
     first, last = _region(xs, d, t)
     outside = np.r_[d[:first], d[last + 1:]]
@@ -591,7 +597,7 @@ def _setup(result, name: str) -> _Setup:
         if hold[i]:
             raise ValueError(f"parameter {name!r} is the strut length, an exact gauge of the moduli: the data do not "
                              "see it at all")
-        return _Setup(pr, i, phi, hold, result.sigma_known)
+        return _Setup(pr, i, phi, hold, result.sigma_known, result.parameters[i].value)
     held = dict(_held_fields(pr))
     if name not in held:
         raise ValueError(f"no parameter named {name!r} (parameters: {', '.join(pr.names)}"
@@ -617,11 +623,12 @@ def _freed(result, name: str, value: float, phi) -> _Setup:
     free = np.where(keep, pr.free[src], False)
     new_phi = np.where(keep, phi[src], math.log(value))
     problem = dataclasses.replace(base, lower=lower, upper=upper, free=free, fixed_log=new_phi.copy())
-    return _Setup(problem, base.names.index(name), new_phi, np.zeros(base.n_params, dtype=bool), result.sigma_known)
+    return _Setup(problem, base.names.index(name), new_phi, np.zeros(base.n_params, dtype=bool), result.sigma_known,
+                  value)
 
 
 def profile_parameter(result, name: str, *, points: int = DEFAULT_POINTS, refine: int = DEFAULT_REFINE,
-                      bounds: tuple | None = None, reason: str = "asked for", hops: int = REFIT_HOPS,
+                      bounds: tuple | None = None, reason: str | None = None, hops: int = REFIT_HOPS,
                       max_nfev: int = REFIT_NFEV, progress: bool | None = None) -> ParameterProfile:
     """The profile likelihood of one parameter of a fit (module docstring).
 
@@ -636,8 +643,8 @@ def profile_parameter(result, name: str, *, points: int = DEFAULT_POINTS, refine
         Bisection refits per threshold crossing (>= 0).
     bounds : (float, float), optional
         The range to scan (the parameter's unit); default its bounds in the fit (a held field: its kind's default).
-    reason : str
-        Why it is profiled (for the report).
+    reason : str, optional
+        Why it is profiled (for the report); default the reason :func:`needs_profile` gives, else "asked for".
     hops, max_nfev : int
         Each refit's budget: basin-hopping moves after its warm start, model evaluations per least-squares run.
     progress : bool or None
@@ -652,6 +659,8 @@ def profile_parameter(result, name: str, *, points: int = DEFAULT_POINTS, refine
 
     points, refine = count("points", points, 3), count("refine", refine, 0)
     setup = _setup(result, name)
+    if reason is None:
+        reason = dict(needs_profile(result)).get(name, "asked for")
     pr = setup.problem
     lo, hi = float(pr.lower[setup.index]), float(pr.upper[setup.index])
     if bounds is not None:
@@ -663,9 +672,9 @@ def profile_parameter(result, name: str, *, points: int = DEFAULT_POINTS, refine
             raise ValueError(f"bounds {bounds!r} do not overlap the bounds of {name!r} "
                              f"[{math.exp(pr.lower[setup.index]):.4g}, {math.exp(pr.upper[setup.index]):.4g}]")
     t0 = time.process_time()
-    with progress_bar(total=points + 4 * refine, desc=f"profile {name}", unit="refit", progress=progress) as bar:
+    with progress_bar(total=points + 4 + 4 * refine, desc=f"profile {name}", unit="refit", progress=progress) as bar:
         prof = _Profiler(setup, count("hops", hops, 0), count("max_nfev", max_nfev, 1), bar)
-        _scan(prof, lo, hi, points)
+        _scan(prof, lo, hi, points, _local_error(result, name))
         _refine(prof, refine)
     xs, m2, rms, phis = prof.arrays()
     reference = float(m2.min())
@@ -673,13 +682,22 @@ def profile_parameter(result, name: str, *, points: int = DEFAULT_POINTS, refine
     span = (math.exp(lo), math.exp(hi))
     others = [(j, n) for j, n in enumerate(pr.names) if prof.free[j]]
     return ParameterProfile(
-        name=name, unit=pr.units[setup.index], reason=reason, value=float(math.exp(setup.phi[setup.index])),
+        name=name, unit=pr.units[setup.index], reason=reason, value=setup.value,
         held=name not in result.problem.names, bounds=span, values=np.exp(xs), m2lnL=m2, rms=rms,
         others=tuple(n for _, n in others), other_values=np.exp(phis[:, [j for j, _ in others]]), reference=reference,
         intervals=tuple(_interval(xs, d, lv, t, span) for lv, t in LEVELS),
         compensations=_compensations(name, xs, d, phis, prof.x0, others), refits=prof.refits,
         cpu_s=time.process_time() - t0, held_others=tuple(n for j, n in enumerate(pr.names) if setup.hold[j]),
         geometric_share=_shares_along(pr, prof.free, phis))
+
+
+def _local_error(result, name: str) -> float | None:
+    """The local standard error of ln ``name`` (None: not analysed, or not determined)."""
+    ident = result.identifiability()
+    if name not in ident.names:
+        return None
+    se = float(ident.standard_errors[ident.names.index(name)])
+    return se if math.isfinite(se) else None
 
 
 def _shares_along(problem, free, phis) -> np.ndarray | None:
