@@ -94,7 +94,7 @@ def test_a_well_determined_parameter_has_the_local_interval(name):
     se = float(ident.standard_errors[ident.names.index(name)])
     p = profile_parameter(r, name, refine=5, progress=False)
     v = r.value(name)
-    for (level, t), iv in zip(LEVELS, p.intervals):
+    for (_, t), iv in zip(LEVELS, p.intervals):
         z = math.sqrt(t)
         assert iv.kind == "two-sided"
         assert math.log(iv.lower / v) == pytest.approx(-z * se, rel=0.02)

@@ -285,8 +285,9 @@ class Identifiability:
                 combo = self._pair(i, j, cov + penalty * unseen, within)
                 if combo is not None:
                     found.append(combo)
-        kept, used = [], set()
-        for c in sorted(found, key=lambda c: c.standard_error):
+        kept: list[Combination] = []
+        used: set[str] = set()
+        for c in sorted(found, key=lambda c: float(c.standard_error or 0.0)):
             names = {n for n, _ in c.exponents}
             if not names & used:
                 kept.append(c)
@@ -318,7 +319,7 @@ class Identifiability:
         k = [i, j]
         value = float(np.exp(np.sum(e * np.log(self.values[k]))))
         return Combination(exponents=tuple((self.labels[n], float(x)) for n, x in zip(k, e)),
-                           singular_value=float(self.sigma / err) if err > 0 else math.inf, standard_error=err,
+                           singular_value=float(self.sigma or 1.0) / err if err > 0 else math.inf, standard_error=err,
                            value=value, factor_errors=tuple((self.labels[n], float(self.standard_errors[n]))
                                                             for n in k))
 

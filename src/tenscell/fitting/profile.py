@@ -31,6 +31,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -428,7 +429,7 @@ def _not_supported(problem) -> str:
 class _Setup:
     """The problem a profile refits in (the fit's own, or a mechanism with a held field freed), and where."""
 
-    problem: object
+    problem: Any  # a Problem dataclass (dataclasses.replace gives its variants)
     index: int  # the profiled parameter's position in problem.names
     phi: np.ndarray  # the fit's log-parameters in this problem's layout
     hold: np.ndarray  # mask of parameters held beside the profiled one (L under the gauge)
@@ -535,7 +536,7 @@ def _region(xs, d, t: float) -> tuple[int, int]:
 
 def _interval(xs, d, level: float, t: float, bounds) -> ProfileInterval:
     """The connected region of ``d <= t`` around the minimum, its ends interpolated linearly in ln value."""
-    ends = []
+    ends: list[float | None] = []
     for side in (-1, 1):
         b = _bracket(xs, d, t, side)
         if b is None:  # within the threshold up to the bound: open on this side

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -43,6 +44,9 @@ from .._checks import positive_array, positive_scalar
 from .._results import format_repr
 from .. import laws as _laws
 from ..linear.assembly import modulus
+
+if TYPE_CHECKING:
+    from .derived import DerivedQuantities
 
 __all__ = ["StructureShares", "structure_shares", "prestress_parts", "StructureSummary", "structure_summary",
            "PrestressScale", "prestress_scale", "share_quantities", "ANCHORED_L", "PASSENGER_SHARE", "CARRIES_SHARE"]
@@ -470,12 +474,13 @@ class StructureSummary:
     model: str
     law: str | None
     shares: StructureShares | None
-    quantities: object | None
+    quantities: DerivedQuantities | None
     scale: PrestressScale
 
     def share_text(self, part: str = "geometric", modulus_part: str = "storage", i: int = 0) -> str:
         """``"2.1 ± 0.01 %"``: a share at frequency ``i`` with its standard error, both in percent."""
         q = self.quantities
+        assert q is not None, "a mechanism's summary"
         key = f"{part}_{modulus_part}"
         v = float(q.values[key][i])
         if not math.isfinite(v):
@@ -487,7 +492,7 @@ class StructureSummary:
 
     def share_verdict(self) -> str:
         """Who carries dG'/dP, in words ("" for the Voigt cell, whose tendons have no tension terms)."""
-        if self.shares is None:
+        if self.shares is None or self.quantities is None:
             return ""
         g = self.quantities.values["geometric_storage"]
         terms = TENSION_TERMS.get(self.law or "", "the tendon law's tension terms")
@@ -512,10 +517,10 @@ class StructureSummary:
     def scale_verdict(self) -> str:
         """The fitted prestress against the measured one, in words ("" when no data set states its prestress)."""
         sc = self.scale
-        if sc.s is None:
+        if sc.s is None or sc.ratio is None or sc.L_paper is None:
             return ""
         where = "inside" if sc.anchored else "outside"
-        return (f"The fitted prestress is {100 * sc.ratio:.3g} % of the measured one (s = {sc.s:.3g} m²); in the "
+        return (f"The fitted prestress (P/L_cell²) is {100 * sc.ratio:.3g} % of the measured one (s = {sc.s:.3g} m²); in the "
                 f"paper's convention the cell's strut length is L = {sc.L_paper:.3g} m, {where} the anchored range "
                 f"{ANCHORED_L[0]:g}–{ANCHORED_L[1]:g} m.")
 
