@@ -191,7 +191,7 @@ def test_the_study_evaluates_the_distributed_mechanism_with_the_lowest_bic():
 
     data = [bundled("fabry2001")]
     s = mechanisms_study(data, mechanisms=["voigt-compact", "voigt-lognormal-damping", "voigt-lognormal-stiffness"],
-                         starts=1, hops=0, holdout_decades=None, ensemble=40, workers=0, progress=False)
+                         starts=1, hops=0, validate=False, falsify=False, ensemble=40, workers=0, progress=False)
     distributed = [r for r in s.rows if r.name != "voigt-compact"]
     best = min(distributed, key=lambda r: r.bic)
     assert s.ensemble is not None and s.ensemble.mechanism == best.name and s.ensemble.K == 40
@@ -200,7 +200,7 @@ def test_the_study_evaluates_the_distributed_mechanism_with_the_lowest_bic():
     assert s.ensemble.prestress_unit == "N"
     Gs, Gl = best.model.moduli(s.ensemble.frequency_hz)
     np.testing.assert_allclose(s.ensemble.reference[0], Gs + 1j * Gl, rtol=1e-12)
-    none = mechanisms_study(data, mechanisms=["voigt-compact"], starts=1, hops=0, holdout_decades=None, ensemble=40,
+    none = mechanisms_study(data, mechanisms=["voigt-compact"], starts=1, hops=0, validate=False, falsify=False, ensemble=40,
                             progress=False)
     assert none.ensemble is None  # nothing distributed: nothing to draw
 

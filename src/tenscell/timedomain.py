@@ -34,15 +34,30 @@ Lanczos run (:meth:`tenscell.linear.modal.Pencil.retardation`), converged
 until J(t) at every time, J(∞) and the initial creep rate change by less than
 ``1e-10`` relative (the spectrum's ``error_estimate``); a sparse model is never
 made dense. :mod:`tenscell.dynamics` computes the nonlinear creep by simulation.
+
+**Laws without a finite realization** (the springpots of :mod:`tenscell.laws.viscoelastic`) are
+realized by a Prony series accurate over a band of frequencies only
+(:meth:`tenscell.laws.Springpot.realization`), so a spectrum of the realized model is right only at
+times ``1/(2π f)`` inside that band. :func:`creep_compliance` and :func:`relaxation_modulus` therefore
+invert the exact transfer function for such models at every requested time (``method="auto"``):
+``J(t) = L⁻¹[J(s)/s]`` and ``R(t) = L⁻¹[1/(s·J(s))]`` with ``J(s)`` from the law's exact ``k*(s)``
+(:func:`tenscell.linear.dynamic.laplace_compliance`), by the fixed Talbot contour (Abate & Valkó,
+Int J Numer Meth Eng 60:979, 2004) with :data:`TALBOT_NODES` nodes, whose error for these
+transfer functions (analytic off the negative real axis, as for every passive law) is below about
+1e-9 relative. The spectrum of a realized model (:func:`creep_spectrum`, :func:`stress_relaxation`)
+warns (:class:`RealizationWarning`) when asked for a time outside its band.
 """
 from __future__ import annotations
 
+import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
 
 from ._checks import positive_array, positive_scalar
+from ._errors import TenscellError
 from .linear.linearize import LinearModel
 from .linear.assembly import continuum_factor
 from .linear.spectrum import ZERO_TIME
@@ -58,7 +73,95 @@ __all__ = [
     "local_exponent",
     "PowerLawFit",
     "fit_power_law",
+    "RealizationWarning",
+    "TALBOT_NODES",
+    "invert_laplace",
+    "realized_times",
 ]
+
+#: nodes of the fixed Talbot contour of the exact inversions (module docstring)
+TALBOT_NODES = 32
+
+
+class RealizationWarning(TenscellError, UserWarning):
+    """A time-domain quantity was asked of a realized spectrum at a time outside the band it was realized over.
+
+    A warning (``warnings.warn``), and a :class:`~tenscell.TenscellError` like every class tenscell defines, so that
+    ``warnings.simplefilter("error", RealizationWarning)`` turns it into an error one ``except`` catches.
+    """
+
+
+def realized_times(band_hz) -> tuple[float, float]:
+    """The times (s) a realization over ``band_hz`` (Hz) represents: ``1/(2π f_high)`` to ``1/(2π f_low)``."""
+    lo, hi = float(band_hz[0]), float(band_hz[1])
+    return 1.0 / (2 * math.pi * hi), 1.0 / (2 * math.pi * lo)
+
+
+def _warn_outside(band_hz, t, what: str) -> None:
+    if band_hz is None:
+        return
+    t = np.asarray(t, dtype=float)
+    lo, hi = realized_times(band_hz)
+    out = t[(t > 0) & ((t < lo) | (t > hi))]
+    if out.size:
+        warnings.warn(
+            f"{what} at {out.size} time(s) ({out.min():.3g}-{out.max():.3g} s) outside the {lo:.3g}-{hi:.3g} s its "
+            f"realization represents ({band_hz[0]:g}-{band_hz[1]:g} Hz): use tenscell.timedomain.creep_compliance / "
+            "relaxation_modulus (exact inversion at every time), or realize with a band_hz that covers 1/(2π t)",
+            RealizationWarning, stacklevel=3)
+
+
+def invert_laplace(F, t, nodes: int = TALBOT_NODES) -> np.ndarray:
+    """``f(t)`` from its Laplace transform ``F(s)`` by the fixed Talbot contour (Abate & Valkó 2004).
+
+    Parameters
+    ----------
+    F : callable
+        ``F(s)`` for a 1-D complex array ``s`` (1/s), returning an array of the same shape; analytic off the
+        negative real axis (every singularity on it), as the transfer functions of passive laws are.
+    t : array_like
+        Times (s), > 0.
+    nodes : int
+        Contour nodes M (≥ 8); the error falls like 10^(−0.6 M) until double-precision rounding, amplified by
+        ``e^(2M/5)``, takes over (M = 32: about 1e-10 relative for smooth transforms).
+
+    Returns
+    -------
+    ndarray, shape of ``t``
+        Real values of f at the times.
+    """
+    tt = positive_array("t (time)", t, unit="s")
+    shape = np.shape(tt)
+    tt = np.atleast_1d(tt).ravel()
+    M = int(nodes)
+    if M < 8:
+        raise ValueError(f"nodes must be an integer >= 8, got {nodes!r}")
+    r = 2.0 * M / (5.0 * tt)  # (nt,)
+    theta = np.arange(1, M) * (math.pi / M)
+    cot = 1.0 / np.tan(theta)
+    s = r[:, None] * (theta * (cot + 1j))[None, :]  # (nt, M-1) on the contour, r at theta = 0
+    sigma = theta + (theta * cot - 1.0) * cot
+    vals = np.asarray(F(np.concatenate([r.astype(complex), s.ravel()])), dtype=complex)
+    F0, Fs = vals[: tt.size].real, vals[tt.size:].reshape(s.shape)
+    total = 0.5 * F0 * np.exp(r * tt) + np.sum((np.exp(tt[:, None] * s) * Fs * (1.0 + 1j * sigma[None, :])).real,
+                                               axis=1)
+    return (r / M * total).reshape(shape)
+
+
+def _approximate(lin) -> bool:
+    """Whether the model's time domain would come from a band-limited realization (a springpot's Prony series)."""
+    R = getattr(lin, "realization", None)
+    return R is not None and R.band_hz is not None
+
+
+def _method(lin, method: str) -> str:
+    if method not in ("auto", "spectrum", "inversion"):
+        raise ValueError(f"method must be 'auto', 'spectrum' or 'inversion', got {method!r}")
+    if method == "auto":
+        return "inversion" if _approximate(lin) else "spectrum"
+    if method == "inversion" and getattr(lin, "law", None) is None:
+        raise ValueError("method='inversion' needs a model built from a tendon law (lin.law is None)")
+    return method
 
 _ZERO_TIME = ZERO_TIME  # τ below this fraction of the longest retardation time counts as instantaneous
 
@@ -98,6 +201,10 @@ class CreepSpectrum:
     error_estimate : float
         Relative accuracy of ``J(t)`` (0 for dense models, whose spectrum is
         exact; for sparse ones the Lanczos run's convergence measure).
+    band_hz : tuple of float or None
+        For a model realized over a band (a springpot's Prony series), that
+        band (Hz): ``J(t)`` is right only for times ``1/(2π f)`` inside it, and
+        :meth:`compliance` warns (:class:`RealizationWarning`) outside. None when exact.
     """
 
     times: np.ndarray
@@ -105,6 +212,7 @@ class CreepSpectrum:
     instantaneous: float
     L: float
     error_estimate: float = 0.0
+    band_hz: tuple | None = None
 
     @property
     def static(self) -> float:
@@ -119,6 +227,7 @@ class CreepSpectrum:
     def compliance(self, t) -> np.ndarray:
         """Creep compliance ``J(t)`` (m/N) at times ``t`` (s, ≥ 0); ``J(0) = J_inst``."""
         t = _times(t)
+        _warn_outside(self.band_hz, t, "creep compliance of a realized spectrum")
         x = np.multiply.outer(t, 1.0 / self.times)
         return self.instantaneous + (-np.expm1(-x)) @ self.weights
 
@@ -188,11 +297,11 @@ def creep_spectrum(lin: LinearModel) -> CreepSpectrum:
     order = np.argsort(tau[~inst])
     return CreepSpectrum(
         times=tau[~inst][order], weights=rho[~inst][order], instantaneous=float(rho[inst].sum()), L=lin.L,
-        error_estimate=float(err),
+        error_estimate=float(err), band_hz=lin.realization.band_hz if _approximate(lin) else None,
     )
 
 
-def creep_compliance(lin: LinearModel, t, *, continuum: bool = False) -> np.ndarray:
+def creep_compliance(lin: LinearModel, t, *, continuum: bool = False, method: str = "auto") -> np.ndarray:
     """Creep compliance of the linear model: displacement per unit force step.
 
     Parameters
@@ -203,15 +312,32 @@ def creep_compliance(lin: LinearModel, t, *, continuum: bool = False) -> np.ndar
     continuum : bool
         Return ``J(t)·2L`` in 1/Pa (the continuum factor of ``G = (0.5/L)/J``)
         instead of m/N.
+    method : {"auto", "spectrum", "inversion"}
+        ``"spectrum"``: from the retardation spectrum (:func:`creep_spectrum`; exact
+        unless the law is realized over a band, then right only inside it).
+        ``"inversion"``: the exact ``J(s)/s`` of the law inverted at each time
+        (:func:`invert_laplace`; ``J(0) = 0`` is taken as the instantaneous compliance's
+        limit, which is 0 unless some mode is undamped). ``"auto"`` (default): the
+        inversion for a band-limited realization (springpot tendons), the spectrum otherwise.
 
     Returns
     -------
     ndarray, same shape as ``t``
         ``J(t)`` in m/N (or 1/Pa).
     """
-    spec = creep_spectrum(lin)
-    J = spec.compliance(t)
-    return J / continuum_factor(spec.L) if continuum else J
+    if _method(lin, method) == "spectrum":
+        spec = creep_spectrum(lin)
+        J = spec.compliance(t)
+    else:
+        from .linear.dynamic import laplace_compliance
+
+        tt = _times(t)
+        J = np.zeros(np.shape(tt))
+        pos = tt > 0
+        J[pos] = invert_laplace(lambda s: laplace_compliance(lin, s) / s, tt[pos])
+        if np.any(~pos):  # J(0+) = lim s J(s)/s as s → ∞: the undamped modes' compliance
+            J[~pos] = creep_spectrum(lin).instantaneous
+    return J / continuum_factor(lin.L) if continuum else J
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -237,6 +363,8 @@ class StressRelaxation:
     error_estimate : float
         Relative accuracy of the retardation spectrum it was computed from
         (0 for dense models; see :class:`CreepSpectrum`).
+    band_hz : tuple of float or None
+        The band (Hz) of a band-limited realization (see :class:`CreepSpectrum`); None when exact.
     """
 
     times: np.ndarray
@@ -245,6 +373,7 @@ class StressRelaxation:
     impulse: float
     L: float
     error_estimate: float = 0.0
+    band_hz: tuple | None = None
 
     @property
     def initial(self) -> float:
@@ -254,6 +383,7 @@ class StressRelaxation:
     def force(self, t) -> np.ndarray:
         """Regular part of ``R(t)`` (N/m) at times ``t`` (s, ≥ 0); the impulse is in :attr:`impulse`."""
         t = _times(t)
+        _warn_outside(self.band_hz, t, "relaxation of a realized spectrum")
         return self.equilibrium + np.exp(-np.multiply.outer(t, 1.0 / self.times)) @ self.weights
 
     def modulus(self, t) -> np.ndarray:
@@ -347,7 +477,7 @@ def stress_relaxation(lin: LinearModel) -> StressRelaxation:
     J0 = spec.static
     if k == 0:  # purely elastic response
         return StressRelaxation(times=np.zeros(0), weights=np.zeros(0), equilibrium=1.0 / J0, impulse=0.0, L=spec.L,
-                                error_estimate=spec.error_estimate)
+                                error_estimate=spec.error_estimate, band_hz=spec.band_hz)
     p = np.sign(r) * np.sqrt(np.abs(r))
     w = np.sqrt(np.abs(r))
     M = np.zeros((k + 1, k + 1))
@@ -382,16 +512,34 @@ def stress_relaxation(lin: LinearModel) -> StressRelaxation:
     order = np.argsort(theta)
     impulse = 1.0 / r.sum() if Jinst == 0.0 else 0.0
     return StressRelaxation(times=theta[order], weights=g[order], equilibrium=1.0 / J0, impulse=impulse, L=spec.L,
-                            error_estimate=spec.error_estimate)
+                            error_estimate=spec.error_estimate, band_hz=spec.band_hz)
 
 
-def relaxation_modulus(lin: LinearModel, t) -> np.ndarray:
-    """Relaxation modulus ``G(t)`` (Pa) of the linear model at times ``t`` (s, ≥ 0).
+def relaxation_modulus(lin: LinearModel, t, *, method: str = "auto") -> np.ndarray:
+    """Relaxation modulus ``G(t)`` (Pa) of the linear model at times ``t`` (s, > 0 for the inversion).
 
     The regular part only; the impulse at t = 0 (present when C0 is positive
     definite) has weight :attr:`StressRelaxation.viscosity` (Pa·s).
+
+    ``method`` as for :func:`creep_compliance`: ``"inversion"`` inverts
+    ``1/(s·J(s))`` minus the cytoplasm's impulse ``2L·η`` exactly; it needs a
+    structure whose own ``1/(s·J(s))`` vanishes as ``s → ∞`` (no tendon acts as
+    a dashpot at high frequency: every springpot exponent below 1), and says so otherwise.
     """
-    return stress_relaxation(lin).modulus(t)
+    if _method(lin, method) == "spectrum":
+        return stress_relaxation(lin).modulus(t)
+    from .linear.dynamic import laplace_compliance
+
+    tt = positive_array("t (time)", t, unit="s")
+    impulse = 2.0 * lin.L * lin.viscosity  # N·s/m: the cytoplasm's dashpot on the probe
+    s_hi = np.array([1e8, 1e10]) / float(np.min(tt))
+    tail = np.abs(1.0 / (s_hi * laplace_compliance(lin, s_hi)) - impulse)
+    if tail[1] > 0.3 * tail[0]:  # 1/(sJ) of the structure falls by less than s^-0.05: a dashpot-like tendon
+        raise ValueError("the structure acts as a dashpot at high frequency (a tendon's k*(s) grows like s), so its "
+                         "relaxation has an impulse the inversion does not separate; use method='spectrum' with a "
+                         "realization whose band_hz covers 1/(2π t)")
+    R = invert_laplace(lambda s: 1.0 / (s * laplace_compliance(lin, s)) - impulse, tt)
+    return continuum_factor(lin.L) * R
 
 
 def local_exponent(t, y) -> np.ndarray:

@@ -26,7 +26,8 @@ MODEL_GROUPS = {
                                   "voigt-lognormal-stiffness", "voigt-trap-damping+visc"),
     "mechanisms: filament turnover (Maxwell)": ("maxwell", "maxwell+visc"),
     "mechanisms: standard linear solid": ("sls", "sls-trap+visc"),
-    "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc"),
+    "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc",
+                                       "springpot-alpha-family+visc"),
     "structure-free formulas (baselines)": ("structural-damping", "structural-damping+newtonian",
                                             "structural-damping-prestress", "structural-damping-prestress+newtonian"),
 }
@@ -96,6 +97,11 @@ def register(sub) -> None:
                         "law with and without a Newtonian term) on held-out splits of the data (frequency sweeps cut "
                         "at 1, 10, 30 Hz; prestress sweeps without some prestresses) and rank them in the report by "
                         "their held-out error; auto: for every model but the 36-parameter per-tendon cell")
+    p.add_argument("--profile", choices=("auto", "yes", "no"), default="auto",
+                   help="profile-likelihood intervals of the parameters the local analysis cannot bound (at a bound, "
+                        "undetermined, one-sided) and of a mechanism's held fields: each held at 9 values over its "
+                        "bounds while the others are refitted (about 15-20 refits per parameter), in the report and "
+                        "fit.json; auto: for models with at most 12 free parameters")
     p.add_argument("--holdout", type=_holdout, metavar="FMIN:FMAX", default=None,
                    help="train on the points outside FMIN..FMAX Hz and report every model's error on the held-out "
                         "points (one frequency sweep)")
@@ -514,6 +520,7 @@ def run(args) -> int:
         # figure while this process writes the report: the figure is most of the time after the fit
         result, baseline = run_fit(datasets, spec, args.starts, args.seed, args.jobs, args.tolerance,
                                    args.baseline_starts, worker=worker, warm_plotting=True, **space)
+        _profile(args, result)
         timing = clock.timing(result)
         timing["outputs_started_s"] = clock.now()
         # the report's ± need one model evaluation per parameter: half of them in the worker, before the figure
@@ -557,6 +564,18 @@ def _validation(args, spec, datasets, space):
                                        notify=stage, starts=2, seed=args.seed, hops=8, patience=3,
                                        tolerance=args.tolerance, max_points=None)
     return validation if validation.splits else None  # no split leaves enough points to fit every model
+
+
+def _profile(args, result) -> None:
+    """``--profile``: the profile intervals of the parameters that need them, kept on the result (or none)."""
+    if args.profile == "no":
+        return
+    from .._progress import stage
+
+    profile = result.compute_profile("needed" if args.profile == "yes" else "auto",
+                                     notify=lambda line: stage(line))
+    stage(f"profile: {profile.not_run}" if profile.not_run else
+          f"profile: {len(profile)} parameter(s), {profile.refits} refits, {profile.cpu_s:.1f} s CPU")
 
 
 def _min_points(spec) -> int:

@@ -152,17 +152,16 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     from ..studies.mechanisms import mechanisms_study
 
     datasets = args.datasets  # read and checked before the study began (run)
-    names = None if args.mechanisms is None else [m.strip() for m in args.mechanisms.split(",") if m.strip()]
-    mech = 12 if names is None else len(names)
+    names = _study_models(args)
     K = STUDY_ENSEMBLE_K if args.ensemble is None else args.ensemble
     s = mechanisms_study(datasets, mechanisms=names, starts=args.starts, hops=args.hops, seed=args.seed,
-                         tolerance=args.tolerance, jobs=jobs_for(mech, args.jobs), ensemble=K or None,
+                         tolerance=args.tolerance, jobs=jobs_for(len(names), args.jobs), ensemble=K or None,
                          workers=args.workers, scheduler=args.scheduler, notify=lambda line: log(f"ensemble: {line}"))
     write_csv_rows(out / "mechanisms.csv", list(STUDY_COLUMNS), study_table_rows(s))
     plotting.save(mechanisms_figure(s, datasets), out / "mechanisms.png")
     report = mechanisms_markdown(s)
     write_text(out / "mechanisms.md", report)
-    print(report.split("## The answer")[0].split("\n\n", 2)[-1], flush=True)
+    print(report.split("## The goals")[0].split("\n\n", 2)[-1], flush=True)
     written = "mechanisms.csv, mechanisms.png, mechanisms.md"
     if s.ensemble is not None:
         from .fit import ENSEMBLE_FILES, write_ensemble
@@ -203,11 +202,14 @@ def cpu_share(workers: int) -> float:
     return min(1.0, (os.cpu_count() or 1) / max(load + workers, 1.0))
 
 
-def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, holdout: bool):
+def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate: bool = True,
+                    falsify: bool = True):
     """The mechanisms study's cost (:class:`tenscell.cli._cost.Cost`): the CPU time of one model evaluation of each
-    mechanism, timed here at a start of its fit with the BLAS threads the search uses, × the evaluations its fit is
-    expected to take (:data:`EVALUATIONS_PER_START_HOP` × starts × hops), twice with a held-out refit, over ``jobs``
-    workers at the CPU share the machine's load leaves them (:func:`cpu_share`)."""
+    model, timed here at a start of its fit with the BLAS threads the search uses, × the evaluations its fits are
+    expected to take (:data:`EVALUATIONS_PER_START_HOP` × starts × hops for the main fit; the same at the refits'
+    budget, :data:`tenscell.studies.mechanisms.REFIT`, for each of the others that
+    :func:`~tenscell.studies.mechanisms.fits_per_model` counts), over ``jobs`` workers at the CPU share the
+    machine's load leaves them (:func:`cpu_share`)."""
     import numpy as np
 
     from .._threads import limited
@@ -215,10 +217,11 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, holdout:
     from ..fitting.entry import prepare
     from ..fitting.models.catalog import PER_TENDON_VOIGT
     from ..fitting.models.voigt import VoigtModel
-    from ..studies.mechanisms import PER_TENDON_HOPS
+    from ..studies.mechanisms import PER_TENDON_HOPS, REFIT, fits_per_model
     from ._cost import Cost
 
-    cpu, evaluations = 0.0, 0
+    cpu, evaluations, fits = 0.0, 0, 0
+    refit = REFIT["starts"] * (REFIT["hops"] + 1)
     with limited():
         for name in names:
             per_tendon = name == PER_TENDON_VOIGT
@@ -226,18 +229,20 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, holdout:
             problem = spec.problem(*prepare(datasets, None, 100, spec))
             theta = problem.initial_guess(np.random.default_rng(0))
             rate = EVALUATIONS_PER_START_HOP["voigt-per-tendon" if per_tendon else "mechanism"]
-            n = int(round(rate * starts * ((max(hops, PER_TENDON_HOPS) if per_tendon else hops) + 1)
-                          * (2 if holdout else 1)))
+            k = fits_per_model(datasets, problem.n_free, spec.structural, validate, falsify)
+            main = starts * ((max(hops, PER_TENDON_HOPS) if per_tendon else hops) + 1)
+            n = int(round(rate * (main + (k - 1) * refit)))
             cpu += n * _cpu_per_call(lambda pb=problem, th=theta: pb.jacobian(th))
             evaluations += n
+            fits += k
     workers = min(jobs, len(names))
     share = cpu_share(workers)
     per = cpu / max(evaluations, 1)
     return Cost("model evaluation", max(evaluations, 1), per / share, workers,
-                detail=f"({len(names)} model(s) × {starts} start(s) × up to {hops} hop(s)"
-                       + (", each fitted twice: all data and held out" if holdout else "")
-                       + f"; {per * 1e3:.2g} ms of CPU each, at {share:.0%} of a CPU per worker: load "
-                         f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs)")
+                detail=f"({len(names)} model(s), {fits} fits: each model × {starts} start(s) × up to {hops} hop(s),"
+                       f" its anchored, structure-free, held-out and unlike refits × {REFIT['starts']} × "
+                       f"{REFIT['hops']}; {per * 1e3:.2g} ms of CPU each, at {share:.0%} of a CPU per worker: load "
+                       f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs)")
 
 
 #: studies that fit data files given on the command line (not part of `reproduce`'s variants stage)
@@ -355,15 +360,20 @@ def _check_ensemble_options(args) -> None:
 def _announce_mechanisms_cost(args) -> None:
     """The mechanisms study's estimate as one line before its fits; refused beyond a day (naming the flags)."""
     from .._parallel import jobs_for
-    from ..fitting.models.catalog import MECHANISMS, PER_TENDON_VOIGT
-    from ..studies.mechanisms import _frequency_sweep
     from ._cost import announce, check
 
-    names = (PER_TENDON_VOIGT, *MECHANISMS) if args.mechanisms is None else \
-        tuple(m.strip() for m in args.mechanisms.split(",") if m.strip())
-    cost = mechanisms_cost(args.datasets, names, args.starts, args.hops, jobs_for(len(names), args.jobs),
-                           holdout=_frequency_sweep(args.datasets) is not None)
+    names = _study_models(args)
+    cost = mechanisms_cost(args.datasets, names, args.starts, args.hops, jobs_for(len(names), args.jobs))
     announce(check(cost, "--starts", hint="give fewer --starts or --hops, or fewer --mechanisms NAMES"))
+
+
+def _study_models(args) -> tuple[str, ...]:
+    """The models of the mechanisms study: ``--mechanisms NAMES`` or its default set."""
+    from ..studies.mechanisms import default_models
+
+    if args.mechanisms is None:
+        return default_models(args.datasets)
+    return tuple(m.strip() for m in args.mechanisms.split(",") if m.strip())
 
 
 def run(args) -> int:

@@ -19,7 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .._results import CORRELATION_THRESHOLD, correlation_text, dataframe, format_repr, plus_minus, reporter
+from .._results import CORRELATION_THRESHOLD, dataframe, format_repr, reporter
 from ..io.data import RheologyData
 from .problem import Problem
 from .records import (CreepFit, DatasetFit, data_axis, error_fields, information_criteria, noise_rms,
@@ -33,7 +33,11 @@ FIT_NULL_MEANS = (
     "time_to_tolerance_s, timing.tolerance_met_s: the tolerance was never met; prestress_Pa / prestress_fitted_Pa: "
     "the data set states no prestress / its prestress is not a fitted parameter; kind: a joint fit; seed, "
     "constraints: not set; parameters[].at_bound: not at a bound; tendon_stiffness_spread_not_at_bounds: every "
-    "stiffness is at a bound; derived.*.stderr: not determined (derived.*.note says why). A null anywhere else is a "
+    "stiffness is at a bound; derived.*.stderr: not determined (derived.*.note says why); structure: a model without "
+    "a cell; structure.shares: the Voigt cell (its prestress activity is prestress_activity); structure.prestress.s_m2 "
+    "and what follows from it: no data set states its prestress; profile: not computed (FitResult.compute_profile, "
+    "tenscell fit --profile); profile.*.intervals[].lower/upper: open, the data do not bound the parameter on that "
+    "side within its bounds. A null anywhere else is a "
     "computed number that is not finite: its value is listed under non_finite")
 #: other starts whose RMS is within this factor of the best (or the tolerance) count as fitting "as well"
 AS_WELL = 1.1
@@ -387,6 +391,31 @@ class FitResult:
             self.__dict__["derived"] = derived_quantities(self, report_quantities, executor=executor)
         return self.__dict__["derived"]
 
+    @cached_property
+    def structure(self):
+        """What the structure carries (:func:`tenscell.fitting.shares.structure_summary`): a mechanism's shares of
+        dG'/dP and dG''/dP with standard errors, and the fitted prestress against the measured one; None for a
+        structure-free formula."""
+        from .shares import structure_summary
+
+        return structure_summary(self)
+
+    @property
+    def profile(self):
+        """The profile-likelihood intervals computed by :meth:`compute_profile` (None until then: each is a series
+        of refits)."""
+        return self.__dict__.get("_profile")
+
+    def compute_profile(self, parameters="auto", **options):
+        """Profile-likelihood intervals of the parameters the local analysis cannot bound, computed now and kept
+        (:func:`tenscell.fitting.profile.profile_intervals`; ``parameters`` and ``options`` as there). Returns the
+        :class:`~tenscell.fitting.profile.ProfileSet`."""
+        from .profile import profile_intervals
+
+        self.__dict__["_profile"] = profile_intervals(self, parameters, **options)
+        self.__dict__.pop("structure", None)  # the prestress scale reads the profile of s
+        return self.__dict__["_profile"]
+
     def correlations(self, threshold: float = CORRELATION_THRESHOLD) -> list[tuple[str, str, float]]:
         """``(a, b, ρ)`` for pairs of determined parameters with ``|ρ| >= threshold``, strongest first."""
         return self.identifiability().strong_correlations(threshold)
@@ -518,6 +547,8 @@ class FitResult:
             "alternative_spread_decades": self.alternative_spread(),
             "history": [{"time_s": t, "rms_log10_error": r} for t, r in self.history],
             "identifiability": self.identifiability().to_dict(),
+            "structure": None if self.structure is None else self.structure.to_dict(),
+            "profile": None if self.profile is None else self.profile.to_dict(),
             **self.problem.summary(self),
             "model": self.model.to_dict(),
         }
@@ -527,69 +558,15 @@ class FitResult:
         return doc
 
     def report(self) -> str:
-        """A readable plain-text report (in the spirit of lmfit's ``fit_report``)."""
-        lines = [
-            "[[Fit statistics]]",
-            *(f"    data {f.index}:             {f.data.source} ({f.data.n} points, {f.axis}): "
-              f"rms {f.rms_log10_error:.5f}" for f in self.fits),
-            f"    model:              {self.spec.name}: {self.problem.describe()}",
-            f"    free parameters:    {self.problem.n_free} (residuals: {self.problem.n_residuals})",
-            f"    rms log10 error:    {self.rms_log10_error:.5f} (tolerance {self.tolerance:g}): " + self.verdict,
-            f"    starts:             {self.starts} (seed {self.seed}), {self.n_evaluations} model evaluations, "
-            f"{self.elapsed_s:.1f} s",
-            f"    message:            {self.message}",
-        ]
-        if self.stiffness_spread is not None:
-            q, u = self.derived, self.problem.units[0]
-            lines.append(f"    stiffness spread:   {q.text('stiffness_spread', 0, u, 3, ln=True)} .. "
-                         f"{q.text('stiffness_spread', 1, u, 3, ln=True)} ({q.text('stiffness_spread', 2, 'decades', 3)})")
-        lines.append("[[Parameters]] (value +/- standard error, in the unit shown: a factor ×/÷ when it exceeds 50 %, "
-                     "as the fit works in ln-parameters; see identifiability())")
-        width = max(len(p.name) for p in self.parameters)
-        if self.identifiability().gauge_removed:
-            lines.append("    (L is an exact gauge of the moduli: the errors are those of EA/L², c/L, P/L² at the "
-                         "fitted L)")
-        why: dict[str, list[str]] = {}  # "not determined" once per reason, under the table
-        for p, (se, note) in zip(self.parameters, self.standard_errors):
-            if se is None:
-                why.setdefault(note.strip("()") or "not determined by the data", []).append(p.name)
-                shown = f"{p.value:.6g}" + (f" {p.unit}" if p.unit else "") + "  (—)"
-            else:
-                shown = plus_minus(p.value, se, p.unit, note, ln=True)
-            lines.append(f"    {p.name + ':':<{width + 1}} {shown}  [{p.lower:.3g}, {p.upper:.3g}]  {p.description}")
-        for reason, names in why.items():
-            listed = ", ".join(names[:12]) + (f" ... ({len(names)} in all)" if len(names) > 12 else "")
-            lines.append(f"    (—) not determined: {listed}: {reason}")
-        strong = self.correlations()
-        lines.append(f"[[Correlations]] (unreported correlations are < {CORRELATION_THRESHOLD:.3f}; strongest first)")
-        lines += ["    " + c for c in correlation_text(strong)]
-        if not strong:
-            lines.append("    none")
-        for f in self.fits:
-            lines += _residual_lines(f)
-        if self.alternatives:
-            lines.append(f"[[Alternatives]] {len(self.alternatives)} other start(s) fit almost as well:")
-            lines += [f"    start {a.start}: rms {a.rms_log10_error:.5f}" for a in self.alternatives]
-        return "\n".join(lines) + "\n"
+        """A readable plain-text report (in the spirit of lmfit's ``fit_report``; :func:`tenscell.reports.fit_text`)."""
+        from .._results import reporter
+
+        return reporter("fit_text")(self)
 
 
 def report_quantities(result: FitResult) -> dict:
     """The report's derived numbers of ``result`` (module level: a worker process evaluates a share of them)."""
     return result.problem.report_quantities(result)
-
-
-def _residual_lines(f) -> list[str]:
-    """The text report's residual table of one data set (moduli: G' and G''; creep: J)."""
-    d = f.data
-    out = [f"[[Residuals log10(model/data): data {f.index}]]"]
-    if f.axis == "time":
-        out.append(f"    {'t (s)':>10}  {'J':>10}")
-        out += [f"    {d.time_s[i]:>10.4g}  {f.residuals[i]:>+10.5f}" for i in range(d.n)]
-        return out
-    xname = "P (Pa)" if f.axis == "prestress" else "f (Hz)"
-    out.append(f"    {xname:>10}  {'G_storage':>10}  {'G_loss':>10}")
-    out += [f"    {f.x[i]:>10.4g}  {f.residuals[i]:>+10.5f}  {f.residuals[d.n + i]:>+10.5f}" for i in range(d.n)]
-    return out
 
 
 def _provenance(d) -> dict:

@@ -120,7 +120,8 @@ class Provenance(Mapping):
 
     def line(self) -> str:
         """One line naming what was read: file, layout, step, temperature, points, columns and conversions."""
-        where = [self.layout] if self.layout else []
+        # a bundled data set's name already says where it comes from
+        where = [self.layout] if self.layout and self.layout not in self.file else []
         if self.step is not None:
             of = f" of {self.steps}" if self.steps else ""
             where.append(f"{self.step_word} {self.step}{of}" + (f" {self.step_name!r}" if self.step_name else ""))

@@ -16,7 +16,7 @@ from .._results import dataframe, format_repr
 from ..model.equilibrium import Cell
 
 __all__ = ["TendonLaw", "Parameter", "Tangent", "Realization", "LinearizationError", "DynamicLawError",
-           "angular_frequencies", "DEFAULT_REALIZATION_TOL"]
+           "angular_frequencies", "laplace_variables", "DEFAULT_REALIZATION_TOL"]
 
 #: default relative accuracy of an approximate internal-variable realization over its band (|Δk*|/|k*|)
 DEFAULT_REALIZATION_TOL = 1e-3
@@ -36,6 +36,14 @@ def angular_frequencies(omega) -> np.ndarray:
     if not (np.all(np.isfinite(w)) and np.all(w >= 0)):
         raise ValueError(f"omega (angular frequency) must be finite numbers >= 0 (rad/s), got {omega!r}")
     return w
+
+
+def laplace_variables(s) -> np.ndarray:
+    """``s`` (1/s) as a finite 1-D complex array (a scalar becomes shape (1,))."""
+    z = np.atleast_1d(np.asarray(s, dtype=complex)).ravel()
+    if not np.all(np.isfinite(z)):
+        raise ValueError(f"s (Laplace variable) must be finite complex numbers (1/s), got {s!r}")
+    return z
 
 
 class Parameter(NamedTuple):
@@ -382,6 +390,18 @@ class TendonLaw:
         w = angular_frequencies(omega)
         k, c = self.tangent_at_rest(l, T)
         return np.asarray(k, dtype=float)[None, :] + 1j * np.multiply.outer(w, np.asarray(c, dtype=float))
+
+    def laplace_stiffness(self, l, T, s) -> np.ndarray:
+        """The dynamic tangent at complex Laplace variables ``s`` (1/s): ``k*(s)``, with ``k*(iω)`` = :meth:`complex_stiffness`.
+
+        Shape ``(n_s, m)``, complex (N/m). For a rate-linear law it is ``k + s·c``; laws with
+        internal dynamics override it with the analytic continuation of their exact form (principal
+        branch of any fractional power), which is what an exact inversion of creep or relaxation
+        (:func:`tenscell.timedomain.creep_compliance`) evaluates off the imaginary axis.
+        """
+        z = laplace_variables(s)
+        k, c = self.tangent_at_rest(l, T)
+        return np.asarray(k, dtype=float)[None, :] + np.multiply.outer(z, np.asarray(c, dtype=float))
 
     def complex_stiffness_derivatives(self, l, T, omega) -> tuple[np.ndarray, np.ndarray]:
         """``(∂k*/∂T, ∂k*/∂θ)``: shapes ``(n_omega, m)`` (1/m) and ``(p, n_omega, m)``, θ in :attr:`names` order.

@@ -8,7 +8,7 @@ import numpy as np
 
 from .._checks import positive_array
 from ..model.equilibrium import Cell
-from .base import DEFAULT_REALIZATION_TOL, Realization, Tangent, TendonLaw, _refs, angular_frequencies
+from .base import DEFAULT_REALIZATION_TOL, Realization, Tangent, TendonLaw, _refs, angular_frequencies, laplace_variables
 
 __all__ = ["CompositeLaw", "family_laws"]
 
@@ -174,14 +174,21 @@ class CompositeLaw(TendonLaw):
         return Realization(k=k, c=c, tendon=np.concatenate(tendon).astype(int), arm_k=np.concatenate(ak),
                            arm_c=np.concatenate(ac), error=err, band_hz=band)
 
+    def _each_part(self, method: str, l, T, z) -> np.ndarray:
+        """Each part's ``method(l, T, z)`` (a dynamic tangent, shape ``(z.size, m_part)``) on its tendons."""
+        l, T = _refs(l, T)
+        out = np.empty((z.size, self.m), dtype=complex)
+        for law, i in zip(self.laws, self.indices):
+            out[:, i] = getattr(law, method)(l[i], T[i], z)
+        return out
+
     def complex_stiffness(self, l, T, omega) -> np.ndarray:
         """Each part's dynamic tangent on its tendons (N/m), shape ``(n_omega, m)``."""
-        l, T = _refs(l, T)
-        w = angular_frequencies(omega)
-        out = np.empty((w.size, self.m), dtype=complex)
-        for law, i in zip(self.laws, self.indices):
-            out[:, i] = law.complex_stiffness(l[i], T[i], w)
-        return out
+        return self._each_part("complex_stiffness", l, T, angular_frequencies(omega))
+
+    def laplace_stiffness(self, l, T, s) -> np.ndarray:
+        """Each part's ``k*(s)`` on its tendons (N/m), shape ``(n_s, m)``."""
+        return self._each_part("laplace_stiffness", l, T, laplace_variables(s))
 
     def complex_stiffness_derivatives(self, l, T, omega) -> tuple[np.ndarray, np.ndarray]:
         """Each part's ``(∂k*/∂T, ∂k*/∂θ)`` assembled on the union of names (0 where a tendon lacks θ)."""

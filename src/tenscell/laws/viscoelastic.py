@@ -46,7 +46,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .base import DEFAULT_REALIZATION_TOL, DynamicLawError, Parameter, Realization, _refs, angular_frequencies
+from .base import (DEFAULT_REALIZATION_TOL, DynamicLawError, Parameter, Realization, _refs, angular_frequencies,
+                   laplace_variables)
 from .springs import _SpringEA
 
 __all__ = ["Maxwell", "StandardLinearSolid", "Springpot", "TensionSpringpot", "SPRINGPOT_TIME", "DEFAULT_REALIZATION_BAND_HZ",
@@ -176,6 +177,17 @@ def _prony_basis(w, tau, w_top) -> np.ndarray:
     return np.concatenate([(1j * w / w_top)[:, None], z / (1 + z)], axis=1)
 
 
+def _arm_s(k, c, s):
+    """A spring ``k`` in series with a dashpot ``c`` at Laplace variables ``s``: ``k·sc/(k + sc)``, shape (n_s, m)."""
+    z = np.multiply.outer(s, c)
+    return k * z / (k + z)
+
+
+def _power_s(s, alpha):
+    """``(s·t1)^α`` on the principal branch, shape (n_s, m) (``(iω·t1)^α`` at s = iω)."""
+    return np.power((s * SPRINGPOT_TIME)[:, None], np.asarray(alpha, dtype=float))
+
+
 def _arm(k, c, w):
     """A spring ``k`` (N/m) in series with a dashpot ``c`` (N·s/m): ``k·iωc/(k + iωc)`` and its ∂/∂k, ∂/∂c.
 
@@ -233,6 +245,11 @@ class Maxwell(_DynamicSpring):
         w = angular_frequencies(omega)
         return T / l + _arm(self.EA / l, np.broadcast_to(self.c, l.shape), w)[0]
 
+    def laplace_stiffness(self, l, T, s) -> np.ndarray:
+        """``T/l + (EA/l)·sc/(EA/l + sc)`` (N/m) at Laplace variables ``s`` (1/s), shape (n_s, m)."""
+        l, T = self._check(l, T)
+        return T / l + _arm_s(self.EA / l, np.broadcast_to(self.c, l.shape), laplace_variables(s))
+
     def complex_stiffness_derivatives(self, l, T, omega):
         """``∂k*/∂T = 1/l``; ``∂k*/∂EA = (1/l)·z²/(EA/l + z)²``, ``∂k*/∂c = iω(EA/l)²/(EA/l + z)²``, ``z = iωc``."""
         l, T = self._check(l, T)
@@ -285,6 +302,12 @@ class StandardLinearSolid(_DynamicSpring):
         l, T = self._check(l, T)
         w = angular_frequencies(omega)
         return self._spring_tangent(l, T) + _arm(self.EA_arm / l, np.broadcast_to(self.c, l.shape), w)[0]
+
+    def laplace_stiffness(self, l, T, s) -> np.ndarray:
+        """``(EA + T)/l + (EA_arm/l)·sc/(EA_arm/l + sc)`` (N/m) at Laplace variables ``s`` (1/s), shape (n_s, m)."""
+        l, T = self._check(l, T)
+        return self._spring_tangent(l, T) + _arm_s(self.EA_arm / l, np.broadcast_to(self.c, l.shape),
+                                                   laplace_variables(s))
 
     def complex_stiffness_derivatives(self, l, T, omega):
         """``∂k*/∂T = ∂k*/∂EA = 1/l``; the arm's ``∂/∂EA_arm``, ``∂/∂c`` as for :class:`Maxwell`."""
@@ -349,6 +372,12 @@ class Springpot(_DynamicSpring):
         l, T = self._check(l, T)
         w = angular_frequencies(omega)
         return self._spring_tangent(l, T) + (self.kappa / l) * self._power(w, np.broadcast_to(self.alpha, l.shape))
+
+    def laplace_stiffness(self, l, T, s) -> np.ndarray:
+        """``(EA + T)/l + (kappa/l)·(s·t1)^α`` (N/m) at Laplace variables ``s`` (1/s), principal branch, shape (n_s, m)."""
+        l, T = self._check(l, T)
+        return self._spring_tangent(l, T) + (self.kappa / l) * _power_s(laplace_variables(s),
+                                                                        np.broadcast_to(self.alpha, l.shape))
 
     def complex_stiffness_derivatives(self, l, T, omega):
         """``∂k*/∂T = ∂k*/∂EA = 1/l``, ``∂k*/∂kappa = (iω·t1)^α/l``, ``∂k*/∂α = (kappa/l)(iω·t1)^α·log(iω·t1)``."""
@@ -443,6 +472,13 @@ class TensionSpringpot(_DynamicSpring):
         w = angular_frequencies(omega)
         pw, pw_T = self._powers(l, w)
         return self._spring_tangent(l, T) + (self.kappa / l) * pw + (self.beta * T / l) * pw_T
+
+    def laplace_stiffness(self, l, T, s) -> np.ndarray:
+        """``(EA + T)/l + (kappa/l)·(s·t1)^α + (beta·T/l)·(s·t1)^α_T`` (N/m) at Laplace variables ``s`` (1/s)."""
+        l, T = self._check(l, T)
+        z = laplace_variables(s)
+        return (self._spring_tangent(l, T) + (self.kappa / l) * _power_s(z, np.broadcast_to(self.alpha, l.shape))
+                + (self.beta * T / l) * _power_s(z, np.broadcast_to(self.alpha_T, l.shape)))
 
     def complex_stiffness_derivatives(self, l, T, omega):
         """``∂k*/∂T = (1 + beta·(iω·t1)^α_T)/l``; by EA, kappa, α, beta, α_T in turn: ``1/l``, ``(iω·t1)^α/l``,

@@ -6,6 +6,7 @@ that the run produced from its own inputs.
 from .compactness import compactness_markdown
 from .ensemble import ensemble_markdown
 from .fit import fit_markdown
+from .fit_text import fit_text
 from .html import (comparison_html, data_html, ensemble_html, fit_html, fitted_model_html, frequency_response_html,
                    population_html)
 from .population import population_markdown, study_markdown
@@ -14,7 +15,7 @@ from .sensitivity import sensitivity_markdown
 from .studies import no_if_markdown, references_markdown, semiflexible_markdown, stiffening_markdown
 
 __all__ = [
-    "fit_markdown", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
+    "fit_markdown", "fit_text", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
     "ensemble_markdown", "population_fit_markdown", "fit_html", "data_html", "frequency_response_html",
     "fitted_model_html", "comparison_html", "population_html", "ensemble_html",

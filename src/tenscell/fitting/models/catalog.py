@@ -59,6 +59,14 @@ def _builtin() -> dict[str, Mechanism]:
                    Field("alpha_T", "exponent", "shared")), viscosity=True,
                   description="passive springpot tendons plus an active springpot whose modulus is proportional to "
                               "the tension (beta = 1000), its own exponent, cytoplasm viscosity"),
+        # issue 26: the prestress acts only through the paper's geometric stiffness P·Kp (no tension term in the law);
+        # the two families' exponents mix with it through the structure's modes (bench/proto_geometric.py)
+        Mechanism("springpot-alpha-family+visc", "Springpot",
+                  (Field("EA", "stiffness", "shared"), Field("kappa", "coefficient"), Field("alpha", "exponent")),
+                  viscosity=True,
+                  description="springpot tendons with a modulus and an exponent per family (actin, intermediate "
+                              "filament), one spring EA, cytoplasm viscosity; the prestress acts through the geometric "
+                              "prestress stiffness only"),
     ]
     return {m.name: m for m in mechs}
 
