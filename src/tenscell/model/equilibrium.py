@@ -100,9 +100,16 @@ class MemberGeometry:
     @cached_property
     def blocks(self) -> NodeBlocks:
         """The node-block pattern of this geometry's stiffness matrices (point nodes only), computed once."""
-        if not self.point_nodes:
+        return NodeBlocks(self.index[:, 0], self.index[:, _W], self._point_directions(), self.n)
+
+    def block_matrix(self, hessian_weights=None, gram_weights=None):
+        """``Σ h_j ∇²l_j + Σ g_j a_j a_jᵀ`` on :attr:`blocks` (point nodes only; real weights, shape (m,) each)."""
+        return self.blocks.assemble(self._point_directions(), self.lengths, hessian_weights, gram_weights)
+
+    def _point_directions(self) -> np.ndarray:
+        if not self.point_nodes or self.directions is None:
             raise ValueError("node blocks exist only for structures of point nodes (no rigid struts, no rollers)")
-        return NodeBlocks(self.index[:, 0], self.index[:, _W], self.directions, self.n)
+        return self.directions
 
 
 class NodeBlocks:
@@ -148,8 +155,8 @@ class NodeBlocks:
         kcol = G.indices.astype(np.int64)
         which = np.searchsorted(krow * nb + kcol, brow * np.int64(nb) + bcol)
         flat = support.reshape(-1, 9)
-        kept = np.stack([np.bincount(which, weights=flat[:, i], minlength=kcol.size) for i in range(9)], axis=1)
-        kept = kept.reshape(-1, 3, 3) > 0
+        kept = np.stack([np.bincount(which, weights=flat[:, i], minlength=kcol.size) > 0 for i in range(9)],
+                        axis=1).reshape(-1, 3, 3)
         # coordinate row 3r + x: block r's blocks in column order, within each its kept columns y in order
         per_row = kept.sum(axis=2)  # (blocks, 3)
         before = np.cumsum(per_row, axis=0) - per_row  # kept entries of earlier blocks, per x
@@ -285,7 +292,7 @@ def equilibrium_matrix(geom: MemberGeometry, sparse: bool | None = None):
 def assemble_hessian(geom: MemberGeometry, weights: np.ndarray, sparse: bool | None = None):
     """``Σ_j w_j ∇²l_j`` assembled into an ``(n_q, n_q)`` matrix."""
     if _node_blocks(geom, sparse):
-        return geom.blocks.assemble(geom.directions, geom.lengths, hessian_weights=weights)
+        return geom.block_matrix(hessian_weights=weights)
     index, hess = geom.index, geom.hess
     if hess is None:
         raise ValueError("assemble_hessian needs a MemberGeometry with Hessians (member_geometry(..., hessians=True))")
@@ -334,7 +341,7 @@ def member_stiffness(geom: MemberGeometry, hessian_weights=None, gram_weights=No
     """
     real = gram_weights is None or not np.iscomplexobj(gram_weights)
     if real and _node_blocks(geom, sparse):
-        return geom.blocks.assemble(geom.directions, geom.lengths, hessian_weights, gram_weights)
+        return geom.block_matrix(hessian_weights, gram_weights)
     use_sparse = _use_sparse(geom.n) if sparse is None else sparse
     H = None if hessian_weights is None else assemble_hessian(geom, hessian_weights, sparse=use_sparse)
     if gram_weights is None:
