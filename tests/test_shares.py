@@ -146,10 +146,23 @@ def test_bad_options():
         structure_shares(pb)
     with pytest.raises(ValueError, match="odd"):
         structure_shares(pb, th, points=4)
-    with pytest.raises(ValueError, match="low < high"):
+    with pytest.raises(ValueError, match="low <= high"):
         structure_shares(pb, th, prestress_pa=(900.0, 400.0))
     with pytest.raises(ValueError, match="part must be"):
         structure_shares(pb, th, points=3).share("elastic")
+
+
+def test_one_stated_prestress_gives_the_local_share():
+    """A frequency sweep stated at one prestress (1000 Pa): the share is the local one there, the limit of the
+    shares over a range shrinking onto it (Simpson over a range of ±0.01 % differs by O(h²) of the share's
+    curvature in P, far below the 1e-6 asked)."""
+    pb, th = _tension_problem()
+    point = structure_shares(pb, th, prestress_pa=(1000.0, 1000.0))
+    narrow = structure_shares(pb, th, prestress_pa=(999.9, 1000.1))
+    assert point.prestress_pa.size == 1
+    for part in ("geometric", "constitutive"):
+        for mod in ("storage", "loss"):
+            np.testing.assert_allclose(point.share(part, mod), narrow.share(part, mod), rtol=1e-6, atol=1e-9)
 
 
 def test_shares_are_invariant_under_the_time_scaling():

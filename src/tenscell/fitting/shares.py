@@ -297,9 +297,10 @@ def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
     if s is not None:
         lo, hi = (positive_scalar("prestress_pa lower", prestress_pa[0], "Pa"),
                   positive_scalar("prestress_pa upper", prestress_pa[1], "Pa"))
-        if not lo < hi:
-            raise ValueError(f"prestress_pa must be (low, high) with low < high (Pa), got {prestress_pa!r}")
-        p_pa = np.linspace(lo, hi, points)
+        if lo > hi:
+            raise ValueError(f"prestress_pa must be (low, high) with low <= high (Pa), got {prestress_pa!r}")
+        # one stated prestress (a frequency sweep at 1000 Pa): the local derivative there, as without a scale
+        p_pa = np.linspace(lo, hi, points) if lo < hi else np.array([lo])
         P_n = s * p_pa
     else:
         p_pa, P_n = np.array([np.nan]), np.array([positive_scalar("P (fitted prestress)", P_fit, "N")])
