@@ -486,6 +486,10 @@ class StructureSummary:
         v = float(q.values[key][i])
         if not math.isfinite(v):
             return "undefined (no change over the range)"
+        if part in ("geometric", "constitutive") and self.law not in TENSION_TERMS:
+            # no tension term in the law: P·Kp carries all of dG*/dP whatever the parameters (no error to give)
+            exact = 100 if part == "geometric" else 0  # v is that to rounding
+            return f"{exact} % (by construction: {self.law} tendons have no tension terms)"
         se, note = q.error(key, i)
         if se is None:
             return f"{100 * v:.3g} % (± not determined{' ' + note if note else ''})"
