@@ -8,7 +8,7 @@ The README's lines, each as a fresh ``tenscell`` process into its own output dir
 * ``tenscell fit my_cells.csv --tendons per-tendon --starts 4 --seed 0 --out fit/`` (the line that raced:
   ``dictionary changed size during iteration`` in 1 of 8 runs, a worker pickling a result whose caches the main
   thread was filling), on the same table;
-* ``tenscell fit SWEEP PRESTRESS_SWEEP --model springpot-tension+visc --out fit/`` on the bundled sets.
+* ``tenscell fit SWEEP PRESTRESS_SWEEP --model springpot-alpha-family+visc --out fit/`` on the bundled sets.
 
 Runs go round-robin over the lines, ``--concurrent`` at a time (default 8: four times the cores, so workers and
 main threads interleave). A run passes when its exit status is 0 or 1 (1: a fit that misses its tolerance, an
@@ -41,8 +41,8 @@ def lines(table: Path) -> dict[str, list[str]]:
         "fit moduli.csv": ["fit", str(table)],
         "fit --tendons per-tendon --starts 4 --seed 0": ["fit", str(table), "--tendons", "per-tendon",
                                                           "--starts", "4", "--seed", "0"],
-        "fit --model springpot-tension+visc": ["fit", "bundled:fabry2001", "bundled:stamenovic2002",
-                                               "--model", "springpot-tension+visc"],
+        "fit --model springpot-alpha-family+visc": ["fit", "bundled:fabry2001", "bundled:stamenovic2002",
+                                               "--model", "springpot-alpha-family+visc"],
     }
 
 
