@@ -31,7 +31,7 @@ MODEL_GROUPS = {
     "structure-free formulas (baselines)": ("structural-damping", "structural-damping+newtonian",
                                             "structural-damping-prestress", "structural-damping-prestress+newtonian"),
 }
-RECOMMENDED_MODEL = "springpot-tension+visc"
+RECOMMENDED_MODEL = "springpot-alpha-family+visc"
 MODEL_NAMES = tuple(n for names in MODEL_GROUPS.values() for n in names)
 #: the name of tenscell 0.2 (every name --model takes)
 MECHANISM_NAMES = MODEL_NAMES
@@ -45,8 +45,8 @@ ENSEMBLE_FILES = ("ensemble.csv", "ensemble.png", "ensemble.md")
 def _model_help() -> str:
     groups = "; ".join(f"{g}: {', '.join(names)}" for g, names in MODEL_GROUPS.items())
     return (f"what to fit (default: the paper's Voigt cell laid out by --tendons/--damping). For a first fit of "
-            f"your own cells try {RECOMMENDED_MODEL} (few parameters, scored against its own structure-free "
-            f"formula in the report). Groups: {groups}. --fix/--bound take the model's parameter names or kinds")
+            f"your own cells try {RECOMMENDED_MODEL} (few parameters; the tensegrity's geometric prestress "
+            f"stiffness carries the prestress dependence; scored against its own structure-free formula in the report). Groups: {groups}. --fix/--bound take the model's parameter names or kinds")
 
 
 #: the prestress (Pa) at which the bundled frequency data (fabry2001) were measured, for joint fits: the

@@ -23,7 +23,7 @@ VOIGT_OPTIONS = {"tendons": "per-tendon", "damping": "uniform", "min_prestress_s
 
 
 def fit(data, cell=None, *, model=None, tendons: str = "per-tendon", damping: str = "uniform", starts: int = 4,
-        seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01, hops: int = 30, patience: int = 6,
+        seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01, hops: int = 30, patience: int = 12,
         max_nfev: int = 100, polish: float = 0.2, polish_effort: float = 0.5, bounds: dict | None = None,
         fixed: dict | None = None, min_prestress_share: float | None = None, max_decades: float | None = None,
         min_prestress_elasticity: float | None = None, elasticity_frequency_hz: float = 0.1, initial=None,

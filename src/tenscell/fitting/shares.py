@@ -297,9 +297,10 @@ def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
     if s is not None:
         lo, hi = (positive_scalar("prestress_pa lower", prestress_pa[0], "Pa"),
                   positive_scalar("prestress_pa upper", prestress_pa[1], "Pa"))
-        if not lo < hi:
-            raise ValueError(f"prestress_pa must be (low, high) with low < high (Pa), got {prestress_pa!r}")
-        p_pa = np.linspace(lo, hi, points)
+        if lo > hi:
+            raise ValueError(f"prestress_pa must be (low, high) with low <= high (Pa), got {prestress_pa!r}")
+        # one stated prestress (a frequency sweep at 1000 Pa): the local derivative there, as without a scale
+        p_pa = np.linspace(lo, hi, points) if lo < hi else np.array([lo])
         P_n = s * p_pa
     else:
         p_pa, P_n = np.array([np.nan]), np.array([positive_scalar("P (fitted prestress)", P_fit, "N")])
@@ -485,6 +486,10 @@ class StructureSummary:
         v = float(q.values[key][i])
         if not math.isfinite(v):
             return "undefined (no change over the range)"
+        if part in ("geometric", "constitutive") and self.law not in TENSION_TERMS:
+            # no tension term in the law: P·Kp carries all of dG*/dP whatever the parameters (no error to give)
+            exact = 100 if part == "geometric" else 0  # v is that to rounding
+            return f"{exact} % (by construction: {self.law} tendons have no tension terms)"
         se, note = q.error(key, i)
         if se is None:
             return f"{100 * v:.3g} % (± not determined{' ' + note if note else ''})"
