@@ -297,7 +297,7 @@ class Pencil:
         if shift == 0.0:
             return self.cholesky
         if shift not in self._factors:
-            Ks = self.shifted(shift).tocsc()
+            Ks = self.shifted(shift)  # the factorization reads its lower triangle in any sparse format
             # C0 is positive semidefinite: K0 + σC0 (σ > 0) not positive definite means K0 is not either
             what = f"K0 + {shift:g}·C0 (so neither is K0)" if shift > 0 else \
                 f"K0 − {-shift:g}·C0 (some relaxation rate is at most {-shift:g} 1/s)"

@@ -143,41 +143,44 @@ class NodeBlocks:
         valid = np.concatenate([fa, fb, fa & fb, fa & fb])
         brow = np.concatenate([ra, rb, ra, rb])[valid]
         bcol = np.concatenate([ra, rb, rb, ra])[valid]
-        nonzero = directions != 0
-        support = (nonzero[:, :, None] & nonzero[:, None, :]) | np.eye(3, dtype=bool)
-        support = np.concatenate([support] * 4)[valid]
-        # the distinct blocks, by row then column (scipy's conversion: linear time, sorts only within rows), and
-        # the union of the supports of the members' blocks that fall on each
+        member = np.flatnonzero(valid) % m
+        # the distinct blocks, by row then column (scipy's conversion: linear time, sorts only within rows)
         G = sp.csr_matrix((np.ones(brow.size, dtype=np.int8), (brow, bcol)), shape=(nb, nb))
         G.sum_duplicates()
         bptr = G.indptr.astype(np.int64)
+        nk = G.indices.size
         krow = np.repeat(np.arange(nb, dtype=np.int64), np.diff(bptr))
         kcol = G.indices.astype(np.int64)
         which = np.searchsorted(krow * nb + kcol, brow * np.int64(nb) + bcol)
-        flat = support.reshape(-1, 9)
-        kept = np.stack([np.bincount(which, weights=flat[:, i], minlength=kcol.size) > 0 for i in range(9)],
-                        axis=1).reshape(-1, 3, 3)
-        # coordinate row 3r + x: block r's blocks in column order, within each its kept columns y in order
-        per_row = kept.sum(axis=2)  # (blocks, 3)
-        before = np.cumsum(per_row, axis=0) - per_row  # kept entries of earlier blocks, per x
-        first_of_row = before[bptr[:-1].clip(max=max(kcol.size - 1, 0))] if kcol.size else np.zeros((nb, 3), int)
-        row_len = np.zeros((nb, 3), dtype=np.int64)
-        for x in range(3):
-            row_len[:, x] = np.bincount(krow, weights=per_row[:, x], minlength=nb)
+        # entry (x, y) of a distinct block is kept when some member on it has e_x·e_y ≠ 0 (the diagonal always):
+        # the blocks are symmetric, so three off-diagonal pairs, one bincount each
+        nonzero = directions != 0
+        kept = np.zeros((nk, 3, 3), dtype=bool)
+        kept[:, (0, 1, 2), (0, 1, 2)] = True
+        for x, y in ((0, 1), (0, 2), (1, 2)):
+            on = np.bincount(which[(nonzero[:, x] & nonzero[:, y])[member]], minlength=nk) > 0
+            kept[:, x, y] = kept[:, y, x] = on
+        # coordinate row 3r + x: block row r's blocks in column order, within each its kept columns y in order
+        k8 = kept.view(np.int8)
+        before_y = np.zeros((nk, 3, 3), dtype=np.int64)  # kept entries left of (x, y) within its block
+        before_y[:, :, 1] = k8[:, :, 0]
+        before_y[:, :, 2] = k8[:, :, 0] + k8[:, :, 1]
+        per_row = before_y[:, :, 2] + k8[:, :, 2]  # (blocks, 3)
+        upto = np.zeros((nk + 1, 3), dtype=np.int64)  # kept entries of the blocks before each, per x
+        np.cumsum(per_row, axis=0, out=upto[1:])
         indptr = np.zeros(n + 1, dtype=np.int64)
-        np.cumsum(row_len.ravel(), out=indptr[1:])
+        np.cumsum((upto[bptr[1:]] - upto[bptr[:-1]]).ravel(), out=indptr[1:])
         nnz = int(indptr[-1])
-        three = np.arange(3)
-        place = (indptr[3 * krow[:, None] + three] + before - first_of_row[krow])[:, :, None] \
-            + np.cumsum(kept, axis=2) - kept  # (blocks, 3, 3)
-        place = np.where(kept, place, nnz)  # an entry zero in every matrix: the spare slot, dropped
         index_type = np.int32 if max(n, nnz) < 2 ** 31 - 1 else np.int64
+        start = indptr[:-1].reshape(nb, 3)[krow] + upto[:-1] - upto[bptr[krow]]  # (blocks, 3): row x's first
+        place = (start[:, :, None] + before_y).astype(index_type)
+        place[~kept] = nnz  # an entry zero in every matrix: the spare slot, dropped
         indices = np.empty(nnz + 1, dtype=index_type)
-        indices[place] = 3 * kcol[:, None, None] + three
+        indices[place] = (3 * kcol).astype(index_type)[:, None, None] + np.arange(3, dtype=index_type)
         # a fixed end's blocks: the spare slot too; kept in the index type (half the memory at int32: 29 MB at
         # 106,641 coordinates, alive as long as the cell, beside the two Cholesky factors of its models)
-        pos = np.full((4 * m, 3, 3), nnz, dtype=index_type)
-        pos[valid] = place[which]
+        pos = np.full((4 * m, 9), nnz, dtype=index_type)
+        pos[np.flatnonzero(valid)] = place.reshape(nk, 9)[which]
         self.n, self.nnz = n, nnz
         self.indptr, self.indices = indptr.astype(index_type), indices[:nnz]
         self.positions = pos.ravel()
