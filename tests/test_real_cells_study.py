@@ -194,3 +194,32 @@ def test_the_docs_page_takes_the_runs_tables_between_its_markers():
         mod.splice("no markers", "x", "y")
     page = (path.parent / "validation.md").read_text()
     assert page.count(mod.BEGIN) == 1 and page.count(mod.END) == 1
+
+
+# ---- the time domain (tenscell.studies.real_cells_time) -------------------------------------------
+def test_time_domain_baselines_recover_the_laws_that_made_the_data():
+    from tenscell.studies.real_cells_time import TimeSeries, power_law_fit, structural_newtonian_fit
+    from tenscell.timedomain import invert_laplace
+
+    t = np.logspace(-1, 1, 25)
+    f = power_law_fit(TimeSeries("pl", "creep", t, 0.01 * t**0.3, "synthetic"))
+    assert f.values["A"] == pytest.approx(0.01, rel=1e-10) and f.values["x"] == pytest.approx(0.3, abs=1e-12)
+    assert f.rms < 1e-12 and f.local_exponent == pytest.approx(0.3, abs=1e-6)
+    shape = power_law_fit(TimeSeries("s", "relaxation shape", t, (t / t[0]) ** -0.2, "synthetic"))
+    assert shape.n_params == 1 and shape.values["x"] == pytest.approx(0.2, abs=1e-12)
+    # creep of G* = G0 Γ(1-x) s^x + η s, inverted exactly (Talbot), fitted back: the law's own parameters
+    G0, x, eta = 100.0, 0.25, 5.0
+    J = invert_laplace(lambda s: 1.0 / (s * (G0 * math.gamma(1 - x) * s**x + eta * s)), t)
+    fit = structural_newtonian_fit(TimeSeries("sn", "creep", t, J, "synthetic"))
+    assert fit.rms < 1e-4
+    assert fit.values["x"] == pytest.approx(x, abs=1e-3) and fit.values["G0"] == pytest.approx(G0, rel=1e-2)
+    assert fit.values["eta"] == pytest.approx(eta, rel=1e-2)
+
+
+def test_time_series_are_checked():
+    from tenscell.studies.real_cells_time import TimeSeries
+
+    with pytest.raises(ValueError, match="kind"):
+        TimeSeries("x", "stress", np.ones(3), np.ones(3), "s")
+    with pytest.raises(ValueError, match="positive"):
+        TimeSeries("x", "creep", np.array([0.0, 1.0, 2.0]), np.ones(3), "s")

@@ -8,7 +8,13 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-__all__ = ["check_inputs", "budgets", "real_cells_cost", "write_real_cells", "EVALUATIONS_PER_START_HOP", "FILES"]
+__all__ = ["check_inputs", "budgets", "real_cells_cost", "write_real_cells", "EVALUATIONS_PER_START_HOP", "FILES",
+           "TIME_FILES", "TIME_FIT_CPU_S"]
+
+#: CPU seconds one mechanism's time-domain fit takes, about the mean over the two series (measured, load 5 on
+#: 2 cores: springpot-lognormal-kappa+visc 75 s on the HL60 creep with 2 starts; on the oocyte shape with 4 starts
+#: springpot-alpha-family+visc 35 s, maxwell+visc 11 s): the estimate of --time-domain
+TIME_FIT_CPU_S = 60.0
 
 #: model evaluations (residuals and Jacobian) one start of a fit on one Xie spectrum takes per basin-hopping move
 #: allowed, the mean over the default models (measured: 12 starts × 30 hops took 900–8900 evaluations on a median,
@@ -17,6 +23,8 @@ EVALUATIONS_PER_START_HOP = 12.0
 #: what the command writes
 FILES = ("real_cells.md", "real_cells_medians.csv", "real_cells_g3.csv", "real_cells_cells.csv",
          "real_cells_medians.png", "real_cells_slopes.png", "validation_tables.md")
+#: what ``--time-domain`` adds
+TIME_FILES = ("real_cells_time.csv", "real_cells_time.png")
 
 
 def check_inputs(args) -> None:
@@ -29,6 +37,11 @@ def check_inputs(args) -> None:
         for line in XIE_LINES:
             xie_median(line, folder)
             xie_cells(line, folder)
+        if args.time_domain:
+            from ..studies.real_cells import hl60_creep, oocyte_relaxation
+
+            hl60_creep(folder)
+            oocyte_relaxation(folder)
     except RealCellsMissing as err:
         flag = "--data DIR" if args.data_dir is None else f"--data {args.data_dir}"
         raise RealCellsMissing(f"{flag}: {err}") from None
@@ -82,12 +95,16 @@ def real_cells_cost(args, jobs: int):
             n = EVALUATIONS_PER_START_HOP * med.starts * (med.hops + 1) * (1 + len(SPLITS)) * len(XIE_LINES)
             if cell is not None and label in per_cell_models:
                 n += EVALUATIONS_PER_START_HOP * cell.starts * (cell.hops + 1) * n_cells
+            if args.time_domain and spec.structural:  # two series, as many evaluations as that CPU time buys
+                n += 2 * TIME_FIT_CPU_S / per
             cpu += n * per
             evaluations += int(round(n))
     workers = max(1, jobs)
     share = cpu_share(workers)
     per = cpu / max(evaluations, 1)
     cells = f", {n_cells} cells × {cell.starts} × {cell.hops}" if cell is not None else ", no per-cell fits"
+    if args.time_domain:
+        cells += f", 2 time series × {len(names)} mechanisms at about {TIME_FIT_CPU_S:.0f} s of CPU each"
     return Cost("model evaluation", max(evaluations, 1), per / share, workers,
                 detail=f"(medians: {len(median_models(names))} models × {1 + len(SPLITS)} fits × 2 lines × "
                        f"{med.starts} starts × up to {med.hops} hops{cells}; {per * 1e3:.2g} ms of CPU each, at "
@@ -99,19 +116,26 @@ def write_real_cells(out: Path, log, args, jobs: int) -> None:
     from .. import plotting
     from ..io.outputs import write_csv_rows, write_text
     from ..plotting.real_cells import real_cells_medians_figure, real_cells_slopes_figure
-    from ..reports.real_cells import (CELL_COLUMNS, G3_COLUMNS, MEDIAN_COLUMNS, cell_rows, g3_rows, median_rows,
-                                      real_cells_markdown, validation_tables)
+    from ..reports.real_cells import (CELL_COLUMNS, G3_COLUMNS, MEDIAN_COLUMNS, TIME_COLUMNS, cell_rows, g3_rows,
+                                      median_rows, real_cells_markdown, time_rows, validation_tables)
     from ..studies.real_cells_study import real_cells_study
 
     names, med, cell, max_cells = budgets(args)
     s = real_cells_study(args.data_dir, mechanisms=names, budget=med, cell_budget=cell, max_cells=max_cells,
-                         jobs=jobs, notify=lambda line: log(line))
+                         time_domain=args.time_domain, jobs=jobs, notify=lambda line: log(line))
     write_csv_rows(out / "real_cells_medians.csv", list(MEDIAN_COLUMNS), median_rows(s))
     write_csv_rows(out / "real_cells_g3.csv", list(G3_COLUMNS), g3_rows(s))
     write_csv_rows(out / "real_cells_cells.csv", list(CELL_COLUMNS), cell_rows(s))
+    written = list(FILES)
+    if s.time_domain:
+        from ..plotting.real_cells import real_cells_time_figure
+
+        write_csv_rows(out / "real_cells_time.csv", list(TIME_COLUMNS), time_rows(s))
+        plotting.save(real_cells_time_figure(s), out / "real_cells_time.png")
+        written += list(TIME_FILES)
     plotting.save(real_cells_medians_figure(s), out / "real_cells_medians.png")
     plotting.save(real_cells_slopes_figure(s), out / "real_cells_slopes.png")
     write_text(out / "validation_tables.md", validation_tables(s))
     write_text(out / "real_cells.md", real_cells_markdown(s))
     print(s.g3.text(), flush=True)
-    log(f"{', '.join(FILES)} ({s.cpu_s:.0f} s CPU, {s.wall_s:.0f} s wall, load {s.load[0]:.1f} -> {s.load[1]:.1f})")
+    log(f"{', '.join(written)} ({s.cpu_s:.0f} s CPU, {s.wall_s:.0f} s wall, load {s.load[0]:.1f} -> {s.load[1]:.1f})")

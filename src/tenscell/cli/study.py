@@ -291,6 +291,7 @@ _STUDY_OPTIONS = {
     "hops": (None, "--hops", ("mechanisms", "real-cells")),
     "data_dir": (None, "--data", ("real-cells",)),
     "cells": (None, "--cells", ("real-cells",)),
+    "time_domain": (False, "--time-domain", ("real-cells",)),
     "ensemble": (None, "--ensemble", ("mechanisms",)),
     "workers": (None, "--workers", ("mechanisms",)),
     "scheduler": (None, "--scheduler", ("mechanisms",)),
@@ -349,6 +350,9 @@ def register(sub) -> None:
                    help="the real-cell data folder (default ../shared/data/real-cells; never shipped with tenscell)")
     r.add_argument("--cells", type=integer(0, 10_000), default=None, metavar="N",
                    help="fit only the first N cells of each line one by one (default all; 0: no per-cell fits)")
+    r.add_argument("--time-domain", action="store_true",
+                   help="also fit the HL60 creep curve and the oocyte relaxation's shape in the time domain (each "
+                        "mechanism about a minute of CPU per series)")
     add_data_options(p)
     p.set_defaults(func=run)
 

@@ -6,10 +6,11 @@ from typing import Sequence
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.ticker import NullFormatter
 
 from ._style import legend_outside, new_panels, styled
 
-__all__ = ["real_cells_medians_figure", "real_cells_slopes_figure"]
+__all__ = ["real_cells_medians_figure", "real_cells_slopes_figure", "real_cells_time_figure"]
 
 
 @styled
@@ -71,4 +72,34 @@ def real_cells_slopes_figure(study, axes: Sequence[Axes] | None = None) -> np.nd
         a.set_ylabel("model's G′ slope")
         a.set_title(line, fontsize="medium")
     legend_outside(ax[len(lines) - 1], fontsize="x-small")
+    return ax
+
+
+@styled
+def real_cells_time_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """The HL60 creep compliance J(t) and the oocyte's relaxation shape F(t)/F(t_ref), each with every model fitted
+    to it in the time domain."""
+    series = list(dict.fromkeys(f.data for f in study.time_domain))
+    ax = new_panels(axes, max(1, len(series)), (5.0 * max(1, len(series)) + 3.0, 4.2),
+                    title="Measured cells in the time domain: every model fitted to each curve")
+    if not series:
+        ax[0].text(0.5, 0.5, "no time-domain fits in this run", ha="center", transform=ax[0].transAxes)
+        return ax
+    data = {ts.name: ts for ts in getattr(study, "time_series", ())}
+    for j, name in enumerate(series):
+        a = ax[j]
+        fits = [f for f in study.time_domain if f.data == name]
+        if name in data:
+            a.plot(data[name].time_s, data[name].values, "o", color="k", ms=3, label="measured", zorder=5)
+        for k, f in enumerate(fits):
+            if f.curve:
+                a.plot(*f.curve, color=f"C{k % 10}", lw=1.2, ls="-" if f.structural else "--",
+                       label=f"{f.model} ({f.rms:.3f})")
+        a.set_xscale("log")
+        a.set_yscale("log")
+        a.set_xlabel("time t (s)")
+        a.xaxis.set_minor_formatter(NullFormatter())
+        a.set_ylabel("J(t) (1/Pa)" if "creep" in name else "F(t) / F(t_ref)")
+        a.set_title(name, fontsize="medium")
+        a.legend(fontsize="x-small", title="RMS (decades)", title_fontsize="x-small")
     return ax

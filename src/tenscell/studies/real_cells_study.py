@@ -33,7 +33,7 @@ from ..fitting.validation import Split, _subset
 
 __all__ = ["HeldOut", "SPLITS", "G3_LIMIT", "DEFAULT_MECHANISMS", "BASELINES", "Budget", "MEDIAN_BUDGET",
            "CELL_BUDGET", "ModelScore", "G3Row", "G3Verdict", "evaluate_g3", "score_model", "median_scores",
-           "CellSlopes", "per_cell_slopes", "slope_between", "RealCellsStudy", "real_cells_study", "SLOPE_BAND_HZ"]
+           "CellSlopes", "per_cell_slopes", "time_series", "time_domain_fits", "TIME_STARTS", "slope_between", "RealCellsStudy", "real_cells_study", "SLOPE_BAND_HZ"]
 
 #: G3's limit on the held-out RMS (decades) of the first split, on both lines
 G3_LIMIT = 0.08
@@ -109,8 +109,9 @@ class Budget:
 #: the medians: 12 starts × up to 30 hops per fit (the best of these is reproducible from the seed: with 4 × 10 the
 #: MDA-MB-436 lognormal mechanism stops in a basin 30 % worse in sample, see docs/validation.md)
 MEDIAN_BUDGET = Budget(12, 30)
-#: each cell: 3 starts × up to 8 hops per fit (105 cells × every model)
-CELL_BUDGET = Budget(3, 8)
+#: each cell: 2 starts × up to 4 hops per fit (105 cells × every model: the study's largest part; 3 × 8 took
+#: 35-105 s of CPU per mechanism on the 59 MCF-10A cells, at load 5 on 2 cores)
+CELL_BUDGET = Budget(2, 4)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -141,6 +142,8 @@ class ModelScore:
         it gave no stable cell there).
     cpu_s : float
         CPU seconds of all its fits.
+    n_evaluations : int
+        Model evaluations of all its fits.
     curve_hz, curve : ndarray
         The first split's refit on a dense frequency grid: G* (Pa), for the figure.
     """
@@ -159,6 +162,7 @@ class ModelScore:
     train_rms: tuple
     held_out: tuple
     cpu_s: float
+    n_evaluations: int = 0
     curve_hz: np.ndarray = field(default_factory=lambda: np.empty(0))
     curve: np.ndarray = field(default_factory=lambda: np.empty(0, complex))
 
@@ -180,13 +184,14 @@ def score_model(spec, data, line: str, *, role: str, formula: str = "", splits: 
     t0 = time.process_time()
     full = fit(data, model=spec, **budget.options())
     aic, bic = full.information_criteria()
-    train, held = [], []
+    train, held, evaluations = [], [], full.n_evaluations
     grid = np.logspace(0, math.log10(200.0), 60)
     curve = np.full(grid.size, np.nan + 0j)
     for k, sp in enumerate(splits):
         s = sp.split(data)
         r = fit(s.train, model=spec, **budget.options())
         train.append(r.rms_log10_error)
+        evaluations += r.n_evaluations
         held.append(held_out_rms(r, s))
         if k == 0:
             try:
@@ -198,7 +203,7 @@ def score_model(spec, data, line: str, *, role: str, formula: str = "", splits: 
                       n_params=full.problem.n_model_parameters, rms=full.rms_log10_error, aic=aic, bic=bic,
                       verdict=full.verdict, at_bound=tuple(p.name for p in full.parameters if p.at_bound),
                       splits=tuple(s.name for s in splits), train_rms=tuple(train), held_out=tuple(held),
-                      cpu_s=time.process_time() - t0, curve_hz=grid, curve=curve)
+                      cpu_s=time.process_time() - t0, n_evaluations=evaluations, curve_hz=grid, curve=curve)
 
 
 def _formula_label(formula) -> str:
@@ -383,6 +388,8 @@ class CellSlopes:
     converged : int
         Cells whose fit converged (or ended inside the data's noise).
     cpu_s : float
+    n_evaluations : int
+        Model evaluations of all its fits.
     """
 
     line: str
@@ -393,6 +400,7 @@ class CellSlopes:
     rms: np.ndarray
     converged: int
     cpu_s: float
+    n_evaluations: int = 0
 
     def _ok(self):
         return np.isfinite(self.measured) & np.isfinite(self.modelled)
@@ -431,7 +439,7 @@ def per_cell_slopes(cells, line: str, model, *, budget: Budget = CELL_BUDGET) ->
 
     spec = get_model(model)
     t0 = time.process_time()
-    meas, mod, rms, conv, idx = [], [], [], 0, []
+    meas, mod, rms, conv, idx, evaluations = [], [], [], 0, [], 0
     grid = np.geomspace(*SLOPE_BAND_HZ, 9)
     for c in cells:
         d = c.data
@@ -443,15 +451,54 @@ def per_cell_slopes(cells, line: str, model, *, budget: Budget = CELL_BUDGET) ->
             mod.append(slope_between(grid, Gs))
             rms.append(r.rms_log10_error)
             conv += bool(r.converged)
+            evaluations += r.n_evaluations
         except (ValueError, ArithmeticError, np.linalg.LinAlgError):  # too few points for its parameters
             mod.append(math.nan)
             rms.append(math.nan)
     return CellSlopes(line=line, model=spec.name, cells=tuple(idx), measured=np.array(meas), modelled=np.array(mod),
-                      rms=np.array(rms), converged=conv, cpu_s=time.process_time() - t0)
+                      rms=np.array(rms), converged=conv, cpu_s=time.process_time() - t0, n_evaluations=evaluations)
 
 
 def _slopes_task(cells, line, model, budget) -> CellSlopes:
     return per_cell_slopes(cells, line, model, budget=budget)
+
+
+#: time-domain fits: least-squares starts per mechanism and series (with 2 starts of 60 iterations every mechanism
+#: stayed on the oocyte's power law, RMS 0.122; with 4 × 150 maxwell+visc reached 0.005 in 11 s of CPU)
+TIME_STARTS = 4
+
+
+def _time_task(series, model, starts, seed):
+    from .real_cells_time import mechanism_time_fit, power_law_fit, structural_newtonian_fit
+
+    if model == "power law":
+        return power_law_fit(series)
+    if model == "structural-damping+newtonian":
+        return structural_newtonian_fit(series)
+    return mechanism_time_fit(series, model, starts=starts, seed=seed)
+
+
+def time_series(directory=None) -> tuple:
+    """The HL60 creep curve and the oocyte relaxation's shape as :class:`~tenscell.studies.real_cells_time.TimeSeries`."""
+    from .real_cells import hl60_creep, oocyte_relaxation
+    from .real_cells_time import creep_series, relaxation_series
+
+    return creep_series(hl60_creep(directory)), relaxation_series(oocyte_relaxation(directory))
+
+
+def time_domain_fits(series, mechanisms: Sequence[str] = DEFAULT_MECHANISMS, *, starts: int = TIME_STARTS,
+                     seed: int = 0, jobs: int = 1, notify: Callable[[str], None] | None = None) -> tuple:
+    """``series`` (:func:`time_series`) in the time domain (:mod:`tenscell.studies.real_cells_time`): the power law,
+    for creep the structural-damping law + Newtonian, and each mechanism."""
+    from .._parallel import starmap
+
+    say = notify or (lambda line: None)
+    tasks = [(ts, m, starts, seed) for ts in series
+             for m in ("power law", *(("structural-damping+newtonian",) if ts.kind == "creep" else ()), *mechanisms)]
+
+    def done(i, f):
+        say(f"{f.data}: {f.model}: RMS {f.rms:.3f} ({f.cpu_s:.1f} s CPU)")
+    return tuple(starmap(_time_task, tasks, jobs=min(jobs, len(tasks)), on_done=done))
 
 
 # ---------------------------------------------------------------------------------------
@@ -471,6 +518,10 @@ class RealCellsStudy:
     g3 : G3Verdict
     cells : tuple of CellSlopes
         Per line and model (empty when the per-cell part was not run).
+    time_domain : tuple of TimeDomainFit
+        The HL60 creep and oocyte relaxation fits (empty when not run).
+    time_series : tuple of TimeSeries
+        The measured curves they were fitted to.
     n_cells : dict
         {line: cells read}.
     budgets : dict
@@ -487,6 +538,8 @@ class RealCellsStudy:
     scores: tuple
     g3: G3Verdict
     cells: tuple
+    time_domain: tuple
+    time_series: tuple
     n_cells: dict
     budgets: dict
     facts: tuple
@@ -508,12 +561,13 @@ def _load() -> float:
 
 def real_cells_study(directory=None, *, mechanisms: Sequence[str] = DEFAULT_MECHANISMS,
                      budget: Budget = MEDIAN_BUDGET, cell_budget: Budget | None = CELL_BUDGET,
-                     max_cells: int | None = None, jobs: int = 1, notify: Callable[[str], None] | None = None) -> RealCellsStudy:
+                     max_cells: int | None = None, time_domain: bool = False, jobs: int = 1,
+                     notify: Callable[[str], None] | None = None) -> RealCellsStudy:
     """Run the study (module docstring) on the data in ``directory`` (default
     :data:`~tenscell.studies.real_cells.DEFAULT_DIRECTORY`).
 
-    ``cell_budget`` None skips the per-cell fits; ``max_cells`` takes the first cells of each line only (a short run).
-    Every file is read before the first fit (:class:`~tenscell.studies.real_cells.RealCellsMissing` otherwise).
+    ``cell_budget`` None skips the per-cell fits; ``max_cells`` takes the first cells of each line only (a short run);
+    ``time_domain`` adds the HL60 creep and oocyte relaxation fits (:func:`time_domain_fits`). Every file is read before the first fit (:class:`~tenscell.studies.real_cells.RealCellsMissing` otherwise).
     """
     from .real_cells import FACTS, XIE_LINES, real_cells_directory, xie_cells, xie_median
 
@@ -534,9 +588,13 @@ def real_cells_study(directory=None, *, mechanisms: Sequence[str] = DEFAULT_MECH
             say(f"{cs.line}: {cs.model} per cell: slope correlation {cs.pearson:.2f} (Spearman {cs.spearman:.2f}), "
                 f"median RMS {np.nanmedian(cs.rms):.3f} ({cs.cpu_s:.1f} s CPU)")
         per_cell = tuple(starmap(_slopes_task, tasks, jobs=min(jobs, len(tasks)), on_done=done))
-    facts = FACTS["xie2024"] + FACTS["xie2024_median"]
+    series = time_series(folder) if time_domain else ()
+    times = time_domain_fits(series, mechanisms, seed=budget.seed, jobs=jobs, notify=say) if time_domain else ()
+    facts = FACTS["xie2024"] + FACTS["xie2024_median"] + ((FACTS["hl60"] + FACTS["oocyte"]) if time_domain else ())
+    # with workers, their own CPU time (each fit measures it) on top of this process's
+    workers = sum(x.cpu_s for x in (*scores, *per_cell, *times)) if jobs > 1 else 0.0
     return RealCellsStudy(directory=str(folder), medians=medians, scores=scores, g3=evaluate_g3(scores),
-                          cells=per_cell, n_cells={ln: len(c) for ln, c in cells.items()},
+                          cells=per_cell, time_domain=times, time_series=series, n_cells={ln: len(c) for ln, c in cells.items()},
                           budgets={"medians": budget, "cells": cell_budget}, facts=facts,
-                          cpu_s=time.process_time() - t0 + (sum(s.cpu_s for s in scores) + sum(c.cpu_s for c in per_cell)
-                                                             if jobs > 1 else 0.0), wall_s=time.perf_counter() - w0, load=(load0, _load()))
+                          cpu_s=time.process_time() - t0 + workers, wall_s=time.perf_counter() - w0,
+                          load=(load0, _load()))
