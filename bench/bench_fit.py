@@ -50,7 +50,6 @@ from scipy.optimize._numdiff import approx_derivative  # what least_squares uses
 from threadpoolctl import threadpool_limits
 
 from tenscell import fitting
-from tenscell.fitting.search import _initial_guess
 from tenscell.io.data import bundled
 
 FREQUENCY_PRESTRESS_PA = 1000.0
@@ -79,7 +78,7 @@ def bench_jacobian():
     print("== Jacobian of the residuals: analytic vs finite differences (one BLAS thread, as in the fit)")
     for name, (data, kw, _) in _cases().items():
         problem = fitting.make_problem(data, **kw)
-        theta = _initial_guess(problem, np.random.default_rng(0))
+        theta = problem.initial_guess(np.random.default_rng(0))
         with threadpool_limits(limits=1, user_api="blas"):
             J = problem.jacobian(theta)
             t_an = _time(lambda: problem.jacobian(theta), 200)

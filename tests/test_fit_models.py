@@ -48,11 +48,14 @@ def test_formula_jacobian_matches_finite_differences(name):
     np.testing.assert_allclose(J, p.jacobian_fd(theta), rtol=1e-6, atol=1e-8 * np.abs(J).max())
 
 
-@pytest.mark.parametrize("mech", ["springpot+visc", "springpot-tension+visc", "maxwell", "sls", "voigt-compact"])
+@pytest.mark.parametrize("mech", ["springpot+visc", "springpot-tension+visc", "maxwell", "sls", "voigt-compact",
+                                  "springpot-alpha-family+visc"])
 def test_lumped_formula_jacobian_and_prestress_coupling(mech):
-    """A mechanism's structure-free formula: its law's terms, the same prestress coupling, exact Jacobian."""
+    """A mechanism's structure-free formula: its law's terms, the same prestress coupling, as many exponents as the
+    mechanism (an exponent per family: two springpots), exact Jacobian."""
     f = lumped_formula(MECHANISMS[mech])
     assert f.uses_prestress and ("springpot_P" in f.terms) == (mech == "springpot-tension+visc")
+    assert ("springpot_2" in f.terms) == (mech == "springpot-alpha-family+visc")
     assert ("newtonian" in f.terms) == ("visc" in mech or MECHANISMS[mech].law == "Voigt")
     p = f.problem([bundled("stamenovic2002"), _law_data(sd=0.05)])
     assert "P_data[1]" in p.names  # the frequency sweep states no prestress: fitted, in Pa
@@ -66,8 +69,8 @@ def test_formula_terms_are_passive_and_structural_damping_is_a_springpot():
     A = G0·Γ(1−α)."""
     w = np.logspace(-3, 4, 50)
     vals = {"E0": 10.0, "a": 0.2, "G0": 300.0, "g": 0.1, "alpha": 0.2, "A": 50.0, "B": 0.1, "alpha_T": 0.3,
-            "E_M": 40.0, "tau": 0.1, "eta": 0.5}
-    for term in ("structural", "structural_P", "springpot", "springpot_P", "maxwell", "newtonian"):
+            "E_M": 40.0, "tau": 0.1, "eta": 0.5, "A_2": 5.0, "alpha_2": 0.6}
+    for term in ("structural", "structural_P", "springpot", "springpot_2", "springpot_P", "maxwell", "newtonian"):
         assert np.all(Formula("t", (term,)).complex_modulus(vals, w, 500.0).imag > 0), term
     G = Formula("t", ("structural",)).complex_modulus(vals, w, 1.0)
     S = Formula("t", ("springpot",)).complex_modulus({"A": 300.0 * math.gamma(0.8), "alpha": 0.2}, w, 1.0)

@@ -391,3 +391,88 @@ def test_cli_fit_magnitude_phase_layout(tmp_path, cell):
     assert cli_main(["fit", str(path), "--tendons", "uniform", "--starts", "1", "--out", str(out)]) == 0
     doc = json.loads((out / "fit.json").read_text())
     assert doc["rms_log10_error"] < 1e-6
+
+
+# --- the search's stopping rules (fitting.search) ------------------------------------------------------
+class _Toy(fitting.problem.Problem):
+    """A three-parameter least-squares problem with a known optimum (RMS above any small tolerance).
+
+    Residuals ``[a − 1, b − 2, a + b − 3.1, 0.1·(c − 0.5)]`` (natural-log parameters a, b, c): the optimum
+    a = b = 1.0333.., c = 0.5 has RMS 0.0289 decades. With ``undetermined`` the last residual is a constant 0.1:
+    c moves nothing, so starts reach the same RMS at different c and never hold the same optimum.
+    """
+
+    def __init__(self, undetermined=False):
+        self.undetermined = undetermined
+        self.names, self.free = ("a", "b", "c"), np.ones(3, bool)
+        self.lower, self.upper, self.fixed_log = np.full(3, -5.0), np.full(3, 5.0), np.zeros(3)
+        self.omega, self.sources, self.dataset_index = np.ones(2), ("toy",), np.zeros(2, int)
+        self.weights, self.y_obs = np.ones(4), np.zeros(4)
+
+    def _evaluate_constrained(self, phi, jac):
+        return np.asarray(phi, dtype=float)
+
+    def _residuals_from(self, phi):
+        a, b, c = phi
+        return np.array([a - 1, b - 2, a + b - 3.1, 0.1 if self.undetermined else 0.1 * (c - 0.5)])
+
+    def _jacobian_from(self, phi):
+        return np.array([[1.0, 0, 0], [0, 1, 0], [1, 1, 0], [0, 0, 0.0 if self.undetermined else 0.1]])
+
+    def initial_guess(self, rng):
+        return rng.uniform(-4, 4, 3)
+
+    def perturb(self, theta, rng):
+        return fitting.problem.jitter(self, theta, rng)
+
+
+def test_search_stops_when_the_starts_agree():
+    """Every start converges to the one optimum: the search ends once two of them hold it and their pooled moves
+    from it reach the patience, long before each start has spent its own patience (4 × 6 moves)."""
+    from tenscell.fitting.search import best_chain, run_search
+
+    chains, stop = run_search(_Toy(), starts=4, hops=30, patience=6, tolerance=1e-3, seed=0, progress=False)
+    assert stop.startswith("4 starts agree on the best fit") and "6 moves from it" in stop
+    assert sum(ch.hops for ch in chains) == 6  # the round of first steps, then six moves: the rule's own count
+    best = best_chain(chains)
+    np.testing.assert_allclose(best.theta, [1.1 / 3 + 2 / 3, 1.1 / 3 + 5 / 3, 0.5], atol=1e-7)
+
+
+def test_search_stops_at_its_plateau_and_says_so():
+    """An undetermined parameter keeps the starts apart, and no move improves the best: the plateau ends the
+    search before every start has finished, and the stop reason says the tolerance is out of reach."""
+    from tenscell.fitting.search import run_search
+
+    chains, stop = run_search(_Toy(undetermined=True), starts=4, hops=30, patience=6, tolerance=1e-3, seed=0,
+                              progress=False)
+    assert stop.startswith("plateau") and "out of this search's reach" in stop
+    assert not all(ch.finished for ch in chains)
+    # the starts reached the same RMS at different c: agreement in RMS alone is not agreement
+    assert np.ptp([ch.rms for ch in chains]) < 1e-9 and np.ptp([ch.theta[2] for ch in chains]) > 0.05
+
+
+def test_stopping_rules_in_a_fit_depend_on_the_seed_only():
+    """A mechanism whose starts agree: the same stop, optimum and evaluations with 1 or 2 worker processes."""
+    joint_data = [bundled("stamenovic2002"), bundled("fabry2001")]
+    kw = dict(model="springpot-tension+visc", starts=3, seed=1, progress=False)
+    a = fitting.fit(joint_data, jobs=1, **kw)
+    b = fitting.fit(joint_data, jobs=2, **kw)
+    assert "starts agree" in a.stop_reason and f"search stopped: {a.stop_reason}" in a.message
+    assert a.stop_reason == b.stop_reason and a.n_evaluations == b.n_evaluations
+    np.testing.assert_array_equal(a.theta, b.theta)
+
+
+def test_tolerance_follows_the_datas_noise():
+    """Data with sd columns: the search asks each data set for max(tolerance, its noise) — the rule by which the
+    result calls a fit converged — and stops there; the same data without sd columns are asked for the
+    tolerance, which this formula cannot reach."""
+    f = np.logspace(-2, 2, 9)
+    G = 300.0 * (1j * 2 * np.pi * f) ** 0.2
+    wobble = 1.0 + 0.03 * np.cos(3 * np.arange(f.size))  # 0.013 decades of misfit no power law removes
+    kw = dict(frequency_hz=f, G_storage=G.real * wobble, G_loss=G.imag / wobble, source="wobbly")
+    sd = RheologyData(**kw, G_storage_sd=0.1 * G.real, G_loss_sd=0.1 * G.imag)
+    opts = dict(model="structural-damping", tolerance=1e-3, polish_effort=0.0, seed=0, progress=False)
+    r = fitting.fit(sd, **opts)
+    assert r.stop_reason == "met the tolerance (no polishing asked)" and r.converged and not r.tolerance_met
+    plain = fitting.fit(RheologyData(**kw), **opts)
+    assert "met the tolerance" not in plain.stop_reason and not plain.converged

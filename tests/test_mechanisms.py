@@ -13,6 +13,7 @@ from tenscell.fitting.models.heterogeneity import DISTRIBUTIONS, assignments
 from tenscell.fitting import fit, get_model
 from tenscell.fitting.fitted import FittedMechanism, load_fit as load_any_fit
 from tenscell.fitting.models.mechanism import bare_problem
+from tenscell.fitting.models import mechanism_kernel
 from tenscell.fitting.models.mechanism import make_mechanism_problem
 from tenscell.fitting.models.catalog import MECHANISMS, mechanism, mechanism_names
 from tenscell.fitting.models.mechanism import Mechanism
@@ -318,3 +319,106 @@ def test_the_stiffness_spread_carries_its_standard_error():
     np.testing.assert_allclose(got, expected, rtol=1e-4)
     line = next(x for x in fit_markdown(r).splitlines() if x.startswith("Tendon stiffnesses span"))
     assert "+/-" in line and "not determined" not in line
+
+
+# ---- the batched kernel (linear.dynamic.batched_compliance, fitting.models.mechanism_kernel) ----------------
+def _kernel_cells():
+    """Dense and fixed (the paper cell), a probe away from the load, free-standing (a Snelson prism), sparse."""
+    import dataclasses
+
+    from test_free_standing import snelson_prism
+
+    from tenscell.model import equilibrium
+    from tenscell.model.equilibrium import equilibrate
+    from tenscell.model.structure import Point
+
+    cell = paper_cell()
+    moved = equilibrate(dataclasses.replace(cell.structure, probe=Point(nodes=(6,), weights=(1.0,),
+                                                                        direction=(0.0, 0.0, 1.0))),
+                        parameters=dict(cell.parameters))
+    before = equilibrium.SPARSE_THRESHOLD
+    equilibrium.SPARSE_THRESHOLD = 10  # the same cell on the sparse path
+    try:
+        sparse = equilibrate(cell.structure, parameters=dict(cell.parameters))
+    finally:
+        equilibrium.SPARSE_THRESHOLD = before
+    assert sparse.sparse and not cell.sparse
+    return {"paper": cell, "probe elsewhere": moved, "free-standing": equilibrate(snelson_prism(1.0, 1.0)),
+            "sparse": sparse}
+
+
+@pytest.mark.parametrize("which", ["paper", "probe elsewhere", "free-standing", "sparse"])
+def test_batched_compliance_against_the_per_point_kernel_and_differences(which):
+    """Each row of one batched solve (its own P and k*) equals dynamic_compliance at that point; ∂J/∂k* and ∂J/∂P
+    equal central differences of the batched J."""
+    from tenscell.linear.dynamic import batched_compliance, dynamic_compliance, dynamic_kernel
+
+    cell = _kernel_cells()[which]
+    kernel = dynamic_kernel(cell)
+    rng = np.random.default_rng(4)
+    R = 5
+    P = np.exp(rng.uniform(-0.5, 0.5, R))
+    # positive real parts well above the prestress terms, loss angles up to 60°: K_r well conditioned
+    kstar = 50.0 * np.exp(rng.uniform(0, 1, (R, cell.m))) * np.exp(1j * rng.uniform(0, 1.0, (R, cell.m)))
+    J, dJ_dk, dJ_dP = batched_compliance(kernel, P, kstar, gradient=True)
+    ref = np.array([dynamic_compliance(cell, P[r], kstar[r:r + 1])[0] for r in range(R)])
+    # two LU solves of the same systems (condition < 1e4 here): round-off
+    np.testing.assert_allclose(J, ref, rtol=1e-11)
+    np.testing.assert_allclose(batched_compliance(kernel, P, kstar), J, rtol=1e-13)
+    h = 1e-6  # relative steps: truncation ~1e-12 relative
+    for j in (0, cell.m // 2, cell.m - 1):
+        e = np.zeros(cell.m)
+        e[j] = h * np.abs(kstar[0, j])
+        fd = (batched_compliance(kernel, P, kstar + e) - batched_compliance(kernel, P, kstar - e)) / (2 * e[j])
+        # round-off of the differences: ~1e-15·|J|/step per row (a few ulps of J through the solve), which for the
+        # soft prism (|J| ~ 1) is comparable to its smallest ∂J/∂k*; 1e-13·|J|/step leaves a margin of 100
+        assert np.all(np.abs(dJ_dk[:, j] - fd) <= 1e-6 * np.abs(fd) + 1e-13 * np.abs(J) / e[j])
+    fd = (batched_compliance(kernel, P * (1 + h), kstar) - batched_compliance(kernel, P * (1 - h), kstar)) / (2 * h * P)
+    # round-off of the differences: ~1e-16·|J|/(h·P) = 1e-10·|J|/P per row (where the prestress term is small
+    # beside k*, ∂J/∂P is small beside J/P); 1e-8·|J|/P leaves a margin of 100
+    assert np.all(np.abs(dJ_dP - fd) <= 1e-6 * np.abs(fd) + 1e-8 * np.abs(J) / P)
+    assert np.all(np.abs(dJ_dP) > 1e-6 * np.abs(J) / P)  # not vanishing: the check above can fail
+
+
+def test_batched_compliance_in_chunks_is_one_solve():
+    """Rows beyond one chunk (a heterogeneous mechanism's 192 rows) give what the rows give one by one."""
+    from tenscell.linear.dynamic import _CHUNK_BYTES, batched_compliance, dynamic_kernel
+
+    cell = paper_cell()
+    kernel = dynamic_kernel(cell)
+    R = 3 * _CHUNK_BYTES // (16 * kernel.H.size) + 2  # three full chunks and part of a fourth
+    rng = np.random.default_rng(5)
+    P = np.exp(rng.uniform(-0.5, 0.5, R))
+    kstar = 50.0 * np.exp(rng.uniform(0, 1, (R, cell.m))) * np.exp(1j * rng.uniform(0, 1.0, (R, cell.m)))
+    J, dk, dP = batched_compliance(kernel, P, kstar, gradient=True)
+    for r in (0, R // 2, R - 1):
+        one = batched_compliance(kernel, P[r:r + 1], kstar[r:r + 1], gradient=True)
+        np.testing.assert_allclose([J[r], dP[r]], [one[0][0], one[2][0]], rtol=1e-13)
+        np.testing.assert_allclose(dk[r], one[1][0], rtol=1e-13, atol=1e-16 * np.abs(dk).max())
+
+
+@pytest.mark.parametrize("name", sorted(MECHANISMS))
+def test_mechanism_kernel_against_the_per_point_path(name, joint):
+    """The planned, batched moduli at the data points equal, for every catalog mechanism, the moduli of each
+    assignment's own law through dynamic_complex_modulus one point at a time, averaged over the assignments."""
+    from tenscell.linear.dynamic import dynamic_complex_modulus
+
+    pb = make_mechanism_problem(joint, get_model(name))
+    theta = pb.initial_guess(np.random.default_rng(3))
+    phi = pb.full(theta)
+    out = pb._evaluate_constrained(phi, jac=False)
+    assert out is not None and len(pb.plan.grids) == 2  # the prestress sweep at 0.1 Hz; the frequency sweep
+    P = pb._group_P(phi)[pb.group_index]
+    eta = math.exp(phi[pb.eta_index]) if pb.eta_index is not None else 0.0
+    K = out.G_assign.shape[0]
+    ref = np.array([[dynamic_complex_modulus(pb.cell, pb.tendon_law(phi, k), P[i], [pb.omega[i] / (2 * np.pi)],
+                                             viscosity=eta, check=False)[0] for i in range(pb.n_points)]
+                    for k in range(K)])
+    # the same systems solved by two LU codes (batched, and one at a time), 1e-10 relative at conditions < 1e5
+    np.testing.assert_allclose(out.G_assign, ref, rtol=1e-9)
+    np.testing.assert_allclose(out.G, ref.mean(axis=0), rtol=1e-9)
+    # the same points in another order, planned on the fly (grids gathered, not sliced): the same moduli
+    order = np.random.default_rng(0).permutation(pb.n_points)
+    anywhere = pb.evaluate(phi, pb.omega[order], P[order], jac=False)
+    assert any(g.rows is None for g in mechanism_kernel.plan_points(pb.omega[order], pb.group_index[order]).grids)
+    np.testing.assert_allclose(anywhere.G, out.G[order], rtol=1e-12)

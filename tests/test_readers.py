@@ -446,3 +446,19 @@ def test_the_measured_files_read_right():
     assert chia.frequency_hz.max() == pytest.approx(100 / (2 * math.pi))  # Angular Frequency: rad/s
     cell = read_data(SHARED / "real-cells" / "xie2024_population" / "MCF-10A" / "cell_01.csv")
     assert cell.n == 6 and cell.provenance.layout == "tenscell CSV"
+
+
+def test_read_data_takes_a_bundled_name_as_the_command_line_does():
+    """``read_data("bundled:fabry2001")`` is the bundled set itself (the CLI's spelling works in Python too); the
+    options that say how to read a file are refused in one line naming the option."""
+    from tenscell.io.data import bundled
+    from tenscell.io.readers import read_data
+
+    got, want = read_data("bundled:Fabry2001"), bundled("fabry2001")
+    np.testing.assert_array_equal(got.frequency_hz, want.frequency_hz)
+    np.testing.assert_array_equal(got.G_storage, want.G_storage)
+    assert got.source == want.source
+    with pytest.raises(DataError, match="step= says how to read a file"):
+        read_data("bundled:fabry2001", step=1)
+    with pytest.raises(DataError, match="fabry2001, 'stamenovic2002'|names|bundled"):
+        read_data("bundled:nosuch")

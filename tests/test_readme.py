@@ -52,7 +52,7 @@ def test_the_mechanism_commands_run_as_written(tmp_path, monkeypatch):
     assert main(shlex.split(block[2])[1:]) == 0
 
 
-@pytest.mark.parametrize("name", ["springpot-tension+visc"])
+@pytest.mark.parametrize("name", ["springpot-alpha-family+visc"])
 def test_the_readme_names_the_recommended_model(name):
     from tenscell.fitting import RECOMMENDED
 

@@ -146,10 +146,23 @@ def test_bad_options():
         structure_shares(pb)
     with pytest.raises(ValueError, match="odd"):
         structure_shares(pb, th, points=4)
-    with pytest.raises(ValueError, match="low < high"):
+    with pytest.raises(ValueError, match="low <= high"):
         structure_shares(pb, th, prestress_pa=(900.0, 400.0))
     with pytest.raises(ValueError, match="part must be"):
         structure_shares(pb, th, points=3).share("elastic")
+
+
+def test_one_stated_prestress_gives_the_local_share():
+    """A frequency sweep stated at one prestress (1000 Pa): the share is the local one there, the limit of the
+    shares over a range shrinking onto it (Simpson over a range of ±0.01 % differs by O(h²) of the share's
+    curvature in P, far below the 1e-6 asked)."""
+    pb, th = _tension_problem()
+    point = structure_shares(pb, th, prestress_pa=(1000.0, 1000.0))
+    narrow = structure_shares(pb, th, prestress_pa=(999.9, 1000.1))
+    assert point.prestress_pa.size == 1
+    for part in ("geometric", "constitutive"):
+        for mod in ("storage", "loss"):
+            np.testing.assert_allclose(point.share(part, mod), narrow.share(part, mod), rtol=1e-6, atol=1e-9)
 
 
 def test_shares_are_invariant_under_the_time_scaling():
@@ -166,3 +179,19 @@ def test_shares_are_invariant_under_the_time_scaling():
     b = structure_shares(pb, _theta(pb, w), frequency_hz=[0.1 / lam, 2.0 / lam], points=5)
     assert np.allclose(a.dG_geometric, b.dG_geometric, rtol=1e-9) and np.allclose(a.dG, b.dG, rtol=1e-9)
     assert math.isclose(a.geometric_share_storage, b.geometric_share_storage, rel_tol=1e-9)
+
+
+def test_a_law_without_tension_terms_has_its_shares_by_construction():
+    """springpot tendons have no tension term: P·Kp carries all of dG'/dP whatever the parameters, and the summary
+    says so rather than "± not determined"; the computed shares are 1 and 0 to rounding."""
+    from tenscell.fitting import fit
+    from tenscell.io.data import bundled
+
+    r = fit([bundled("stamenovic2002"), bundled("fabry2001")], model="springpot-alpha-family+visc", starts=1,
+            hops=0, progress=False)
+    st = r.structure
+    np.testing.assert_allclose(st.quantities.values["geometric_storage"], 1.0, atol=1e-9)
+    np.testing.assert_allclose(st.quantities.values["constitutive_storage"], 0.0, atol=1e-9)
+    assert st.share_text("geometric", "storage") == "100 % (by construction: Springpot tendons have no tension terms)"
+    assert st.share_text("constitutive", "loss").startswith("0 % (by construction")
+    assert "not determined" not in st.share_verdict()

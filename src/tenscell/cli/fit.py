@@ -31,7 +31,7 @@ MODEL_GROUPS = {
     "structure-free formulas (baselines)": ("structural-damping", "structural-damping+newtonian",
                                             "structural-damping-prestress", "structural-damping-prestress+newtonian"),
 }
-RECOMMENDED_MODEL = "springpot-tension+visc"
+RECOMMENDED_MODEL = "springpot-alpha-family+visc"
 MODEL_NAMES = tuple(n for names in MODEL_GROUPS.values() for n in names)
 #: the name of tenscell 0.2 (every name --model takes)
 MECHANISM_NAMES = MODEL_NAMES
@@ -45,8 +45,8 @@ ENSEMBLE_FILES = ("ensemble.csv", "ensemble.png", "ensemble.md")
 def _model_help() -> str:
     groups = "; ".join(f"{g}: {', '.join(names)}" for g, names in MODEL_GROUPS.items())
     return (f"what to fit (default: the paper's Voigt cell laid out by --tendons/--damping). For a first fit of "
-            f"your own cells try {RECOMMENDED_MODEL} (few parameters, scored against its own structure-free "
-            f"formula in the report). Groups: {groups}. --fix/--bound take the model's parameter names or kinds")
+            f"your own cells try {RECOMMENDED_MODEL} (few parameters; the tensegrity's geometric prestress "
+            f"stiffness carries the prestress dependence; scored against its own structure-free formula in the report). Groups: {groups}. --fix/--bound take the model's parameter names or kinds")
 
 
 #: the prestress (Pa) at which the bundled frequency data (fabry2001) were measured, for joint fits: the
@@ -97,6 +97,11 @@ def register(sub) -> None:
                         "law with and without a Newtonian term) on held-out splits of the data (frequency sweeps cut "
                         "at 1, 10, 30 Hz; prestress sweeps without some prestresses) and rank them in the report by "
                         "their held-out error; auto: for every model but the 36-parameter per-tendon cell")
+    p.add_argument("--profile", choices=("auto", "yes", "no"), default="auto",
+                   help="profile-likelihood intervals of the parameters the local analysis cannot bound (at a bound, "
+                        "undetermined, one-sided) and of a mechanism's held fields: each held at 9 values over its "
+                        "bounds while the others are refitted (about 15-20 refits per parameter), in the report and "
+                        "fit.json; auto: for models with at most 12 free parameters")
     p.add_argument("--holdout", type=_holdout, metavar="FMIN:FMAX", default=None,
                    help="train on the points outside FMIN..FMAX Hz and report every model's error on the held-out "
                         "points (one frequency sweep)")
@@ -515,6 +520,7 @@ def run(args) -> int:
         # figure while this process writes the report: the figure is most of the time after the fit
         result, baseline = run_fit(datasets, spec, args.starts, args.seed, args.jobs, args.tolerance,
                                    args.baseline_starts, worker=worker, warm_plotting=True, **space)
+        _profile(args, result)
         timing = clock.timing(result)
         timing["outputs_started_s"] = clock.now()
         # the report's ± need one model evaluation per parameter: half of them in the worker, before the figure
@@ -558,6 +564,18 @@ def _validation(args, spec, datasets, space):
                                        notify=stage, starts=2, seed=args.seed, hops=8, patience=3,
                                        tolerance=args.tolerance, max_points=None)
     return validation if validation.splits else None  # no split leaves enough points to fit every model
+
+
+def _profile(args, result) -> None:
+    """``--profile``: the profile intervals of the parameters that need them, kept on the result (or none)."""
+    if args.profile == "no":
+        return
+    from .._progress import stage
+
+    profile = result.compute_profile("needed" if args.profile == "yes" else "auto",
+                                     notify=lambda line: stage(line))
+    stage(f"profile: {profile.not_run}" if profile.not_run else
+          f"profile: {len(profile)} parameter(s), {profile.refits} refits, {profile.cpu_s:.1f} s CPU")
 
 
 def _min_points(spec) -> int:

@@ -18,7 +18,10 @@ In the manner of lmfit, every fit has the same layers:
 - :mod:`~tenscell.fitting.fitted`: the fitted model every consumer takes (``moduli``, ``creep``, ``simulate``,
   ``show --from-fit``, ensembles) and fit.json.
 - :mod:`~tenscell.fitting.shares`: what the structure carries, the geometric prestress stiffness's share of dG′/dP
-  and dG″/dP against the law's tension terms (:func:`structure_shares`).
+  and dG″/dP against the law's tension terms (:func:`structure_shares`; with ± and the fitted prestress against the
+  measured one, :func:`structure_summary`);
+- :mod:`~tenscell.fitting.profile`: profile-likelihood intervals of the parameters the local analysis cannot bound
+  (:func:`profile_intervals`, :meth:`FitResult.compute_profile`).
 
 :func:`fit` runs them: ``fit(data)`` is the paper's per-tendon fit, ``fit(data, model=NAME)`` any other model.
 The Markdown report is :func:`tenscell.reports.fit.fit_markdown`.
@@ -35,7 +38,8 @@ from .prestress import PrestressActivity, prestress_activity
 from .records import DatasetFit, FitAlternative, FitCurve, FitParameter, data_axis
 from .curves import frequency_slopes, model_curve, prestress_slopes
 from .result import FitResult
-from .shares import StructureShares, structure_shares
+from .shares import PrestressScale, StructureShares, StructureSummary, structure_shares, structure_summary
+from .profile import ParameterProfile, ProfileInterval, ProfileSet, profile_intervals, profile_parameter
 
 #: one result type for every model: a mechanism's fit is a FitResult (the name of tenscell 0.2)
 MechanismFit = FitResult
@@ -84,4 +88,12 @@ __all__ = [
     "load_any_fit",
     "StructureShares",
     "structure_shares",
+    "StructureSummary",
+    "structure_summary",
+    "PrestressScale",
+    "ProfileSet",
+    "ParameterProfile",
+    "ProfileInterval",
+    "profile_intervals",
+    "profile_parameter",
 ]

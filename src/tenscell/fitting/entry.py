@@ -23,7 +23,7 @@ VOIGT_OPTIONS = {"tendons": "per-tendon", "damping": "uniform", "min_prestress_s
 
 
 def fit(data, cell=None, *, model=None, tendons: str = "per-tendon", damping: str = "uniform", starts: int = 4,
-        seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01, hops: int = 30, patience: int = 6,
+        seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01, hops: int = 30, patience: int = 12,
         max_nfev: int = 100, polish: float = 0.2, polish_effort: float = 0.5, bounds: dict | None = None,
         fixed: dict | None = None, min_prestress_share: float | None = None, max_decades: float | None = None,
         min_prestress_elasticity: float | None = None, elasticity_frequency_hz: float = 0.1, initial=None,
@@ -60,12 +60,15 @@ def fit(data, cell=None, *, model=None, tendons: str = "per-tendon", damping: st
     jobs : int
         Worker processes over starts (1 = in this process).
     tolerance : float
-        RMS of the log10 errors (decades) every data set must reach to converge.
+        RMS of the log10 errors (decades) every data set must reach to converge; a data set with standard
+        deviations is asked for no less than its own noise (the RMS of its sd, :func:`~.records.noise_rms`).
     polish, polish_effort : float
         The search stops as soon as one start's RMS is ``polish × tolerance``
         (on every data set), or once the evaluations since the tolerance was
         first met reach ``polish_effort`` × those it took to meet it (0 stops
-        at the tolerance); see the module docstring.
+        at the tolerance). Before the tolerance is met it stops when the starts
+        agree on the best fit or the best RMS is on a plateau
+        (:mod:`tenscell.fitting.search`; the result's ``stop_reason`` says which).
     bounds, fixed, min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz :
         See :func:`tenscell.fitting.make_problem`.
     initial : FitResult or array_like, optional
@@ -100,7 +103,8 @@ def fit(data, cell=None, *, model=None, tendons: str = "per-tendon", damping: st
     positive_scalar("tolerance", tolerance, "decades")
     chains, stop = run_search(problem, starts=starts, seed=seed, jobs=jobs, tolerance=tolerance, hops=hops,
                               patience=patience, max_nfev=max_nfev, polish=polish, polish_effort=polish_effort,
-                              initial=initial, progress=progress, desc=f"fit ({spec.name})", t_begin=t_begin)
+                              initial=initial, progress=progress, desc=f"fit ({spec.name})", t_begin=t_begin,
+                              noise=noise_rms(datasets))
     return build_result(problem, datasets, chains, stop, float(tolerance), seed, t_begin)
 
 

@@ -41,7 +41,8 @@ import numpy as np
 from .._results import format_repr
 from .._threads import hot_path
 
-__all__ = ["Identifiability", "Combination", "identifiability", "errors_from_covariance", "GAUGE", "NULL_SHARE"]
+__all__ = ["Identifiability", "Combination", "identifiability", "errors_from_covariance", "simple_exponent", "GAUGE",
+           "NULL_SHARE", "SIMPLE_EXPONENTS"]
 
 #: the exact strut-length invariance of the linear moduli
 GAUGE = "(P, EA, c, L) -> (λ²P, λ²EA, λc, λL)"
@@ -64,11 +65,36 @@ class Combination:
     standard_error : float
         Standard error of ``ln Π name^exponent`` (ln units; 0.1 ≈ ±10 %), or
         None if the noise level is unknown.
+    value : float or None
+        The product's value at the fit (SI units of its factors), for a combination of
+        :meth:`Identifiability.identified`; None for a singular vector of :attr:`Identifiability.combinations`
+        (for those, ``singular_value`` is the singular value itself; for an identified pair it is the
+        equivalent one, σ over the standard error).
+    factor_errors : tuple of (str, float)
+        The factors' own standard errors of ln (inf: not determined), for an identified combination.
     """
 
     exponents: tuple
     singular_value: float
     standard_error: float | None
+    value: float | None = None
+    factor_errors: tuple = ()
+
+    def words(self) -> str:
+        """``"beta·s"``, ``"EA[3]/L² · s^-0.5"``: the product in plain notation (exponents of ±1 not written)."""
+        parts = []
+        for n, e in sorted(self.exponents, key=lambda t: -abs(t[1])):
+            name = f"({n})" if "/" in n and abs(e) != 1 else n
+            if abs(e - 1) <= 1e-9:
+                parts.append(name)
+            elif abs(e + 1) <= 1e-9:
+                parts.append(f"1/{name}" if not parts else f"/{name}")
+            else:
+                parts.append(f"{name}^{e:.2g}")
+        text = ""
+        for p in parts:
+            text += p if p.startswith("/") or not text else f"·{p}"
+        return text
 
     def text(self, min_exponent: float = 0.1, max_terms: int = 6) -> str:
         """``"(c/L)^1 · (EA[4]/L²)^0.41 ..."``: terms with ``|exponent| >= min_exponent``, largest first."""
@@ -80,8 +106,13 @@ class Combination:
 
     def to_dict(self) -> dict:
         """JSON-ready dict."""
-        return {"exponents": dict(self.exponents), "singular_value": self.singular_value,
-                "standard_error_ln": self.standard_error, "text": self.text()}
+        out = {"exponents": dict(self.exponents), "singular_value": self.singular_value,
+               "standard_error_ln": self.standard_error, "text": self.text()}
+        if self.value is not None:
+            out.update(value=self.value, words=self.words(),
+                       factor_standard_errors_ln={n: (None if se is None or not math.isfinite(se) else se)
+                                                  for n, se in self.factor_errors})
+        return out
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -229,6 +260,69 @@ class Identifiability:
         s = self.singular_values[:self.rank]
         return float(self.sigma * np.sqrt(np.sum((c[:self.rank] / s) ** 2))), ""
 
+    def identified(self, within: float = 0.1) -> tuple[Combination, ...]:
+        """Products of two parameters the data determine although neither factor is: ``beta·s``, ``EA/c``.
+
+        For every pair of analysed parameters whose own standard errors exceed ``within`` (ln units), the
+        combination ``x^a·y^b`` (largest |exponent| 1) with the smallest standard error is found in closed form
+        (the smaller eigenvector of the pair's 2×2 covariance, the unseen combinations excluded) and kept when it
+        is determined within ``within`` and at least twice as well as its better factor. A parameter enters at most
+        one kept pair, the best determined first. Exponents within 0.05 of ±½, ±1 or ±2 are rounded to them when
+        the rounded product is determined as well. Each combination carries its value (of the labels: the
+        gauge-invariant ones when the gauge was removed) and its factors' own standard errors.
+        """
+        if self.directions is None or self.sigma is None or self.rank == 0:
+            return ()
+        V, s = self.directions, self.singular_values[:self.rank]
+        cov = (V[:, :self.rank] / s**2) @ V[:, :self.rank].T
+        unseen = V[:, self.rank:] @ V[:, self.rank:].T
+        penalty = 1e6 * float(np.max(np.diag(cov)))  # excludes the unseen combinations from the minimum
+        se = np.asarray(self.standard_errors, dtype=float)
+        loose = [i for i in range(self.n_analysed) if not se[i] <= within]
+        found = []
+        for a, i in enumerate(loose):
+            for j in loose[a + 1:]:
+                combo = self._pair(i, j, cov + penalty * unseen, within)
+                if combo is not None:
+                    found.append(combo)
+        kept: list[Combination] = []
+        used: set[str] = set()
+        for c in sorted(found, key=lambda c: float(c.standard_error or 0.0)):
+            names = {n for n, _ in c.exponents}
+            if not names & used:
+                kept.append(c)
+                used |= names
+        return tuple(kept)
+
+    def _pair(self, i: int, j: int, q: np.ndarray, within: float) -> Combination | None:
+        """The best-determined product of parameters ``i`` and ``j`` (see :meth:`identified`), or None."""
+        a, b, c = float(q[i, i]), float(q[i, j]), float(q[j, j])
+        if b == 0.0:
+            return None
+        lam = 0.5 * (a + c) - math.hypot(0.5 * (a - c), b)  # the smaller eigenvalue of [[a, b], [b, c]]
+        v = np.array([b, lam - a]) if abs(lam - a) >= abs(lam - c) else np.array([lam - c, b])
+        v = v / v[int(np.argmax(np.abs(v)))]
+        if float(np.min(np.abs(v))) < 0.1:  # one parameter alone, not a product
+            return None
+        snapped = np.array([simple_exponent(x) for x in v])
+        best = None
+        for e in (snapped, v) if not np.array_equal(snapped, v) else (v,):
+            g = np.zeros(self.n_analysed)
+            g[[i, j]] = e
+            err, _ = self.propagate(g)
+            if err is not None and err <= within and err <= 0.5 * min(self.standard_errors[i], self.standard_errors[j]):
+                best = (e, err)
+                break
+        if best is None:
+            return None
+        e, err = best
+        k = [i, j]
+        value = float(np.exp(np.sum(e * np.log(self.values[k]))))
+        return Combination(exponents=tuple((self.labels[n], float(x)) for n, x in zip(k, e)),
+                           singular_value=float(self.sigma or 1.0) / err if err > 0 else math.inf, standard_error=err,
+                           value=value, factor_errors=tuple((self.labels[n], float(self.standard_errors[n]))
+                                                            for n in k))
+
     def strong_correlations(self, threshold: float = 0.9) -> list[tuple[str, str, float]]:
         """``(label_a, label_b, ρ)`` for determined pairs with ``|ρ| >= threshold``, strongest first."""
         ok = np.isfinite(self.standard_errors)
@@ -280,8 +374,19 @@ class Identifiability:
             "chi2": self.chi2,
             "correlation": [[num(x) for x in row] for row in self.correlation],
             "combinations": [c.to_dict() for c in self.combinations],
+            "identified_combinations": [c.to_dict() for c in self.identified()],
             "determined_within_10_percent": [lab for lab, d in zip(self.labels, self.determined()) if d],
         }
+
+
+#: exponents an identified combination's are rounded to when within 0.05 of one (and the product stays determined)
+SIMPLE_EXPONENTS = (-2.0, -1.0, -0.5, 0.5, 1.0, 2.0)
+
+
+def simple_exponent(x: float) -> float:
+    """``x`` rounded to the nearest of :data:`SIMPLE_EXPONENTS` when within 0.05 of it, else ``x``."""
+    near = min(SIMPLE_EXPONENTS, key=lambda e: abs(e - x))
+    return near if abs(near - x) <= 0.05 else float(x)
 
 
 def _gauge_label(name: str, power: float) -> str:

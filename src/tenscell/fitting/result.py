@@ -33,7 +33,11 @@ FIT_NULL_MEANS = (
     "time_to_tolerance_s, timing.tolerance_met_s: the tolerance was never met; prestress_Pa / prestress_fitted_Pa: "
     "the data set states no prestress / its prestress is not a fitted parameter; kind: a joint fit; seed, "
     "constraints: not set; parameters[].at_bound: not at a bound; tendon_stiffness_spread_not_at_bounds: every "
-    "stiffness is at a bound; derived.*.stderr: not determined (derived.*.note says why). A null anywhere else is a "
+    "stiffness is at a bound; derived.*.stderr: not determined (derived.*.note says why); structure: a model without "
+    "a cell; structure.shares: the Voigt cell (its prestress activity is prestress_activity); structure.prestress.s_m2 "
+    "and what follows from it: no data set states its prestress; profile: not computed (FitResult.compute_profile, "
+    "tenscell fit --profile); profile.*.intervals[].lower/upper: open, the data do not bound the parameter on that "
+    "side within its bounds. A null anywhere else is a "
     "computed number that is not finite: its value is listed under non_finite")
 #: other starts whose RMS is within this factor of the best (or the tolerance) count as fitting "as well"
 AS_WELL = 1.1
@@ -387,6 +391,31 @@ class FitResult:
             self.__dict__["derived"] = derived_quantities(self, report_quantities, executor=executor)
         return self.__dict__["derived"]
 
+    @cached_property
+    def structure(self):
+        """What the structure carries (:func:`tenscell.fitting.shares.structure_summary`): a mechanism's shares of
+        dG'/dP and dG''/dP with standard errors, and the fitted prestress against the measured one; None for a
+        structure-free formula."""
+        from .shares import structure_summary
+
+        return structure_summary(self)
+
+    @property
+    def profile(self):
+        """The profile-likelihood intervals computed by :meth:`compute_profile` (None until then: each is a series
+        of refits)."""
+        return self.__dict__.get("_profile")
+
+    def compute_profile(self, parameters="auto", **options):
+        """Profile-likelihood intervals of the parameters the local analysis cannot bound, computed now and kept
+        (:func:`tenscell.fitting.profile.profile_intervals`; ``parameters`` and ``options`` as there). Returns the
+        :class:`~tenscell.fitting.profile.ProfileSet`."""
+        from .profile import profile_intervals
+
+        self.__dict__["_profile"] = profile_intervals(self, parameters, **options)
+        self.__dict__.pop("structure", None)  # the prestress scale reads the profile of s
+        return self.__dict__["_profile"]
+
     def correlations(self, threshold: float = CORRELATION_THRESHOLD) -> list[tuple[str, str, float]]:
         """``(a, b, ρ)`` for pairs of determined parameters with ``|ρ| >= threshold``, strongest first."""
         return self.identifiability().strong_correlations(threshold)
@@ -518,6 +547,8 @@ class FitResult:
             "alternative_spread_decades": self.alternative_spread(),
             "history": [{"time_s": t, "rms_log10_error": r} for t, r in self.history],
             "identifiability": self.identifiability().to_dict(),
+            "structure": None if self.structure is None else self.structure.to_dict(),
+            "profile": None if self.profile is None else self.profile.to_dict(),
             **self.problem.summary(self),
             "model": self.model.to_dict(),
         }

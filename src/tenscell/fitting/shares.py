@@ -36,14 +36,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .._checks import positive_array, positive_scalar
+from .._results import format_repr
 from .. import laws as _laws
 from ..linear.assembly import modulus
 
-__all__ = ["StructureShares", "structure_shares", "prestress_parts"]
+if TYPE_CHECKING:
+    from .derived import DerivedQuantities
+
+__all__ = ["StructureShares", "structure_shares", "prestress_parts", "StructureSummary", "structure_summary",
+           "PrestressScale", "prestress_scale", "share_quantities", "ANCHORED_L", "PASSENGER_SHARE", "CARRIES_SHARE"]
 
 #: prestresses (odd: Simpson's rule) on which the parts are integrated over the range
 DEFAULT_POINTS = 17
@@ -139,7 +145,7 @@ class StructureShares:
         return float(np.max(np.abs(self._integral(self.dG) - direct) / np.abs(self.G[-1])))
 
     def __repr__(self) -> str:
-        from .._results import format_repr, span
+        from .._results import span
 
         x = self.prestress_pa if np.all(np.isfinite(self.prestress_pa)) else None
         where = f"{span(x, 'Pa')}" if x is not None else f"P = {self.prestress_n[0]:.4g} N (fitted)"
@@ -291,9 +297,10 @@ def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
     if s is not None:
         lo, hi = (positive_scalar("prestress_pa lower", prestress_pa[0], "Pa"),
                   positive_scalar("prestress_pa upper", prestress_pa[1], "Pa"))
-        if not lo < hi:
-            raise ValueError(f"prestress_pa must be (low, high) with low < high (Pa), got {prestress_pa!r}")
-        p_pa = np.linspace(lo, hi, points)
+        if lo > hi:
+            raise ValueError(f"prestress_pa must be (low, high) with low <= high (Pa), got {prestress_pa!r}")
+        # one stated prestress (a frequency sweep at 1000 Pa): the local derivative there, as without a scale
+        p_pa = np.linspace(lo, hi, points) if lo < hi else np.array([lo])
         P_n = s * p_pa
     else:
         p_pa, P_n = np.array([np.nan]), np.array([positive_scalar("P (fitted prestress)", P_fit, "N")])
@@ -308,3 +315,264 @@ def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
         parts[:, i] = PdG / per
     return StructureShares(mechanism=problem.mechanism.name, frequency_hz=f, prestress_pa=p_pa, prestress_n=P_n,
                            G=G, dG_transverse=parts[0], dG_axial=parts[1], dG_constitutive=parts[2])
+
+
+# ---- what a fit report shows: the shares with their standard errors, the prestress against the measured one ----
+#: the strut lengths (m, on the paper's convention: the model prestress in N equal to the measured prestress in Pa)
+#: the anchored gauge accepts: s ∈ [0.01, 100] m² on a cell of strut length 1 m
+ANCHORED_L = (0.1, 10.0)
+#: a geometric share of ΔG' below this: the structure is a passenger (the tendon law's tension terms do the work)
+PASSENGER_SHARE = 0.1
+#: ... at or above this: the structure carries the prestress dependence (goal G1 of issue 26)
+CARRIES_SHARE = 0.5
+#: the tension terms of the laws that have them, in words (other laws: "the law's tension terms")
+TENSION_TERMS = {"TensionSpringpot": "the active springpot β·T·(iω)^α_T"}
+#: parts of the prestress derivative a summary reports, in the order of its table
+SHARE_PARTS = ("geometric", "transverse", "axial", "constitutive")
+
+
+def share_quantities(result) -> dict:
+    """The shares of a fitted mechanism as flat arrays (per frequency of :func:`structure_shares`' default grid):
+    ``{part}_{storage|loss}`` for each of :data:`SHARE_PARTS` and ``change_storage`` / ``change_loss``, the whole
+    change ΔG', ΔG'' over the prestress range (Pa). Module level: :func:`tenscell.fitting.derived.derived_quantities`
+    gives each its standard error (and may evaluate it in a worker)."""
+    sh = structure_shares(result.problem, result.theta)
+    out = {f"{part}_{mod}": sh.share(part, mod) for part in SHARE_PARTS for mod in ("storage", "loss")}
+    total = sh._integral(sh.dG)
+    out["change_storage"], out["change_loss"] = np.real(total), np.imag(total)
+    return out
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class PrestressScale:
+    """The fitted prestress against the measured one, and the strut length it means in the paper's convention.
+
+    With a prestress scale ``s`` the model prestress on the fit's cell (strut length ``L_cell``) is ``P = s·p`` (N)
+    for a measured prestress p (Pa). Moved along the exact gauge ``(P, EA, c, L) → (λ²P, λ²EA, λc, λL)`` to the
+    cell whose prestress in N equals the measured one in Pa (the paper's convention), the strut length is
+    ``L = L_cell/√s`` (s in m²); the anchored gauge asks for L in :data:`ANCHORED_L`.
+
+    Attributes
+    ----------
+    s : float or None
+        The prestress scale (m²); None when no data set states its prestress.
+    s_error_ln : float or None
+        Standard error of ln s (of s/L² under the Voigt cell's gauge); None when not determined.
+    s_note : str
+        Why there is no error, or which combination it is of.
+    L_cell : float
+        Strut length (m) of the cell the fit's prestresses refer to (the reference for a mechanism, the fitted L for
+        the Voigt cell).
+    measured_pa : tuple of float
+        The prestresses the data state (Pa).
+    fitted_pa : tuple of (int, float, float or None)
+        ``(data set, fitted prestress in Pa, standard error)`` of the data sets that state none.
+    P_N : float or None
+        The fitted model prestress (N) when no data set states one.
+    profile_s : tuple or None
+        ``(lower, upper)`` of s at 95 % from its profile likelihood (None: no profile; an end None: open).
+    s_at_bound : str or None
+        ``"lower"`` or ``"upper"`` when s sits at a bound of the fit (then L_paper is a limit, not an estimate).
+    """
+
+    s: float | None
+    s_error_ln: float | None
+    s_note: str
+    L_cell: float
+    measured_pa: tuple
+    fitted_pa: tuple
+    P_N: float | None = None
+    profile_s: tuple | None = None
+    s_at_bound: str | None = None
+
+    @property
+    def L_paper(self) -> float | None:
+        """``L_cell/√s`` (m): the strut length of the same fit with model prestress (N) = measured prestress (Pa)."""
+        return None if self.s is None else self.L_cell / math.sqrt(self.s)
+
+    @property
+    def L_paper_error_ln(self) -> float | None:
+        """Standard error of ln L_paper (half that of ln s)."""
+        return None if self.s_error_ln is None else 0.5 * self.s_error_ln
+
+    @property
+    def ratio(self) -> float | None:
+        """Model prestress on the reference cell (N) per measured prestress (Pa) at L_cell = 1 m: s/L_cell² (m²/m²),
+        as a fraction of the measured one."""
+        return None if self.s is None else self.s / self.L_cell**2
+
+    @property
+    def anchored(self) -> bool | None:
+        """L_paper within :data:`ANCHORED_L` (None without a scale)."""
+        L = self.L_paper
+        return None if L is None else bool(ANCHORED_L[0] <= L <= ANCHORED_L[1])
+
+    @property
+    def profile_L(self) -> tuple | None:
+        """The 95 % profile interval of s as strut lengths ``(shortest, longest)`` (m; None: open)."""
+        if self.profile_s is None:
+            return None
+        lo, hi = self.profile_s
+        return (None if hi is None else self.L_cell / math.sqrt(hi), None if lo is None else self.L_cell / math.sqrt(lo))
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict."""
+        return {"s_m2": self.s, "s_stderr_ln": self.s_error_ln, "s_note": self.s_note, "L_cell_m": self.L_cell,
+                "model_over_measured": self.ratio, "L_paper_convention_m": self.L_paper,
+                "L_paper_convention_stderr_ln": self.L_paper_error_ln, "anchored_range_m": list(ANCHORED_L),
+                "anchored": self.anchored, "measured_prestress_Pa": list(self.measured_pa),
+                "fitted_prestress_Pa": [{"dataset": k, "value": v, "stderr": e} for k, v, e in self.fitted_pa],
+                "fitted_model_prestress_N": self.P_N,
+                "s_at_bound": self.s_at_bound,
+                "profile_s_95": None if self.profile_s is None else list(self.profile_s),
+                "profile_L_paper_95": None if self.profile_L is None else list(self.profile_L)}
+
+
+def prestress_scale(result) -> PrestressScale | None:
+    """The fitted prestress against the measured one (:class:`PrestressScale`); None for a model without a cell."""
+    if result.cell is None:
+        return None
+    pr = result.problem
+    named = {p.name: p for p in result.parameters}
+    errors = dict(zip((p.name for p in result.parameters), result.standard_errors))
+    L_cell = named["L"].value if "L" in named else float(result.cell.strut_length)
+    measured = tuple(float(x) for x in pr.group_measured if np.isfinite(x))
+    fitted = tuple((int(n[7:-1]), named[n].value, errors[n][0]) for n in named if n.startswith("P_data["))
+    if "s" not in named:
+        P = [p.value for n, p in named.items() if n == "P" or n.startswith("P[")]
+        return PrestressScale(s=None, s_error_ln=None, s_note="no data set states its prestress", L_cell=L_cell,
+                              measured_pa=measured, fitted_pa=fitted, P_N=P[0] if P else None)
+    rel, note = result.identifiability().relative_error("s")
+    profile = getattr(result, "profile", None)
+    span = None
+    if profile is not None:
+        try:
+            iv = profile["s"].interval(0.95)
+            span = (iv.lower, iv.upper)
+        except KeyError:
+            span = None
+    return PrestressScale(s=named["s"].value, s_error_ln=rel, s_note=note, L_cell=L_cell, measured_pa=measured,
+                          fitted_pa=fitted, profile_s=span, s_at_bound=named["s"].at_bound)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class StructureSummary:
+    """What the structure carries in a fit (the numbers of the report's section and of fit.json ``structure``).
+
+    Attributes
+    ----------
+    model : str
+    law : str or None
+        The tendon law of a mechanism (None for the Voigt cell: its tendons have no tension terms, and its prestress
+        activity is :mod:`tenscell.fitting.prestress`).
+    shares : StructureShares or None
+        A mechanism's shares over the data's prestress range (None for the Voigt cell).
+    quantities : DerivedQuantities or None
+        :func:`share_quantities` with their standard errors (delta method).
+    scale : PrestressScale
+    """
+
+    model: str
+    law: str | None
+    shares: StructureShares | None
+    quantities: DerivedQuantities | None
+    scale: PrestressScale
+
+    def share_text(self, part: str = "geometric", modulus_part: str = "storage", i: int = 0) -> str:
+        """``"2.1 ± 0.01 %"``: a share at frequency ``i`` with its standard error, both in percent."""
+        q = self.quantities
+        assert q is not None, "a mechanism's summary"
+        key = f"{part}_{modulus_part}"
+        v = float(q.values[key][i])
+        if not math.isfinite(v):
+            return "undefined (no change over the range)"
+        if part in ("geometric", "constitutive") and self.law not in TENSION_TERMS:
+            # no tension term in the law: P·Kp carries all of dG*/dP whatever the parameters (no error to give)
+            exact = 100 if part == "geometric" else 0  # v is that to rounding
+            return f"{exact} % (by construction: {self.law} tendons have no tension terms)"
+        se, note = q.error(key, i)
+        if se is None:
+            return f"{100 * v:.3g} % (± not determined{' ' + note if note else ''})"
+        return f"{100 * v:.3g} ± {100 * se:.2g} %"
+
+    def share_verdict(self) -> str:
+        """Who carries dG'/dP, in words ("" for the Voigt cell, whose tendons have no tension terms)."""
+        if self.shares is None or self.quantities is None:
+            return ""
+        g = self.quantities.values["geometric_storage"]
+        terms = TENSION_TERMS.get(self.law or "", "the tendon law's tension terms")
+        f = self.shares.frequency_hz
+        at = f"at {f[0]:.3g} Hz" if f.size == 1 else f"at {f[0]:.3g}–{f[-1]:.3g} Hz"
+        over = (f"over {self.shares.prestress_pa[0]:.4g}–{self.shares.prestress_pa[-1]:.4g} Pa"
+                if np.all(np.isfinite(self.shares.prestress_pa)) else
+                f"at the fitted P = {self.shares.prestress_n[0]:.4g} N (locally)")
+        share = (f"{self.share_text('geometric', 'storage')} of the change of G′ and "
+                 f"{self.share_text('geometric', 'loss')} of G″ {over} {at}")
+        if np.all(~np.isfinite(g)):
+            return f"G′ does not change with the prestress {over}: there is no change to share."
+        if np.nanmax(g) < PASSENGER_SHARE:
+            return (f"**The structure is a passenger**: the geometric prestress stiffness P·Kp carries {share}; the "
+                    f"rest is carried by {terms}. The prestress acts through the tendon law, not through the paper's "
+                    "mechanism.")
+        if np.nanmin(g) >= CARRIES_SHARE:
+            return f"**The structure carries the prestress dependence**: the geometric prestress stiffness P·Kp carries {share}."
+        return (f"The structure and the tendon law share the prestress dependence: the geometric prestress stiffness "
+                f"P·Kp carries {share}; the rest is carried by {terms}.")
+
+    def scale_verdict(self) -> str:
+        """The fitted prestress against the measured one, in words ("" when no data set states its prestress)."""
+        sc = self.scale
+        if sc.s is None or sc.ratio is None or sc.L_paper is None:
+            return ""
+        where = "inside" if sc.anchored else "outside"
+        return (f"The fitted prestress (P/L_cell²) is {100 * sc.ratio:.3g} % of the measured one (s = {sc.s:.3g} m²); in the "
+                f"paper's convention the cell's strut length is L = {sc.L_paper:.3g} m, {where} the anchored range "
+                f"{ANCHORED_L[0]:g}–{ANCHORED_L[1]:g} m.")
+
+    def verdict(self) -> str:
+        """The finding in words: who carries dG'/dP, and whether the prestress is anchored."""
+        return " ".join(t for t in (self.share_verdict(), self.scale_verdict()) if t)
+
+    def __repr__(self) -> str:
+        return format_repr(f"StructureSummary of {self.model}", self.verdict())
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict (fit.json ``structure``): shares per frequency with standard errors, the prestress scale."""
+        doc: dict = {"model": self.model, "law": self.law, "verdict": self.verdict(), "prestress": self.scale.to_dict(),
+                     "shares": None}
+        if self.shares is not None and self.quantities is not None:
+            sh = self.shares
+            doc["shares"] = {
+                "frequency_Hz": sh.frequency_hz.tolist(),
+                "prestress_range_Pa": ([float(sh.prestress_pa[0]), float(sh.prestress_pa[-1])]
+                                       if np.all(np.isfinite(sh.prestress_pa)) else None),
+                "prestress_model_N": [float(sh.prestress_n[0]), float(sh.prestress_n[-1])],
+                "closure": sh.closure, "tension_terms": TENSION_TERMS.get(self.law or "", "the law's tension terms"),
+                **self.quantities.to_dict()}
+        return doc
+
+
+def structure_summary(result) -> StructureSummary | None:
+    """What the structure carries in a fit: a mechanism's shares of dG'/dP and dG''/dP with standard errors, and for
+    every model with a cell the fitted prestress against the measured one. None for a structure-free formula.
+
+    Parameters
+    ----------
+    result : FitResult
+
+    Returns
+    -------
+    StructureSummary or None
+    """
+    from .derived import derived_quantities
+    from .models.mechanism import MechanismProblem
+
+    scale = prestress_scale(result)
+    if scale is None:
+        return None
+    pr = result.problem
+    if not isinstance(pr, MechanismProblem):
+        return StructureSummary(model=result.spec.name, law=None, shares=None, quantities=None, scale=scale)
+    shares = structure_shares(pr, result.theta)
+    return StructureSummary(model=result.spec.name, law=pr.mechanism.law, shares=shares,
+                            quantities=derived_quantities(result, share_quantities), scale=scale)

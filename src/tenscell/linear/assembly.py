@@ -1,8 +1,8 @@
 """The pencil at the reference: K0 and C0 assembled from member tangents, and the continuum factor.
 
 The one place K0 and C0 are put together (every linear model, the prestress
-family, the grid, the dynamic kernel and the stability test of trial
-references take them from here):
+family, the grid, the dynamic kernel, the fits' batched kernel and the stability
+test of trial references take them from here):
 
 * ``K0 = P·Σ T0_j ∇²l_j + Σ k_j a_j a_jᵀ`` (N/m) for tangent stiffnesses ``k_j``
   (N/m) of the members (:func:`assemble_stiffness`);
@@ -26,8 +26,8 @@ import numpy as np
 
 from ..model.equilibrium import weighted_gram
 
-__all__ = ["continuum_factor", "modulus", "assemble_stiffness", "stiffness_stack", "assemble_damping",
-           "spring_stiffness", "voigt_stiffness"]
+__all__ = ["continuum_factor", "modulus", "assemble_stiffness", "stiffness_stack", "stiffness_rows", "gram_table",
+           "assemble_damping", "spring_stiffness", "voigt_stiffness"]
 
 
 def continuum_factor(L: float) -> float:
@@ -62,6 +62,41 @@ def stiffness_stack(cell, P: float, k: np.ndarray) -> np.ndarray:
     A = np.asarray(cell.A)
     H = np.asarray(cell.prestress_hessian, dtype=float)
     return P * H[None] + (A[None] * k[:, None, :]) @ A.T
+
+
+def gram_table(A) -> np.ndarray:
+    """The members' ``a_j a_jᵀ`` flattened, shape (m, n·n), for ``A`` (n, m, dense): with it
+    :func:`stiffness_rows` assembles many stiffness matrices in one matrix product."""
+    A = np.asarray(A, dtype=float)
+    return np.einsum("im,jm->mij", A, A).reshape(A.shape[1], A.shape[0] ** 2)
+
+
+def stiffness_rows(H, gram, P, k) -> np.ndarray:
+    """:func:`assemble_stiffness` at many points, each with its own prestress: ``K_r = P_r·H + Σ_j k_rj a_j a_jᵀ``.
+
+    Parameters
+    ----------
+    H : ndarray, shape (n, n)
+        ``Σ T0_j ∇²l_j`` (N/m per N), dense (or its restriction to a subspace, with ``gram`` of the same one).
+    gram : ndarray, shape (m, n·n)
+        :func:`gram_table` of the members' ``a_j``.
+    P : ndarray, shape (R,)
+        Prestress scale of each point (N).
+    k : ndarray of complex, shape (R, m)
+        Member tangents at each point (N/m), e.g. a dynamic tangent ``k*(ω)``.
+
+    Returns
+    -------
+    ndarray of complex, shape (R, n, n)
+    """
+    R, n = k.shape[0], H.shape[0]
+    # real and imaginary parts in one real product (half the work of a complex one against a real table)
+    parts = np.concatenate([k.real, k.imag]) @ gram
+    K = np.empty((R, n, n), dtype=complex)
+    np.multiply(P[:, None, None], H, out=K.real)
+    K.real += parts[:R].reshape(R, n, n)
+    K.imag = parts[R:].reshape(R, n, n)
+    return K
 
 
 def spring_stiffness(cell, EA):

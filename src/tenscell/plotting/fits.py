@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from ..io.data import RheologyData
 
 __all__ = ["fit_figure", "data_points", "plot_fit", "fit_panels", "compactness_front", "stiffness_histogram",
-           "measured"]
+           "measured", "plot_profile"]
 
 
 def _x_axis(data: RheologyData) -> str:
@@ -212,4 +212,27 @@ def stiffness_histogram(EA, ax: Axes | None = None, title: str | None = None, fa
     ax.set_ylabel("tendons")
     if title:
         ax.set_title(wrap(title, _width_in(ax)))
+    return ax
+
+
+@styled
+def plot_profile(profile, ax: Axes | None = None, title: str | None = None) -> Axes:
+    """The profile likelihood of one parameter (:class:`tenscell.fitting.profile.ParameterProfile`): Δ(−2 ln L)
+    against the held value (log axis), the 68 % and 95 % thresholds, the fit's own value and the intervals' ends."""
+    ax = new_axes(ax, (6.4, 3.8))
+    d = np.clip(profile.delta, 1e-3, None)  # the minimum (0) on a log axis
+    ax.semilogx(profile.values, d, "o-", color="C0", ms=4, label="refit at each value")
+    ax.set_yscale("symlog", linthresh=1.0)
+    for iv, ls in zip(profile.intervals, (":", "--")):
+        ax.axhline(iv.threshold, color="0.4", ls=ls, lw=1, label=f"{100 * iv.level:.0f} % threshold")
+        for end in (iv.lower, iv.upper):
+            if end is not None:
+                ax.axvline(end, color="C3", ls=ls, lw=1)
+    ax.axvline(profile.value, color="C2", lw=1.2, label=("held value" if profile.held else "fitted value"))
+    unit = f" ({profile.unit})" if profile.unit else ""
+    ax.set_xlabel(f"{profile.name}{unit}, held")
+    ax.set_ylabel("Δ(−2 ln L), others refitted")
+    legend_outside(ax)
+    ax.set_title(wrap(title or f"Profile likelihood of {profile.name}: {profile.interval(0.95).text(profile.unit)}",
+                      _width_in(ax)))
     return ax

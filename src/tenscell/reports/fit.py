@@ -24,6 +24,7 @@ from ..io.thinning import binning_notes
 from .._results import CORRELATION_THRESHOLD, correlation_text, ln_error, plus_minus
 from ._format import num, table
 from .fit_analysis import section_comparison, section_creep, section_identifiability, section_provenance
+from .fit_structure import section_combinations, section_profile, section_structure
 
 __all__ = ["fit_markdown", "SECTIONS", "MODEL_SECTIONS", "section_summary", "section_datasets", "section_baseline",
            "section_shape", "section_prestress", "section_stiffness", "section_parameters", "section_errors",
@@ -372,8 +373,12 @@ def section_alternatives(result: FitResult, baseline=None) -> list[str]:
 
 #: the report's sections, in order: (name, function); the names in MODEL_SECTIONS run only where the model asks
 SECTIONS = [("summary", section_summary), ("provenance", section_provenance), ("datasets", section_datasets),
+            ("combinations", section_combinations),
             ("baseline", section_baseline), ("shape", section_shape), ("held", section_held),
-            ("prestress", section_prestress), ("identifiability", section_identifiability),
+            ("prestress", section_prestress),
+            ("structure", section_structure),
+            ("identifiability", section_identifiability),
+            ("profile", section_profile),
             ("comparison", section_comparison), ("creep", section_creep), ("stiffness", section_stiffness),
             ("assignments", section_assignments), ("parameters", section_parameters), ("errors", section_errors),
             ("alternatives", section_alternatives)]

@@ -11,6 +11,7 @@ term               G*(ω, P)                                         parameters
 ``structural``     G0·Γ(1−α)·(iω/Φ0)^α, Φ0 = 1 rad/s                G0 (Pa), alpha
 ``structural_P``   (G0 + g·P)·Γ(1−α)·(iω/Φ0)^α                      G0 (Pa), g (Pa/Pa), alpha
 ``springpot``      A·(iω)^α                                         A (Pa at 1 rad/s), alpha
+``springpot_2``    A_2·(iω)^α_2: a second springpot                 A_2 (Pa at 1 rad/s), alpha_2
 ``springpot_P``    B·P·(iω)^α_T                                     B (Pa/Pa at 1 rad/s), alpha_T
 ``maxwell``        E_M·iωτ/(1 + iωτ)                                E_M (Pa), tau (s)
 ``newtonian``      iωη                                              eta (Pa·s)
@@ -54,6 +55,7 @@ TERMS: dict[str, tuple[tuple[str, str, str], ...]] = {
     "structural": (("G0", "Pa", "stiffness"), ("alpha", "", "exponent")),
     "structural_P": (("G0", "Pa", "stiffness"), ("g", "Pa/Pa", "ratio"), ("alpha", "", "exponent")),
     "springpot": (("A", "Pa (at 1 rad/s)", "coefficient"), ("alpha", "", "exponent")),
+    "springpot_2": (("A_2", "Pa (at 1 rad/s)", "coefficient"), ("alpha_2", "", "exponent")),
     "springpot_P": (("B", "Pa/Pa (at 1 rad/s)", "ratio"), ("alpha_T", "", "exponent")),
     "maxwell": (("E_M", "Pa", "stiffness"), ("tau", "s", "time")),
     "newtonian": (("eta", "Pa·s", "viscosity"),),
@@ -93,9 +95,10 @@ def _term(term: str, p: dict, omega: np.ndarray, P: np.ndarray) -> tuple[np.ndar
         if term == "structural_P":
             d["g"] = p["g"] * P * base
         return G, d
-    if term == "springpot":
-        G = p["A"] * iw ** p["alpha"]
-        return G, {"A": G, "alpha": G * p["alpha"] * np.log(iw)}
+    if term in ("springpot", "springpot_2"):
+        A, a = ("A", "alpha") if term == "springpot" else ("A_2", "alpha_2")
+        G = p[A] * iw ** p[a]
+        return G, {A: G, a: G * p[a] * np.log(iw)}
     if term == "springpot_P":
         G = p["B"] * P * iw ** p["alpha_T"]
         return G, {"B": G, "alpha_T": G * p["alpha_T"] * np.log(iw)}
@@ -191,12 +194,18 @@ _LAW_TERMS = {"Voigt": ("E0", "newtonian"), "Maxwell": ("maxwell",), "StandardLi
 def lumped_formula(mechanism) -> Formula:
     """A mechanism's own structure-free formula: its law's terms as one lumped element (a distribution of a
     property lumped with it), its cytoplasm, and the same prestress coupling — the law's tension term where it has
-    one, else a modulus proportional to P (what P·Kp gives without a structure). Module docstring."""
+    one, else a modulus proportional to P (what P·Kp gives without a structure); a springpot law with an exponent
+    per family lumps into two springpots (``springpot_2``), as many exponents as the mechanism has. Module
+    docstring."""
     terms = _LAW_TERMS.get(mechanism.law)
     if terms is None:
         raise ValueError(f"mechanism {mechanism.name!r}: no lumped formula is defined for law {mechanism.law}")
     if "springpot_P" not in terms:
         terms = ("aP", *terms)
+    if "springpot" in terms and any(f.kind == "exponent" and f.layout == "family" for f in mechanism.fields):
+        # an exponent per family: two springpots side by side, as many exponents as the mechanism has
+        i = terms.index("springpot") + 1
+        terms = (*terms[:i], "springpot_2", *terms[i:])
     if mechanism.viscosity and "newtonian" not in terms:
         terms = (*terms, "newtonian")
     return Formula(f"{mechanism.name} (lumped)", terms,

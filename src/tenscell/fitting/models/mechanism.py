@@ -49,9 +49,10 @@ from ... import laws as _laws
 from ...io.data import DataError
 from ...model.equilibrium import Cell
 from .heterogeneity import DISTRIBUTIONS, assignments
-from .mechanism_kernel import MechanismEvaluation, evaluate, law_values
+from .mechanism_kernel import EvaluationPlan, MechanismEvaluation, evaluate, evaluate_planned, law_values, plan_points
 from ..parameters import bounds_by_name, fixed_by_name, _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
 from ..._results import format_repr
+from ...linear.dynamic import DynamicKernel, dynamic_kernel
 from ...linear.linearize import LinearModel
 from .base import (FitFileError, FitModel, FittedModel, cell_from_dict, cell_to_dict, field_of, frequencies_of, model_from_dict,
                    positive_values, prestress_from)
@@ -247,6 +248,19 @@ class MechanismProblem(Problem):
     prestress_start: int
 
     tendons: str = "mechanism"
+    #: the cell's matrices for the batched solve and the data points' plan (:mod:`.mechanism_kernel`): made once,
+    #: when the problem is built (None: made in ``__post_init__``), never on first use
+    kernel: DynamicKernel | None = None
+    plan: EvaluationPlan | None = None
+
+    def __post_init__(self):
+        if self.kernel is None:
+            object.__setattr__(self, "kernel", dynamic_kernel(self.cell))
+        if self.plan is None:
+            object.__setattr__(self, "plan", plan_points(self.omega, self.group_index))
+        for _, D, const in self.field_maps:  # shared by every evaluation (law_values hands them out)
+            D.setflags(write=False)
+            const.setflags(write=False)
 
     def __repr__(self) -> str:
         return (f"MechanismProblem({self.mechanism.name}: {self.n_free} free of {self.n_params} parameters, "
@@ -276,6 +290,16 @@ class MechanismProblem(Problem):
         return np.asarray(theta, dtype=float).copy()
 
     # -- the model ---------------------------------------------------------------------
+    @property
+    def law_class(self) -> type[_laws.TendonLaw]:
+        """The tendon law's class (:mod:`tenscell.laws`)."""
+        return getattr(_laws, self.mechanism.law)
+
+    @property
+    def law_names(self) -> tuple:
+        """The law's parameters, in the order of its derivatives."""
+        return tuple(p.name for p in self.law_class.parameters)
+
     def law_values(self, phi) -> tuple[dict, dict]:
         """Per law parameter: values (K, m) and d ln value / d φ (K, m, n_params), at log-parameters ``phi``."""
         return law_values(self, phi)
@@ -291,12 +315,12 @@ class MechanismProblem(Problem):
 
     # -- at the data points ----------------------------------------------------------------
     def _at_data(self, phi, jac: bool) -> MechanismEvaluation | None:
-        P = self._group_P(phi)[self.group_index]
         dP = None
         if jac:
             dP = np.zeros((self.n_points, self.n_params))
             dP[:, self.prestress_slice] = self.group_map[self.group_index]
-        return self.evaluate(phi, self.omega, P, jac, dP)
+        assert self.plan is not None
+        return evaluate_planned(self, phi, self.plan, self.omega, self._group_P(phi), jac, dP)
 
     def _evaluate_constrained(self, phi, jac: bool):
         return self._at_data(phi, jac)

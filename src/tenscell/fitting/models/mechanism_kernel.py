@@ -1,12 +1,25 @@
-"""The mechanism's moduli and their exact derivatives: per-tendon law values, the dynamic kernel, averages.
+"""The mechanism's moduli and their exact derivatives at every point at once: law values, one batched solve.
 
 For parameters ``φ`` (natural logs), each field of the :class:`~tenscell.fitting.models.mechanism.Mechanism`
 gives the law parameter of every tendon in every assignment k (K × m values,
-:mod:`~tenscell.fitting.models.heterogeneity`), the law gives the dynamic tangent ``k*_j(ω)`` at the tensions
-``P·T0`` and its exact derivatives (``complex_stiffness_derivatives``), and the kernel
-:func:`tenscell.linear.dynamic.dynamic_compliance` gives J(ω) and the exact ``dJ`` along any set of directions in
-k* (:mod:`~tenscell.fitting.models.mechanism` explains the three kinds of direction). The functions take a
-:class:`~tenscell.fitting.models.mechanism.MechanismProblem` (its maps and arrays).
+:mod:`~tenscell.fitting.models.heterogeneity`); the law gives the dynamic tangent ``k*_j(ω)`` at the tensions
+``P·T0`` and its exact derivatives (``complex_stiffness_derivatives``); and
+:func:`tenscell.linear.dynamic.batched_compliance` gives J at every (point, assignment) in one batched solve, with
+``∂J/∂k*_j`` and ``∂J/∂P`` from the same factorization. The chain rule then gives, exactly,
+
+* a mechanism parameter q: ``∂J/∂φ_q = Σ_j ∂J/∂k*_j · Σ_p (∂k*_j/∂x_p)·x_p·∂ln x_p/∂φ_q``;
+* the prestress: ``P·dJ/dP = P·∂J/∂P|_k* + Σ_j ∂J/∂k*_j · (∂k*_j/∂T)·P·T0_j`` (the law's tension dependence),
+  times ``∂ln P/∂φ``;
+* the viscosity adds ``iωη`` to G*: its derivative is itself.
+
+The moduli are ``G* = mean_k (0.5/L)/J_k + iωη``.
+
+**The plan.** A law is evaluated on a grid of frequencies for a set of tendons. The points of a data set pair a
+frequency with a prestress group (a frequency sweep: many frequencies at one prestress; a prestress sweep: one
+frequency at many), so the points are split once, when the problem is built, into grids whose prestress groups
+share one set of frequencies (:func:`plan_points`): the law is evaluated once per grid, with the tendons of every
+group and assignment side by side, and each point takes its row. Nothing is validated, looked up or sorted per
+evaluation: the problem checked its data and parameters when it was built.
 """
 from __future__ import annotations
 
@@ -15,11 +28,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ... import laws as _laws
-from ...linear.assembly import modulus
+from ...linear.assembly import continuum_factor
+from ...linear.dynamic import batched_compliance
 from .heterogeneity import DISTRIBUTIONS
 
-__all__ = ["MechanismEvaluation", "law_values", "evaluate"]
+__all__ = ["MechanismEvaluation", "Grid", "EvaluationPlan", "plan_points", "law_values", "evaluate",
+           "evaluate_planned"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -31,90 +45,177 @@ class MechanismEvaluation:
     dG: np.ndarray | None  # (N, n_params) complex dG/dφ
 
 
+@dataclass(frozen=True, eq=False)
+class Grid:
+    """Points whose prestress groups share one set of frequencies: the law is evaluated once for all of them.
+
+    Attributes
+    ----------
+    omega : ndarray, shape (U,)
+        The grid's angular frequencies (rad/s), ascending.
+    groups : ndarray of int, shape (G,)
+        Its prestress groups, ascending.
+    points : ndarray of int, shape (n,)
+        The points it serves.
+    cell : ndarray of int, shape (n,)
+        Each point's place on the grid, ``u·G + g`` (its frequency's index u, its group's index g).
+    rows : slice or None
+        ``points`` as a slice when they are consecutive and in grid order (a data set's own sweep: its values are
+        copied, not gathered).
+    """
+
+    omega: np.ndarray
+    groups: np.ndarray
+    points: np.ndarray
+    cell: np.ndarray
+    rows: slice | None = None  # the points as a slice, when they are consecutive and in grid order (no gathering)
+
+
+@dataclass(frozen=True, eq=False)
+class EvaluationPlan:
+    """The points of a problem split into :class:`Grid` s (:func:`plan_points`)."""
+
+    group_index: np.ndarray  # (N,) each point's prestress group
+    grids: tuple
+
+    @property
+    def n_points(self) -> int:
+        return int(self.group_index.size)
+
+
+def plan_points(omega, group_index) -> EvaluationPlan:
+    """Split points (angular frequency ``omega`` (rad/s), prestress group ``group_index``) into grids.
+
+    Prestress groups with the same set of frequencies form one grid (a frequency sweep at several prestresses is
+    one grid; a prestress sweep at one frequency is one grid), so every grid is evaluated only where some point
+    needs it, and a data set adds at most one grid per distinct frequency set.
+    """
+    w = np.asarray(omega, dtype=float).ravel()
+    gi = np.asarray(group_index, dtype=int).ravel()
+    by_set: dict[bytes, tuple[np.ndarray, list]] = {}
+    for g in np.unique(gi):
+        f = np.unique(w[gi == g])
+        by_set.setdefault(f.tobytes(), (f, []))[1].append(int(g))
+    grids = []
+    for f, gs in by_set.values():
+        groups = np.array(gs, dtype=int)
+        pts = np.flatnonzero(np.isin(gi, groups))
+        cell = np.searchsorted(f, w[pts]) * groups.size + np.searchsorted(groups, gi[pts])
+        n = pts.size
+        ordered = n == f.size * groups.size and np.array_equal(cell, np.arange(n)) and np.array_equal(pts, pts[0] + np.arange(n))
+        grids.append(Grid(omega=f, groups=groups, points=pts, cell=cell,
+                          rows=slice(int(pts[0]), int(pts[0]) + n) if ordered else None))
+    return EvaluationPlan(group_index=gi, grids=tuple(grids))
+
+
 def law_values(problem, phi) -> tuple[dict, dict]:
     """Per law parameter: values (K, m) and d ln value / d φ (K, m, n_params), at log-parameters ``phi``."""
     vals, dln = {}, {}
     for name, D, const in problem.field_maps:
         lnx = const + D @ phi
-        dl = D.copy()
+        dl = D
         for fname, idx, dist, u in problem.shape_maps:
             if fname == name:  # ln x = ln scale + q(u; shape), with q the distribution's log quantile at scale 1
                 q, _, dq = DISTRIBUTIONS[dist](1.0, math.exp(phi[idx])).log_quantile(u)
                 lnx = lnx + q
+                dl = D.copy()
                 dl[..., idx] = dq
         vals[name], dln[name] = np.exp(lnx), dl
     return vals, dln
 
 
 def evaluate(problem, phi, omega, P, jac: bool, dP=None) -> MechanismEvaluation | None:
-    """Moduli at angular frequencies ``omega`` (rad/s) and model prestresses ``P`` (N), per point.
+    """Moduli at angular frequencies ``omega`` (rad/s) and model prestresses ``P`` (N), per point, anywhere.
 
-    ``dP`` (N, n_params): d ln P / d φ of each point (for the Jacobian). None where not a stable cell.
+    ``dP`` (N, n_params): d ln P / d φ of each point (for the Jacobian). None where not a stable cell. The points
+    are planned here (:func:`plan_points`, prestress groups from the distinct values of ``P``); a problem's own
+    data points use the plan made once (:func:`evaluate_planned`).
     """
-    from ...linear.dynamic import dynamic_compliance
+    omega = np.asarray(omega, dtype=float).ravel()
+    P_groups, group = np.unique(np.asarray(P, dtype=float).ravel(), return_inverse=True)
+    return evaluate_planned(problem, phi, plan_points(omega, group), omega, P_groups, jac, dP)
 
+
+def evaluate_planned(problem, phi, plan: EvaluationPlan, omega, P_groups, jac: bool,
+                     dP=None) -> MechanismEvaluation | None:
+    """Moduli at the points of ``plan`` (angular frequencies ``omega``, rad/s), prestress ``P_groups[g]`` (N) in
+    group g; ``dP`` (N, n_params) is d ln P / d φ of each point (with ``jac``). None where not a stable cell."""
     vals, dln = law_values(problem, phi)
-    law_cls = getattr(_laws, problem.mechanism.law)
     K, m = next(iter(vals.values())).shape
-    N = omega.size
-    G_assign = np.empty((K, N), dtype=complex)
-    dG = np.zeros((N, problem.n_params), dtype=complex) if jac else None
-    l, T0 = np.tile(problem.lengths, K), np.tile(problem.T0, K)
-    law = law_cls._trusted(**{n: v.ravel() for n, v in vals.items()})
-    for Pg in np.unique(P):
-        sel = np.flatnonzero(P == Pg)
-        w = omega[sel]
-        out = _kernel(problem, dynamic_compliance, law, l, float(Pg), Pg * T0, w, vals, dln, K, m, jac)
-        if out is None:
-            return None
-        G_assign[:, sel], dGk, dGP = out
-        if jac:
-            assert dG is not None and dP is not None
-            dG[sel] = dGk + dGP[:, None] * dP[sel]
+    N = plan.n_points
+    laws = _tangents(problem, plan, vals, P_groups, K, m, jac)
+    kstar = laws[0]
+    P = np.repeat(P_groups[plan.group_index], K)  # rows (point, assignment)
+    try:
+        out = batched_compliance(problem.kernel, P, kstar.reshape(N * K, m), gradient=jac)
+    except np.linalg.LinAlgError:
+        return None
+    J = (out[0] if jac else out).reshape(N, K)
+    if not np.all(np.isfinite(J)):
+        return None
+    G = continuum_factor(problem.L_ref) / J  # (N, K)
+    dG = None
+    if jac:
+        assert dP is not None
+        dG = _derivatives(problem, laws, out, J, G, P.reshape(N, K), vals, dln, dP)
+    G_assign = G.T
     if problem.eta_index is not None:
         visc = 1j * omega * math.exp(phi[problem.eta_index])
         G_assign = G_assign + visc[None]
-        if jac:
-            assert dG is not None
+        if dG is not None:
             dG[:, problem.eta_index] += visc
     return MechanismEvaluation(G=G_assign.mean(axis=0), G_assign=G_assign, dG=dG)
 
-def _kernel(problem, dynamic_compliance, law, l, P, T, w, vals, dln, K, m, jac):
-    """Structural G of each assignment (K, n_w) and, with ``jac``, dG by φ (n_w, n_params), P dG/dP (n_w,)."""
-    nw = w.size
 
-    def stack(a):  # (n_w, K·m) -> (K·n_w, m): assignments stacked along the frequency axis of the kernel
-        return np.transpose(a.reshape(nw, K, m), (1, 0, 2)).reshape(K * nw, m)
+def _tangents(problem, plan: EvaluationPlan, vals: dict, P_groups, K: int, m: int, jac: bool):
+    """``k*`` (N, K, m) at every point, and with ``jac`` ``∂k*/∂T`` (N, K, m) and ``∂k*/∂x_p`` (p, N, K, m).
 
-    ks = law.complex_stiffness(l, T, w)
-    kstar = stack(ks)
-    if jac:
-        dk_dT, dk = law.complex_stiffness_derivatives(l, T, w)
-        dirs = np.zeros((problem.n_params + 2, K * nw, m), dtype=complex)
-        for p, name in enumerate(law.names):
-            if name not in vals:
-                continue
-            chain = (vals[name][..., None] * dln[name]).reshape(K * m, problem.n_params)  # x_p ∂ln x_p/∂φ
-            contrib = dk[p][:, :, None] * chain[None]  # (n_w, K·m, n_params)
-            for q in np.flatnonzero(np.any(chain != 0, axis=0)):
-                dirs[q] += stack(contrib[..., q])
-        dirs[-2] = stack(dk_dT * T[None])  # P ∂k*/∂P at fixed parameters: (∂k*/∂T)·P·T0
-        dirs[-1] = kstar  # the Euler direction
-    try:
+    One law per grid, its tendons those of every (group, assignment) of the grid side by side.
+    """
+    N = plan.n_points
+    kstar = np.empty((N, K, m), dtype=complex)
+    dk_dT = np.empty((N, K, m), dtype=complex) if jac else None
+    dk = None
+    law_cls = problem.law_class
+    for grid in plan.grids:
+        shape = (grid.groups.size, K, m)
+        T = (P_groups[grid.groups][:, None, None] * problem.T0).repeat(K, axis=1).ravel()
+        l = np.broadcast_to(problem.lengths, shape).ravel()
+        law = law_cls._trusted(**{n: _tile(v, grid.groups.size) for n, v in vals.items()})
+        U = grid.omega.size * grid.groups.size
+        rows = grid.rows
+        pick = slice(None) if rows is not None else grid.cell
+        rows = grid.points if rows is None else rows
+        kstar[rows] = law.complex_stiffness(l, T, grid.omega).reshape(U, K, m)[pick]
         if jac:
-            J, dJ = dynamic_compliance(problem.cell, P, kstar, dirs)
-        else:
-            J = dynamic_compliance(problem.cell, P, kstar)
-    except np.linalg.LinAlgError:
-        return None
-    if not np.all(np.isfinite(J)):
-        return None
-    G = modulus(J, problem.L_ref)
-    Gk = G.reshape(K, nw)
-    if not jac:
-        return Gk, None, None
-    dlnG = -dJ / J[None]  # (q, K·n_w)
-    dG = (G[None] * dlnG).reshape(-1, K, nw).mean(axis=1)  # d mean_k G_k, (q, n_w)
-    dGP = G * (1.0 + (dJ[-1] - dJ[-2]) / J)  # P dG/dP = −G·P ∂ln J/∂P (module docstring)
-    dGP = dGP.reshape(K, nw).mean(axis=0)
-    return Gk, dG[: problem.n_params].T, dGP
+            assert dk_dT is not None
+            dT, dx = law.complex_stiffness_derivatives(l, T, grid.omega)
+            dk_dT[rows] = dT.reshape(U, K, m)[pick]
+            if dk is None:
+                dk = np.empty((dx.shape[0], N, K, m), dtype=complex)
+            dk[:, rows] = dx.reshape(-1, U, K, m)[:, pick]
+    return kstar, dk_dT, dk
+
+
+def _tile(values, copies: int) -> np.ndarray:
+    """``values`` (K, m) raveled, ``copies`` times over (a view when once)."""
+    return values.ravel() if copies == 1 else np.tile(values.ravel(), copies)
+
+
+def _derivatives(problem, laws, out, J, G, P, vals: dict, dln: dict, dP) -> np.ndarray:
+    """``dG/dφ`` (N, n_params) of the assignments' mean from the kernel's ``∂J/∂k*``, ``∂J/∂P`` (module docstring)."""
+    _, dk_dT, dk = laws
+    _, dJ_dk, dJ_dP = out
+    N, K = J.shape
+    dG_dJ = -G / J  # (N, K): G = c/J
+    g = dJ_dk.reshape(N, K, -1) * dG_dJ[..., None]  # dG_k/dk*_j
+    dG = np.zeros((N, problem.n_params), dtype=complex)
+    for p, name in enumerate(problem.law_names):
+        chain = vals[name][..., None] * dln[name]  # x_p ∂ln x_p/∂φ, (K, m, n_params)
+        if not chain.any():
+            continue  # a held field
+        dG += np.einsum("nkm,kmq->nq", g * dk[p], chain)
+    # P dG/dP along the prestress: at fixed k*, and through the tensions P·T0 in k*
+    dG_P = dG_dJ * P * dJ_dP.reshape(N, K) + np.einsum("nkm,nkm,m->nk", g, dk_dT, problem.T0) * P
+    dG += dG_P.sum(axis=1)[:, None] * dP
+    return dG / K

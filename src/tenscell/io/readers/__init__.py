@@ -71,6 +71,8 @@ def read_data(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, An
     Parameters
     ----------
     path : str or PathLike
+        A file, or ``"bundled:NAME"`` for a data set shipped with tenscell (:func:`tenscell.io.data.bundled`:
+        ``bundled:fabry2001``, ``bundled:stamenovic2002``), read in its own layout.
     columns : ColumnMap or dict, optional
     step : int or str, optional
         TRIOS step or RheoCompass interval: its number, or its name.
@@ -96,6 +98,8 @@ def read_data(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, An
         One line naming the file: what is wrong and where, or, for a layout tenscell does not recognise, what it
         expected.
     """
+    if isinstance(path, str) and path.lower().startswith("bundled:"):  # as on the command line
+        return _bundled(path, columns, step, temperature, sheet, units)
     request = Request(columns=columns, units=units, step=step, temperature=temperature, sheet=sheet,
                       min_points=min_points, accept=accept)
     probe = Probe(path)
@@ -107,3 +111,16 @@ def read_data(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, An
     if name != "excel" and sheet is not None:
         raise DataError(f"{path}: {option('sheet', sheet)} chooses a sheet of an Excel workbook; this file is not one")
     return _reader(name).read(probe, request)
+
+
+def _bundled(path: str, columns, step, temperature, sheet, units):
+    """A data set shipped with tenscell; the options that say how to read a file are refused (it has its own
+    layout)."""
+    from ..data import bundled
+
+    given = [name for name, value in (("columns", columns), ("step", step), ("temperature", temperature),
+                                      ("sheet", sheet)) if value is not None] + sorted(units)
+    if given:
+        raise DataError(f"{path}: {given[0]}= says how to read a file; {path} is a data set shipped with tenscell, "
+                        "in its own layout")
+    return bundled(path.split(":", 1)[1])
