@@ -174,7 +174,8 @@ def test_the_command_end_to_end_on_a_few_cells(tmp_path, capsys):
     cells = list(csv.DictReader((out / "real_cells_cells.csv").open()))
     assert len(cells) == 2 * 3 * 2  # 2 lines × 3 cells × (the mechanism, the power law + Newtonian)
     report = (out / "real_cells.md").read_text()
-    for phrase in ("drag correction", "monotone", "1 Hz", "Not done by this command", "s of CPU"):
+    for phrase in ("drag correction", "monotone", "1 Hz", "Not done in this run", "--populations", "--time-domain",
+                   "s of CPU"):
         assert phrase in report
 
 
@@ -223,3 +224,38 @@ def test_time_series_are_checked():
         TimeSeries("x", "stress", np.ones(3), np.ones(3), "s")
     with pytest.raises(ValueError, match="positive"):
         TimeSeries("x", "creep", np.array([0.0, 1.0, 2.0]), np.ones(3), "s")
+
+
+# ---- populations (G4) on synthetic numbers --------------------------------------------------------
+def _pop_scores(pop_bic, pop_cells, spearman_model, spearman_measured=-0.72):
+    from types import SimpleNamespace
+
+    from tenscell.fitting.population_scores import Correlation, ScoreRow
+
+    rows = (ScoreRow("pop", "population", 60, 0.1, pop_bic, (0.1, 0.1), pop_cells),
+            ScoreRow("structural-damping", "independent per cell", 118, 0.13, -70.0, (0.2, 0.2), 0.175),
+            ScoreRow("structural-damping+newtonian", "independent per cell", 177, 0.08, -400.0, (0.2, 0.2), 0.124))
+    corr = (Correlation("exponent", "stiffness", spearman_measured, spearman_model, spearman_model, 59),)
+    return SimpleNamespace(rows=rows, correlations=corr)
+
+
+def test_g4_is_met_only_when_every_condition_holds():
+    from tenscell.studies.real_cells_study import g4_row
+
+    assert g4_row("A", _pop_scores(-800.0, 0.12, -0.80)).met
+    r = g4_row("A", _pop_scores(-300.0, 0.12, -0.80))  # worse BIC than the 3-parameter per-cell law
+    assert not r.met and "BIC -300.0 not below structural-damping+newtonian's -400.0" in r.why_not()
+    r = g4_row("A", _pop_scores(-800.0, 0.13, -0.80))  # worse on held-out cells
+    assert not r.met and "held-out cells 0.130" in r.why_not() and "BIC" not in r.why_not()
+    r = g4_row("A", _pop_scores(-800.0, 0.12, -0.99))  # one parameter per cell: Spearman -1 by construction
+    assert not r.met and "off by 0.27 > 0.15" in r.why_not()
+
+
+def test_population_cells_need_four_frequencies_in_each_window():
+    from types import SimpleNamespace
+
+    from tenscell.studies.real_cells_study import population_cells
+
+    full = SimpleNamespace(data=_spectrum())
+    no_1hz = SimpleNamespace(data=_spectrum(f=(3.0, 10.0, 30.0, 100.0, 200.0)))
+    assert population_cells((full, no_1hz)) == (full,)

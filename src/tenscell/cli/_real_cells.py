@@ -9,12 +9,15 @@ import os
 from pathlib import Path
 
 __all__ = ["check_inputs", "budgets", "real_cells_cost", "write_real_cells", "EVALUATIONS_PER_START_HOP", "FILES",
-           "TIME_FILES", "TIME_FIT_CPU_S"]
+           "TIME_FILES", "TIME_FIT_CPU_S", "POPULATION_CPU_S"]
 
 #: CPU seconds one mechanism's time-domain fit takes, about the mean over the two series (measured, load 5 on
 #: 2 cores: springpot-lognormal-kappa+visc 75 s on the HL60 creep with 2 starts; on the oocyte shape with 4 starts
 #: springpot-alpha-family+visc 35 s, maxwell+visc 11 s): the estimate of --time-domain
 TIME_FIT_CPU_S = 60.0
+#: CPU seconds of one population model's scores on one line (joint fit, per-cell laws, held-out frequencies,
+#: 5 folds; 2 starts × 1 hop): the estimate of --populations
+POPULATION_CPU_S = 90.0
 
 #: model evaluations (residuals and Jacobian) one start of a fit on one Xie spectrum takes per basin-hopping move
 #: allowed, the mean over the default models (measured: 12 starts × 30 hops took 900–8900 evaluations on a median,
@@ -77,7 +80,7 @@ def real_cells_cost(args, jobs: int):
 
     from .._threads import limited
     from ..studies.real_cells import XIE_LINES, real_cells_directory, xie_cells, xie_median
-    from ..studies.real_cells_study import BASELINES, SPLITS, median_models
+    from ..studies.real_cells_study import BASELINES, POPULATIONS, SPLITS, median_models
     from ._cost import Cost
     from .study import _cpu_per_call, cpu_share
 
@@ -95,6 +98,8 @@ def real_cells_cost(args, jobs: int):
             n = EVALUATIONS_PER_START_HOP * med.starts * (med.hops + 1) * (1 + len(SPLITS)) * len(XIE_LINES)
             if cell is not None and label in per_cell_models:
                 n += EVALUATIONS_PER_START_HOP * cell.starts * (cell.hops + 1) * n_cells
+            if args.populations and label == names[0]:  # the populations' CPU, counted once
+                n += 2 * len(POPULATIONS) * POPULATION_CPU_S / per
             if args.time_domain and spec.structural:  # two series, as many evaluations as that CPU time buys
                 n += 2 * TIME_FIT_CPU_S / per
             cpu += n * per
@@ -103,6 +108,8 @@ def real_cells_cost(args, jobs: int):
     share = cpu_share(workers)
     per = cpu / max(evaluations, 1)
     cells = f", {n_cells} cells × {cell.starts} × {cell.hops}" if cell is not None else ", no per-cell fits"
+    if args.populations:
+        cells += (f", populations: 2 lines × {len(POPULATIONS)} models × about {POPULATION_CPU_S:.0f} s of CPU each")
     if args.time_domain:
         cells += f", 2 time series × {len(names)} mechanisms at about {TIME_FIT_CPU_S:.0f} s of CPU each"
     return Cost("model evaluation", max(evaluations, 1), per / share, workers,
@@ -116,13 +123,15 @@ def write_real_cells(out: Path, log, args, jobs: int) -> None:
     from .. import plotting
     from ..io.outputs import write_csv_rows, write_text
     from ..plotting.real_cells import real_cells_medians_figure, real_cells_slopes_figure
-    from ..reports.real_cells import (CELL_COLUMNS, G3_COLUMNS, MEDIAN_COLUMNS, TIME_COLUMNS, cell_rows, g3_rows,
-                                      median_rows, real_cells_markdown, time_rows, validation_tables)
+    from ..reports.real_cells import (CELL_COLUMNS, G3_COLUMNS, MEDIAN_COLUMNS, POPULATION_COLUMNS, TIME_COLUMNS,
+                                      cell_rows, g3_rows, median_rows, population_rows, real_cells_markdown, time_rows,
+                                      validation_tables)
     from ..studies.real_cells_study import real_cells_study
 
     names, med, cell, max_cells = budgets(args)
     s = real_cells_study(args.data_dir, mechanisms=names, budget=med, cell_budget=cell, max_cells=max_cells,
-                         time_domain=args.time_domain, jobs=jobs, notify=lambda line: log(line))
+                         time_domain=args.time_domain, populations=args.populations, jobs=jobs,
+                         notify=lambda line: log(line))
     write_csv_rows(out / "real_cells_medians.csv", list(MEDIAN_COLUMNS), median_rows(s))
     write_csv_rows(out / "real_cells_g3.csv", list(G3_COLUMNS), g3_rows(s))
     write_csv_rows(out / "real_cells_cells.csv", list(CELL_COLUMNS), cell_rows(s))
@@ -133,6 +142,9 @@ def write_real_cells(out: Path, log, args, jobs: int) -> None:
         write_csv_rows(out / "real_cells_time.csv", list(TIME_COLUMNS), time_rows(s))
         plotting.save(real_cells_time_figure(s), out / "real_cells_time.png")
         written += list(TIME_FILES)
+    if s.populations:
+        write_csv_rows(out / "real_cells_populations.csv", list(POPULATION_COLUMNS), population_rows(s))
+        written.append("real_cells_populations.csv")
     plotting.save(real_cells_medians_figure(s), out / "real_cells_medians.png")
     plotting.save(real_cells_slopes_figure(s), out / "real_cells_slopes.png")
     write_text(out / "validation_tables.md", validation_tables(s))

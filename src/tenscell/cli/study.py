@@ -292,6 +292,7 @@ _STUDY_OPTIONS = {
     "data_dir": (None, "--data", ("real-cells",)),
     "cells": (None, "--cells", ("real-cells",)),
     "time_domain": (False, "--time-domain", ("real-cells",)),
+    "populations": (False, "--populations", ("real-cells",)),
     "ensemble": (None, "--ensemble", ("mechanisms",)),
     "workers": (None, "--workers", ("mechanisms",)),
     "scheduler": (None, "--scheduler", ("mechanisms",)),
@@ -353,6 +354,10 @@ def register(sub) -> None:
     r.add_argument("--time-domain", action="store_true",
                    help="also fit the HL60 creep curve and the oocyte relaxation's shape in the time domain (each "
                         "mechanism about a minute of CPU per series)")
+    r.add_argument("--populations", action="store_true",
+                   help="also score population models on each line (springpot-alpha-family+visc with its prestress "
+                        "per cell, the power law + Newtonian with its modulus per cell) against independent per-cell "
+                        "power laws, with goal G4 (a few minutes of CPU)")
     add_data_options(p)
     p.set_defaults(func=run)
 

@@ -6,7 +6,7 @@ import math
 
 from ._format import num, table
 
-__all__ = ["time_rows", "TIME_COLUMNS", "real_cells_markdown", "validation_tables", "median_rows", "MEDIAN_COLUMNS", "cell_rows", "CELL_COLUMNS",
+__all__ = ["population_rows", "POPULATION_COLUMNS", "time_rows", "TIME_COLUMNS", "real_cells_markdown", "validation_tables", "median_rows", "MEDIAN_COLUMNS", "cell_rows", "CELL_COLUMNS",
            "g3_rows", "G3_COLUMNS"]
 
 MEDIAN_COLUMNS = ("line", "model", "role", "formula", "free_parameters", "rms_decades", "AIC", "BIC", "fit",
@@ -14,6 +14,8 @@ MEDIAN_COLUMNS = ("line", "model", "role", "formula", "free_parameters", "rms_de
 G3_COLUMNS = ("mechanism", "free_parameters", "formula", "formula_free_parameters", "line", "held_out_rms_decades",
               "formula_held_out_rms_decades", "within_limit_both_lines", "beats_formula", "no_more_parameters", "met")
 CELL_COLUMNS = ("line", "model", "cell", "measured_Gstorage_slope", "model_Gstorage_slope", "rms_decades")
+POPULATION_COLUMNS = ("line", "population", "model", "kind", "free_parameters", "rms_decades", "BIC",
+                      "held_out_train_le_30Hz_decades", "held_out_train_3_100Hz_decades", "held_out_cells_decades")
 TIME_COLUMNS = ("series", "model", "structural", "free_parameters", "rms_decades", "rms_late_decades",
                 "local_exponent", "at_bound", "message", "cpu_s")
 
@@ -53,6 +55,39 @@ def time_rows(study):
     for f in study.time_domain:
         yield (f.data, f.model, f.structural, f.n_params, f.rms, f.rms_late, f.local_exponent, " ".join(f.at_bound),
                f.message, round(f.cpu_s, 2))
+
+
+def population_rows(study):
+    for line, sc, _ in study.populations:
+        for r in sc.rows:
+            yield (line, sc.population.name, r.model, r.kind, r.n_params, r.rms_log10_error, r.bic,
+                   *r.heldout_frequencies, r.heldout_cells)
+
+
+def _population_section(study) -> list:
+    out = ["### Populations: shared material, one parameter per cell (G4)\n"]
+    for line, sc, cpu in study.populations:
+        head = ["model", "kind", "free", "RMS", "BIC",
+                *[f"held out: train {lo:g}–{hi:g} Hz" for lo, hi in sc.splits], f"held-out cells ({sc.folds}-fold)"]
+        rows = [[f"`{r.model}`", r.kind, r.n_params, num(r.rms_log10_error, 3), num(r.bic, 5),
+                 *[num(x, 3) for x in r.heldout_frequencies], num(r.heldout_cells, 3)] for r in sc.rows]
+        out += [f"**{line}** ({sc.n_cells} of its {study.n_cells[line]} cells: those with 4 frequencies or more in "
+                f"both training windows; {cpu:.0f} s of CPU): `{sc.population.name}`\n", table(head, rows)]
+        corr = [[c.x, c.y, num(c.measured, 2), num(c.model, 2), c.n_cells] for c in sc.correlations]
+        out += [table(["Spearman of", "with", "measured", "population model", "cells"], corr)]
+        out += ["\n".join(f"- {n}" for n in sc.notes) + "\n"]
+    if study.g4:
+        head = ["line", "population", "BIC", "per-cell laws' BIC", "held-out cells", "per-cell laws'",
+                "Spearman exponent–stiffness model (measured)", "G4"]
+        rows = [[g.line, f"`{g.model}`", num(g.bic, 5), ", ".join(num(b, 5) for b in g.baseline_bic.values()),
+                 num(g.heldout_cells, 3), ", ".join(num(b, 3) for b in g.baseline_heldout_cells.values()),
+                 f"{g.spearman_model:+.2f} ({g.spearman_measured:+.2f})", "met" if g.met else "missed"]
+                for g in study.g4]
+        out += ["**G4** (the mechanism's population beats the independent per-cell power laws on BIC and on held-out "
+                f"cells, and its exponent–stiffness Spearman correlation is within ±{study.g4[0].tol:g} of the "
+                "measured one):\n", table(head, rows)]
+        out += ["\n".join(f"- {g.line}: " + (g.why_not() or "met") for g in study.g4) + "\n"]
+    return out
 
 
 def _time_table(study) -> str:
@@ -143,6 +178,10 @@ def validation_tables(study) -> str:
                 + _QUALIFY["selection"] + "\n"]
     else:
         out.append("Per-cell fits: not run in this run.\n")
+    if study.populations:
+        out += _population_section(study)
+    else:
+        out.append("Populations and G4: not run in this run (`--populations`).\n")
     if study.time_domain:
         out += ["### Time domain: the HL60 creep curve and the oocyte relaxation's shape\n", _time_table(study),
                 "One cell each, other cell types than the Xie lines. The oocyte's force has no modulus scale (the probe "
@@ -184,7 +223,7 @@ def real_cells_markdown(study) -> str:
         "as good as its own structure-free formula on each line, with no more free parameters than that formula.\n",
         validation_tables(study),
         "## What these data cannot tell\n", facts + "\n",
-        "## Not done by this command\n",
-        "- the population model over the cells of a line against per-cell power laws (G4, issue 26 item 5b): not "
-        "evaluated here, and no number in this report speaks for it.\n",
+        *(["## Not done in this run\n",
+           "- the population models and G4 (`--populations`): not evaluated here, and no number in this report speaks "
+           "for them.\n"] if not study.populations else []),
     ])
