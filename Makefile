@@ -26,7 +26,7 @@ test: $(STAMP)
 REAL_CELLS ?= ../shared/data/real-cells
 validate: $(STAMP)
 	@if [ -d "$(REAL_CELLS)" ]; then \
-		$(VENV)/bin/tenscell study real-cells --data "$(REAL_CELLS)" --out build/validation && \
+		$(VENV)/bin/tenscell study real-cells --populations --data "$(REAL_CELLS)" --out build/validation && \
 		$(PY) docs/update_validation.py build/validation/validation_tables.md docs/validation.md; \
 	else \
 		echo "make validate: skipped: $(REAL_CELLS) does not exist (the measured-cell data are not shipped with tenscell; give REAL_CELLS=DIR)"; \
