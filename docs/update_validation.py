@@ -43,7 +43,7 @@ def main(argv: list[str]) -> int:
         print(f"update_validation: {tables_path}: no such file (run `tenscell study real-cells` first)",
               file=sys.stderr)
         return 2
-    when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    when = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
     stamp = (f"*Written by `make validate` from commit `{commit(page_path.resolve().parent)}` on {when} "
              f"(`tenscell study real-cells`, default budgets).*")
     page_path.write_text(splice(page_path.read_text(encoding="utf-8"), tables_path.read_text(encoding="utf-8"),

@@ -172,7 +172,7 @@ def validation_tables(study) -> str:
     out.append(_fit_column(study) + "\n")
     out.append(_QUALIFY["held_high"] + " " + _QUALIFY["held_low"] + "\n")
     if study.cells:
-        out += [f"### Per cell: the model's G' slope (3–30 Hz) against the cell's\n", _cells_table(study),
+        out += ["### Per cell: the model's G' slope (3–30 Hz) against the cell's\n", _cells_table(study),
                 "A cell's fit has no stated noise, so its tolerance (0.01 decades) is a target of the search, not a "
                 "verdict: the per-cell spectra scatter more than that (the median fit RMS column). "
                 + _QUALIFY["selection"] + "\n"]
