@@ -225,12 +225,13 @@ def median_models(mechanisms: Sequence[str] = DEFAULT_MECHANISMS):
     for the mechanisms that share it) and :data:`BASELINES`."""
     from ..fitting import get_model
 
-    out, formulas = [], {}
+    out: list = []
+    formulas: dict = {}
     for name in mechanisms:
         m = get_model(name)
         f = m.formula()
         if f is not None:
-            formulas.setdefault(f.terms, (f, []))[1].append(m.name)
+            formulas.setdefault(getattr(f, "terms", f.name), (f, []))[1].append(m.name)
         out.append((m, "mechanism", _formula_label(f) if f is not None else "", m.name))
     for f, of in formulas.values():
         out.append((f, "formula", ", ".join(of), _formula_label(f)))
@@ -339,7 +340,7 @@ class G3Verdict:
         if self.met_by:
             return (f"G3 met by {', '.join(self.met_by)} (held-out RMS ≤ {self.limit:g} decades on both lines, at "
                     f"least as good as its own formula with no more free parameters; power law + Newtonian: {ref})")
-        c = self.closest
+        c = self.rows[0]
         held = ", ".join(f"{k} {v:.3f}" for k, v in c.held.items())
         return (f"G3 not met by any mechanism. Closest: {c.model} (held out {held}; worst line "
                 f"{c.worst - self.limit:+.3f} decades from the limit {self.limit:g}); it misses: {c.why_not()}. "
@@ -609,11 +610,11 @@ def population_scores(cells, line: str, base: str, per_cell: tuple, *, budget: B
     """``Population(base, per_cell)`` over ``cells`` (one line's :class:`~tenscell.studies.real_cells.XieCell`)
     scored by :func:`tenscell.fitting.population_scores.score_population` against independent per-cell power laws,
     with the cells' measured aspect ratio and area as covariates: ``(scores, CPU s)``."""
-    from ..fitting import Population
+    from ..fitting import Population, get_model
     from ..fitting.population_scores import score_population
 
     t0 = time.process_time()
-    sc = score_population([c.data for c in cells], Population(base, per_cell=tuple(per_cell)), label=line,
+    sc = score_population([c.data for c in cells], Population(get_model(base), per_cell=tuple(per_cell)), label=line,
                           covariates={"aspect_ratio": [c.aspect_ratio for c in cells], "area": [c.area for c in cells]},
                           folds=min(folds, len(cells)), starts=budget.starts, hops=budget.hops, seed=budget.seed,
                           progress=False)
@@ -723,13 +724,13 @@ def real_cells_study(directory=None, *, mechanisms: Sequence[str] = DEFAULT_MECH
     if populations:
         from .._parallel import starmap
 
-        tasks = [(population_cells(cells[ln]), ln, base, per, population_budget) for ln in XIE_LINES
-                 for base, per in POPULATIONS]
+        ptasks = [(population_cells(cells[ln]), ln, base, per, population_budget) for ln in XIE_LINES
+                  for base, per in POPULATIONS]
 
         def pdone(i, res):
-            say(f"{tasks[i][1]}: population of {tasks[i][2]} ({res[1]:.1f} s CPU)")
+            say(f"{ptasks[i][1]}: population of {ptasks[i][2]} ({res[1]:.1f} s CPU)")
         pops = tuple((t[1], sc, cpu) for t, (sc, cpu) in
-                     zip(tasks, starmap(_population_task, tasks, jobs=min(jobs, len(tasks)), on_done=pdone)))
+                     zip(ptasks, starmap(_population_task, ptasks, jobs=min(jobs, len(ptasks)), on_done=pdone)))
     g4 = tuple(g4_row(ln, sc) for ln, sc, _ in pops if sc.population.base.name == POPULATIONS[0][0])
     series = time_series(folder) if time_domain else ()
     times = time_domain_fits(series, mechanisms, seed=budget.seed, jobs=jobs, notify=say) if time_domain else ()
