@@ -259,3 +259,25 @@ def test_population_cells_need_four_frequencies_in_each_window():
     full = SimpleNamespace(data=_spectrum())
     no_1hz = SimpleNamespace(data=_spectrum(f=(3.0, 10.0, 30.0, 100.0, 200.0)))
     assert population_cells((full, no_1hz)) == (full,)
+
+
+@needs_data
+def test_populations_end_to_end_on_a_few_cells(tmp_path, capsys):
+    out = tmp_path / "rc"
+    code, stdout, err = _run(["study", "real-cells", "--data", str(REAL), "--out", str(out), "--cells", "8",
+                              "--starts", "1", "--hops", "0", "--jobs", "1", "--populations",
+                              "--mechanisms", "springpot+visc"], capsys)
+    assert code == 0, err
+    rows = list(csv.DictReader((out / "real_cells_populations.csv").open()))
+    # per line: 2 population models × (the population + 2 per-cell laws)
+    assert {r["line"] for r in rows} == {"MCF-10A", "MDA-MB-436"} and len(rows) == 2 * 2 * 3
+    for r in rows:
+        k = int(r["free_parameters"])
+        assert k > 0 and float(r["rms_decades"]) > 0 and float(r["held_out_cells_decades"]) > 0
+    # the per-cell laws have 2 and 3 parameters per cell; a population has its shared ones plus one per cell
+    per = {(r["line"], r["population"], r["model"]): int(r["free_parameters"]) for r in rows}
+    for (line, pop, model), k in per.items():
+        if model == "structural-damping+newtonian":
+            assert k == 3 * per[(line, pop, "structural-damping")] // 2
+    report = (out / "real_cells.md").read_text()
+    assert "G4" in report and "Spearman" in report and "of its 8 cells" in report
