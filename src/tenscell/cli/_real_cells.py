@@ -72,17 +72,18 @@ def budgets(args):
     return names, med, cell, (None if args.cells in (None, 0) else args.cells)
 
 
-def real_cells_cost(args, jobs: int):
+def real_cells_cost(args, jobs: int, cpu_per_call, cpu_share):
     """The study's cost (:class:`tenscell.cli._cost.Cost`): the CPU time of one model evaluation of each model on
-    a median, timed here, × :data:`EVALUATIONS_PER_START_HOP` × starts × (hops + 1) × its fits (3 per line on the
-    medians, one per cell), over ``jobs`` workers at the CPU share the machine's load leaves them."""
+    a median, timed here (``cpu_per_call(fn)``: CPU seconds of one call), × :data:`EVALUATIONS_PER_START_HOP` ×
+    starts × (hops + 1) × its fits (3 per line on the medians, one per cell), over ``jobs`` workers at the CPU share
+    the machine's load leaves them (``cpu_share(workers)``) — the two measures of :mod:`tenscell.cli.study`, passed
+    in by it."""
     import numpy as np
 
     from .._threads import limited
     from ..studies.real_cells import XIE_LINES, real_cells_directory, xie_cells, xie_median
     from ..studies.real_cells_study import BASELINES, POPULATIONS, SPLITS, median_models
     from ._cost import Cost
-    from .study import _cpu_per_call, cpu_share
 
     names, med, cell, max_cells = budgets(args)
     folder = real_cells_directory(args.data_dir)
@@ -94,7 +95,7 @@ def real_cells_cost(args, jobs: int):
         for spec, _, _, label in median_models(names):
             problem = spec.problem(data, None)
             theta = problem.initial_guess(np.random.default_rng(0))
-            per = _cpu_per_call(lambda pb=problem, th=theta: pb.jacobian(th))
+            per = cpu_per_call(lambda pb=problem, th=theta: pb.jacobian(th))
             n = EVALUATIONS_PER_START_HOP * med.starts * (med.hops + 1) * (1 + len(SPLITS)) * len(XIE_LINES)
             if cell is not None and label in per_cell_models:
                 n += EVALUATIONS_PER_START_HOP * cell.starts * (cell.hops + 1) * n_cells

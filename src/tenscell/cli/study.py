@@ -469,7 +469,8 @@ def run(args) -> int:
         from ._cost import announce, check
         from ._real_cells import real_cells_cost
 
-        announce(check(real_cells_cost(args, jobs_for(len(args.real_cells_models), args.jobs)), "--starts",
+        announce(check(real_cells_cost(args, jobs_for(len(args.real_cells_models), args.jobs), _cpu_per_call,
+                                       cpu_share), "--starts",
                        hint="give fewer --starts or --hops, --cells N, or fewer --mechanisms NAMES"))
     t = time.perf_counter()
     stage(f"study {args.name} ...")
