@@ -16,8 +16,9 @@ __all__ = ["check_inputs", "budgets", "real_cells_cost", "write_real_cells", "EV
 #: springpot-alpha-family+visc 35 s, maxwell+visc 11 s): the estimate of --time-domain
 TIME_FIT_CPU_S = 60.0
 #: CPU seconds of one population model's scores on one line (joint fit, per-cell laws, held-out frequencies,
-#: 5 folds; 2 starts × 1 hop): the estimate of --populations
-POPULATION_CPU_S = 90.0
+#: 5 folds; 2 starts × 1 hop): the estimate of --populations (measured at load 3.6 on 2 cores: the mechanism 39 s
+#: and 54 s, the power law + Newtonian 4 s and 9 s, on the 25 and 57 cells of the two lines)
+POPULATION_CPU_S = 30.0
 
 #: model evaluations (residuals and Jacobian) one start of a fit on one Xie spectrum takes per basin-hopping move
 #: allowed, the mean over the default models (measured: 12 starts × 30 hops took 900–8900 evaluations on a median,
