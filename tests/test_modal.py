@@ -64,8 +64,8 @@ def test_sparse_model_is_factorized_once_per_matrix(monkeypatch):
     tenscell.linear.relaxation_spectrum(lin)
     tenscell.response.static_modulus(lin)
     tenscell.response.viscosity_limit(lin)
-    tenscell.summary.relaxation_modes(lin, 2)  # the slowest modes run on the check's own factor
-    assert calls.count("K0") == 1 and len(calls) == 2, calls  # K0 once, K0 + σC0 once
+    tenscell.summary.relaxation_modes(lin, 2)  # the slowest modes: a probe on the check's own factor, then K0 − λ0C0
+    assert calls.count("K0") == 1 and len(calls) == 3, calls  # K0 once, K0 + σC0 once, K0 − λ0C0 once
     # without the check, the frequency response and the time domain share one factorization
     calls.clear()
     lin2 = tenscell.linearize(cell, 1500.0, _lattice_EA(cell), 1.0, check=False)

@@ -158,3 +158,22 @@ def test_metis_has_less_fill_than_the_geometric_dissection_at_16k(monkeypatch):
     monkeypatch.setattr(ordering, "_pymetis", lambda: None)
     geometric = tenscell.linearize(cell, 1000.0, EA, 1.0).pencil
     assert metis.cholesky.fill < 0.85 * geometric.cholesky.fill
+
+
+def test_node_graph_is_the_location_graph_of_point_nodes():
+    """For point nodes (three unknowns per location, consecutive) METIS is given the graph of the matrix's 3×3
+    blocks (no sort of the locations): the same graph as the location graph, up to numbering its vertices."""
+    cell, EA = _lattice((5, 4, 4))
+    lin = tenscell.linearize(cell, 1000.0, EA, 1.0)
+    A = sp.csr_matrix(abs(lin.K0) + abs(lin.C0))
+    pts = ordering.coordinate_locations(cell.coords)
+    assert ordering._in_triples(pts)
+    _, c1, xadj1, adj1 = ordering._node_graph(A, pts)
+    group, c2, xadj2, adj2 = ordering._location_graph(A, pts)
+    node_at = np.argsort(group[0::3])  # location index -> node
+    assert np.unique(group[0::3]).size == group[0::3].size  # one node per location here
+    G1 = sp.csr_matrix((np.ones(adj1.size), adj1, xadj1), shape=(c1.size, c1.size))
+    G2 = sp.csr_matrix((np.ones(adj2.size), adj2, xadj2), shape=(c2.size, c2.size))
+    assert (G1[node_at][:, node_at] != G2).nnz == 0 and G1.nnz == G2.nnz > 0
+    np.testing.assert_array_equal(c1, c2)
+    assert not ordering._in_triples(np.arange(12.0).reshape(4, 3).repeat(3, axis=0)[1:-2])  # triples out of step

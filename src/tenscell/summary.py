@@ -268,14 +268,25 @@ class RelaxationModes:
     vectors : ndarray, shape (n, k)
         The modes in generalized coordinates.
     residuals : ndarray, shape (k,) or None
-        Relative Ritz residuals of approximate modes (sparse models); None
-        when exact (dense eigensolver).
+        Relative Ritz residuals of approximate modes (sparse models): each
+        bounds, to first order, the relative distance from its rate to a rate
+        of the model; None when exact (dense eigensolver).
     """
 
     rates: np.ndarray
     displacements: np.ndarray
     vectors: np.ndarray
     residuals: np.ndarray | None = None
+
+    def rates_text(self) -> str:
+        """The rates (1/s) with the significant digits their accuracy supports: six when exact (dense); else as
+        many as keep the largest residual bound ε below half a unit in the last digit (2 to 6)."""
+        if self.residuals is None or self.residuals.size == 0:
+            digits = 6
+        else:
+            eps = max(float(self.residuals.max()), 1e-300)
+            digits = int(min(6, max(2, np.floor(-np.log10(2 * eps)))))
+        return ", ".join(f"{r:#.{digits}g}".rstrip(".") for r in self.rates)  # trailing zeros are digits too
 
     # ---- notebook conventions (tenscell._results) ---------------------------------
     def __repr__(self) -> str:
@@ -305,7 +316,7 @@ class RelaxationModes:
 
 
 @hot_path
-def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
+def relaxation_modes(lin: LinearModel, k: int = 3, tol: float = 1e-6) -> RelaxationModes:
     """The ``k`` slowest relaxation modes, also when C0 is singular or the structure is free-standing.
 
     Solves ``C0 v = μ K0 v`` (K0 positive definite; μ = 1/λ, μ = 0 for an
@@ -313,7 +324,8 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     are treated on the complement of their rigid-body motions. Dense models
     use the pencil's modal decomposition (:meth:`~tenscell.linear.modal.Pencil.slow_modes`);
     sparse ones (more than 1500 coordinates) return the slowest modes *that the load excites*
-    (:func:`tenscell.linear.krylov.load_modes`).
+    (:func:`tenscell.linear.krylov.load_modes`), each rate within ``tol`` (relative, to first
+    order) of a rate of the model; ``residuals`` gives the bound each reached.
     """
     if not (isinstance(k, (int, np.integer)) and k >= 1):
         raise ValueError(f"k (number of modes) must be a whole number >= 1, got {k!r}")
@@ -324,7 +336,7 @@ def relaxation_modes(lin: LinearModel, k: int = 3) -> RelaxationModes:
     if sp.issparse(lin.K0):
         # ARPACK does not converge in reasonable time on lattices, whose slowest rate is shared by
         # one local mode per module; the Lanczos run from the load finds the slowest modes it excites
-        rates, V, resid = load_modes(lin, min(k, n))
+        rates, V, resid = load_modes(lin, min(k, n), tol=tol)
         mu = 1.0 / rates
     elif rigid_body_modes(lin.cell.coords).shape[1] == 0:
         # anchored structures: the model's one modal decomposition (C0 v = τ K0 v, τ = μ ascending)

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.equilibrium import weighted_gram
+from ..model.equilibrium import member_stiffness, weighted_gram
 
 __all__ = ["continuum_factor", "modulus", "assemble_stiffness", "stiffness_stack", "stiffness_rows", "gram_table",
            "assemble_damping", "spring_stiffness", "voigt_stiffness"]
@@ -53,6 +53,8 @@ def assemble_stiffness(cell, P: float, k):
         (a dynamic tangent ``k*(ω)``). For the Voigt spring with the rest lengths of Eq. 11 it is
         ``(EA_j + P·T0_j)/l_j`` (:func:`voigt_stiffness`).
     """
+    if cell.sparse and cell.geometry.point_nodes:  # one pass over the members on the cell's node-block pattern
+        return member_stiffness(cell.geometry, P * cell.T0, k, A=cell.A, sparse=True)
     return P * cell.prestress_hessian + weighted_gram(cell.A, k)
 
 
@@ -101,7 +103,7 @@ def stiffness_rows(H, gram, P, k) -> np.ndarray:
 
 def spring_stiffness(cell, EA):
     """The spring part of a Voigt cell's K0, ``Km = Σ EA_j a_j a_jᵀ/l_j`` (N/m), for ``EA`` (N, shape (m,))."""
-    return weighted_gram(cell.A, np.asarray(EA, dtype=float) / cell.lengths)
+    return _gram(cell, np.asarray(EA, dtype=float) / cell.lengths)
 
 
 def voigt_stiffness(cell, P: float, EA):
@@ -115,4 +117,9 @@ def voigt_stiffness(cell, P: float, EA):
 
 def assemble_damping(cell, c):
     """``C0 = Σ c_j a_j a_jᵀ`` (N·s/m) for member damping ``c`` (N·s/m, shape (m,))."""
-    return weighted_gram(cell.A, c)
+    return _gram(cell, c)
+
+
+def _gram(cell, w):
+    """``Σ w_j a_j a_jᵀ``: the cell's equilibrium matrix ``A diag(w) Aᵀ``, or its node blocks (large lattices)."""
+    return member_stiffness(cell.geometry, gram_weights=w, A=cell.A, sparse=cell.sparse)

@@ -28,6 +28,7 @@ from ..laws.base import DEFAULT_REALIZATION_TOL, Realization
 from .._errors import NotPositiveDefiniteError
 from ..model.equilibrium import Cell, tangent_stiffness
 from .assembly import assemble_damping, assemble_stiffness, spring_stiffness
+from .definite import _dense_factor
 from .dynamic import cytoplasm_damping, viscosity_value
 from .family import PrestressFamily
 from .pencil import Pencil
@@ -340,8 +341,11 @@ class _KeptTendons:
                             realization=None, basis=None)
         pencil = lin.__dict__["pencil"] = Pencil(lin.K0, family.C0, self.load, lin.D0, describe=f"{cell.describe()} at "
                                                  f"P={P:.6g}", hint=_STABILITY_HINT, family=(family, P))
-        if check:
-            pencil.check()
+        if check:  # the one criterion, as Pencil.check asks it, without its wrappers (a loop's hot path)
+            L = _dense_factor(lin.K0)
+            if L is None:
+                pencil.check()  # raises, with the model's message
+            pencil.__dict__["cholesky"] = L  # kept for static solves, as Pencil.cholesky keeps it
         return lin
 
 

@@ -81,6 +81,18 @@ def complement_basis(R: np.ndarray, n: int) -> np.ndarray:
     return scipy.linalg.null_space(R.T) if R.shape[1] else np.eye(n)
 
 
+def _same_pattern(A, B) -> bool:
+    """Whether two CSR matrices share one sparsity structure (the same ``indptr`` and ``indices`` memory, as the
+    matrices assembled on a structure's node blocks do: :class:`tenscell.model.equilibrium.NodeBlocks`)."""
+    return A.shape == B.shape and _same_memory(A.indptr, B.indptr) and _same_memory(A.indices, B.indices)
+
+
+def _same_memory(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two arrays are the same memory seen the same way (scipy hands out views of the arrays it is given)."""
+    return (a.shape == b.shape and a.dtype == b.dtype and a.strides == b.strides
+            and a.__array_interface__["data"][0] == b.__array_interface__["data"][0])
+
+
 class Pencil:
     """The pencil (K0, C0) of one linear model with its decompositions, each computed once.
 
@@ -152,7 +164,8 @@ class Pencil:
         """
         if not self.sparse or self.points is None or self.n < ordering.MIN_SIZE:
             return None
-        pattern = abs(sp.csr_matrix(self.K0)) + abs(sp.csr_matrix(self.C0))
+        K, C = sp.csr_matrix(self.K0), sp.csr_matrix(self.C0)
+        pattern = K if _same_pattern(K, C) else abs(K) + abs(C)
         return ordering.fill_reducing(pattern, self.points)
 
     def check(self) -> None:
@@ -274,24 +287,41 @@ class Pencil:
 
     # -- sparse: factors and Lanczos runs per shift ----------------------------------------------------
     def factor(self, shift: float = 0.0):
-        """Sparse Cholesky factor of ``K0 + shift·C0`` (shift in rad/s, ≥ 0), computed once per shift."""
+        """Sparse Cholesky factor of ``K0 + shift·C0`` (shift in rad/s), computed once per shift.
+
+        A positive shift serves the frequency and time domains; a negative one, ``−λ0``, the slowest modes
+        (:func:`tenscell.linear.krylov.load_modes`): its factor exists exactly when λ0 (1/s) lies below every
+        relaxation rate, and :class:`NotPositiveDefiniteError` says it does not.
+        """
         shift = float(shift)
         if shift == 0.0:
             return self.cholesky
         if shift not in self._factors:
-            Ks = self.shifted(shift).tocsc()
-            # C0 is positive semidefinite: K0 + σC0 not positive definite means K0 is not either
-            self._factors[shift] = positive_definite_factor(Ks, what=f"K0 + {shift:g}·C0 (so neither is K0)",
-                                                            describe=self.describe, hint=self.hint,
-                                                            perm=self.ordering)
+            Ks = self.shifted(shift)  # the factorization reads its lower triangle in any sparse format
+            # C0 is positive semidefinite: K0 + σC0 (σ > 0) not positive definite means K0 is not either
+            what = f"K0 + {shift:g}·C0 (so neither is K0)" if shift > 0 else \
+                f"K0 − {-shift:g}·C0 (some relaxation rate is at most {-shift:g} 1/s)"
+            try:
+                self._factors[shift] = positive_definite_factor(Ks, what=what, describe=self.describe,
+                                                                hint=self.hint, perm=self.ordering)
+            except NotPositiveDefiniteError:
+                del self._shifted[shift]  # no run will use it
+                raise
         return self._factors[shift]
 
     def shifted(self, shift: float):
         """``K0 + shift·C0`` (sparse CSR, shift in rad/s), formed once per shift for its factor and its Lanczos run."""
         shift = float(shift)
         if shift not in self._shifted:
-            self._shifted[shift] = (sp.csr_matrix(self.K0) + shift * sp.csr_matrix(self.C0)).tocsr() if shift \
-                else sp.csr_matrix(self.K0)
+            K, C = sp.csr_matrix(self.K0), sp.csr_matrix(self.C0)
+            if not shift:
+                Ks = K
+            elif _same_pattern(K, C):  # one pattern (a lattice's node blocks): the sum of the data arrays
+                Ks = sp.csr_matrix((K.data + shift * C.data, K.indices, K.indptr), shape=K.shape)
+                Ks.has_sorted_indices, Ks.has_canonical_format = K.has_sorted_indices, K.has_canonical_format
+            else:
+                Ks = (K + shift * C).tocsr()
+            self._shifted[shift] = Ks
         return self._shifted[shift]
 
     def nearby_shift(self, shift: float) -> float:

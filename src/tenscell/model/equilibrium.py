@@ -29,7 +29,7 @@ import scipy.linalg
 import scipy.sparse as sp
 
 from .._errors import TenscellError
-from .coordinates import Coordinates, NodeKinematics, kinematics, make_coordinates
+from .coordinates import _W, Coordinates, NodeKinematics, kinematics, make_coordinates
 from .structure import Point, Structure, cable_mask
 
 __all__ = [
@@ -39,6 +39,9 @@ __all__ = [
     "member_geometry",
     "equilibrium_matrix",
     "assemble_hessian",
+    "member_stiffness",
+    "NodeBlocks",
+    "point_nodes_only",
     "point_vector",
     "self_stress_basis",
     "self_stress",
@@ -75,6 +78,12 @@ class MemberGeometry:
         Global coordinate indices of the block, -1 where unused.
     n : int
         Number of generalized coordinates.
+    directions : ndarray, shape (m, 3), or None
+        Unit vectors ``e_j = (x_a − x_b)/l_j`` from the second end to the first (dimensionless).
+    point_nodes : bool
+        Every node that moves is a point node with its three coordinates (no rigid struts, no rollers): then
+        ``∇l_j = [e_j, −e_j]`` and ``∇²l_j = [[Π_j, −Π_j], [−Π_j, Π_j]]`` with ``Π_j = (I − e_j e_jᵀ)/l_j``, and
+        large stiffness matrices are assembled from 3×3 node blocks (:attr:`blocks`) without the Hessians.
     """
 
     lengths: np.ndarray
@@ -82,9 +91,120 @@ class MemberGeometry:
     hess: np.ndarray | None
     index: np.ndarray
     n: int
+    directions: np.ndarray | None = None
+    point_nodes: bool = False
 
     def __repr__(self) -> str:
         return f"<MemberGeometry: {self.lengths.size} members, {self.n} coordinates>"
+
+    @cached_property
+    def blocks(self) -> NodeBlocks:
+        """The node-block pattern of this geometry's stiffness matrices (point nodes only), computed once."""
+        return NodeBlocks(self.index[:, 0], self.index[:, _W], self._point_directions(), self.n)
+
+    def block_matrix(self, hessian_weights=None, gram_weights=None):
+        """``Σ h_j ∇²l_j + Σ g_j a_j a_jᵀ`` on :attr:`blocks` (point nodes only; real weights, shape (m,) each)."""
+        return self.blocks.assemble(self._point_directions(), self.lengths, hessian_weights, gram_weights)
+
+    def _point_directions(self) -> np.ndarray:
+        if not self.point_nodes or self.directions is None:
+            raise ValueError("node blocks exist only for structures of point nodes (no rigid struts, no rollers)")
+        return self.directions
+
+
+class NodeBlocks:
+    """The sparsity pattern shared by every stiffness and damping matrix of a structure of point nodes.
+
+    Member j joining nodes a and b adds one 3×3 block ``B_j`` as ``[[B_j, −B_j], [−B_j, B_j]]`` on the
+    coordinates of a and b (a fixed end adds nothing), with ``B_j = s_j I + t_j e_j e_jᵀ`` for every matrix
+    (:meth:`assemble`): its entry (x, y), x ≠ y, is zero whatever the weights where ``e_jx·e_jy = 0`` (a member
+    along an axis or in a coordinate plane). The union of the other entries is the pattern of
+    ``Σ h_j ∇²l_j + Σ g_j a_j a_jᵀ`` for any weights, the one a sum of sparse products gives. It is laid out
+    once as a CSR structure (sorted indices) with the place of each entry of each member's four blocks in its
+    data array, so that each matrix is one ``bincount`` over the members (no COO sort, no sparse products or
+    sums), and every matrix assembled here shares one ``indptr``/``indices`` (K0 + σC0 is then a sum of data
+    arrays, and the fill-reducing ordering reads one pattern).
+
+    Parameters
+    ----------
+    first_a, first_b : ndarray of int, shape (m,)
+        The first coordinate of each member's ends (3·k for the k-th moving node), -1 for a fixed end.
+    directions : ndarray, shape (m, 3)
+        The members' unit vectors.
+    n : int
+        Number of generalized coordinates (3 per moving node).
+    """
+
+    def __init__(self, first_a: np.ndarray, first_b: np.ndarray, directions: np.ndarray, n: int):
+        nb, m = n // 3, first_a.size
+        ra, rb = first_a // 3, first_b // 3
+        fa, fb = first_a >= 0, first_b >= 0
+        # each member's four blocks (a, a), (b, b), (a, b), (b, a), in this order, and where they can be nonzero
+        valid = np.concatenate([fa, fb, fa & fb, fa & fb])
+        brow = np.concatenate([ra, rb, ra, rb])[valid]
+        bcol = np.concatenate([ra, rb, rb, ra])[valid]
+        member = np.flatnonzero(valid) % m
+        # the distinct blocks, by row then column (scipy's conversion: linear time, sorts only within rows)
+        G = sp.csr_matrix((np.ones(brow.size, dtype=np.int8), (brow, bcol)), shape=(nb, nb))
+        G.sum_duplicates()
+        bptr = G.indptr.astype(np.int64)
+        nk = G.indices.size
+        krow = np.repeat(np.arange(nb, dtype=np.int64), np.diff(bptr))
+        kcol = G.indices.astype(np.int64)
+        which = np.searchsorted(krow * nb + kcol, brow * np.int64(nb) + bcol)
+        # entry (x, y) of a distinct block is kept when some member on it has e_x·e_y ≠ 0 (the diagonal always):
+        # the blocks are symmetric, so three off-diagonal pairs, one bincount each
+        nonzero = directions != 0
+        kept = np.zeros((nk, 3, 3), dtype=bool)
+        kept[:, (0, 1, 2), (0, 1, 2)] = True
+        for x, y in ((0, 1), (0, 2), (1, 2)):
+            on = np.bincount(which[(nonzero[:, x] & nonzero[:, y])[member]], minlength=nk) > 0
+            kept[:, x, y] = kept[:, y, x] = on
+        # coordinate row 3r + x: block row r's blocks in column order, within each its kept columns y in order
+        k8 = kept.view(np.int8)
+        before_y = np.zeros((nk, 3, 3), dtype=np.int64)  # kept entries left of (x, y) within its block
+        before_y[:, :, 1] = k8[:, :, 0]
+        before_y[:, :, 2] = k8[:, :, 0] + k8[:, :, 1]
+        per_row = before_y[:, :, 2] + k8[:, :, 2]  # (blocks, 3)
+        upto = np.zeros((nk + 1, 3), dtype=np.int64)  # kept entries of the blocks before each, per x
+        np.cumsum(per_row, axis=0, out=upto[1:])
+        indptr = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum((upto[bptr[1:]] - upto[bptr[:-1]]).ravel(), out=indptr[1:])
+        nnz = int(indptr[-1])
+        index_type = np.int32 if max(n, nnz) < 2 ** 31 - 1 else np.int64
+        start = indptr[:-1].reshape(nb, 3)[krow] + upto[:-1] - upto[bptr[krow]]  # (blocks, 3): row x's first
+        place = (start[:, :, None] + before_y).astype(index_type)
+        place[~kept] = nnz  # an entry zero in every matrix: the spare slot, dropped
+        indices = np.empty(nnz + 1, dtype=index_type)
+        indices[place] = (3 * kcol).astype(index_type)[:, None, None] + np.arange(3, dtype=index_type)
+        # a fixed end's blocks: the spare slot too; kept in the index type (half the memory at int32: 29 MB at
+        # 106,641 coordinates, alive as long as the cell, beside the two Cholesky factors of its models)
+        pos = np.full((4 * m, 9), nnz, dtype=index_type)
+        pos[np.flatnonzero(valid)] = place.reshape(nk, 9)[which]
+        self.n, self.nnz = n, nnz
+        self.indptr, self.indices = indptr.astype(index_type), indices[:nnz]
+        self.positions = pos.ravel()
+
+    def assemble(self, directions: np.ndarray, lengths: np.ndarray, hessian_weights=None, gram_weights=None):
+        """``Σ h_j ∇²l_j + Σ g_j a_j a_jᵀ`` as a CSR matrix on the shared pattern (real weights, shape (m,) each).
+
+        Node block ``B_j = (h_j/l_j)(I − e_j e_jᵀ) + g_j e_j e_jᵀ = s_j I + t_j e_j e_jᵀ``.
+        """
+        m = lengths.size
+        s = np.zeros(m) if hessian_weights is None else np.asarray(hessian_weights, dtype=float) / lengths
+        t = -s if gram_weights is None else np.asarray(gram_weights, dtype=float) - s
+        B = np.empty((4, m, 3, 3))
+        np.multiply(directions[:, :, None], directions[:, None, :], out=B[0])  # e eᵀ, symmetric to the bit
+        B[0] *= t[:, None, None]
+        B[0, :, (0, 1, 2), (0, 1, 2)] += s
+        B[1] = B[0]
+        np.negative(B[0], out=B[2])
+        B[3] = B[2]
+        data = np.bincount(self.positions, weights=B.ravel(), minlength=self.nnz + 1)[:-1]
+        M = sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
+        M.has_sorted_indices = True  # the layout of __init__: one entry per (row, column), columns ascending
+        M.has_canonical_format = True
+        return M
 
 
 def member_geometry(coords: Coordinates, q: np.ndarray, kin: NodeKinematics | None = None, *,
@@ -106,9 +226,11 @@ def member_geometry(coords: Coordinates, q: np.ndarray, kin: NodeKinematics | No
         raise ValueError(f"tendon {j} has zero length in this configuration")
     e = d / l[:, None]
     index = np.concatenate([kin.index[a], kin.index[b]], axis=1)
+    if point_nodes_only(coords):
+        return _point_geometry(l, e, index, coords.n, hessians)
     if not hessians:
         grad = np.concatenate([np.einsum("mxk,mx->mk", kin.jac[a], e), -np.einsum("mxk,mx->mk", kin.jac[b], e)], axis=1)
-        return MemberGeometry(lengths=l, grad=grad, hess=None, index=index, n=coords.n)
+        return MemberGeometry(lengths=l, grad=grad, hess=None, index=index, n=coords.n, directions=e)
     M = np.concatenate([kin.jac[a], -kin.jac[b]], axis=2)  # (m, 3, 10)
     grad = np.einsum("mxk,mx->mk", M, e)
     proj = (np.eye(3)[None] - e[:, :, None] * e[:, None, :]) / l[:, None, None]
@@ -117,7 +239,35 @@ def member_geometry(coords: Coordinates, q: np.ndarray, kin: NodeKinematics | No
         w = kin.hess.shape[-1]
         hess[:, :w, :w] += np.einsum("mx,mxkl->mkl", e, kin.hess[a])
         hess[:, w:, w:] -= np.einsum("mx,mxkl->mkl", e, kin.hess[b])
-    return MemberGeometry(lengths=l, grad=grad, hess=hess, index=index, n=coords.n)
+    return MemberGeometry(lengths=l, grad=grad, hess=hess, index=index, n=coords.n, directions=e)
+
+
+def point_nodes_only(coords: Coordinates) -> bool:
+    """Whether every node that moves is a point node with its three coordinates (no rigid struts, no rollers):
+    node positions are then the coordinates themselves (unit Jacobians, no curvature)."""
+    return not coords.structure.struts and coords.point_axes is None
+
+
+def _point_geometry(l: np.ndarray, e: np.ndarray, index: np.ndarray, n: int, hessians: bool) -> MemberGeometry:
+    """:func:`member_geometry` of a structure of point nodes: ``∇l = [e, −e]``, ``∇²l = [[Π, −Π], [−Π, Π]]``.
+
+    The same numbers as the general chain rule with unit Jacobians (a fixed end has none: its slots are -1
+    and its entries 0), without forming the Jacobians' products.
+    """
+    m = l.size
+    free = index >= 0
+    grad = np.zeros((m, 2 * _W))
+    grad[:, :3] = e
+    grad[:, _W:_W + 3] = -e
+    grad *= free
+    hess = None
+    if hessians:
+        proj = (np.eye(3)[None] - e[:, :, None] * e[:, None, :]) / l[:, None, None]
+        hess = np.zeros((m, 2 * _W, 2 * _W))
+        hess[:, :3, :3] = hess[:, _W:_W + 3, _W:_W + 3] = proj
+        hess[:, :3, _W:_W + 3] = hess[:, _W:_W + 3, :3] = -proj
+        hess *= free[:, :, None] & free[:, None, :]
+    return MemberGeometry(lengths=l, grad=grad, hess=hess, index=index, n=n, directions=e, point_nodes=True)
 
 
 def _use_sparse(n: int) -> bool:
@@ -144,6 +294,8 @@ def equilibrium_matrix(geom: MemberGeometry, sparse: bool | None = None):
 
 def assemble_hessian(geom: MemberGeometry, weights: np.ndarray, sparse: bool | None = None):
     """``Σ_j w_j ∇²l_j`` assembled into an ``(n_q, n_q)`` matrix."""
+    if _node_blocks(geom, sparse):
+        return geom.block_matrix(hessian_weights=weights)
     index, hess = geom.index, geom.hess
     if hess is None:
         raise ValueError("assemble_hessian needs a MemberGeometry with Hessians (member_geometry(..., hessians=True))")
@@ -163,6 +315,44 @@ def assemble_hessian(geom: MemberGeometry, weights: np.ndarray, sparse: bool | N
     H = sp.csr_matrix((data, (r, c)), shape=(geom.n, geom.n))
     use_sparse = _use_sparse(geom.n) if sparse is None else sparse
     return H if use_sparse else H.toarray()
+
+
+def _node_blocks(geom: MemberGeometry, sparse: bool | None) -> bool:
+    """Whether a matrix of this geometry is assembled from node blocks: sparse, of point nodes."""
+    return geom.point_nodes and (_use_sparse(geom.n) if sparse is None else sparse)
+
+
+def member_stiffness(geom: MemberGeometry, hessian_weights=None, gram_weights=None, *, A=None,
+                     sparse: bool | None = None):
+    """``Σ_j h_j ∇²l_j + Σ_j g_j a_j a_jᵀ`` (either sum may be left out): every stiffness and damping matrix.
+
+    Parameters
+    ----------
+    geom : MemberGeometry
+    hessian_weights : ndarray, shape (m,), optional
+        ``h``: member forces (N) for a stiffness (``P·T0``, or ``T0`` for the prestress stiffness per N).
+    gram_weights : ndarray, shape (m,), optional
+        ``g``: tangent stiffnesses (N/m) or dampings (N·s/m), real or complex.
+    A : ndarray or sparse matrix, shape (n, m), optional
+        The equilibrium matrix of ``geom`` when already formed (computed otherwise).
+    sparse : bool, optional
+        Sparse or dense result (default: by size, :data:`SPARSE_THRESHOLD`).
+
+    Large structures of point nodes (lattices) are assembled from node blocks in one pass over the members
+    (:class:`NodeBlocks`: one shared pattern, no sparse products); the others as the Hessian sum plus the Gram
+    product ``A diag(g) Aᵀ``. The two agree to rounding.
+    """
+    real = gram_weights is None or not np.iscomplexobj(gram_weights)
+    if real and _node_blocks(geom, sparse):
+        return geom.block_matrix(hessian_weights, gram_weights)
+    use_sparse = _use_sparse(geom.n) if sparse is None else sparse
+    H = None if hessian_weights is None else assemble_hessian(geom, hessian_weights, sparse=use_sparse)
+    if gram_weights is None:
+        return H
+    if A is None:
+        A = equilibrium_matrix(geom, use_sparse)
+    G = weighted_gram(A, gram_weights)
+    return G if H is None else H + G
 
 
 def point_vector(coords: Coordinates, point: Point, kin: NodeKinematics) -> np.ndarray:
@@ -410,6 +600,8 @@ class Cell:
 
         Computed on first use: linearizing needs only :attr:`prestress_hessian`.
         """
+        if _node_blocks(self.geometry, self.sparse):  # Σ T0_j/l_j [[I, −I], [−I, I]]: one pass, no Hessian
+            return member_stiffness(self.geometry, self.T0, self.T0 / self.lengths, A=self.A, sparse=True)
         return self.prestress_hessian + weighted_gram(self.A, self.T0 / self.lengths)
 
     @property
@@ -514,7 +706,9 @@ def equilibrate(
     """
     coords = make_coordinates(structure, parametrization)
     kin = kinematics(coords, coords.q0)
-    geom = member_geometry(coords, coords.q0, kin)
+    # a large structure of point nodes assembles its matrices from node blocks: its Hessians are never formed
+    geom = member_geometry(coords, coords.q0, kin,
+                           hessians=not (point_nodes_only(coords) and _use_sparse(coords.n)))
     A = equilibrium_matrix(geom)
     label = _label(structure.name, parameters or {})
     if T0 is None:
@@ -590,7 +784,7 @@ def generalized_forces(cell: Cell, q: np.ndarray, tensions_fn):
 
 def damping_matrix(geom: MemberGeometry, c: np.ndarray):
     """``C(q) = Σ c_j a_j a_jᵀ`` (paper Eq. 8), in N·s/m, from a member geometry."""
-    return weighted_gram(equilibrium_matrix(geom), np.broadcast_to(c, geom.lengths.shape))
+    return member_stiffness(geom, gram_weights=np.broadcast_to(c, geom.lengths.shape))
 
 
 def tangent_stiffness(geom: MemberGeometry, T: np.ndarray, dT_dl: np.ndarray, A=None, sparse: bool | None = None):
@@ -600,5 +794,4 @@ def tangent_stiffness(geom: MemberGeometry, T: np.ndarray, dT_dl: np.ndarray, A=
     K0 of a linear model and the tangent of the time integrator. ``A`` (the
     equilibrium matrix of ``geom``) is computed when not given.
     """
-    A = equilibrium_matrix(geom, sparse) if A is None else A
-    return assemble_hessian(geom, T, sparse=sp.issparse(A)) + weighted_gram(A, dT_dl)
+    return member_stiffness(geom, T, dT_dl, A=A, sparse=sp.issparse(A) if A is not None else sparse)
