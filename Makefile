@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: reproduce test bench install clean docs typecheck lint
+.PHONY: reproduce test bench install clean docs typecheck lint validate
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -19,6 +19,18 @@ reproduce: $(STAMP)
 
 test: $(STAMP)
 	$(PY) -m pytest
+
+# the mechanisms against measured cells (docs/validation.md): runs `tenscell study real-cells` when the measured-cell
+# data sit beside the repository (they are not shipped), writes its tables and figures to build/validation/ and the
+# tables into docs/validation.md with the commit and date; skipped, saying why, where the data are absent
+REAL_CELLS ?= ../shared/data/real-cells
+validate: $(STAMP)
+	@if [ -d "$(REAL_CELLS)" ]; then \
+		$(VENV)/bin/tenscell study real-cells --populations --data "$(REAL_CELLS)" --out build/validation && \
+		$(PY) docs/update_validation.py build/validation/validation_tables.md docs/validation.md; \
+	else \
+		echo "make validate: skipped: $(REAL_CELLS) does not exist (the measured-cell data are not shipped with tenscell; give REAL_CELLS=DIR)"; \
+	fi
 
 bench: $(STAMP)
 	@for b in bench/bench_*.py; do echo "== $$b"; $(PY) $$b || exit 1; done

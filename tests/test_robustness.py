@@ -45,6 +45,7 @@ NUMERIC_FLAGS = {
     ("study", "mechanisms", "DATA"): {"--hops": ("zero",), "--starts": (), "--jobs": (), "--tolerance": (),
                                       "--seed": ("zero",), "--prestress": (), "--temperature": ("negative", "zero"),
                                       "--ensemble": ("zero",), "--workers": ("zero",)},
+    ("study", "real-cells"): {"--cells": ("zero",)},  # 0: no per-cell fits
     ("show", "paper"): {"--modes": ("zero",), "--prestress": (), "--P": (), "--EA": (), "--c": (), "--L": ()},
     ("show", "block"): {"--size": ()},
     ("synth-population", "--out", "OUT"): {"--cells": (), "--noise": ("zero",), "--spread": ("zero",), "--freq": (),

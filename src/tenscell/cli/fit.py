@@ -27,7 +27,7 @@ MODEL_GROUPS = {
     "mechanisms: filament turnover (Maxwell)": ("maxwell", "maxwell+visc"),
     "mechanisms: standard linear solid": ("sls", "sls-trap+visc"),
     "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc",
-                                       "springpot-alpha-family+visc"),
+                                       "springpot-alpha-family+visc", "springpot-lognormal-kappa+visc"),
     "structure-free formulas (baselines)": ("structural-damping", "structural-damping+newtonian",
                                             "structural-damping-prestress", "structural-damping-prestress+newtonian"),
 }

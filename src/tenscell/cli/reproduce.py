@@ -192,10 +192,10 @@ def reproduce_dynamics(out: Path, log) -> None:
 
 def reproduce_variants(out: Path, log) -> None:
     """All five variant studies into ``out/variants/<name>/``."""
-    from .study import DATA_STUDIES, STUDIES
+    from .study import NOT_VARIANTS, STUDIES
 
     for name, run_study in STUDIES.items():
-        if name in DATA_STUDIES:
+        if name in NOT_VARIANTS:
             continue
         d = out / "variants" / name
         d.mkdir(parents=True, exist_ok=True)

@@ -245,13 +245,27 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate
                        f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs)")
 
 
+def _study_real_cells(out: Path, log, args=None) -> None:
+    from .._parallel import jobs_for
+    from ._real_cells import write_real_cells
+
+    write_real_cells(out, log, args, jobs_for(len(args.real_cells_models), args.jobs))
+
+
 #: studies that fit data files given on the command line (not part of `reproduce`'s variants stage)
 DATA_STUDIES = ("compactness", "mechanisms")
+#: studies that are not among the paper's variants (`reproduce` leaves them out): those fitting data
+NOT_VARIANTS = (*DATA_STUDIES, "real-cells")
+#: --starts and --hops where a study does not set its own default
+_DEFAULT_SEARCH = {"starts": 4, "hops": 10}
+#: the per-study defaults of --starts and --hops (None: the study's own budget)
+_SEARCH_DEFAULTS = {"starts": {"real-cells": None}, "hops": {"real-cells": None}}
 
 #: the studies of `tenscell study NAME`: name -> writer(out_dir, log, args)
 STUDIES = {
     "compactness": _study_compactness,
     "mechanisms": _study_mechanisms,
+    "real-cells": _study_real_cells,
     "no-if": _study_no_if,
     "sensitivity": _study_sensitivity,
     "references": _study_references,
@@ -266,15 +280,19 @@ _QUICK_DRAWS = 1000
 #: options that apply to some studies only: dest -> (default, flag, studies); any other value elsewhere is refused
 _STUDY_OPTIONS = {
     "draws": (200, "--draws", ("sensitivity",)),
-    "seed": (0, "--seed", ("sensitivity", "compactness", "mechanisms")),
+    "seed": (0, "--seed", ("sensitivity", "compactness", "mechanisms", "real-cells")),
     "decades": (tuple(float(d) for d in range(1, 15)), "--decades", ("compactness",)),
     "prestress": (None, "--prestress", ("compactness", "mechanisms")),
     "damping": ("uniform", "--damping", ("compactness",)),
-    "starts": (4, "--starts", ("compactness", "mechanisms")),
-    "jobs": (None, "--jobs", ("compactness", "mechanisms")),
+    "starts": (None, "--starts", ("compactness", "mechanisms", "real-cells")),
+    "jobs": (None, "--jobs", ("compactness", "mechanisms", "real-cells")),
     "tolerance": (0.01, "--tolerance", ("compactness", "mechanisms")),
-    "mechanisms": (None, "--mechanisms", ("mechanisms",)),
-    "hops": (10, "--hops", ("mechanisms",)),
+    "mechanisms": (None, "--mechanisms", ("mechanisms", "real-cells")),
+    "hops": (None, "--hops", ("mechanisms", "real-cells")),
+    "data_dir": (None, "--data", ("real-cells",)),
+    "cells": (None, "--cells", ("real-cells",)),
+    "time_domain": (False, "--time-domain", ("real-cells",)),
+    "populations": (False, "--populations", ("real-cells",)),
     "ensemble": (None, "--ensemble", ("mechanisms",)),
     "workers": (None, "--workers", ("mechanisms",)),
     "scheduler": (None, "--scheduler", ("mechanisms",)),
@@ -291,7 +309,10 @@ def register(sub) -> None:
                                    "each bound on its spread); mechanisms DATA... (every mechanism — per-tendon and "
                                    "compact Voigt, Maxwell, SLS, springpot, cytoplasm, distributions — fitted to the "
                                    "same data: parameters, RMS, AIC/BIC, identifiability, G' slope ripple, held-out "
-                                   "error; it prints its estimated time first and refuses a run beyond a day).")
+                                   "error; it prints its estimated time first and refuses a run beyond a day); "
+                                   "real-cells (the mechanisms and their structure-free baselines on measured cells "
+                                   "— the Xie et al. 2024 AFM spectra, read from --data — in sample and held out, "
+                                   "with goal G3 and the per-cell G' slopes).")
     p.add_argument("name", choices=sorted(STUDIES), help="which study")
     p.add_argument("data", nargs="*", help="compactness, mechanisms: file(s) of measured moduli (as for `tenscell "
                                            "fit`), or bundled:NAME")
@@ -307,7 +328,8 @@ def register(sub) -> None:
     g.add_argument("--prestress", action="append", type=stated_prestress, metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     g.add_argument("--damping", choices=("uniform", "per-family"), default="uniform", help="damping c")
-    g.add_argument("--starts", type=integer(1, 10_000), default=4, help="starts per bound (mechanisms: per fit)")
+    g.add_argument("--starts", type=integer(1, 10_000), default=None,
+                   help="starts per bound (default 4; mechanisms: per fit; real-cells: per fit of a median, default 12)")
     g.add_argument("--jobs", type=integer(1, 256), default=None,
                    help="worker processes over the starts (mechanisms: over the mechanisms) (default: one per CPU, at most --starts;"
                         " the result does not depend on it)")
@@ -316,12 +338,26 @@ def register(sub) -> None:
     m = p.add_argument_group("mechanisms (every mechanism fitted to the same data: one table, one figure)")
     m.add_argument("--mechanisms", metavar="NAMES", default=None,
                    help="comma list of mechanisms (default all; see `tenscell fit --model`)")
-    m.add_argument("--hops", type=integer(0, 10_000), default=10, help="basin-hopping moves per start")
+    m.add_argument("--hops", type=integer(0, 10_000), default=None,
+                   help="basin-hopping moves per start (default 10; real-cells: per fit of a median, default 30)")
     m.add_argument("--ensemble", type=ensemble_size, default=None, metavar="K",
                    help=f"evaluate the distributed mechanism with the lowest BIC over K assignments of its tendon "
                         f"values at the data's prestresses and frequencies (ensemble.csv, .png, .md; default "
                         f"{STUDY_ENSEMBLE_K}; 0: none; 1 is refused: one assignment has no spread)")
     add_cluster_options(m)
+    r = p.add_argument_group("real-cells (the mechanisms and their baselines on the measured Xie et al. 2024 cells, "
+                             "held out; docs/validation.md)")
+    r.add_argument("--data", dest="data_dir", type=path("a directory"), default=None, metavar="DIR",
+                   help="the real-cell data folder (default ../shared/data/real-cells; never shipped with tenscell)")
+    r.add_argument("--cells", type=integer(0, 10_000), default=None, metavar="N",
+                   help="fit only the first N cells of each line one by one (default all; 0: no per-cell fits)")
+    r.add_argument("--time-domain", action="store_true",
+                   help="also fit the HL60 creep curve and the oocyte relaxation's shape in the time domain (each "
+                        "mechanism about a minute of CPU per series)")
+    r.add_argument("--populations", action="store_true",
+                   help="also score population models on each line (springpot-alpha-family+visc with its prestress "
+                        "per cell, the power law + Newtonian with its modulus per cell) against independent per-cell "
+                        "power laws, with goal G4 (a few minutes of CPU)")
     add_data_options(p)
     p.set_defaults(func=run)
 
@@ -399,6 +435,14 @@ def run(args) -> int:
             raise ValueError(f"--mechanisms: unknown mechanism {bad[0]!r}; known: {', '.join(mechanism_names())}")
     if args.name == "mechanisms":
         _check_ensemble_options(args)
+    for dest, defaults in _SEARCH_DEFAULTS.items():  # each study's own default budget
+        if getattr(args, dest) is None:
+            setattr(args, dest, defaults.get(args.name, _DEFAULT_SEARCH[dest]))
+    if args.name == "real-cells":
+        from ._real_cells import budgets, check_inputs
+
+        check_inputs(args)  # every file read before the output folder is made and before any fit
+        args.real_cells_models = budgets(args)[0]
     if args.from_fit is not None:
         if args.name != "sensitivity":
             raise ValueError(f"--from-fit applies to study sensitivity, not to study {args.name}")
@@ -420,6 +464,14 @@ def run(args) -> int:
         announce(check(Cost("draw", 2 * args.draws, per, 1, detail="(two Monte Carlo sets of --draws)"), "--draws"))
     if args.name == "mechanisms":
         _announce_mechanisms_cost(args)
+    if args.name == "real-cells":
+        from .._parallel import jobs_for
+        from ._cost import announce, check
+        from ._real_cells import real_cells_cost
+
+        announce(check(real_cells_cost(args, jobs_for(len(args.real_cells_models), args.jobs), _cpu_per_call,
+                                       cpu_share), "--starts",
+                       hint="give fewer --starts or --hops, --cells N, or fewer --mechanisms NAMES"))
     t = time.perf_counter()
     stage(f"study {args.name} ...")
     with out as d:

@@ -67,6 +67,15 @@ def _builtin() -> dict[str, Mechanism]:
                   description="springpot tendons with a modulus and an exponent per family (actin, intermediate "
                               "filament), one spring EA, cytoplasm viscosity; the prestress acts through the geometric "
                               "prestress stiffness only"),
+        # issue 26: a log-normal spread of the springpots' modulus over the tendons (one exponent): on the Xie et al.
+        # medians it predicts 100-200 Hz from 1-30 Hz best of the prototypes (bench/proto_science_results.md, G3)
+        Mechanism("springpot-lognormal-kappa+visc", "Springpot",
+                  (Field("EA", "stiffness", "shared"), Field("kappa", "coefficient", "shared", "lognormal"),
+                   Field("alpha", "exponent", "shared")),
+                  viscosity=True,
+                  description="springpot tendons with one exponent and a log-normal spread of their modulus over the "
+                              "tendons, one spring EA, cytoplasm viscosity; the prestress acts through the geometric "
+                              "prestress stiffness only"),
     ]
     return {m.name: m for m in mechs}
 
