@@ -186,3 +186,31 @@ def test_fit_uses_one_process_per_cpu_by_default_and_timing_is_ordered(tmp_path,
         assert t["fit_started_s"] <= t["tolerance_met_s"] <= t["fit_finished_s"]
         assert t["tolerance_met_s"] == pytest.approx(t["fit_started_s"] + doc["time_to_tolerance_s"], abs=1e-3)
     assert (out / "fit.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"  # drawn in the worker, written here
+
+
+def test_anchored_holds_the_prestress_scale_in_the_papers_range(tmp_path, monkeypatch):
+    """`--anchored` = `--bound s=0.01:100`: springpot-tension+visc, whose free fit shrinks s to about 2e-3 m², ends
+    with s inside [0.01, 100] m² (the strut length L = s^-1/2 within 0.1-10 m), and fit.json records the bounds."""
+    from tenscell.fitting.shares import ANCHORED_L, ANCHORED_S
+
+    assert ANCHORED_S == pytest.approx((1 / ANCHORED_L[1] ** 2, 1 / ANCHORED_L[0] ** 2))
+    monkeypatch.setenv("TENSCELL_PROGRESS", "0")
+    out = tmp_path / "anch"
+    status = cli_main(["fit", "bundled:stamenovic2002", "bundled:fabry2001", "--model", "springpot-tension+visc",
+                       "--anchored", "--starts", "1", "--validate", "no", "--profile", "no", "--jobs", "1",
+                       "--out", str(out)])
+    assert status in (0, 1)
+    s = next(p for p in json.loads((out / "fit.json").read_text())["parameters"] if p["name"] == "s")
+    assert ANCHORED_S[0] * (1 - 1e-9) <= s["value"] <= ANCHORED_S[1] * (1 + 1e-9)
+    assert (s["lower"], s["upper"]) == pytest.approx(ANCHORED_S)
+
+
+@pytest.mark.parametrize("extra, match", [
+    (["bundled:fabry2001"], "--anchored: this fit has no prestress scale s"),
+    (["bundled:stamenovic2002", "--bound", "s=1:2"], "give it or --bound s=LO:HI, not both"),
+])
+def test_anchored_refusals(tmp_path, capsys, extra, match):
+    out = tmp_path / "x"
+    assert cli_main(["fit", *extra, "--model", "springpot+visc", "--anchored", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert match in err and err.count("\n") == 1 and not out.exists()

@@ -89,6 +89,10 @@ def register(sub) -> None:
     p.add_argument("--bound", action="append", type=_bound, metavar="KIND=LO:HI", default=None,
                    help="bounds of every parameter of a kind, in SI units (repeatable): EA (N), c (N·s/m), P (N), "
                         "s (m²), P_data (Pa), L (m); e.g. --bound EA=1e-3:1e3")
+    p.add_argument("--anchored", action="store_true",
+                   help="hold the prestress gauge to the paper's convention: the prestress scale s in [0.01, 100] m², "
+                        "i.e. the strut length L = s^-1/2 in 0.1-10 m (the same as --bound s=0.01:100; needs a data "
+                        "set that states its prestress in Pa)")
     p.add_argument("--fix", action="append", type=_fixed, metavar="NAME=VALUE", default=None,
                    help="hold a parameter fixed, by its name in fit.json, in SI units (repeatable): e.g. --fix L=1, "
                         "--fix c=0.5, --fix P=20, --fix c_actin=2, --fix EA_intermediate_filament=0.3")
@@ -213,6 +217,19 @@ def spec_from_args(args):
     return spec
 
 
+def _anchored(bounds: dict, plain) -> dict:
+    """``bounds`` with the prestress scale held to the anchored range (``--anchored``)."""
+    from ..fitting.shares import ANCHORED_S
+
+    if "s" in bounds:
+        raise ValueError("--anchored sets the prestress scale's bounds itself (s in 0.01-100 m²); give it or "
+                         "--bound s=LO:HI, not both")
+    if "s" not in plain.names:
+        raise ValueError("--anchored: this fit has no prestress scale s (no data set states its prestress in Pa: "
+                         "give a prestress sweep, or --prestress FILE=PA)")
+    return {**bounds, "s": ANCHORED_S}
+
+
 def search_space(args, datasets, spec) -> dict:
     """``bounds`` and ``fixed`` as keyword arguments of :func:`tenscell.fitting.fit`, checked against ``spec``'s
     parameters for these data (each --bound kind or name and --fix name named with the flag, in the units typed)
@@ -221,6 +238,8 @@ def search_space(args, datasets, spec) -> dict:
 
     plain = spec.problem(datasets)
     bounds = dict(args.bound or ())
+    if getattr(args, "anchored", False):
+        bounds = _anchored(bounds, plain)
     for key, (lo, hi) in bounds.items():
         if key not in plain.kinds and key not in plain.names:
             raise ValueError(f"--bound {key}={lo:g}:{hi:g}: no parameter or parameter kind {key!r} in this fit "

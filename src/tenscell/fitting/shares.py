@@ -321,6 +321,9 @@ def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
 #: the strut lengths (m, on the paper's convention: the model prestress in N equal to the measured prestress in Pa)
 #: the anchored gauge accepts: s ∈ [0.01, 100] m² on a cell of strut length 1 m
 ANCHORED_L = (0.1, 10.0)
+#: the same range as the prestress scale s = (L_cell/L)² (m², L_cell = 1 m): what `tenscell fit --anchored`, the
+#: mechanisms study's anchored refits and the reports use
+ANCHORED_S = (1.0 / ANCHORED_L[1] ** 2, 1.0 / ANCHORED_L[0] ** 2)
 #: a geometric share of ΔG' below this: the structure is a passenger (the tendon law's tension terms do the work)
 PASSENGER_SHARE = 0.1
 #: ... at or above this: the structure carries the prestress dependence (goal G1 of issue 26)

@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..fitting.models.catalog import MECHANISMS, PER_TENDON_VOIGT
+from ..fitting.shares import ANCHORED_S
 
 if TYPE_CHECKING:
     from ..fitting.validation import OutOfSampleComparison
@@ -58,7 +59,7 @@ GOALS = {"max_free": 8, "max_spread": 2.0, "max_rms": 0.02, "min_determined": 0.
 ISSUE26_GOALS = {"max_free": 8, "min_geometric_share": 0.5, "max_rms": 0.02, "unlike_ratio": 3.0}
 #: the anchored prestress gauge: the scale s (m²) that maps measured prestress (Pa) to model prestress (N) on the
 #: reference cell, held where the strut length L = s^(-1/2) of the paper's convention lies in 0.1–10
-ANCHOR_S = (0.01, 100.0)
+ANCHOR_S = ANCHORED_S
 #: a model whose RMS on an unlike data set is below this many times its RMS on the cell data does not discriminate
 DISCRIMINATES = 2.0
 #: the search of the refits (anchored, formula, held out, unlike data): a shorter budget than the main fit
