@@ -14,7 +14,7 @@ without a Newtonian term (:func:`proto_common.power_law_fit`).
 Caveats the numbers inherit (real_cells.FACTS): the authors' selection of monotone curves, the undocumented drag
 correction at 100-200 Hz, unreliable 1 Hz points, medians over the cells positive at all 6 frequencies.
 
-Run: .venv/bin/python bench/proto_xie.py [--unweighted] [names...]
+Run: .venv/bin/python bench/proto_measured_medians.py [--unweighted] [names...]
 """
 from __future__ import annotations
 
@@ -89,7 +89,7 @@ def main(argv):
     names = argv or ["springpot-alpha-family+visc", "springpot+visc", "springpot-tension+visc (free gauge)",
                      "springpot-lognormal-kappa+visc", "maxwell+visc"]
     how = "weighted by the medians' bootstrap standard errors" if weighted else "unweighted"
-    print(f"# proto_xie: {load_banner()}; fits {how}")
+    print(f"# proto_measured_medians: {load_banner()}; fits {how}")
     print("| line | split | model | free | train RMS | held-out RMS | CPU s |")
     print("|---|---|---|---|---|---|---|")
     for line in XIE_LINES:
