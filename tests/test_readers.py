@@ -458,7 +458,7 @@ def test_read_data_takes_a_bundled_name_as_the_command_line_does():
     np.testing.assert_array_equal(got.frequency_hz, want.frequency_hz)
     np.testing.assert_array_equal(got.G_storage, want.G_storage)
     assert got.source == want.source
-    with pytest.raises(DataError, match="step= says how to read a file"):
+    with pytest.raises(DataError, match="step=1 says how to read a file"):
         read_data("bundled:fabry2001", step=1)
     with pytest.raises(DataError, match="fabry2001, 'stamenovic2002'|names|bundled"):
         read_data("bundled:nosuch")

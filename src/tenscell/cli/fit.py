@@ -294,26 +294,14 @@ def add_constraints(p) -> None:
                    help="bound the spread log10(max EA / min EA) of the tendon stiffnesses to D decades")
 
 
-#: the data-reading flags that choose what to read in a file, by their keyword in data_options_from_args
-_CHOOSING = {"columns": "--columns/--columns-file", "units": "--units", "step": "--step",
-             "temperature": "--temperature", "sheet": "--sheet"}
-
-
 def read_data_arg(text: str, min_points: int, options: dict | None = None):
     """A data file (moduli or creep compliance; tenscell's CSV, an instrument export or a table with recognised
     headers, see :func:`tenscell.io.readers.read_data`), or ``bundled:NAME`` for a data set shipped with
     tenscell. ``options``: :func:`~tenscell.cli._args.data_options_from_args` (column map, units, step, checks
     accepted)."""
-    from ..io.data import bundled
     from ..io.readers import read_data
 
     options = dict(options or {})
-    if text.lower().startswith("bundled:"):
-        given = [flag for key, flag in _CHOOSING.items() if options.get(key)]
-        if given:
-            raise ValueError(f"{given[0]} says how to read a file; {text} is a data set shipped with tenscell, in "
-                             "its own layout")
-        return bundled(text.split(":", 1)[1])
     units = options.pop("units", None) or {}
     return read_data(text, min_points=min_points, **options, **units)
 

@@ -118,9 +118,10 @@ def _bundled(path: str, columns, step, temperature, sheet, units):
     layout)."""
     from ..data import bundled
 
-    given = [name for name, value in (("columns", columns), ("step", step), ("temperature", temperature),
-                                      ("sheet", sheet)) if value is not None] + sorted(units)
-    if given:
-        raise DataError(f"{path}: {given[0]}= says how to read a file; {path} is a data set shipped with tenscell, "
-                        "in its own layout")
+    given = ([option("columns")] if columns is not None else []) + [
+        option(name, value) for name, value in (("step", step), ("temperature", temperature), ("sheet", sheet),
+                                                *sorted(units.items())) if value is not None]
+    if given:  # option() marks: a Python keyword here, the flag on the command line
+        raise DataError(f"{path}: {given[0]} says how to read a file; this is a data set shipped with tenscell, in "
+                        "its own layout")
     return bundled(path.split(":", 1)[1])
