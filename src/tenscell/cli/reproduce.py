@@ -5,6 +5,7 @@ output set (staged, committed when every stage succeeded).
 """
 from __future__ import annotations
 
+import math
 import sys
 import time
 from pathlib import Path
@@ -90,17 +91,6 @@ REPRODUCE_MECHANISMS = ("springpot+visc", "springpot-tension+visc", "springpot-a
 MECHANISM_SEARCH: dict[str, Any] = {"starts": 4, "seed": 0}
 
 
-def _geometric_share(result) -> float | None:
-    """The share of dG'/dP carried by the geometric prestress stiffness, averaged over the report's frequencies
-    (None for a model without the split: the per-tendon Voigt cell)."""
-    import numpy as np
-
-    summary = result.structure
-    if summary is None or summary.shares is None:
-        return None
-    return float(np.mean(summary.shares.share("geometric", "storage")))
-
-
 def _same_fit_command(data, name: str) -> str:
     """The `tenscell fit` command that repeats this run's fit of mechanism ``name`` to the bundled data."""
     stated = f" --prestress bundled:fabry2001={data[1].prestress[0]:g}" if data[1].prestress is not None else ""
@@ -113,14 +103,15 @@ def _reproduce_mechanisms(out: Path, data, per_tendon, log) -> None:
     from ..fitting import RECOMMENDED, fit
     from ..io.outputs import write_csv_rows, write_json, write_text
     from ..reports._format import table
-    from ..studies.mechanisms import _scores, _spread
+    from ..studies.mechanisms import _scores, _shares, _spread
 
     fits = {"voigt-per-tendon": per_tendon}
     fits.update({m: fit(data, model=m, jobs=2, progress=False, **MECHANISM_SEARCH) for m in REPRODUCE_MECHANISMS})
     rows = []
     for name, r in fits.items():
         rms, aic, bic, k = _scores(r)
-        rows.append((name, k, _spread(r), *rms, aic, bic, _geometric_share(r)))
+        share = _shares(r)[0]  # the study's share of dG'/dP (NaN without the split: the per-tendon Voigt cell)
+        rows.append((name, k, _spread(r), *rms, aic, bic, None if math.isnan(share) else share))
     win = min(rows[1:], key=lambda x: x[6])
     P = data[1].prestress[0]
     write_csv_rows(out / "mechanisms_vs_per_tendon.csv", ["model", "free_parameters", "stiffness_spread_decades",
