@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -27,11 +28,69 @@ from ..._results import reporter
 from ...linear.linearize import LinearModel
 from ...model.equilibrium import Cell
 
-__all__ = ["FitModel", "model_from_dict", "FittedModel", "FitFileError", "FITTED_KINDS", "cell_to_dict",
+__all__ = ["Capabilities", "DATA_KINDS", "FitModel", "model_from_dict", "FittedModel", "FitFileError", "FITTED_KINDS", "cell_to_dict",
            "cell_from_dict", "frequencies_of", "field_of", "positive_values", "prestress_from"]
 
 #: every fitted-model kind by its ``format`` tag (filled by FittedModel.__init_subclass__)
 FITTED_KINDS: dict[str, type[FittedModel]] = {}
+
+#: the kinds of data a model may fit: moduli G′, G″ against frequency and prestress; creep compliance J(t);
+#: stress relaxation G(t)
+DATA_KINDS = ("moduli", "creep", "relaxation")
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    """What a fittable model can do: generic code (the search, the result, shares, profiles, reports, studies and
+    the command line) asks these, never the model's class (pyMOR's way: a model declares, consumers ask).
+
+    Attributes
+    ----------
+    data_kinds : frozenset of str
+        The kinds of :data:`DATA_KINDS` the model fits (a data set of another kind is refused in one line).
+    structural : bool
+        The model has a cell: a structure whose geometry and prestress carry the response (False for a
+        structure-free formula).
+    structure_shares : bool
+        The split of dG*/dP into the geometric prestress stiffness P·Kp and the law's tension terms is defined
+        (:mod:`tenscell.fitting.shares`).
+    profile_fields : bool
+        The model has held (fixed) law fields whose profile likelihood can be computed
+        (:mod:`tenscell.fitting.profile`).
+    lumped_terms : bool
+        The model has its own structure-free formula (:meth:`FitModel.formula`): the baseline it must beat.
+    voigt_options : bool
+        The model takes the Voigt cell's options (``tendons``, ``damping``, the activity constraints).
+    multimodal : bool
+        Fits of the model have several basins on typical data: the search keeps its basin-hopping moves after two
+        starts agree (the catalog marks these models).
+    heterogeneous : bool
+        A property is drawn from a distribution over the tendons (the fitted model has an ensemble).
+    per_cell : bool
+        A population: parameters of each cell's own beside shared ones.
+    """
+
+    data_kinds: frozenset = frozenset({"moduli"})
+    structural: bool = True
+    structure_shares: bool = False
+    profile_fields: bool = False
+    lumped_terms: bool = False
+    voigt_options: bool = False
+    multimodal: bool = False
+    heterogeneous: bool = False
+    per_cell: bool = False
+
+    def __post_init__(self):
+        kinds = frozenset(self.data_kinds)
+        unknown = sorted(kinds - set(DATA_KINDS))
+        if unknown or not kinds:
+            raise ValueError(f"Capabilities.data_kinds: some of {', '.join(DATA_KINDS)}, got {sorted(kinds)!r}")
+        object.__setattr__(self, "data_kinds", kinds)
+
+    def fits(self, kind: str) -> bool:
+        """Whether the model fits data of ``kind`` (one of :data:`DATA_KINDS`)."""
+        return kind in self.data_kinds
+
 
 #: every FitModel subclass by class name (filled by __init_subclass__): what model_from_dict rebuilds
 _CLASSES: dict[str, type[FitModel]] = {}
@@ -62,6 +121,12 @@ class FitModel:
         Bad input raises ValueError (or :class:`tenscell.io.data.DataError` for the data) naming it.
         """
         raise NotImplementedError
+
+    @property
+    def capabilities(self) -> Capabilities:
+        """What this model can do (:class:`Capabilities`); every subclass declares its own."""
+        return Capabilities(structural=self.structural, heterogeneous=self.heterogeneous,
+                            lumped_terms=self.formula() is not None)
 
     @property
     def heterogeneous(self) -> bool:

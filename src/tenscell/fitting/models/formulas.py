@@ -42,7 +42,7 @@ from ...io.data import DataError
 from ..parameters import _is_creep, as_datasets, bounds_by_name, fixed_by_name, kind_bounds
 from ..problem import PENALTY, Problem, draw_start, jitter, log_residual_blocks
 from ..._results import format_repr
-from .base import FitFileError, FitModel, FittedModel, field_of, frequencies_of, model_from_dict, positive_values, prestress_from
+from .base import Capabilities, FitFileError, FitModel, FittedModel, field_of, frequencies_of, model_from_dict, positive_values, prestress_from
 
 __all__ = ["Formula", "FormulaProblem", "FittedFormula", "FORMULA_FORMAT", "FORMULAS", "TERMS", "lumped_formula", "structural_damping_moduli", "PHI0"]
 
@@ -135,6 +135,11 @@ class Formula(FitModel):
     @property
     def group(self) -> str:
         return "structure-free formulas (baselines)"
+
+    @property
+    def capabilities(self) -> Capabilities:
+        """Moduli (and creep where a term has a time-domain form: the time-series issue adds them); no cell."""
+        return Capabilities(structural=False)
 
     @property
     def parameter_rows(self) -> tuple[tuple[str, str, str], ...]:

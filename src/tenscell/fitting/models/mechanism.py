@@ -54,7 +54,7 @@ from ..parameters import bounds_by_name, fixed_by_name, _family_groups, _is_cree
 from ..._results import format_repr
 from ...linear.dynamic import DynamicKernel, dynamic_kernel
 from ...linear.linearize import LinearModel
-from .base import (FitFileError, FitModel, FittedModel, cell_from_dict, cell_to_dict, field_of, frequencies_of, model_from_dict,
+from .base import (Capabilities, FitFileError, FitModel, FittedModel, cell_from_dict, cell_to_dict, field_of, frequencies_of, model_from_dict,
                    positive_values, prestress_from)
 from ..problem import PENALTY as _PENALTY, Problem, draw_start, jitter, log_residual_blocks
 
@@ -163,6 +163,12 @@ class Mechanism(FitModel):
     def K(self) -> int:
         """Assignments actually used: :attr:`assignments` if heterogeneous, else 1."""
         return self.assignments if self.heterogeneous else 1
+
+    @property
+    def capabilities(self) -> Capabilities:
+        """Moduli; the structure's share of dG*/dP; held fields to profile; its lumped formula."""
+        return Capabilities(structure_shares=True, profile_fields=any(f.layout == "fixed" for f in self.fields),
+                            lumped_terms=True, heterogeneous=self.heterogeneous)
 
     @property
     def group(self) -> str:

@@ -43,7 +43,7 @@ from ...io.data import DataError, RheologyData
 from ..identifiability import Identifiability, _combinations, _sigma, errors_from_covariance
 from ..parameters import as_datasets
 from ..problem import LN10, Problem
-from .base import FITTED_KINDS, FitFileError, FitModel, FittedModel, field_of, model_from_dict
+from .base import FITTED_KINDS, Capabilities, FitFileError, FitModel, FittedModel, field_of, model_from_dict
 
 __all__ = ["Population", "PopulationProblem", "FittedPopulation", "PopulationIdentifiability",
            "make_population_problem", "block_identifiability", "POPULATION_FORMAT", "cell_parameter_name"]
@@ -108,6 +108,13 @@ class Population(FitModel):
     @property
     def group(self) -> str:
         return "populations"
+
+    @property
+    def capabilities(self) -> Capabilities:
+        """The base model's, for many cells at once (per-cell parameters; no structure shares of a population)."""
+        base = self.base.capabilities
+        return Capabilities(data_kinds=base.data_kinds, structural=base.structural, heterogeneous=base.heterogeneous,
+                            multimodal=base.multimodal, per_cell=True)
 
     def problem(self, data, cell=None, *, bounds=None, fixed=None) -> PopulationProblem:
         return make_population_problem(data, self, cell, bounds=bounds, fixed=fixed)

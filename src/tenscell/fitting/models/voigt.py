@@ -72,7 +72,7 @@ from ..._results import format_repr
 from ...linear.whitening import rescaled_basis, unit_damping_basis, whitened_basis
 from ...model.equilibrium import Cell
 from ..problem import LN10 as _LN10, PENALTY as _PENALTY, Problem, centred_start, central_difference as _central
-from .base import FitModel
+from .base import Capabilities, FitModel
 from .voigt_fitted import MODEL_FORMAT, FittedCell, scaled_cell
 from .voigt_results import VoigtResults
 from .voigt_kernel import _Evaluation, evaluate
@@ -123,6 +123,12 @@ class VoigtModel(FitModel):
     @property
     def group(self) -> str:
         return "the paper's Voigt cell"
+
+    @property
+    def capabilities(self) -> Capabilities:
+        """Moduli and creep; the Voigt options; its lumped formula (no law tension terms: no shares to split)."""
+        return Capabilities(data_kinds=frozenset({"moduli", "creep"}), voigt_options=True, lumped_terms=True,
+                            multimodal=self.tendons == "per-tendon")
 
     def baseline(self) -> FitModel | None:
         """The homogeneous cell (none for an unconstrained homogeneous fit: it is its own baseline)."""

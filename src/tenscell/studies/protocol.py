@@ -1,0 +1,384 @@
+"""The study protocol: a study plans its work as tasks, runs them, and returns one result the writer puts on disk.
+
+As lmfit's ``Model`` → ``ModelResult`` is for a fit, and pyMOR's one interface is for every model, every study
+follows the same three steps:
+
+* ``study.plan(options)`` → a :class:`Plan`: the study's options, checked, and its :class:`Task` list — every fit
+  and evaluation the run will make. The plan is the one count both the run and the estimate use: the command
+  line announces ``plan.estimate_cpu(rates)`` before the work, and :func:`execute` revises it as tasks finish.
+* ``study.run(plan)`` → a :class:`StudyResult` (by default :func:`execute` the tasks, then ``study.assemble(plan,
+  results)``): the study's tables with **named columns** (:class:`Table`, never positional tuples), its figures
+  (:class:`Figure`: a drawing function of :mod:`tenscell.plotting` by name, reached through
+  :func:`tenscell._results.plotter`), its Markdown (rendered by :mod:`tenscell.reports` through
+  :func:`tenscell._results.reporter`), its checks (:class:`Check`: each goal as measured) and the study's own
+  result object for Python users (``result.data``).
+* one writer (``tenscell study NAME``) puts every table, figure and page of any study on disk, as a complete set
+  or not at all.
+
+A task names a module-level function (it may run in a worker process) and its arguments; ``needs`` lists the
+keys of earlier tasks whose results are appended to its arguments (a held-out refit warm-started from the main
+fit needs the main fit). Tasks of one ``kind`` cost about the same per unit of ``weight``: the estimate is
+``Σ weight × rate[kind]`` over the tasks, with each kind's rate measured (before the run from a calibration the
+study gives, during it from the tasks already done).
+"""
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+__all__ = ["Task", "Plan", "Table", "Figure", "Check", "StudyResult", "Study", "execute", "run_study",
+           "TaskRecord"]
+
+
+@dataclass(frozen=True)
+class Task:
+    """One unit of a study's work: a fit, a refit, an evaluation.
+
+    Attributes
+    ----------
+    key : str
+        Unique within the plan (e.g. ``"springpot+visc/held-out/fabry2001 ≤ 1 Hz"``).
+    kind : str
+        What the task is (``"fit"``, ``"refit"``, ``"evaluate"``...): tasks of one kind share a CPU rate.
+    fn : callable
+        A module-level function (pickled to a worker when the plan runs on several).
+    args : tuple
+        Its positional arguments; the results of ``needs`` follow them, in that order.
+    needs : tuple of str
+        Keys of earlier tasks of the plan whose results this task takes.
+    weight : float
+        Its cost in units of its kind's rate (1: a typical task of the kind).
+    """
+
+    key: str
+    kind: str
+    fn: Callable[..., Any]
+    args: tuple = ()
+    needs: tuple = ()
+    weight: float = 1.0
+
+    def __post_init__(self):
+        if not isinstance(self.key, str) or not self.key:
+            raise ValueError(f"Task: key must be a non-empty string, got {self.key!r}")
+        if not (isinstance(self.weight, (int, float)) and math.isfinite(self.weight) and self.weight > 0):
+            raise ValueError(f"Task {self.key!r}: weight must be a finite number > 0, got {self.weight!r}")
+        object.__setattr__(self, "args", tuple(self.args))
+        object.__setattr__(self, "needs", tuple(self.needs))
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """A study's checked options and every task its run makes, in an order where each task follows its needs.
+
+    Attributes
+    ----------
+    study : str
+        The study's name (``tenscell study NAME``).
+    options : dict
+        The options the study was planned with (as given to :meth:`Study.plan`, defaults filled in).
+    tasks : tuple of Task
+    """
+
+    study: str
+    options: dict
+    tasks: tuple
+
+    def __post_init__(self):
+        object.__setattr__(self, "tasks", tuple(self.tasks))
+        seen: set[str] = set()
+        for t in self.tasks:
+            if not isinstance(t, Task):
+                raise ValueError(f"Plan {self.study!r}: tasks must be Task objects, got {type(t).__name__}")
+            if t.key in seen:
+                raise ValueError(f"Plan {self.study!r}: task key {t.key!r} appears twice")
+            missing = [k for k in t.needs if k not in seen]
+            if missing:
+                raise ValueError(f"Plan {self.study!r}: task {t.key!r} needs {missing[0]!r}, which is not an "
+                                 "earlier task of the plan")
+            seen.add(t.key)
+
+    def count(self, kind: str | None = None) -> int:
+        """How many tasks (of ``kind``, or all)."""
+        return sum(1 for t in self.tasks if kind is None or t.kind == kind)
+
+    def kinds(self) -> dict[str, float]:
+        """The total weight of each kind of task."""
+        out: dict[str, float] = {}
+        for t in self.tasks:
+            out[t.kind] = out.get(t.kind, 0.0) + float(t.weight)
+        return out
+
+    def estimate_cpu(self, rates: Mapping[str, float]) -> float:
+        """CPU seconds of the whole plan at ``rates`` (CPU seconds per unit of weight, by kind). KeyError names a
+        kind without a rate."""
+        total = 0.0
+        for kind, w in self.kinds().items():
+            if kind not in rates:
+                raise KeyError(f"no CPU rate for tasks of kind {kind!r} (kinds of this plan: "
+                               f"{', '.join(self.kinds())})")
+            total += w * float(rates[kind])
+        return total
+
+    def task(self, key: str) -> Task:
+        for t in self.tasks:
+            if t.key == key:
+                return t
+        raise KeyError(f"no task {key!r} in the plan of study {self.study!r}")
+
+
+@dataclass(frozen=True)
+class Table:
+    """A table with named columns (units in the names: ``rms_fabry2001_decades``, ``prestress_Pa``).
+
+    Build it from records (:meth:`from_records`): each record names its values, so a column cannot shift.
+    """
+
+    name: str
+    columns: tuple
+    rows: tuple
+    description: str = ""
+
+    def __post_init__(self):
+        cols = tuple(self.columns)
+        if len(set(cols)) != len(cols):
+            dup = next(c for c in cols if cols.count(c) > 1)
+            raise ValueError(f"table {self.name!r}: column {dup!r} appears twice")
+        rows = tuple(tuple(r) for r in self.rows)
+        for i, r in enumerate(rows):
+            if len(r) != len(cols):
+                raise ValueError(f"table {self.name!r}: row {i} has {len(r)} values for {len(cols)} columns")
+        object.__setattr__(self, "columns", cols)
+        object.__setattr__(self, "rows", rows)
+
+    @classmethod
+    def from_records(cls, name: str, records: Sequence[Mapping[str, Any]], columns: Sequence[str] | None = None,
+                     description: str = "") -> Table:
+        """A table from one mapping per row. ``columns`` (default: the first record's keys, in order) must be
+        exactly every record's keys: ValueError names the row and the column missing or extra."""
+        records = list(records)
+        cols = tuple(columns) if columns is not None else (tuple(records[0]) if records else ())
+        want = set(cols)
+        rows = []
+        for i, rec in enumerate(records):
+            keys = set(rec)
+            if keys != want:
+                extra, missing = sorted(keys - want), sorted(want - keys)
+                what = f"has no column {missing[0]!r}" if missing else f"has an unknown column {extra[0]!r}"
+                raise ValueError(f"table {name!r}: row {i} {what}")
+            rows.append(tuple(rec[c] for c in cols))
+        return cls(name=name, columns=cols, rows=tuple(rows), description=description)
+
+    def column(self, name: str) -> tuple:
+        """The values of column ``name``."""
+        if name not in self.columns:
+            raise KeyError(f"table {self.name!r} has no column {name!r}; columns: {', '.join(self.columns)}")
+        i = self.columns.index(name)
+        return tuple(r[i] for r in self.rows)
+
+    def records(self) -> list[dict]:
+        """One dict per row."""
+        return [dict(zip(self.columns, r)) for r in self.rows]
+
+    def to_dataframe(self):
+        """A pandas DataFrame with the table's columns."""
+        import pandas as pd
+
+        return pd.DataFrame(list(self.rows), columns=list(self.columns))
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A figure of a study: the drawing function ``plotter`` of :mod:`tenscell.plotting` (by name), called with
+    ``args`` and ``kwargs``, saved as ``name`` (``"mechanisms.png"``)."""
+
+    name: str
+    plotter: str
+    args: tuple = ()
+    kwargs: dict = field(default_factory=dict)
+
+    def draw(self):
+        """The matplotlib figure (drawn now)."""
+        from .._results import plotter
+
+        return plotter(self.plotter)(*self.args, **self.kwargs)
+
+
+@dataclass(frozen=True)
+class Check:
+    """One goal as the run measured it.
+
+    Attributes
+    ----------
+    label : str
+        The goal in words (with its target).
+    met : bool
+    closest : str
+        The model or structure that comes closest (or meets it).
+    detail : str
+        By how much, in words with numbers from the run.
+    """
+
+    label: str
+    met: bool
+    closest: str = ""
+    detail: str = ""
+
+
+@dataclass(frozen=True)
+class TaskRecord:
+    """What one task cost: its kind, weight, CPU seconds (in the process that ran it) and wall seconds."""
+
+    key: str
+    kind: str
+    weight: float
+    cpu_s: float
+    wall_s: float
+
+
+@dataclass(frozen=True, eq=False)
+class StudyResult:
+    """What a study's run gives: tables, figures, pages, checks, and the study's own result object.
+
+    Attributes
+    ----------
+    study : str
+    tables : tuple of Table
+        Written as ``{name}.csv``.
+    figures : tuple of Figure
+        Written under their names.
+    pages : tuple of (str, str)
+        ``(file name, Markdown text)``.
+    checks : tuple of Check
+    data : object
+        The study's own result (e.g. :class:`tenscell.studies.mechanisms.MechanismStudy`).
+    summary : str
+        What the command line prints when the study ends (a few lines).
+    tasks : tuple of TaskRecord
+        What each task cost.
+    elapsed_s : float
+        Wall seconds of the run.
+    """
+
+    study: str
+    tables: tuple = ()
+    figures: tuple = ()
+    pages: tuple = ()
+    checks: tuple = ()
+    data: Any = None
+    summary: str = ""
+    tasks: tuple = ()
+    elapsed_s: float = math.nan
+
+    @property
+    def cpu_s(self) -> float:
+        """CPU seconds of every task."""
+        return float(sum(t.cpu_s for t in self.tasks))
+
+    def table(self, name: str) -> Table:
+        for t in self.tables:
+            if t.name == name:
+                return t
+        raise KeyError(f"study {self.study!r} has no table {name!r}; tables: {', '.join(t.name for t in self.tables)}")
+
+    def files(self) -> tuple[str, ...]:
+        """The names of every file the writer puts on disk."""
+        return (*(f"{t.name}.csv" for t in self.tables), *(f.name for f in self.figures), *(p[0] for p in self.pages))
+
+
+@runtime_checkable
+class Study(Protocol):
+    """What every study answers (module docstring). ``name`` is its command-line name."""
+
+    name: str
+
+    def plan(self, options: Mapping[str, Any]) -> Plan:
+        """The checked options and the tasks (ValueError naming a bad option, before any work)."""
+        ...
+
+    def assemble(self, plan: Plan, results: Mapping[str, Any]) -> StudyResult:
+        """The result from every task's result (by key)."""
+        ...
+
+
+def _timed(fn, *args):
+    c0, t0 = time.process_time(), time.monotonic()
+    out = fn(*args)
+    return out, time.process_time() - c0, time.monotonic() - t0
+
+
+def _waves(plan: Plan) -> list[list[Task]]:
+    """The tasks in waves: each wave's tasks need only tasks of earlier waves."""
+    level: dict[str, int] = {}
+    waves: list[list[Task]] = []
+    for t in plan.tasks:
+        lv = 1 + max((level[k] for k in t.needs), default=-1)
+        level[t.key] = lv
+        while len(waves) <= lv:
+            waves.append([])
+        waves[lv].append(t)
+    return waves
+
+
+def execute(plan: Plan, *, jobs: int = 1, rates: Mapping[str, float] | None = None,
+            notify: Callable[[str], None] | None = None) -> tuple[dict[str, Any], tuple[TaskRecord, ...]]:
+    """Run every task of ``plan`` (each after its needs), over ``jobs`` worker processes.
+
+    ``rates``: CPU seconds per unit of weight by kind, known before the run (a study's calibration); as tasks
+    finish, each kind's rate becomes the measured one, and ``notify`` (if given) receives a line after each task
+    with the tasks done and the CPU time the rest should take at the rates measured so far.
+
+    Returns ``(results by key, what each task cost)``.
+    """
+    from .._parallel import Workers
+
+    known = dict(rates or {})
+    done_w: dict[str, float] = {}
+    done_cpu: dict[str, float] = {}
+    results: dict[str, Any] = {}
+    records: list[TaskRecord] = []
+    total = len(plan.tasks)
+
+    def rate(kind: str) -> float | None:
+        if done_w.get(kind):
+            return done_cpu[kind] / done_w[kind]
+        return known.get(kind)
+
+    def remaining_cpu() -> float | None:
+        left = [t for t in plan.tasks if t.key not in results]
+        rs = [rate(t.kind) for t in left]
+        return None if any(r is None for r in rs) else float(sum(t.weight * r for t, r in zip(left, rs)))
+
+    with Workers(max(1, int(jobs))) as workers:
+        for wave in _waves(plan):
+            args = [(t.fn, *t.args, *(results[k] for k in t.needs)) for t in wave]
+
+            def finished(i, out, wave=wave):
+                t = wave[i]
+                value, cpu, wall = out
+                results[t.key] = value
+                records.append(TaskRecord(t.key, t.kind, float(t.weight), cpu, wall))
+                done_w[t.kind] = done_w.get(t.kind, 0.0) + t.weight
+                done_cpu[t.kind] = done_cpu.get(t.kind, 0.0) + cpu
+                if notify is not None:
+                    left = remaining_cpu()
+                    tail = "" if left is None or len(results) == total else f"; about {left:.0f} s of CPU left"
+                    notify(f"{len(results)}/{total} tasks: {t.key} ({cpu:.1f} s CPU){tail}")
+
+            workers.starmap(_timed, args, on_done=finished)
+    order = {t.key: i for i, t in enumerate(plan.tasks)}
+    return results, tuple(sorted(records, key=lambda r: order[r.key]))
+
+
+def run_study(study: Study, options: Mapping[str, Any] | Plan, *, jobs: int = 1,
+              rates: Mapping[str, float] | None = None, notify: Callable[[str], None] | None = None) -> StudyResult:
+    """Plan (unless a :class:`Plan` is given), execute and assemble a study: ``run(plan)`` of the protocol."""
+    import dataclasses
+
+    plan = options if isinstance(options, Plan) else study.plan(options)
+    t0 = time.monotonic()
+    results, records = execute(plan, jobs=jobs, rates=rates, notify=notify)
+    out = study.assemble(plan, results)
+    return dataclasses.replace(out, tasks=records, elapsed_s=time.monotonic() - t0)
