@@ -13,14 +13,14 @@
 """
 from __future__ import annotations
 
-from .base import FitModel, model_from_dict
+from .base import Capabilities, FitModel, model_from_dict
 from .formulas import FORMULAS, Formula
 from .catalog import MECHANISMS, PER_TENDON_VOIGT
 from .mechanism import Field, Mechanism
 from .population import Population
 from .voigt import VoigtModel
 
-__all__ = ["FitModel", "VoigtModel", "Mechanism", "Field", "Formula", "Population", "MODELS", "GROUPS", "RECOMMENDED",
+__all__ = ["Capabilities", "FitModel", "VoigtModel", "Mechanism", "Field", "Formula", "Population", "MODELS", "GROUPS", "RECOMMENDED",
            "get_model", "model_names", "model_from_dict", "PER_TENDON_VOIGT", "baseline_of"]
 
 #: the recommended model for a lab's first fit: the few-parameter mechanism of `tenscell study mechanisms` on the
