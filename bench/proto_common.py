@@ -24,7 +24,7 @@ import scipy.optimize as so
 
 import tenscell.laws as laws
 from tenscell.fitting.models.mechanism import make_mechanism_problem
-from tenscell.fitting.parameters import _prestress_layout, as_datasets
+from tenscell.fitting.parameters import prestress_layout, as_datasets
 from tenscell.fitting.records import information_criteria
 
 LN10 = math.log(10.0)
@@ -251,7 +251,7 @@ def lumped_problem(data, mech, *, fixed_law=None, bounds=None) -> Lumped:
         eta_index = len(names)
         names.append("eta_cytoplasm")
         kinds.append("viscosity")
-    p_names, _, _, p_kinds, groups, point_group = _prestress_layout(datasets)
+    p_names, _, _, p_kinds, groups, point_group = prestress_layout(datasets)
     start = len(names)
     names += p_names
     kinds += p_kinds

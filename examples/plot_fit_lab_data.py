@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 import tenscell as tc
+from tenscell.fitting import VoigtModel
 
 ref = tc.bundled("fabry2001")
 export = pd.DataFrame({"omega [rad/s]": 2 * np.pi * ref.frequency_hz,
@@ -45,7 +46,7 @@ print(np.allclose(same.G_storage, data.G_storage))
 
 # %%
 # Fit, one stiffness per tendon as in the paper (one start keeps the example short; use several for a real fit).
-result = tc.fit(data, tendons="per-tendon", starts=1, seed=0, progress=False)
+result = tc.fit(data, model=VoigtModel(tendons="per-tendon"), starts=1, seed=0, progress=False)
 print(f"rms log10 error {result.rms_log10_error:.4f} decades; converged: {result.converged}")
 
 print(result)

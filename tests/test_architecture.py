@@ -13,9 +13,22 @@
    decompose) with the reason each one is not a decomposition of a structure's
    (K0, C0).
 
+3. **One criterion of positive definiteness.** Outside ``linear/`` no eigenvalue
+   (of numpy, scipy or ``linear/``'s own eigensolvers: :data:`EIGEN_ROUTINES`),
+   nor anything computed from one, is compared with a threshold
+   (:func:`eigen_thresholds`): definiteness is asked of ``linear.definite``
+   (a Cholesky factor exists), except in the places :data:`CRITERIA_EXCEPTIONS`
+   lists with the reason.
+4. **Modules keep their privates.** No private name (``_x``, a function, a class or
+   a module) is imported from another subpackage (:func:`private_imports`;
+   :data:`PENDING_PRIVATE` lists what work in progress removes), no module imports
+   ``*``, and no project module is imported by name at run time
+   (``importlib.import_module``, ``__import__``: the import graph could not see
+   it), except the registries :data:`DYNAMIC_IMPORTS` lists with the reason.
+
 Each check has companion tests that plant a violation in a copy of the
 source tree and assert that the check finds it — for the decompositions, one of
-each kind (:data:`PLANTED`) — so neither can pass vacuously.
+each kind (:data:`PLANTED`) — so none can pass vacuously.
 """
 from __future__ import annotations
 
@@ -83,10 +96,52 @@ EXCEPTIONS: dict[tuple[str, str], str] = {
 }
 
 
+#: the names of eigenvalue routines, wherever they come from (numpy, scipy, LAPACK, ``linear/``'s own kernels): an
+#: eigenvalue compared with a threshold is a home-made criterion (of definiteness, stability or rank)
+EIGEN_ROUTINES = frozenset({"eig", "eigh", "eigvals", "eigvalsh", "eigs", "eigsh", "eig_banded", "eigvals_banded",
+                            "eigh_tridiagonal", "eigvalsh_tridiagonal", "lobpcg", "syevd", "syev", "syevr", "heevd",
+                            "heev", "symmetric_eigen", "prestress_grid_modes", "slow_modes", "damping_modes"})
+#: (module, enclosing function) -> why eigenvalues are compared with a threshold there, and it is not a criterion of
+#: positive definiteness of a structure's matrices
+CRITERIA_EXCEPTIONS: dict[tuple[str, str], str] = {
+    ("model.formfinding", "find_form"): "the found form's stability is reported from its own energy Hessian at the "
+                                        "trial geometry (a relative eigenvalue floor), before any linear model "
+                                        "exists; model/ precedes linear/, so it cannot ask linear.definite",
+    ("timedomain", "stress_relaxation"): "a realness test of the zeros of J(s) (eigenvalues of a small modal "
+                                         "matrix): whether the relaxation is a sum of real exponentials, no "
+                                         "definiteness",
+    ("summary", "relaxation_modes"): "the slowest modes' times τ turned into rates (τ = 0: an instantaneous mode, "
+                                     "rate ∞) and their shapes scaled for a figure; the model's definiteness was "
+                                     "asked of its pencil",
+}
+#: (module, enclosing function) -> the registry whose project modules it imports by name at run time, and why
+DYNAMIC_IMPORTS: dict[tuple[str, str], str] = {
+    ("", "__getattr__"): "the top level's lazy names (_EXPORTS, _MOVED: `import tenscell` stays quick); "
+                         "tests/test_startup.py resolves every one",
+    ("io", "__getattr__"): "tenscell.io's lazy names (`import tenscell.io` imports none of its modules)",
+    ("population", "__getattr__"): "tenscell.population's lazy names (Dask is imported on first use)",
+    ("io.readers", "_reader"): "the readers' registry (READERS: one module per format, two files to add one)",
+    ("cli", "build_parser"): "the command modules' registry (COMMAND_MODULES: building the parser imports only "
+                             "the standard library)",
+    ("_results", "_renderer"): "the renderers' registry: plotting/ and reports/ register on import, and the "
+                               "analyses upstream of them may not import them (data flows one way)",
+    ("population._warm", "setup"): "the modules a worker process imports before its first task (names given by "
+                                   "the caller)",
+    ("_optional", "require"): "optional third-party dependencies by name (never a tenscell module), with the "
+                              "command that installs a missing one",
+}
+
 #: what other work in progress will remove, each with who removes it; a test fails once an entry has gone, so
 #: that the list is emptied as the work lands (never add to it to make a new violation pass)
 PENDING_CYCLES: dict[frozenset[str], str] = {}
 PENDING_BACKWARD: dict[tuple[str, str], str] = {}
+#: (importing module, imported private name) of private imports across subpackages that pending work removes
+PENDING_PRIVATE: dict[tuple[str, str], str] = {
+    ("cli.reproduce", "studies.mechanisms._scores"): "issue 35 item 3 (branch studies): reproduce's mechanism "
+                                                     "comparison moves into studies/",
+    ("cli.reproduce", "studies.mechanisms._shares"): "issue 35 item 3 (branch studies)",
+    ("cli.reproduce", "studies.mechanisms._spread"): "issue 35 item 3 (branch studies)",
+}
 
 
 # ---- reading the source -------------------------------------------------------------------------------
@@ -323,6 +378,136 @@ def unexplained(found) -> list[str]:
     return sorted(set(out))
 
 
+def _call_name(call: ast.Call) -> str | None:
+    """The last name of what a call calls (``np.linalg.eigvalsh(...)`` -> ``eigvalsh``)."""
+    f = call.func
+    return f.id if isinstance(f, ast.Name) else f.attr if isinstance(f, ast.Attribute) else None
+
+
+def _eigen_calls(node: ast.AST) -> list[str]:
+    return [n for c in ast.walk(node) if isinstance(c, ast.Call) and (n := _call_name(c)) in EIGEN_ROUTINES]
+
+
+def _names(node: ast.AST) -> set[str]:
+    return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+
+
+def _tainted(func: ast.AST) -> set[str]:
+    """The names in ``func`` bound to an eigenvalue routine's result or to anything computed from one (a fixpoint
+    over assignments and loops: ``lam, _ = symmetric_eigen(K)``, ``low = lam[0]``, ``for x in lam``)."""
+    tainted: set[str] = set()
+    while True:
+        before = len(tainted)
+        for node in ast.walk(func):
+            if isinstance(node, (ast.Assign, ast.AnnAssign, ast.AugAssign, ast.NamedExpr)) and node.value is not None:
+                source, targets = node.value, (node.targets if isinstance(node, ast.Assign) else [node.target])
+            elif isinstance(node, (ast.For, ast.comprehension)):
+                source, targets = node.iter, [node.target]
+            else:
+                continue
+            if _eigen_calls(source) or _names(source) & tainted:
+                for t in targets:
+                    tainted |= _names(t)
+        if len(tainted) == before:
+            return tainted
+
+
+def eigen_thresholds(root: Path = SRC) -> list[tuple[str, str, int, str]]:
+    """Every comparison of an eigenvalue (or of what is computed from one) outside linear/: (module, enclosing
+    functions, line, the eigenvalue routine or name compared)."""
+    found = set()
+    for module, path in _modules(root).items():
+        if module == "linear" or module.startswith("linear."):
+            continue
+        tree = _parse(path.read_text(encoding="utf-8"))
+        chain = {id(node): ".".join(funcs) or "<module>" for node, funcs in _runtime_nodes(tree)
+                 if isinstance(node, ast.Compare)}
+        for func in [tree] + [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))]:
+            tainted = _tainted(func) if func is not tree else set()
+            for node in ast.walk(func):
+                if not isinstance(node, ast.Compare) or id(node) not in chain:
+                    continue
+                bad = set(_eigen_calls(node)) | (_names(node) & tainted)
+                if bad:
+                    found.add((module, chain[id(node)], node.lineno, sorted(bad)[0]))
+    return sorted(found)
+
+
+def unexplained_criteria(found) -> list[str]:
+    """The eigenvalue comparisons no entry of :data:`CRITERIA_EXCEPTIONS` covers."""
+    return sorted({f"tenscell.{m}:{line} ({funcs}) compares {name} with a threshold: ask linear.definite "
+                   "(positive_definite_factor, is_positive_definite) or list the reason in CRITERIA_EXCEPTIONS"
+                   for m, funcs, line, name in found if not any((m, f) in CRITERIA_EXCEPTIONS for f in funcs.split("."))})
+
+
+def _subpackage(module: str, is_package: bool) -> str:
+    return module if is_package else module.rpartition(".")[0]
+
+
+def _from_module(module: str, is_package: bool, node: ast.ImportFrom) -> str | None:
+    """The tenscell module (relative name) a ``from ... import`` reads from; None for another package."""
+    if node.level:
+        base = module.split(".") if module else []
+        if not is_package:
+            base = base[:-1]
+        base = base[: len(base) - (node.level - 1)]
+        return ".".join(base + ([node.module] if node.module else []))
+    if node.module == "tenscell" or (node.module or "").startswith("tenscell."):
+        return node.module.removeprefix("tenscell").removeprefix(".")
+    return None
+
+
+def private_imports(root: Path = SRC) -> list[str]:
+    """Every private name (``_x``) imported from another subpackage, and every star import, as
+    'importer imports name (line n)'."""
+    mods = _modules(root)
+    out = []
+    for module, path in mods.items():
+        is_package = path.name == "__init__.py"
+        mine = _subpackage(module, is_package)
+        for node, _ in _runtime_nodes(_parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            source = _from_module(module, is_package, node)
+            for alias in node.names:
+                if alias.name == "*":
+                    out.append(f"tenscell.{module} (line {node.lineno}) imports * from {node.module or '.'}")
+                    continue
+                if source is None or not alias.name.startswith("_") or alias.name.startswith("__"):
+                    continue
+                full = f"{source}.{alias.name}".strip(".")
+                if full in mods:  # a private module: it belongs to its package
+                    home = full.rpartition(".")[0]
+                else:
+                    home = _subpackage(source, source in mods and mods[source].name == "__init__.py")
+                if home != mine and (module, full) not in PENDING_PRIVATE:
+                    out.append(f"tenscell.{module} (line {node.lineno}) imports {full}, private to "
+                               f"tenscell{'.' + home if home else ''}: make it public or move the code")
+    return sorted(out)
+
+
+def dynamic_imports(root: Path = SRC) -> list[tuple[str, str, int]]:
+    """Every call of ``importlib.import_module`` or ``__import__`` whose module may be a project module (anything
+    but a string naming another package): (module, enclosing functions, line)."""
+    found = []
+    for module, path in _modules(root).items():
+        for node, funcs in _runtime_nodes(_parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.Call) or _call_name(node) not in ("import_module", "__import__"):
+                continue
+            first = node.args[0] if node.args else None
+            if isinstance(first, ast.Constant) and isinstance(first.value, str) and not (
+                    first.value.startswith(".") or first.value.split(".")[0] == "tenscell"):
+                continue  # another package by its literal name (an optional dependency)
+            found.append((module, ".".join(funcs) or "<module>", node.lineno))
+    return found
+
+
+def unexplained_dynamic(found) -> list[str]:
+    return sorted({f"tenscell.{m}:{line} ({funcs}) imports a module by name at run time: import it (the "
+                   "architecture test then sees the edge) or list the registry in DYNAMIC_IMPORTS"
+                   for m, funcs, line in found if not any((m, f) in DYNAMIC_IMPORTS for f in funcs.split("."))})
+
+
 # ---- the promises ----------------------------------------------------------------------------------------
 def test_every_module_has_a_stage():
     for module in _modules(SRC):
@@ -359,6 +544,43 @@ def test_every_exception_is_still_needed():
     used = {(m, f) for m, funcs, _, _ in decompositions() for f in funcs.split(".")}
     stale = sorted(set(EXCEPTIONS) - used)
     assert not stale, f"EXCEPTIONS lists places without a decomposition: {stale}"
+
+
+def test_no_home_made_criterion_of_definiteness():
+    found = unexplained_criteria(eigen_thresholds())
+    assert not found, "\n".join(found)
+
+
+def test_every_criterion_exception_is_still_needed():
+    used = {(m, f) for m, funcs, _, _ in eigen_thresholds() for f in funcs.split(".")}
+    stale = sorted(set(CRITERIA_EXCEPTIONS) - used)
+    assert not stale, f"CRITERIA_EXCEPTIONS lists places without an eigenvalue comparison: {stale}"
+
+
+def test_no_private_import_across_subpackages_and_no_star_import():
+    found = private_imports()
+    assert not found, "\n".join(found)
+
+
+def test_pending_private_imports_are_still_pending():
+    mods = _modules(SRC)
+    gone = []
+    for module, full in PENDING_PRIVATE:
+        text = mods[module].read_text(encoding="utf-8")
+        if full.rpartition(".")[2] not in text:
+            gone.append((module, full))
+    assert not gone, f"no longer occurring, remove from PENDING_PRIVATE: {gone}"
+
+
+def test_no_project_module_imported_by_name():
+    found = unexplained_dynamic(dynamic_imports())
+    assert not found, "\n".join(found)
+
+
+def test_every_dynamic_import_entry_is_still_needed():
+    used = {(m, f) for m, funcs, _ in dynamic_imports() for f in funcs.split(".")}
+    stale = sorted(set(DYNAMIC_IMPORTS) - used)
+    assert not stale, f"DYNAMIC_IMPORTS lists places without a dynamic import: {stale}"
 
 
 # ---- the checks can fail -----------------------------------------------------------------------------------
@@ -460,3 +682,62 @@ def test_every_error_is_a_tenscell_error():
     assert len(defined) >= 13, defined  # the check looks at the real classes
     outside = [f"{c.__module__}.{c.__qualname__}" for c in defined if not issubclass(c, TenscellError)]
     assert not outside, outside
+
+
+#: home-made criteria the eigenvalue check must catch: (what, source appended to sensitivity.py)
+PLANTED_CRITERIA = {
+    "linear's own eigensolver and a relative floor": (
+        "from .linear.definite import symmetric_eigen\n\ndef _stable(K):\n    lam, _ = symmetric_eigen(K)\n"
+        "    return lam[0] > 1e-12 * abs(lam[-1])\n"),
+    "numpy's eigvalsh through a name": (
+        "import numpy as np\n\ndef _stable(K):\n    ev = np.linalg.eigvalsh(K)\n    low = ev.min()\n"
+        "    if low <= 1e-9:\n        return False\n    return True\n"),
+    "a loop over eigenvalues": (
+        "import scipy.linalg\n\ndef _stable(K):\n    return all(x > 0 for x in scipy.linalg.eigh(K)[0])\n"),
+}
+
+
+@pytest.mark.parametrize("kind", sorted(PLANTED_CRITERIA))
+def test_a_planted_criterion_is_found(tree_copy, kind):
+    _append(tree_copy / "sensitivity.py", PLANTED_CRITERIA[kind])
+    new = set(unexplained_criteria(eigen_thresholds(tree_copy))) - set(unexplained_criteria(eigen_thresholds()))
+    assert len(new) == 1 and new.pop().startswith("tenscell.sensitivity:"), new
+
+
+def test_eigenvalues_that_are_not_compared_are_not_flagged(tree_copy):
+    """Eigenvalues used as numbers (a spectrum, a sum) are no criterion."""
+    _append(tree_copy / "sensitivity.py", "from .linear.definite import symmetric_eigen\n\ndef _spectrum(K):\n"
+                                          "    lam, U = symmetric_eigen(K)\n    return lam.sum(), U\n")
+    assert eigen_thresholds(tree_copy) == eigen_thresholds()
+
+
+PLANTED_IMPORTS = {
+    "a private function of another subpackage": "def _f():\n    from .fitting.search import _least_squares\n"
+                                                "    return _least_squares\n",
+    "a private module of another subpackage": "def _f():\n    from .population import _engine\n    return _engine\n",
+    "a star import": "from .fitting.search import *  # noqa: F403\n",
+}
+
+
+@pytest.mark.parametrize("kind", sorted(PLANTED_IMPORTS))
+def test_a_planted_private_import_is_found(tree_copy, kind):
+    _append(tree_copy / "sensitivity.py", PLANTED_IMPORTS[kind])
+    new = set(private_imports(tree_copy)) - set(private_imports())
+    assert len(new) == 1 and new.pop().startswith("tenscell.sensitivity (line"), new
+
+
+def test_a_private_import_within_a_subpackage_is_allowed(tree_copy):
+    _append(tree_copy / "fitting" / "shares.py", "def _f():\n    from .search import _least_squares\n"
+                                                 "    return _least_squares\n")
+    assert private_imports(tree_copy) == private_imports()
+
+
+@pytest.mark.parametrize("code", [
+    "import importlib\n\ndef _f():\n    return importlib.import_module('tenscell.fitting')\n",
+    "from importlib import import_module\n\ndef _f(name):\n    return import_module(f'.{name}', 'tenscell')\n",
+    "def _f():\n    return __import__('tenscell.fitting.search')\n",
+])
+def test_a_planted_dynamic_import_is_found(tree_copy, code):
+    _append(tree_copy / "sensitivity.py", code)
+    new = set(unexplained_dynamic(dynamic_imports(tree_copy))) - set(unexplained_dynamic(dynamic_imports()))
+    assert len(new) == 1 and new.pop().startswith("tenscell.sensitivity:"), new

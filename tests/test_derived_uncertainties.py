@@ -21,6 +21,7 @@ import tenscell
 from tenscell.fitting.curves import frequency_slopes, prestress_slopes
 from tenscell.io.data import bundled
 from tenscell.reports.fit import fit_markdown
+from tenscell.fitting import VoigtModel
 
 H = 1e-3
 RTOL = 1e-4
@@ -50,13 +51,13 @@ def _independent_errors(result, quantity) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def prestress_fit():
-    return tenscell.fit(bundled("stamenovic2002"), tendons="per-family", starts=1, progress=False)
+    return tenscell.fit(bundled("stamenovic2002"), model=VoigtModel(tendons="per-family"), starts=1, progress=False)
 
 
 @pytest.fixture(scope="module")
 def frequency_fit():
     data = tenscell.read_data("tests/data/trios_lims_temperature_steps.txt", temperature=25)
-    return tenscell.fit(data, tendons="per-family", starts=1, progress=False)
+    return tenscell.fit(data, model=VoigtModel(tendons="per-family"), starts=1, progress=False)
 
 
 def test_prestress_lines_elasticities_and_creep_errors_match_an_independent_propagation(prestress_fit):
@@ -119,7 +120,7 @@ def test_reports_show_the_errors(prestress_fit, frequency_fit):
 def test_undetermined_numbers_say_so():
     """A per-tendon fit of a prestress sweep sees 10 of its 31 parameter combinations: the stiffness spread moves
     along unseen ones (and its top sits at a bound), so it has no error and the report says why."""
-    r = tenscell.fit(bundled("stamenovic2002"), tendons="per-tendon", starts=1, progress=False)
+    r = tenscell.fit(bundled("stamenovic2002"), model=VoigtModel(tendons="per-tendon"), starts=1, progress=False)
     ident = r.identifiability()
     assert ident.rank < ident.n_analysed
     q = r.derived

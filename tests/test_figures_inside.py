@@ -15,6 +15,7 @@ import pytest
 import tenscell as tc
 from tenscell import plotting
 from tenscell.io.data import bundled
+from tenscell.fitting import VoigtModel
 
 #: a pixel of slack for rounding of extents (at the figures' 150 dpi)
 TOL_PX = 1.0
@@ -80,10 +81,10 @@ def resp():
 
 @pytest.fixture(scope="module")
 def fits():
-    prestress = tc.fit(bundled("stamenovic2002"), tendons="uniform", starts=1, progress=False)
-    frequency = tc.fit(bundled("fabry2001"), tendons="uniform", starts=1, progress=False)
+    prestress = tc.fit(bundled("stamenovic2002"), model=VoigtModel(tendons="uniform"), starts=1, progress=False)
+    frequency = tc.fit(bundled("fabry2001"), model=VoigtModel(tendons="uniform"), starts=1, progress=False)
     creep = tc.fit(tc.read_data(__import__("pathlib").Path(__file__).parent / "data" / "creep_compliance.tsv"),
-                   tendons="uniform", starts=1, progress=False)
+                   model=VoigtModel(tendons="uniform"), starts=1, progress=False)
     return prestress, frequency, creep
 
 

@@ -9,12 +9,13 @@ import pytest
 from tenscell.cli import main as cli_main
 from tenscell.fitting import fit
 from tenscell.io.data import bundled
+from tenscell.fitting import VoigtModel
 
 
 @pytest.fixture(scope="module")
 def fit_json(tmp_path_factory):
     """fit.json of a fast per-family fit of the prestress sweep (its model prestress is s × prestress in Pa)."""
-    result = fit(bundled("stamenovic2002"), tendons="per-family", starts=1, hops=2, seed=0, progress=False)
+    result = fit(bundled("stamenovic2002"), model=VoigtModel(tendons="per-family"), starts=1, hops=2, seed=0, progress=False)
     path = tmp_path_factory.mktemp("fit") / "fit.json"
     path.write_text(json.dumps(result.to_dict()))
     return path, result
@@ -31,7 +32,7 @@ def test_creep_from_fit_is_the_fitted_cells_linear_creep(fit_json, tmp_path):
     pc = result.predicted_creep(0.1, 10.0, 61)
     # creep.json is in m/N; the fit's prediction in 1/Pa is J·2L
     assert doc["power_law_fits"]["linear"]["alpha"] == pytest.approx(pc.alpha, rel=1e-9)
-    assert doc["power_law_fits"]["linear"]["A_m_per_N"] * 2 * result.L == pytest.approx(pc.A, rel=1e-9)
+    assert doc["power_law_fits"]["linear"]["A_m_per_N"] * 2 * result.model.L == pytest.approx(pc.A, rel=1e-9)
 
 
 def test_simulate_from_fit_builds_the_fitted_law(fit_json):
@@ -44,8 +45,8 @@ def test_simulate_from_fit_builds_the_fitted_law(fit_json):
                                       "--freq", "0.1", "--out", "unused"])
     cell, law, _ = law_from_args(args)
     assert args.prestress_N == pytest.approx(result.value("s") * 500.0)
-    np.testing.assert_array_equal(law.EA, result.EA)
-    assert cell.strut_length == pytest.approx(result.L)
+    np.testing.assert_array_equal(law.EA, result.model.EA)
+    assert cell.strut_length == pytest.approx(result.model.L)
     np.testing.assert_allclose(np.asarray(law.elastic(cell.lengths)), args.prestress_N * cell.T0, rtol=1e-9)
 
 
@@ -163,9 +164,9 @@ def test_study_sensitivity_from_fit_takes_the_fitted_paper_cell(fit_json, tmp_pa
 
     path, result = fit_json
     kw = _fitted_paper_cell(path)
-    assert kw["L"] == pytest.approx(result.L) and kw["P"] == pytest.approx(
+    assert kw["L"] == pytest.approx(result.model.L) and kw["P"] == pytest.approx(
         result.value("s") * np.median(result.data.prestress))
-    np.testing.assert_array_equal(kw["EA"], result.EA)
+    np.testing.assert_array_equal(kw["EA"], result.model.EA)
     assert cli_main(["study", "no-if", "--from-fit", str(path), "--out", str(tmp_path / "x")]) == 2
     assert "applies to study sensitivity" in capsys.readouterr().err
 

@@ -11,6 +11,7 @@ import scipy.linalg
 import tenscell
 from tenscell.fitting.models.voigt_creep import creep_from_modes, pair_kernels, step_kernel
 from tenscell.timedomain import creep_compliance
+from tenscell.fitting import VoigtModel
 
 
 def _closed(a, b, t):
@@ -183,7 +184,7 @@ def test_joint_fit_of_creep_and_frequency_data_recovers_the_model():
     creep = _creep_data(cell, t, P, EA, c).with_prestress(400.0)
     Gs, Gl = tenscell.moduli(tenscell.linearize(cell, P=P, EA=EA, c=c), f)
     freq = RheologyData(f, Gs, Gl, prestress=np.full(f.size, 400.0), source="synthetic moduli")
-    r = fit([creep, freq], cell, tendons="uniform", starts=2, hops=3, seed=0, fixed={"L": L}, progress=False)
+    r = fit([creep, freq], cell, model=VoigtModel(tendons="uniform"), starts=2, hops=3, seed=0, fixed={"L": L}, progress=False)
     assert max(x.rms_log10_error for x in r.fits) < 1e-3
     assert r.fits[0].axis == "time" and r.fits[0].J_model.shape == t.shape
     assert r.value("EA") == pytest.approx(EA, rel=1e-3)

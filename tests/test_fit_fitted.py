@@ -9,6 +9,7 @@ import pytest
 import tenscell
 from tenscell.fitting.fitted import FittedCell, load_fit, predicted_creep, scaled_cell
 from tenscell.timedomain import creep_compliance, fit_power_law
+from tenscell.fitting import VoigtModel
 
 F = np.logspace(-2, 3, 9)
 
@@ -114,8 +115,8 @@ def small_fits():
     from tenscell.io.data import bundled
 
     kw = dict(starts=1, hops=2, seed=0, progress=False)
-    return (fit(bundled("fabry2001"), tendons="per-family", fixed={"L": 0.8}, **kw),
-            fit(bundled("stamenovic2002"), tendons="uniform", **kw))
+    return (fit(bundled("fabry2001"), model=VoigtModel(tendons="per-family"), fixed={"L": 0.8}, **kw),
+            fit(bundled("stamenovic2002"), model=VoigtModel(tendons="uniform"), **kw))
 
 
 def test_fit_json_rebuilds_the_fitted_cell_to_rounding(small_fits, tmp_path):
@@ -124,7 +125,7 @@ def test_fit_json_rebuilds_the_fitted_cell_to_rounding(small_fits, tmp_path):
         path = tmp_path / "fit.json"
         path.write_text(json.dumps(result.to_dict()))
         back = load_fit(path)
-        assert back.L == pytest.approx(result.L, rel=1e-15)
+        assert back.L == pytest.approx(result.model.L, rel=1e-15)
         if d.kind == "prestress":
             for p in np.unique(d.prestress):
                 sel = d.prestress == p
@@ -134,8 +135,8 @@ def test_fit_json_rebuilds_the_fitted_cell_to_rounding(small_fits, tmp_path):
             np.testing.assert_allclose(np.array(back.moduli(d.frequency_hz)), np.array(result.moduli(d.frequency_hz)),
                                        rtol=1e-12)
         # the linear model is the fitted cell's, at the fitted strut length
-        assert result.linear.cell.strut_length == pytest.approx(result.L)
-        np.testing.assert_array_equal(result.linear.EA, result.EA)
+        assert result.linear.cell.strut_length == pytest.approx(result.model.L)
+        np.testing.assert_array_equal(result.linear.EA, result.model.EA)
 
 
 def test_report_has_identifiability_comparison_and_creep_sections(small_fits):

@@ -13,6 +13,7 @@ from tenscell.fitting.models.catalog import MECHANISMS
 from tenscell.fitting.scores import (compare_models, fit_structural_damping, information_criteria, split_holdout,
                                      structural_damping_moduli)
 from tenscell.io.data import DataError, RheologyData, bundled
+from tenscell.fitting import VoigtModel
 
 F = np.logspace(-2, 2.5, 14)
 
@@ -160,7 +161,7 @@ def test_compare_models_scores_every_model_on_the_same_residuals():
 
     data = _law_data(seed=3)
     train, held = split_holdout(data, 0.3, 3.0)
-    homog = fit(train, tendons="uniform", starts=1, hops=3, seed=0, progress=False)
+    homog = fit(train, model=VoigtModel(tendons="uniform"), starts=1, hops=3, seed=0, progress=False)
     cmp_ = compare_models(homog, held_out=held, holdout=(0.3, 3.0))
     assert [s.name for s in cmp_.scores] == ["homogeneous tensegrity", "structural damping (power law)"]
     sd = fit_structural_damping(train)

@@ -20,6 +20,7 @@ from tenscell import fitting
 from tenscell.reports.fit import fit_markdown
 from tenscell.cli import main as cli_main
 from tenscell.io.data import DataError, RheologyData, bundled, write_csv
+from tenscell.fitting import VoigtModel
 
 F5 = np.logspace(-2, 3, 7)
 
@@ -168,7 +169,7 @@ def test_uniform_fit_recovers_known_parameters(cell):
     """Data from the homogeneous model itself: the uniform fit must find them (L fixed: it is a gauge)."""
     f = np.logspace(-1, 3, 9)
     data = _synthetic(cell, f, 300.0, 2.0, 0.05)
-    r = fitting.fit(data, cell, tendons="uniform", starts=2, hops=5, seed=1, fixed={"L": 1.0}, progress=False)
+    r = fitting.fit(data, cell, model=VoigtModel(tendons="uniform"), starts=2, hops=5, seed=1, fixed={"L": 1.0}, progress=False)
     assert r.converged and r.rms_log10_error < 1e-6
     assert r.value("EA") == pytest.approx(2.0, rel=1e-4)
     assert r.value("c") == pytest.approx(0.05, rel=1e-4)
@@ -183,7 +184,7 @@ def test_prestress_scale_recovered(cell):
     f = np.full(6, 0.1)
     P_exp = np.linspace(350, 1900, 6)
     data = _synthetic(cell, f, 0.3, 40.0, 20.0, prestress=P_exp)
-    r = fitting.fit(data, cell, tendons="uniform", starts=2, hops=5, seed=0, fixed={"L": 1.0}, progress=False)
+    r = fitting.fit(data, cell, model=VoigtModel(tendons="uniform"), starts=2, hops=5, seed=0, fixed={"L": 1.0}, progress=False)
     assert r.rms_log10_error < 1e-6
     assert r.value("s") == pytest.approx(0.3, rel=1e-3)
     np.testing.assert_allclose(r.prestress_model(P_exp), 0.3 * P_exp, rtol=1e-3)
@@ -191,7 +192,7 @@ def test_prestress_scale_recovered(cell):
 
 def test_homogeneous_model_cannot_fit_power_law(cell):
     """The paper's point: a homogeneous cell misses G' ~ f^0.2 over five decades."""
-    r = fitting.fit(bundled("fabry2001"), cell, tendons="uniform", starts=2, hops=10, seed=0, progress=False)
+    r = fitting.fit(bundled("fabry2001"), cell, model=VoigtModel(tendons="uniform"), starts=2, hops=10, seed=0, progress=False)
     assert not r.converged
     assert r.rms_log10_error > 0.1
     assert "did not reach" in r.message
@@ -242,7 +243,7 @@ def test_same_seed_same_result_and_jobs_independent(cell):
 
 
 def test_not_converged_is_said(cell):
-    r = fitting.fit(bundled("stamenovic2002"), cell, tendons="uniform", starts=1, hops=1, tolerance=1e-9,
+    r = fitting.fit(bundled("stamenovic2002"), cell, model=VoigtModel(tendons="uniform"), starts=1, hops=1, tolerance=1e-9,
                     progress=False)
     assert not r.converged
     assert "did not reach" in r.message
@@ -257,9 +258,9 @@ def test_result_records(cell):
     json.dumps(d, allow_nan=False)
     assert d["n_free_parameters"] == cell.m + 3 and d["n_residuals"] == 16
     assert len(r.parameters) == cell.m + 3
-    assert np.all(r.EA > 0) and r.EA.shape == (cell.m,) and np.all(r.c == r.c[0])
+    assert np.all(r.model.EA > 0) and r.model.EA.shape == (cell.m,) and np.all(r.model.c == r.model.c[0])
     lo, hi, dec = r.stiffness_spread
-    assert lo == pytest.approx(r.EA.min()) and dec == pytest.approx(math.log10(hi / lo))
+    assert lo == pytest.approx(r.model.EA.min()) and dec == pytest.approx(math.log10(hi / lo))
     np.testing.assert_allclose(np.sqrt(np.mean(r.residuals**2)), r.rms_log10_error)
     # history is a best-so-far trajectory in time
     t = [h[0] for h in r.history]
@@ -404,8 +405,8 @@ class _Toy(fitting.problem.Problem):
 
     def __init__(self, undetermined=False):
         self.undetermined = undetermined
-        self.names, self.free = ("a", "b", "c"), np.ones(3, bool)
-        self.lower, self.upper, self.fixed_log = np.full(3, -5.0), np.full(3, 5.0), np.zeros(3)
+        self.params = fitting.Parameters.from_rows([(n, "", "toy", n) for n in "abc"], np.full(3, -5.0),
+                                                   np.full(3, 5.0), np.ones(3, bool), np.zeros(3))
         self.omega, self.sources, self.dataset_index = np.ones(2), ("toy",), np.zeros(2, int)
         self.weights, self.y_obs = np.ones(4), np.zeros(4)
 

@@ -20,6 +20,7 @@ from tenscell.fitting.models.voigt import _central
 from tenscell.io.data import DataError, RheologyData, bundled, write_csv
 from tenscell.reports.fit import fit_markdown
 from tenscell.sensitivity import analytic_elasticities
+from tenscell.fitting import VoigtModel
 
 
 @pytest.fixture(scope="module")
@@ -143,12 +144,13 @@ def test_storage_elasticity_matches_core_and_its_jacobian(cell):
 
 def test_min_prestress_elasticity_is_respected(cell):
     data = bundled("fabry2001")
-    kw = dict(tendons="per-family", damping="per-family", starts=1, hops=1, seed=0, progress=False)
-    free = fitting.fit(data, cell, **kw)
+    layout = dict(tendons="per-family", damping="per-family")
+    kw = dict(starts=1, hops=1, seed=0, progress=False)
+    free = fitting.fit(data, cell, model=VoigtModel(**layout), **kw)
     bound = 0.5 * (1.0 + float(free.problem.prestress_elasticity(free.theta).max()))
-    held = fitting.fit(data, cell, min_prestress_elasticity=bound, **kw)
+    held = fitting.fit(data, cell, model=VoigtModel(**layout, min_prestress_elasticity=bound), **kw)
     assert held.problem.prestress_elasticity(held.theta).min() >= 0.99 * bound
-    assert held.prestress.reference_storage.min() == pytest.approx(
+    assert fitting.prestress_activity(held).reference_storage.min() == pytest.approx(
         float(held.problem.prestress_elasticity(held.theta).min()), rel=1e-9)
     assert "∂lnG'/∂lnP at 0.1 Hz at or above" in fit_markdown(held)
 
@@ -156,14 +158,14 @@ def test_min_prestress_elasticity_is_respected(cell):
 def test_min_prestress_share_is_respected(cell):
     """A fit whose prestress ends with a small share keeps the asked share when the option asks for more."""
     data = bundled("fabry2001")
-    kw = dict(tendons="per-family", starts=1, hops=1, seed=0, progress=False)
-    free = fitting.fit(data, cell, **kw)
+    kw = dict(starts=1, hops=1, seed=0, progress=False)
+    free = fitting.fit(data, cell, model=VoigtModel("per-family"), **kw)
     free_share = float(free.problem.prestress_share(free.theta).min())
     bound = 0.5 * (1.0 + free_share)  # above what the unconstrained fit chose
-    held = fitting.fit(data, cell, min_prestress_share=bound, **kw)
+    held = fitting.fit(data, cell, model=VoigtModel("per-family", min_prestress_share=bound), **kw)
     share = held.problem.prestress_share(held.theta)
     assert share.min() >= 0.99 * bound
-    assert held.prestress.share.min() == pytest.approx(share.min())
+    assert fitting.prestress_activity(held).share.min() == pytest.approx(share.min())
     assert held.to_dict()["constraints"]["min_prestress_share"] == bound
     assert "required to keep the prestress share" in fit_markdown(held)
 
@@ -173,9 +175,9 @@ def test_inert_prestress_is_said(cell):
     f = np.logspace(-1, 2, 6)
     a, b = _moduli(cell, 1e-9, 2.0, 0.05, f)
     data = RheologyData(frequency_hz=f, G_storage=a, G_loss=b, source="voigt")
-    r = fitting.fit(data, cell, tendons="uniform", starts=1, hops=0, seed=0, fixed={"L": 1.0, "P": 1e-9},
+    r = fitting.fit(data, cell, model=VoigtModel(tendons="uniform"), starts=1, hops=0, seed=0, fixed={"L": 1.0, "P": 1e-9},
                     progress=False)
-    pa = r.prestress
+    pa = fitting.prestress_activity(r)
     assert pa.inert and pa.share.max() < 1e-6 and np.abs(pa.storage).max() < 1e-6
     assert "inert" in pa.verdict() and "Voigt springs" in fit_markdown(r)
 
@@ -204,7 +206,7 @@ def test_compact_coordinates(cell):
 
 
 def test_max_decades_is_respected(cell):
-    r = fitting.fit(bundled("fabry2001"), cell, starts=1, hops=1, max_nfev=60, seed=0, max_decades=2.5,
+    r = fitting.fit(bundled("fabry2001"), cell, starts=1, hops=1, max_nfev=60, seed=0, model=VoigtModel(max_decades=2.5),
                     progress=False)
     assert r.stiffness_spread[2] <= 2.5 + 1e-9
     assert "2.5 decades" in fit_markdown(r)
@@ -231,7 +233,7 @@ def test_compactness_study_front(cell):
 # --- recovery of known parameters --------------------------------------------------------
 def test_joint_fit_recovers_known_parameters(cell):
     sweep, freq, _, _ = _joint_truth(cell)
-    r = fitting.fit([sweep, freq], cell, tendons="per-family", damping="per-family", starts=2, hops=4, seed=0,
+    r = fitting.fit([sweep, freq], cell, model=VoigtModel(tendons="per-family", damping="per-family"), starts=2, hops=4, seed=0,
                     fixed={"L": 1.0}, progress=False)
     assert r.converged and max(f.rms_log10_error for f in r.fits) < 1e-6
     for name, truth in (("EA_actin", 3.0), ("EA_intermediate_filament", 0.4), ("c_actin", 0.02),
@@ -242,7 +244,7 @@ def test_joint_fit_recovers_known_parameters(cell):
 
 def test_joint_fit_recovers_an_unstated_prestress(cell):
     sweep, freq, _, _ = _joint_truth(cell, state_prestress=False)
-    r = fitting.fit([sweep, freq], cell, tendons="per-family", damping="per-family", starts=2, hops=4, seed=0,
+    r = fitting.fit([sweep, freq], cell, model=VoigtModel(tendons="per-family", damping="per-family"), starts=2, hops=4, seed=0,
                     fixed={"L": 1.0}, progress=False)
     assert r.converged
     assert r.value("P_data[1]") == pytest.approx(1000.0, rel=1e-4)
@@ -260,7 +262,7 @@ def _exact(cell):
 def test_search_stops_at_its_target(cell):
     """Exact data: every start stops as soon as one meets the polish target, not after its hops."""
     data = _exact(cell)
-    kw = dict(tendons="uniform", starts=3, hops=50, patience=50, seed=0, progress=False)
+    kw = dict(model=VoigtModel("uniform"), starts=3, hops=50, patience=50, seed=0, progress=False)
     r = fitting.fit(data, cell, **kw)
     assert r.stop_reason == "met the polish target"
     assert r.rms_log10_error <= 0.2 * r.tolerance
@@ -281,7 +283,7 @@ def test_search_stops_at_its_target(cell):
 
 def test_warm_start(cell):
     data = _exact(cell)
-    kw = dict(tendons="per-family", starts=1, hops=0, progress=False)
+    kw = dict(model=VoigtModel("per-family"), starts=1, hops=0, progress=False)
     a = fitting.fit(data, cell, seed=0, max_nfev=20, polish=1e-12, **kw)
     b = fitting.fit(data, cell, seed=5, initial=a, max_nfev=1, **kw)
     assert b.rms_log10_error <= a.rms_log10_error * (1 + 1e-9)
@@ -292,13 +294,13 @@ def test_warm_start(cell):
 # --- result conventions -----------------------------------------------------------------
 def test_joint_result_conventions(cell):
     sweep, freq, _, _ = _joint_truth(cell)
-    r = fitting.fit([sweep, freq], cell, tendons="per-family", damping="per-family", starts=1, hops=1, seed=0,
+    r = fitting.fit([sweep, freq], cell, model=VoigtModel(tendons="per-family", damping="per-family"), starts=1, hops=1, seed=0,
                     progress=False)
     text = repr(r)
     assert len(text.splitlines()) <= 6 and len(text) < 800
     df = r.to_dataframe()
     assert len(df) == 13 and {"dataset", "frequency_Hz", "G_storage_model_Pa", "log10_error_loss"} <= set(df.columns)
-    assert set(r.prestress.to_dataframe().columns) >= {"dlnGstorage_dlnP", "prestress_share"}
+    assert set(fitting.prestress_activity(r).to_dataframe().columns) >= {"dlnGstorage_dlnP", "prestress_share"}
     doc = r.to_dict()
     json.dumps(doc, allow_nan=False)
     assert [d["n_points"] for d in doc["datasets"]] == [6, 7]

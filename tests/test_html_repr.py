@@ -12,6 +12,7 @@ import pytest
 import tenscell as tc
 from tenscell._results import CORRELATION_THRESHOLD, LN_FACTOR_FROM, ln_error, plus_minus
 from tenscell.io.data import RheologyData
+from tenscell.fitting import VoigtModel
 
 
 def _cells(text: str) -> list[str]:
@@ -74,7 +75,7 @@ def test_errors_of_ln_parameters_are_factors_beyond_half_the_value():
 def test_the_text_report_says_not_determined_once_per_reason():
     f = np.logspace(-1, 2, 6)
     data = RheologyData(f, 100 * f ** 0.2, 20 * f ** 0.2)
-    r = tc.fit(data, tendons="per-tendon", starts=1, seed=0, progress=False)
+    r = tc.fit(data, model=VoigtModel(tendons="per-tendon"), starts=1, seed=0, progress=False)
     text = r.report()
     missing = [p.name for p, (se, _) in zip(r.parameters, r.standard_errors) if se is None]
     assert missing, "a 36-parameter fit to 6 points leaves parameters undetermined"

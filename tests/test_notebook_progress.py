@@ -45,7 +45,7 @@ def _text(outputs) -> str:
 
 FIT = ["import tenscell as tc",
        "data = tc.read_data('trios_lims_temperature_steps.txt', temperature=25)\n"
-       "r = tc.fit(data, tendons='uniform', starts=2)\nprint('rms', r.rms_log10_error)",
+       "r = tc.fit(data, model='voigt-uniform', starts=2)\nprint('rms', r.rms_log10_error)",
        "import gc; gc.collect(); print('done')"]
 
 

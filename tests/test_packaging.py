@@ -39,7 +39,7 @@ def test_a_missing_extra_is_one_line_with_the_install_hint(module, extra):
 
 def test_fitting_a_sweep_imports_no_heavy_dependency():
     code = ("import sys\nimport tenscell as tc\n"
-            "tc.fit(tc.bundled('fabry2001'), tendons='uniform', starts=1, progress=False)\n"
+            "tc.fit(tc.bundled('fabry2001'), model='voigt-uniform', starts=1, progress=False)\n"
             "print(sorted(m for m in ('cvxopt', 'dask', 'distributed', 'pyarrow') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == "[]"

@@ -20,6 +20,7 @@ from tenscell.cli import main
 from tenscell.io.data import DataError, RheologyData, read_csv
 from tenscell.io.structure_files import load_structure_file
 from tenscell.model.structure import StructureError
+from tenscell.fitting import VoigtModel
 
 HEADER = "frequency_Hz,G_storage_Pa,G_loss_Pa\n"
 GOOD_ROWS = "".join(f"{f},{100 * f ** 0.2},{10 * f ** 0.2}\n" for f in (0.1, 0.3, 1, 3, 10, 30, 100))
@@ -182,8 +183,8 @@ def test_row_order_does_not_change_the_data_or_the_fit(tmp_path):
                             G_loss=d.G_loss[order], source="shuffled")
     for name in ("frequency_hz", "G_storage", "G_loss"):
         np.testing.assert_array_equal(getattr(shuffled, name), getattr(d, name))
-    a = fitting.fit(d, tendons="uniform", starts=1, hops=2, seed=5, progress=False)
-    b = fitting.fit(shuffled, tendons="uniform", starts=1, hops=2, seed=5, progress=False)
+    a = fitting.fit(d, model=VoigtModel(tendons="uniform"), starts=1, hops=2, seed=5, progress=False)
+    b = fitting.fit(shuffled, model=VoigtModel(tendons="uniform"), starts=1, hops=2, seed=5, progress=False)
     assert a.rms_log10_error == b.rms_log10_error
     np.testing.assert_array_equal(a.theta, b.theta)
 
@@ -233,7 +234,7 @@ def test_fit_from_python_bins_dense_data_as_the_command_does():
 
     f = np.logspace(-2, 2, 2000)
     d = RheologyData(frequency_hz=f, G_storage=300 * f ** 0.2, G_loss=60 * f ** 0.2, source="dense")
-    quick = dict(tendons="uniform", starts=1, hops=0, seed=0, progress=False)
+    quick = dict(model=fitting.VoigtModel("uniform"), starts=1, hops=0, seed=0, progress=False)
     r = fitting.fit(d, max_points=40, **quick)
     assert r.data.n <= 40 and binning_notes(r.data) and r.problem.n_points == r.data.n
     assert f.min() <= r.data.frequency_hz.min() and r.data.frequency_hz.max() <= f.max()

@@ -10,6 +10,7 @@ import scipy.optimize
 import tenscell
 from tenscell._results import CORRELATION_THRESHOLD, plus_minus
 from tenscell.fitting.scores import fit_structural_damping, structural_damping_moduli
+from tenscell.fitting import VoigtModel
 
 DATA = Path(__file__).parent / "data"
 
@@ -63,7 +64,7 @@ def test_structural_damping_errors_agree_with_curve_fit():
 @pytest.fixture(scope="module")
 def fitted():
     data = tenscell.read_data(DATA / "trios_lims_temperature_steps.txt", temperature=25)
-    return tenscell.fit(data, tendons="per-family", starts=1, progress=False)
+    return tenscell.fit(data, model=VoigtModel(tendons="per-family"), starts=1, progress=False)
 
 
 def test_every_parameter_shows_its_error(fitted):

@@ -257,7 +257,7 @@ def test_cylindrical_reference_lies_on_the_cylinder_and_is_valid():
     # threefold symmetric: a +120° turn about the axis maps the nodes onto each other
     c, s = math.cos(2 * math.pi / 3), math.sin(2 * math.pi / 3)
     turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    perm = shapes._TURN
+    perm = shapes.TURN
     assert all(np.allclose(turn @ x[i], x[perm[i]], atol=1e-12) for i in range(13))
     lin = linearize(cell, 1000.0)
     assert np.all(np.linalg.eigvalsh(lin.K0) > 0)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from typing import Mapping
 
-__all__ = ["TenscellError", "NotPositiveDefiniteError", "option", "spelled", "raw_message"]
+__all__ = ["TenscellError", "NotPositiveDefiniteError", "CapabilityError", "option", "spelled", "raw_message"]
 
 # the marks around an option named in a message: start, name/value separator, end (control characters that
 # never occur in a file name or a header a message quotes: readers refuse control characters in headers)
@@ -72,6 +72,16 @@ class TenscellError(Exception):
 
     def __str__(self) -> str:
         return spelled(Exception.__str__(self))
+
+
+class CapabilityError(TenscellError, ValueError):
+    """A member or an analysis asked of a model that does not have it: the tendons of a structure-free formula, the
+    Voigt cell's stiffness layout of a mechanism's fit, the ensemble of a model without a distributed property...
+
+    The one error every such request raises (what a fitted model has is declared by its
+    :class:`tenscell.fitting.models.base.Capabilities`); the message names the member, the model and, where there is
+    one, what to use instead.
+    """
 
 
 class NotPositiveDefiniteError(TenscellError, ValueError):

@@ -50,6 +50,8 @@ from .model.shapes import paper_cell
 from .model.structure import STRUT
 
 __all__ = [
+    "base_parameters",
+    "monte_carlo_spreads",
     "Elasticities",
     "analytic_elasticities",
     "elasticities",
@@ -241,7 +243,7 @@ def _dynamic_elasticities(lin: LinearModel, f: np.ndarray) -> Elasticities:
     ``∂J/∂P = −yᵀ(Σ T0∇²l)x − Σ_j T0_j ∂k*_j/∂T (yᵀa_j)(a_jᵀx)``; a cytoplasm
     (``lin.viscosity``) adds ``iωη`` to G and depends on none of them.
     """
-    from .linear.dynamic import _solves
+    from .linear.dynamic import dynamic_solves
 
     if lin.basis is not None:  # the per-frequency solves of linear.dynamic work on the full, singular K(ω)
         raise ValueError(f"exact elasticities of a law with internal dynamics ({type(lin.law).__name__}) are not "
@@ -250,7 +252,7 @@ def _dynamic_elasticities(lin: LinearModel, f: np.ndarray) -> Elasticities:
     cell, law, w = lin.cell, lin.law, 2 * np.pi * f
     l, T = cell.lengths, lin.P * cell.T0
     dT, dk = law.complex_stiffness_derivatives(l, T, w)
-    x, y = _solves(cell, lin.P, law.complex_stiffness(l, T, w), both=True)  # one LU per frequency
+    x, y = dynamic_solves(cell, lin.P, law.complex_stiffness(l, T, w), both=True)  # one LU per frequency
     assert y is not None
     Js = x @ np.asarray(cell.probe, dtype=float)
     prod = (cell.A.T @ y.T).T * (cell.A.T @ x.T).T  # (nf, m): (yᵀa_j)(a_jᵀx)
@@ -412,7 +414,9 @@ class PerturbationRow:
         return max(v) if v else math.nan
 
 
-def _base_parameters(alpha, delta, L, P, EA, c, intermediate_filaments):
+def base_parameters(alpha, delta, L, P, EA, c, intermediate_filaments):
+    """``(cell, EA, c)`` of a base point of the sensitivity analysis: the paper cell at (α, δ, L) and its tendons'
+    stiffness (N) and damping (N·s/m) per tendon, checked."""
     cell = paper_cell(alpha=alpha, delta=delta, L=L, intermediate_filaments=intermediate_filaments)
     m = cell.m
     return cell, positive_array("EA", EA, (m,), "N"), positive_array("c", c, (m,), "N·s/m")
@@ -448,7 +452,7 @@ def perturbation_table(
         raise ValueError(f"change must be a fraction below 1, got {change!r}")
     alpha_change = change if alpha_change is None else positive_scalar("alpha_change", alpha_change, "rad")
     f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
-    cell, EA, c = _base_parameters(alpha, delta, L, P, EA, c, intermediate_filaments)
+    cell, EA, c = base_parameters(alpha, delta, L, P, EA, c, intermediate_filaments)
     delta0 = float(cell.parameters["delta"])
     fam = [_family_tag(x) for x in cell.structure.families]
 
@@ -677,7 +681,7 @@ def monte_carlo(
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n (number of draws) must be a whole number >= 1, got {n!r}")
-    spread, alpha_spread = _mc_spreads(spread, alpha_spread, parameters)
+    spread, alpha_spread = monte_carlo_spreads(spread, alpha_spread, parameters)
     names = monte_carlo_names(paper_cell().m, parameters)
     factors = monte_carlo_factors(np.random.default_rng(seed), n, len(names), spread, alpha_spread, parameters)
     cs, cl, reasons = monte_carlo_draws(factors, parameters=parameters, alpha=alpha, delta=delta, L=L, P=P, EA=EA,
@@ -689,7 +693,8 @@ def monte_carlo(
                             label=label, frequency_hz=f)
 
 
-def _mc_spreads(spread, alpha_spread, parameters):
+def monte_carlo_spreads(spread, alpha_spread, parameters):
+    """``(spread, alpha_spread)`` of a Monte Carlo draw, checked against the parameters varied."""
     spread = positive_scalar("spread", spread)
     if spread >= 1:
         raise ValueError(f"spread must be a fraction below 1, got {spread!r}")
@@ -737,7 +742,7 @@ def monte_carlo_draws(factors, *, parameters: str = "all", alpha: float = 0.0, d
     factors = np.atleast_2d(np.asarray(factors, dtype=float))
     n = factors.shape[0]
     f = np.atleast_1d(positive_array("frequency", f_hz, unit="Hz")).ravel()
-    cell, EA, c = _base_parameters(alpha, delta, L, P, EA, c, True)
+    cell, EA, c = base_parameters(alpha, delta, L, P, EA, c, True)
     delta0 = float(cell.parameters["delta"])
     m = cell.m
     G0 = modulus(compliance(linearize(cell, P=P, EA=EA, c=c), f), cell.strut_length)

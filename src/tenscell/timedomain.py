@@ -76,6 +76,7 @@ __all__ = [
     "RealizationWarning",
     "TALBOT_NODES",
     "invert_laplace",
+    "talbot_contour",
     "realized_times",
 ]
 
@@ -111,6 +112,30 @@ def _warn_outside(band_hz, t, what: str) -> None:
             RealizationWarning, stacklevel=3)
 
 
+def talbot_contour(t, nodes: int = TALBOT_NODES) -> tuple[np.ndarray, np.ndarray]:
+    """The fixed Talbot contour of :func:`invert_laplace`: ``(s, w)``, each shape ``(len(t), nodes)``, with
+    ``f(t_i) = Re Σ_k w_ik F(s_ik)`` for every transform F (s in 1/s; the first node of each time is real).
+
+    Linear in F: the derivatives of ``f`` by a parameter are the same sum over the derivatives of F, which is how a
+    fit to creep or relaxation data gets its exact Jacobian (:mod:`tenscell.fitting.time_series`).
+    """
+    tt = np.atleast_1d(positive_array("t (time)", t, unit="s")).ravel()
+    M = int(nodes)
+    if M < 8:
+        raise ValueError(f"nodes must be an integer >= 8, got {nodes!r}")
+    r = 2.0 * M / (5.0 * tt)  # (nt,)
+    theta = np.arange(1, M) * (math.pi / M)
+    cot = 1.0 / np.tan(theta)
+    sigma = theta + (theta * cot - 1.0) * cot
+    s = np.empty((tt.size, M), dtype=complex)
+    s[:, 0] = r
+    s[:, 1:] = r[:, None] * (theta * (cot + 1j))[None, :]  # on the contour, r at theta = 0
+    w = np.empty((tt.size, M), dtype=complex)
+    w[:, 0] = 0.5 * np.exp(r * tt)
+    w[:, 1:] = np.exp(tt[:, None] * s[:, 1:]) * (1.0 + 1j * sigma[None, :])
+    return s, w * (r / M)[:, None]
+
+
 def invert_laplace(F, t, nodes: int = TALBOT_NODES) -> np.ndarray:
     """``f(t)`` from its Laplace transform ``F(s)`` by the fixed Talbot contour (Abate & Valkó 2004).
 
@@ -130,27 +155,15 @@ def invert_laplace(F, t, nodes: int = TALBOT_NODES) -> np.ndarray:
     ndarray, shape of ``t``
         Real values of f at the times.
     """
-    tt = positive_array("t (time)", t, unit="s")
-    shape = np.shape(tt)
-    tt = np.atleast_1d(tt).ravel()
-    M = int(nodes)
-    if M < 8:
-        raise ValueError(f"nodes must be an integer >= 8, got {nodes!r}")
-    r = 2.0 * M / (5.0 * tt)  # (nt,)
-    theta = np.arange(1, M) * (math.pi / M)
-    cot = 1.0 / np.tan(theta)
-    s = r[:, None] * (theta * (cot + 1j))[None, :]  # (nt, M-1) on the contour, r at theta = 0
-    sigma = theta + (theta * cot - 1.0) * cot
-    vals = np.asarray(F(np.concatenate([r.astype(complex), s.ravel()])), dtype=complex)
-    F0, Fs = vals[: tt.size].real, vals[tt.size:].reshape(s.shape)
-    total = 0.5 * F0 * np.exp(r * tt) + np.sum((np.exp(tt[:, None] * s) * Fs * (1.0 + 1j * sigma[None, :])).real,
-                                               axis=1)
-    return (r / M * total).reshape(shape)
+    shape = np.shape(positive_array("t (time)", t, unit="s"))
+    s, w = talbot_contour(t, nodes)
+    vals = np.asarray(F(s.ravel()), dtype=complex).reshape(s.shape)
+    return np.sum((w * vals).real, axis=1).reshape(shape)
 
 
 def _approximate(lin) -> bool:
     """Whether the model's time domain would come from a band-limited realization (a springpot's Prony series)."""
-    R = getattr(lin, "realization", None)
+    R = lin.realization
     return R is not None and R.band_hz is not None
 
 
@@ -159,7 +172,7 @@ def _method(lin, method: str) -> str:
         raise ValueError(f"method must be 'auto', 'spectrum' or 'inversion', got {method!r}")
     if method == "auto":
         return "inversion" if _approximate(lin) else "spectrum"
-    if method == "inversion" and getattr(lin, "law", None) is None:
+    if method == "inversion" and lin.law is None:
         raise ValueError("method='inversion' needs a model built from a tendon law (lin.law is None)")
     return method
 

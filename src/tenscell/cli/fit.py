@@ -195,7 +195,6 @@ def spec_from_args(args):
     ValueError naming the flag for a Voigt flag given with another model.
     """
     from ..fitting.models import get_model
-    from ..fitting.models.voigt import VoigtModel
 
     voigt = {"tendons": (args.tendons, "per-tendon", "--tendons"), "damping": (args.damping, "uniform", "--damping"),
              "min_prestress_share": (getattr(args, "min_prestress_share", None), None, "--min-prestress-share"),
@@ -203,13 +202,12 @@ def spec_from_args(args):
              "min_prestress_elasticity": (getattr(args, "min_prestress_elasticity", None), None,
                                           "--min-prestress-elasticity")}
     given = {k: v for k, (v, default, _) in voigt.items() if v != default}
-    if args.model is None:
-        return VoigtModel(**{k: v for k, (v, _, _) in voigt.items()})
-    spec = get_model(args.model)
-    if isinstance(spec, VoigtModel):  # --model voigt-per-family: --tendons may only agree with it
-        if "tendons" in given and given["tendons"] != spec.tendons:
+    spec = get_model("voigt-per-tendon" if args.model is None else args.model)
+    if spec.capabilities.voigt_options:  # --model voigt-per-family: --tendons may only agree with it
+        if args.model is not None and "tendons" in given and given["tendons"] != spec.tendons:
             raise ValueError(f"--tendons {given['tendons']} contradicts --model {args.model}")
-        return VoigtModel(**{**{k: v for k, (v, _, _) in voigt.items()}, "tendons": spec.tendons})
+        options = {k: v for k, (v, _, _) in voigt.items() if args.model is None or k != "tendons"}
+        return spec.with_options(**options)
     if given:
         flag = voigt[next(iter(given))][2]
         raise ValueError(f"{flag} applies to the Voigt cell (no --model, or --model voigt-*), not to --model "
@@ -363,7 +361,7 @@ def read_inputs(args, min_points: int) -> tuple[list, list[str]]:
     for path, data, thin in zip(args.data, datasets, binned):
         lines.append(data.provenance.line())
         if thin is not data:
-            axis = "time" if getattr(data, "kind", None) == "creep" else "frequency"
+            axis = "time" if data.kind == "creep" else "frequency"
             weights = "each bin weighing as one point" if thin.counts is None and not thin.has_sd else \
                 "each bin weighing √(its points)" if not thin.has_sd else "weighted by the stated SDs"
             lines.append(f"{data.n:,} points of {Path(path).name} binned to {thin.n:,} in log {axis} (--max-points "
@@ -587,11 +585,7 @@ def _profile(args, result) -> None:
 
 def _min_points(spec) -> int:
     """Points a single data set needs for this model (the layout's own check is exact; this one reads early)."""
-    from ..fitting.models.voigt import VoigtModel, required_points
-
-    if isinstance(spec, VoigtModel):
-        return required_points(spec.tendons, spec.damping)
-    return 2
+    return spec.min_points()
 
 
 def _split_holdout(args, datasets):
@@ -614,9 +608,7 @@ def _check_ensemble(args, spec) -> None:
     """``--ensemble K``: a mechanism drawn from a distribution, and K >= 2 (or 0: none), before any fitting."""
     if not args.ensemble:
         return
-    from ..fitting.models.mechanism import Mechanism
-
-    if not isinstance(spec, Mechanism) or not spec.heterogeneous:
+    if not spec.capabilities.heterogeneous:
         raise ValueError(f"--ensemble: model {spec.name} draws no tendon property from a distribution: every "
                          "assignment is the same cell, so it has no ensemble (0: none)")
     if args.ensemble == 1:

@@ -363,12 +363,12 @@ def _open_run(args, what: str):
     """The output set and work directory of a population command, checked before any work: the scheduler is
     reachable (``--scheduler``) and a ``--resume`` has an unfinished ``what`` to resume."""
     from ..io.outputs import OutputSet
-    from ..population import _engine
+    from ..population import check_scheduler
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     work = _work_dir(args, out.target)
     if args.scheduler is not None:
-        _engine.check_scheduler(args.scheduler)
+        check_scheduler(args.scheduler)
         reach_scheduler(args.scheduler)
     if args.resume and not work.is_dir():
         raise ValueError(f"--resume: no unfinished {what} in {work}")

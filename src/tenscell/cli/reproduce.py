@@ -34,12 +34,13 @@ def reproduce_homogeneous(out: Path, log) -> None:
 
 
 def _write_fit(out: Path, stem: str, result, baseline, title: str, log) -> None:
+    from ..fitting.prestress import prestress_activity
     from .fit import fit_outputs
 
     outputs = fit_outputs(result, baseline, title=title)
     for ext in ("png", "csv", "json", "md"):
         outputs[ext](out / f"{stem}.{ext}")
-    pa = result.prestress
+    pa = prestress_activity(result)
     each = ", ".join(f"{f.rms_log10_error:.4f}" for f in result.fits)
     log(f"{stem}.png, .csv, .json, .md (rms {each}, homogeneous {baseline.rms_log10_error:.3f}; "
         f"dlnG'/dlnP at {pa.reference_frequency_hz:g} Hz {pa.reference_storage.min():.3g} to "

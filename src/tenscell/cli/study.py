@@ -5,6 +5,7 @@ import math
 import os
 import time
 from pathlib import Path
+from typing import Any
 
 from ._args import add_data_options, add_out, data_options_from_args, ensemble_size, integer, number, number_list, path
 from .fit import stated_prestress
@@ -133,11 +134,11 @@ def _study_compactness(out: Path, log, args=None) -> None:
     written = "compactness.csv, compactness_front.png, compactness.md"
     knee = s.knee_fit
     if knee is not None:
-        plotting.save(stiffness_histogram(knee.EA, families=knee.cell.structure.families,
+        plotting.save(stiffness_histogram(knee.model.EA, families=knee.cell.structure.families,
                                           title=f"Stiffnesses at the narrowest bound within tolerance ({s.knee:g} "
                                                 "decades)"), out / "compactness_histogram.png")
         write_csv_rows(out / "compactness_knee_stiffness.csv", ["tendon", "family", "EA_N"],
-                       ((j, fam, float(e)) for j, (fam, e) in enumerate(zip(knee.cell.structure.families, knee.EA))))
+                       ((j, fam, float(e)) for j, (fam, e) in enumerate(zip(knee.cell.structure.families, knee.model.EA))))
         written += ", compactness_histogram.png, compactness_knee_stiffness.csv"
     write_text(out / "compactness.md", compactness_markdown(s))
     log(written)
@@ -366,10 +367,8 @@ def _fitted_paper_cell(path) -> dict:
     """The sensitivity study's keyword arguments for the fitted paper cell in ``path`` (ValueError otherwise)."""
     from ..fitting.fitted import load_fit
 
-    from ..fitting.fitted import FittedCell
-
-    model = load_fit(path)
-    if not isinstance(model, FittedCell):
+    model: Any = load_fit(path)  # a fitted Voigt cell once its capabilities say so (EA, c, L)
+    if not model.capabilities.voigt_options:  # the Voigt cell's fitted EA, c and L
         raise ValueError(f"--from-fit {path}: the sensitivity study varies the paper cell's α, δ, L, EA and c; this "
                          f"fit is {model.describe()}, not a fit of the Voigt cell (tenscell fit without --model)")
     p = model.cell.parameters

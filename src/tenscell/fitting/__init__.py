@@ -26,6 +26,7 @@ In the manner of lmfit, every fit has the same layers:
 :func:`fit` runs them: ``fit(data)`` is the paper's per-tendon fit, ``fit(data, model=NAME)`` any other model.
 The Markdown report is :func:`tenscell.reports.fit.fit_markdown`.
 """
+from .._errors import CapabilityError
 from .entry import fit
 from .fitted import FittedCell, FittedFormula, FittedMechanism, FittedModel, load_fit
 from .models import (GROUPS, MODELS, RECOMMENDED, FitModel, Formula, Mechanism, Population, VoigtModel, get_model,
@@ -34,6 +35,7 @@ from .models.population import FittedPopulation
 from .models.catalog import MECHANISMS, PER_TENDON_VOIGT, mechanism_names
 from .models.mechanism import Field
 from .models.voigt import DAMPING_MODES, TENDON_MODES, FitProblem, make_problem, required_points
+from .parameters import ParameterSpec, Parameters
 from .prestress import PrestressActivity, prestress_activity
 from .records import DatasetFit, FitAlternative, FitCurve, FitParameter, data_axis
 from .curves import frequency_slopes, model_curve, prestress_slopes
@@ -49,6 +51,7 @@ load_any_fit = load_fit
 __all__ = [
     "fit",
     "FitModel",
+    "CapabilityError",
     "VoigtModel",
     "Mechanism",
     "Formula",
@@ -65,6 +68,8 @@ __all__ = [
     "TENDON_MODES",
     "DAMPING_MODES",
     "FitParameter",
+    "Parameters",
+    "ParameterSpec",
     "FitAlternative",
     "FitResult",
     "FitCurve",

@@ -95,7 +95,7 @@ def shape_quantities(result) -> dict[str, np.ndarray]:
                                          dataset=f.index)
             out[f"frequency_slopes[{f.index}]"] = np.array([s1.min(), s1.max(), s2.min(), s2.max()])
         elif f.axis == "time":
-            expo = np.gradient(np.log(f.J_model), np.log(d.time_s)) if d.n > 1 else np.zeros(1)
+            expo = np.gradient(np.log(f.model_values), np.log(d.time_s)) if d.n > 1 else np.zeros(1)
             out[f"creep_slopes[{f.index}]"] = np.array([expo.min(), expo.max()])
         else:
             out[f"prestress_lines[{f.index}]"] = np.array(prestress_slopes(result, dataset=f.index))

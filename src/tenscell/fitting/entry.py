@@ -3,53 +3,53 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 
 import numpy as np
 
 from .._checks import positive_scalar
+from .._errors import CapabilityError
 from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
 from .models import get_model
-from .models.voigt import VoigtModel
 from .parameters import as_datasets
 from .records import FitAlternative, accepted, noise_note, noise_rms
 from .result import AS_WELL, FitResult
 from .search import best_chain, count, merged_history, run_search
+from .time_series import data_kind
 
 __all__ = ["fit", "VOIGT_OPTIONS", "prepare", "build_result"]
 
-#: the options that describe the Voigt cell (VoigtModel's fields): refused with another model
+#: the options that describe the Voigt cell (VoigtModel's fields, with their defaults): on :func:`fit` they are
+#: deprecated (``fit(data, model=VoigtModel(tendons="per-family"))``) and refused with another model
 VOIGT_OPTIONS = {"tendons": "per-tendon", "damping": "uniform", "min_prestress_share": None, "max_decades": None,
                  "min_prestress_elasticity": None, "elasticity_frequency_hz": 0.1}
 
 
-def fit(data, cell=None, *, model=None, tendons: str = "per-tendon", damping: str = "uniform", starts: int = 4,
-        seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01, hops: int = 30, patience: int = 12,
-        max_nfev: int = 100, polish: float = 0.2, polish_effort: float = 0.5, bounds: dict | None = None,
-        fixed: dict | None = None, min_prestress_share: float | None = None, max_decades: float | None = None,
-        min_prestress_elasticity: float | None = None, elasticity_frequency_hz: float = 0.1, initial=None,
-        max_points: int | None = DEFAULT_MAX_POINTS, progress: bool | None = None) -> FitResult:
-    """Fit a model's G', G'' (or creep compliance) to measured data (multi-start, analytic Jacobian).
+def fit(data, cell=None, *, model=None, starts: int = 4, seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01,
+        hops: int = 30, patience: int = 12, max_nfev: int = 100, polish: float = 0.2, polish_effort: float = 0.5,
+        bounds: dict | None = None, fixed: dict | None = None, initial=None,
+        max_points: int | None = DEFAULT_MAX_POINTS, progress: bool | None = None, **voigt_options) -> FitResult:
+    """Fit a model's G', G'' (or creep compliance, or stress relaxation) to measured data (multi-start, analytic
+    Jacobian).
 
     Every model goes through the same search and returns the same :class:`FitResult`: the paper's
     per-tendon Voigt cell (the default), any registered model by name (:func:`tenscell.fitting.models.get_model`:
-    mechanisms, structure-free formulas) or a :class:`~tenscell.fitting.models.base.FitModel` of your own.
+    mechanisms, structure-free formulas, populations) or a :class:`~tenscell.fitting.models.base.FitModel` of your
+    own. What the model fits is declared by it (``model.capabilities.data_kinds``).
 
     Parameters
     ----------
-    data : RheologyData or sequence of RheologyData
-        A frequency or prestress sweep (see :mod:`tenscell.io.data`), or several
-        data sets fitted jointly by one parameter set; a frequency sweep that
-        states its prestress (``data.with_prestress(P_Pa)``) is linked to the
-        others by one prestress scale (see :mod:`tenscell.fitting.models.voigt`).
+    data : RheologyData, CreepData or RelaxationData, or a sequence of them
+        A frequency or prestress sweep (see :mod:`tenscell.io.data`), a creep or a stress relaxation curve, or
+        several data sets fitted jointly by one parameter set; a data set that states its prestress
+        (``data.with_prestress(P_Pa)``) is linked to the others by one prestress scale (see
+        :mod:`tenscell.fitting.models.voigt`).
     cell : Cell, optional
         Reference cell; default :func:`tenscell.paper_cell` (strut length 1 m). A structure-free formula has none.
     model : str or FitModel, optional
-        What to fit (default: the Voigt cell laid out by ``tendons``, ``damping`` and the activity constraints).
-        ``tendons``, ``damping``, ``min_prestress_share``, ``max_decades``, ``min_prestress_elasticity`` and
-        ``elasticity_frequency_hz`` describe the Voigt cell and are refused with another model.
-    tendons : {"per-tendon", "per-family", "uniform"}
-        Stiffness parametrization ("uniform" is the homogeneous baseline).
-    damping : {"uniform", "per-family"}
+        What to fit (default: the paper's Voigt cell with a stiffness per tendon,
+        :class:`~tenscell.fitting.models.voigt.VoigtModel`). The Voigt cell's options are its own:
+        ``model=VoigtModel(tendons="per-family", damping="per-family")``.
     starts, hops, patience, max_nfev : int
         Independent starts (>= 1), basin-hopping moves per start at most, moves
         without a 5 % improvement before a start stops, model evaluations per
@@ -69,8 +69,9 @@ def fit(data, cell=None, *, model=None, tendons: str = "per-tendon", damping: st
         at the tolerance). Before the tolerance is met it stops when the starts
         agree on the best fit or the best RMS is on a plateau
         (:mod:`tenscell.fitting.search`; the result's ``stop_reason`` says which).
-    bounds, fixed, min_prestress_share, max_decades, min_prestress_elasticity, elasticity_frequency_hz :
-        See :func:`tenscell.fitting.make_problem`.
+    bounds, fixed : dict, optional
+        ``{parameter name or kind: (lo, hi)}`` and ``{parameter name: value}`` in SI units (see the model's
+        problem: :func:`tenscell.fitting.make_problem` for the Voigt cell).
     initial : FitResult or array_like, optional
         A warm start: start 0 begins here (a FitResult of the same data and
         parametrization, or its free log-parameters ``theta``), moved inside
@@ -79,10 +80,14 @@ def fit(data, cell=None, *, model=None, tendons: str = "per-tendon", damping: st
         A moduli data set with more points is fitted binned in log frequency
         per prestress (:func:`tenscell.io.thinning.bin_log_frequency`; the rule
         and counts go into the data's comments and the report), as ``tenscell
-        fit --max-points`` does. None fits every point; creep data are never binned.
+        fit --max-points`` does. None fits every point; time series are never binned.
     progress : bool or None
         A progress bar: None when someone watches (a terminal or a notebook),
         True always, False never (see :mod:`tenscell._progress`).
+    **voigt_options
+        Deprecated: ``tendons``, ``damping``, ``min_prestress_share``, ``max_decades``,
+        ``min_prestress_elasticity``, ``elasticity_frequency_hz`` belong to the Voigt cell
+        (``model=VoigtModel(...)``); given here they still set it, with a DeprecationWarning, for one release.
 
     Returns
     -------
@@ -91,32 +96,41 @@ def fit(data, cell=None, *, model=None, tendons: str = "per-tendon", damping: st
     Raises
     ------
     ValueError
-        Bad options, data or cell (see :func:`make_problem`).
+        Bad options, data or cell (see the model's problem); data of a kind the model does not fit; a Voigt option
+        with another model (:class:`~tenscell.fitting.models.base.CapabilityError`).
+    TypeError
+        An unknown keyword.
     """
 
     t_begin = time.monotonic()
-    voigt = dict(tendons=tendons, damping=damping, min_prestress_share=min_prestress_share, max_decades=max_decades,
-                 min_prestress_elasticity=min_prestress_elasticity, elasticity_frequency_hz=elasticity_frequency_hz)
-    spec = _spec(model, voigt)
+    spec = _spec(model, voigt_options)
     datasets, cell = prepare(data, cell, max_points, spec)
     problem = spec.problem(datasets, cell, bounds=bounds, fixed=fixed)
     positive_scalar("tolerance", tolerance, "decades")
+    warm = initial.theta if isinstance(initial, FitResult) else initial  # a fit of the same problem, or its theta
     chains, stop = run_search(problem, starts=starts, seed=seed, jobs=jobs, tolerance=tolerance, hops=hops,
                               patience=patience, max_nfev=max_nfev, polish=polish, polish_effort=polish_effort,
-                              initial=initial, progress=progress, desc=f"fit ({spec.name})", t_begin=t_begin,
+                              initial=warm, progress=progress, desc=f"fit ({spec.name})", t_begin=t_begin,
                               noise=noise_rms(datasets))
     return build_result(problem, datasets, chains, stop, float(tolerance), seed, t_begin)
 
 
-def _spec(model, voigt: dict):
-    """The FitModel to fit: ``model`` (a name or a FitModel), or the Voigt cell of the Voigt options."""
-    if model is None:
-        return VoigtModel(**voigt)
-    spec = get_model(model)
-    given = [k for k, default in VOIGT_OPTIONS.items() if voigt[k] != default]
-    if given and not isinstance(spec, VoigtModel):
-        raise ValueError(f"{', '.join(given)}: option(s) of the Voigt cell, not of model={spec.name!r}")
-    return spec
+def _spec(model, voigt_options: dict):
+    """The FitModel to fit: ``model`` (a name or a FitModel; default the per-tendon Voigt cell), with the deprecated
+    Voigt options of :func:`fit` applied."""
+    unknown = sorted(set(voigt_options) - set(VOIGT_OPTIONS))
+    if unknown:
+        raise TypeError(f"fit() got an unexpected keyword argument {unknown[0]!r}")
+    spec = get_model("voigt-per-tendon" if model is None else model)
+    if not voigt_options:
+        return spec
+    named = ", ".join(f"{k}=" for k in voigt_options)
+    warnings.warn(f"tenscell.fit({named}) is deprecated: the Voigt cell's options are its own, "
+                  f"fit(data, model=VoigtModel({named.replace('=', '=...')})) (tenscell.fitting.VoigtModel)",
+                  DeprecationWarning, stacklevel=3)
+    if not spec.capabilities.voigt_options:  # a default value was never refused with another model
+        voigt_options = {k: v for k, v in voigt_options.items() if v != VOIGT_OPTIONS[k]}
+    return spec.with_options(**voigt_options)
 
 
 def prepare(data, cell, max_points, spec=None):
@@ -125,6 +139,11 @@ def prepare(data, cell, max_points, spec=None):
     from ..model.shapes import paper_cell
 
     datasets = as_datasets(data)
+    if spec is not None:  # what the model fits, it declares (Capabilities.data_kinds)
+        for d in datasets:
+            if not spec.capabilities.fits(data_kind(d)):
+                raise CapabilityError(f"{d.source}: model {spec.name!r} fits {', '.join(sorted(spec.capabilities.data_kinds))} "
+                                      f"data, not {data_kind(d)} (a mechanism or a formula fits every kind)")
     if max_points is not None:
         datasets = bin_datasets(datasets, count("max_points", max_points, 4))
     if spec is not None and not spec.structural:

@@ -41,7 +41,7 @@ import numpy as np
 from .._results import format_repr
 from .._threads import hot_path
 
-__all__ = ["Identifiability", "Combination", "identifiability", "errors_from_covariance", "simple_exponent", "GAUGE",
+__all__ = ["Identifiability", "Combination", "identifiability", "combinations", "sigma_estimate", "errors_from_covariance", "simple_exponent", "GAUGE",
            "NULL_SHARE", "SIMPLE_EXPONENTS"]
 
 #: the exact strut-length invariance of the linear moduli
@@ -440,7 +440,7 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
     rank = int(np.sum(s > rtol * s[0])) if s.size and s[0] > 0 else 0
     chi2 = float(r @ r)
     dof = n - rank
-    sigma, source = _sigma(sigma_known, chi2, dof)
+    sigma, source = sigma_estimate(sigma_known, chi2, dof)
     V = Vt.T
     se, null_share, corr = _uncertainties(V, s, rank, values.size, sigma)
     return Identifiability(
@@ -448,7 +448,7 @@ def identifiability(problem, theta, *, sigma_known: bool = False, rtol: float = 
         gauge_removed=gauge_removed, excluded=tuple(excluded),
         fixed=tuple(problem.names[i] for i in np.flatnonzero(~free)), n_residuals=n, sigma=sigma,
         sigma_source=source, dof=dof, chi2=chi2, standard_errors=se, null_share=null_share, correlation=corr,
-        combinations=_combinations(V, s, rank, labels, sigma),
+        combinations=combinations(V, s, rank, labels, sigma),
         leverage=np.sum(U[:, :rank] ** 2, axis=1) if U is not None else np.zeros(n),
         directions=V,
     )
@@ -470,7 +470,7 @@ def _kept(pars, free: np.ndarray, gauge: bool, l_index: int) -> tuple[np.ndarray
     return keep, excluded
 
 
-def _sigma(sigma_known: bool, chi2: float, dof: int) -> tuple[float | None, str]:
+def sigma_estimate(sigma_known: bool, chi2: float, dof: int) -> tuple[float | None, str]:
     """The residuals' standard deviation and where it comes from (None when it cannot be estimated)."""
     if sigma_known:
         return 1.0, "data standard deviations"
@@ -503,7 +503,7 @@ def errors_from_covariance(cov_unit: np.ndarray, null_share: np.ndarray,
     return se, corr
 
 
-def _combinations(V: np.ndarray, s: np.ndarray, rank: int, labels: tuple[str, ...],
+def combinations(V: np.ndarray, s: np.ndarray, rank: int, labels: tuple[str, ...],
                   sigma: float | None) -> tuple[Combination, ...]:
     """The ``rank`` determined combinations of the labels, one per nonzero singular value."""
     combos = []

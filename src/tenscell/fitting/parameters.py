@@ -17,16 +17,144 @@ data (:func:`default_bounds`).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from .._checks import positive_scalar
+from .._results import format_repr
 from ..io.data import DataError, RheologyData
 from ..model.equilibrium import Cell
 
-__all__ = ["TENDON_MODES", "DAMPING_MODES", "required_points", "as_datasets", "parameter_layout", "data_arrays",
-           "default_bounds", "check_options", "prestress_varies",
-           "kind_bounds", "bounds_by_name", "fixed_by_name"]
+__all__ = ["Parameters", "ParameterSpec", "TENDON_MODES", "DAMPING_MODES", "required_points", "as_datasets",
+           "parameter_layout", "data_arrays", "default_bounds", "check_options", "prestress_varies", "kind_bounds",
+           "bounds_by_name", "fixed_by_name", "family_groups", "prestress_layout"]
+
+@dataclass(frozen=True)
+class ParameterSpec:
+    """One parameter of a fit's layout (an entry of :class:`Parameters`), in SI units.
+
+    Attributes
+    ----------
+    name, unit, kind, description : str
+        ``kind`` sets default bounds and starts (``"EA"``, ``"stiffness"``, ``"exponent"``, ``"s"``...).
+    lower, upper : float
+        Bounds (the fit works in the log between them).
+    fixed : float or None
+        The value a fixed parameter is held at; None for a free one.
+    start : float
+        Where a free parameter sits when a start does not place it (the layout's reference: the cell's own strut
+        length, the middle of the bounds in log...); the value of a fixed one.
+    """
+
+    name: str
+    unit: str
+    kind: str
+    description: str
+    lower: float
+    upper: float
+    fixed: float | None
+    start: float
+
+    @property
+    def vary(self) -> bool:
+        """Whether the parameter is free."""
+        return self.fixed is None
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Parameters:
+    """Every parameter of a fit, built once by the layout of its model (lmfit's ``Parameters``): names, units, kinds,
+    descriptions, bounds and what is held fixed, as plain read-only arrays a problem pickles to its workers.
+
+    Attributes
+    ----------
+    names, units, descriptions, kinds : tuple of str
+    lower, upper : ndarray
+        Natural logs of the bounds (SI units); ``-inf``/``inf`` for a layout without data (a model evaluated
+        anywhere).
+    free : ndarray of bool
+    fixed_log : ndarray
+        Natural logs of the fixed parameters' values, and of the free ones' reference values
+        (:attr:`ParameterSpec.start`).
+
+    ``params["s"]`` (a name) or ``params[3]`` is one :class:`ParameterSpec`; iterating gives them in order.
+    """
+
+    names: tuple
+    units: tuple
+    descriptions: tuple
+    kinds: tuple
+    lower: np.ndarray
+    upper: np.ndarray
+    free: np.ndarray
+    fixed_log: np.ndarray
+
+    def __post_init__(self):
+        for name in ("names", "units", "descriptions", "kinds"):
+            object.__setattr__(self, name, tuple(str(x) for x in getattr(self, name)))
+        n = len(self.names)
+        for name, dtype in (("lower", float), ("upper", float), ("free", bool), ("fixed_log", float)):
+            arr = np.array(getattr(self, name), dtype=dtype).ravel()
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        sizes = {len(self.units), len(self.descriptions), len(self.kinds), self.lower.size, self.upper.size,
+                 self.free.size, self.fixed_log.size}
+        if sizes != {n}:
+            raise ValueError(f"Parameters: {n} names but fields of lengths {sorted(sizes)}")
+        if len(set(self.names)) != n:
+            raise ValueError(f"Parameters: a name appears twice in {', '.join(self.names)}")
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def __iter__(self):
+        return (self[i] for i in range(len(self)))
+
+    def __contains__(self, name) -> bool:
+        return name in self.names
+
+    def __getitem__(self, key) -> ParameterSpec:
+        i = self.index(key) if isinstance(key, str) else int(key)
+        fixed = None if self.free[i] else math.exp(self.fixed_log[i])
+        return ParameterSpec(name=self.names[i], unit=self.units[i], kind=self.kinds[i],
+                             description=self.descriptions[i], lower=math.exp(self.lower[i]),
+                             upper=math.exp(self.upper[i]), fixed=fixed, start=math.exp(self.fixed_log[i]))
+
+    def index(self, name: str) -> int:
+        """Position of parameter ``name`` (ValueError naming the parameters otherwise)."""
+        try:
+            return self.names.index(name)
+        except ValueError:
+            raise ValueError(f"no parameter named {name!r}; parameters: {', '.join(self.names)}") from None
+
+    def __repr__(self) -> str:
+        rows = [f"{p.name} ({p.unit or '-'}, {p.kind}): "
+                + (f"fixed at {p.fixed:.4g}" if p.fixed is not None else f"free in [{p.lower:.3g}, {p.upper:.3g}]")
+                for p in self]
+        return format_repr(f"Parameters: {int(self.free.sum())} free of {len(self)}", *rows[:12],
+                           *(["..."] if len(rows) > 12 else []))
+
+    def replaced(self, *, free=None, fixed_log=None, lower=None, upper=None) -> Parameters:
+        """The same parameters with the free mask, the (log) values or the (log) bounds replaced."""
+        return Parameters(self.names, self.units, self.descriptions, self.kinds,
+                          self.lower if lower is None else lower, self.upper if upper is None else upper,
+                          self.free if free is None else free, self.fixed_log if fixed_log is None else fixed_log)
+
+    def subset(self, index) -> Parameters:
+        """The parameters at positions ``index`` (in that order)."""
+        index = np.asarray(index, dtype=int)
+        pick = lambda xs: tuple(xs[i] for i in index)  # noqa: E731
+        return Parameters(pick(self.names), pick(self.units), pick(self.descriptions), pick(self.kinds),
+                          self.lower[index], self.upper[index], self.free[index], self.fixed_log[index])
+
+    @classmethod
+    def from_rows(cls, rows, lower, upper, free, fixed_log) -> Parameters:
+        """From ``(name, unit, kind, description)`` rows and the log bounds, free mask and log values."""
+        rows = list(rows)
+        return cls(tuple(r[0] for r in rows), tuple(r[1] for r in rows), tuple(r[3] for r in rows),
+                   tuple(r[2] for r in rows), lower, upper, free, fixed_log)
+
 
 #: how tendon stiffnesses are parametrized
 TENDON_MODES = ("per-tendon", "per-family", "uniform")
@@ -61,33 +189,36 @@ def _tendon_labels(cell: Cell) -> list[str]:
     return [f"{names[a]}-{names[b]} ({fam})" for (a, b), fam in zip(st.tendons, st.families)]
 
 
-def _family_groups(cell: Cell) -> tuple[np.ndarray, list[str]]:
+def family_groups(cell: Cell) -> tuple[np.ndarray, list[str]]:
+    """``(family index of every tendon, the families in order of appearance)`` of ``cell``."""
     fams = list(dict.fromkeys(cell.structure.families))  # in order of appearance
     groups = np.array([fams.index(f) for f in cell.structure.families])
     return groups, fams
 
 
 def _is_creep(d) -> bool:
-    return getattr(d, "kind", None) == "creep"
+    return d.kind == "creep"
 
 
 def as_datasets(data) -> tuple:
-    """One data set or a sequence of them as a tuple of :class:`RheologyData` or
-    :class:`~tenscell.io.creep_data.CreepData` (ValueError otherwise)."""
+    """One data set or a sequence of them as a tuple of :class:`RheologyData`,
+    :class:`~tenscell.io.creep_data.CreepData` or :class:`~tenscell.io.relaxation_data.RelaxationData`
+    (ValueError otherwise)."""
     from ..io.creep_data import CreepData
+    from ..io.relaxation_data import RelaxationData
 
-    kinds = (RheologyData, CreepData)
+    kinds = (RheologyData, CreepData, RelaxationData)
     items = (data,) if isinstance(data, kinds) else tuple(data) if isinstance(data, (list, tuple)) else None
     if not items or not all(isinstance(d, kinds) for d in items):
-        raise ValueError("data must be a tenscell.io.data.RheologyData or CreepData, or a non-empty list of them, "
-                         f"got {type(data).__name__}")
+        raise ValueError("data must be a tenscell.io.data.RheologyData, CreepData or RelaxationData, or a non-empty "
+                         f"list of them, got {type(data).__name__}")
     return items
 
 
 def _stiffness_layout(cell: Cell, tendons: str, damping: str):
     """(ea_groups, ea_names, ea_desc, c_groups, c_names, c_desc) for the parametrization."""
     m = cell.m
-    fam_groups, fams = _family_groups(cell)
+    fam_groups, fams = family_groups(cell)
     labels = _tendon_labels(cell)
     if tendons == "per-tendon":
         ea = (np.arange(m), [f"EA[{j}]" for j in range(m)],
@@ -103,7 +234,7 @@ def _stiffness_layout(cell: Cell, tendons: str, damping: str):
     return (*ea, *cc)
 
 
-def _prestress_layout(datasets):
+def prestress_layout(datasets):
     """Prestress parameters and groups: (names, units, descs, kinds, groups) with groups a list of
     (dataset, measured Pa or NaN, log offset, {parameter position: 1}) and point -> group index."""
     known = [d.prestress is not None for d in datasets]
@@ -149,12 +280,13 @@ def _prestress_layout(datasets):
 def default_bounds(datasets, L_ref):
     """Default bounds per parameter kind and the scales used by the initial guess.
 
-    A creep point at time t counts as a modulus 1/J at the angular frequency 1/t.
+    A creep point at time t counts as a modulus 1/J at the angular frequency 1/t, a relaxation point as G(t) there
+    (:func:`~tenscell.fitting.time_series.modulus_scales`).
     """
-    Gs = np.concatenate([1.0 / d.compliance if _is_creep(d) else d.G_storage for d in datasets])
-    omega = np.concatenate([1.0 / d.time_s if _is_creep(d) else 2 * np.pi * d.frequency_hz for d in datasets])
-    S = float(np.median(Gs)) * L_ref**2
-    w_m = float(np.exp(np.mean(np.log(omega))))
+    from .time_series import modulus_scales
+
+    G, w_m, _ = modulus_scales(datasets)
+    S = G * L_ref**2
     known = [d.prestress for d in datasets if d.prestress is not None]
     P_med = float(np.median(np.concatenate(known))) if known else 1.0
     defaults = {
@@ -228,8 +360,8 @@ def check_options(min_prestress_share, max_decades, min_prestress_elasticity, el
 def parameter_layout(cell: Cell, datasets, tendons: str, damping: str, bounds, fixed) -> tuple[dict, list]:
     """The parameters of a fit of ``cell`` to ``datasets`` as :class:`FitProblem` fields, and each data set's groups.
 
-    Returns ``(fields, point_group)``: names, units, descriptions, kinds,
-    log bounds, free mask and fixed values, stiffness and damping groups,
+    Returns ``(fields, point_group)``: the :class:`Parameters` (names, units, descriptions, kinds,
+    log bounds, free mask and fixed values), stiffness and damping groups,
     prestress groups and the scales of the initial guess; ``point_group[k]``
     is the prestress group of each point of data set ``k``. DataError if the
     data have fewer points than the layout needs (:func:`required_points`).
@@ -237,9 +369,9 @@ def parameter_layout(cell: Cell, datasets, tendons: str, damping: str, bounds, f
     _choice("tendons", tendons, TENDON_MODES)
     _choice("damping", damping, DAMPING_MODES)
     ea_groups, ea_names, ea_desc, c_groups, c_names, c_desc = _stiffness_layout(cell, tendons, damping)
-    p_names, p_units, p_desc, p_kinds, groups, point_group = _prestress_layout(datasets)
+    p_names, p_units, p_desc, p_kinds, groups, point_group = prestress_layout(datasets)
     n_points = sum(d.n for d in datasets)
-    need = required_points(tendons, damping, n_families=len(_family_groups(cell)[1])) + len(p_names) - 1
+    need = required_points(tendons, damping, n_families=len(family_groups(cell)[1])) + len(p_names) - 1
     if n_points < need:
         src = datasets[0].source if len(datasets) == 1 else f"{len(datasets)} data sets"
         raise DataError(
@@ -257,10 +389,12 @@ def parameter_layout(cell: Cell, datasets, tendons: str, damping: str, bounds, f
     for g, (_, _, _, links) in enumerate(groups):
         for j, v in links.items():
             group_map[g, j] = v
-    fields = dict(
+    params = Parameters(
         names=names, units=tuple(["N"] * len(ea_names) + ["N·s/m"] * len(c_names) + p_units + ["m"]),
         descriptions=tuple(ea_desc + c_desc + p_desc + ["strut length (redundant with P, EA, c: see docs)"]),
-        kinds=kinds, lower=lower, upper=upper, free=free, fixed_log=fixed_log, tendons=tendons, damping=damping,
+        kinds=kinds, lower=lower, upper=upper, free=free, fixed_log=fixed_log)
+    fields = dict(
+        params=params, tendons=tendons, damping=damping,
         n_ea=len(ea_names), n_c=len(c_names), ea_groups=np.asarray(ea_groups), c_groups=np.asarray(c_groups),
         group_log_offset=np.array([g[2] for g in groups]), group_map=group_map,
         group_measured=np.array([g[1] for g in groups]), group_dataset=np.array([g[0] for g in groups]),

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -32,12 +32,12 @@ from .._progress import progress_bar
 from .._results import dataframe, format_repr
 from ..io.data import RheologyData
 from .models import get_model
-from .models.formulas import Formula
 from .models.population import Population
 from .records import information_criteria
-from .scores import _subset
+from .scores import data_subset
 
 if TYPE_CHECKING:
+    from .models.formulas import Formula
     from .result import FitResult
 
 __all__ = ["PopulationScores", "ScoreRow", "Correlation", "score_population", "population_cells", "springpot_exponent",
@@ -247,8 +247,8 @@ class PopulationScores:
 # ---------------------------------------------------------------------------------------
 def _window(d: RheologyData, lo: float, hi: float) -> tuple[RheologyData | None, RheologyData | None]:
     inside = (d.frequency_hz >= lo * (1 - 1e-9)) & (d.frequency_hz <= hi * (1 + 1e-9))
-    train = _subset(d, inside, "training") if inside.any() else None
-    test = _subset(d, ~inside, "held out") if (~inside).any() else None
+    train = data_subset(d, inside, "training") if inside.any() else None
+    test = data_subset(d, ~inside, "held out") if (~inside).any() else None
     return train, test
 
 
@@ -349,7 +349,7 @@ def score_population(cells, population, *, baselines=DEFAULT_BASELINES, splits=D
     PopulationScores
     """
     population = get_model(population)
-    if not isinstance(population, Population) or len(population.per_cell) > 2:
+    if not population.capabilities.per_cell or len(population.per_cell) > 2:
         raise ValueError("score_population: needs a Population with one or two per-cell parameters (a held-out "
                          "cell's are set by its G′, or G′ and G″, at the anchor frequency)")
     cells = tuple(cells)
@@ -357,7 +357,8 @@ def score_population(cells, population, *, baselines=DEFAULT_BASELINES, splits=D
         raise ValueError(f"folds must lie between 2 and the number of cells ({len(cells)}), got {folds!r}")
     forms = [get_model(b) for b in baselines]
     for b in forms:
-        if not isinstance(b, Formula) or "G0" not in [r[0] for r in b.parameter_rows]:
+        caps = b.capabilities  # a structure-free formula of one cell (not a population of them)
+        if caps.structural or caps.per_cell or "G0" not in [r[0] for r in cast("Formula", b).parameter_rows]:
             raise ValueError(f"baselines: {b.name!r} is not a structure-free formula with a scale G0")
     settings = dict(starts=starts, hops=hops, seed=seed)
     steps = 1 + len(forms) + len(splits) * (1 + len(forms)) + folds

@@ -154,7 +154,8 @@ class PrestressActivity:
 
 def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERENCE_FREQUENCY_HZ) -> PrestressActivity:
     """The prestress elasticities and share of a fit of the Voigt cell, at its data points and at a reference
-    frequency (:meth:`tenscell.fitting.models.voigt.FitProblem.prestress_activity`).
+    frequency (:meth:`tenscell.fitting.models.voigt.FitProblem.prestress_activity`); CapabilityError for another
+    model (:class:`tenscell.fitting.models.base.CapabilityError`).
 
     Parameters
     ----------
@@ -162,4 +163,6 @@ def prestress_activity(result: FitResult, reference_frequency_hz: float = REFERE
     reference_frequency_hz : float
         Frequency (Hz) of the per-prestress summary (default 0.1 Hz).
     """
+    if reference_frequency_hz == REFERENCE_FREQUENCY_HZ:
+        return result._prestress_activity  # computed once per result (the report reads it several times)
     return result.problem.prestress_activity(result, reference_frequency_hz)

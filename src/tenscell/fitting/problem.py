@@ -36,9 +36,14 @@ then creep points (log10 J).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
+
+from .._errors import CapabilityError
+from .parameters import Parameters
+from .time_series import TimeLayout
 
 __all__ = ["Problem", "centred_start", "central_difference", "log_residual_blocks", "draw_start", "jitter", "LN10",
            "PENALTY"]
@@ -54,19 +59,17 @@ class Problem:
 
     Subclasses are frozen dataclasses (:class:`~tenscell.fitting.models.voigt.FitProblem`,
     :class:`~tenscell.fitting.models.mechanism.MechanismProblem`,
-    :class:`~tenscell.fitting.models.formulas.FormulaProblem`); they declare the fields below and implement the
-    evaluation, the moves and the result hooks.
+    :class:`~tenscell.fitting.models.formulas.FormulaProblem`,
+    :class:`~tenscell.fitting.models.population.PopulationProblem`); they declare the fields below and implement the
+    evaluation, the moves and the result hooks. The parameters are one object built by the model's layout,
+    ``params`` (:class:`~tenscell.fitting.parameters.Parameters`, lmfit's ``Parameters``); ``names``, ``units``,
+    ``descriptions``, ``kinds``, ``lower``, ``upper``, ``free`` and ``fixed_log`` read it, and :meth:`holding` gives
+    the same problem with some of them replaced. Every field is a plain value or array: problems are pickled to the
+    search's worker processes.
     """
 
-    names: tuple
-    units: tuple
-    descriptions: tuple
-    kinds: tuple
+    params: Parameters  # every parameter: names, units, kinds, descriptions, bounds, what is fixed
     weights: np.ndarray
-    free: np.ndarray
-    lower: np.ndarray
-    upper: np.ndarray
-    fixed_log: np.ndarray
     omega: np.ndarray
     y_obs: np.ndarray
     dataset_index: np.ndarray
@@ -75,8 +78,10 @@ class Problem:
     group_log_offset: np.ndarray
     group_measured: np.ndarray
     group_index: np.ndarray
-    creep_dataset: np.ndarray  # per creep point: its data set (the models with creep data have them)
-    creep_group: np.ndarray  # per creep point: its prestress group
+    #: the time points of creep and relaxation data, their contour nodes and weights
+    #: (:class:`~tenscell.fitting.time_series.TimeLayout`); None without time data (the Voigt cell's creep has its
+    #: own modal route: :meth:`time_points`, :meth:`time_model`)
+    time: TimeLayout | None = None
     # and every subclass has ``cell``: the reference cell (None for a structure-free formula)
     #: ``_jacobian_from`` returns a scipy.sparse matrix (the search then solves its steps by LSMR)
     sparse_jacobian = False
@@ -107,7 +112,53 @@ class Problem:
         (:data:`tenscell.reports.fit.SECTIONS`)."""
         return ()
 
-    # -- layout ---------------------------------------------------------------------------
+    # -- layout: read from the parameters (:class:`~tenscell.fitting.parameters.Parameters`) ----------
+    @property
+    def names(self) -> tuple:
+        """All parameter names."""
+        return self.params.names
+
+    @property
+    def units(self) -> tuple:
+        """Each parameter's unit."""
+        return self.params.units
+
+    @property
+    def descriptions(self) -> tuple:
+        """What each parameter is, in words."""
+        return self.params.descriptions
+
+    @property
+    def kinds(self) -> tuple:
+        """Each parameter's kind (bounds and starts)."""
+        return self.params.kinds
+
+    @property
+    def lower(self) -> np.ndarray:
+        """Log lower bounds of all parameters (read-only)."""
+        return self.params.lower
+
+    @property
+    def upper(self) -> np.ndarray:
+        """Log upper bounds of all parameters (read-only)."""
+        return self.params.upper
+
+    @property
+    def free(self) -> np.ndarray:
+        """Which parameters are free (read-only)."""
+        return self.params.free
+
+    @property
+    def fixed_log(self) -> np.ndarray:
+        """Log values of all parameters: the fixed ones', and the free ones' references (read-only)."""
+        return self.params.fixed_log
+
+    def holding(self, *, free=None, fixed_log=None, lower=None, upper=None):
+        """The same problem with the parameters' free mask, log values or log bounds replaced (a refit with some
+        parameters held, a profile point)."""
+        return dataclasses.replace(self, params=self.params.replaced(free=free, fixed_log=fixed_log, lower=lower,
+                                                                     upper=upper))
+
     @property
     def n_params(self) -> int:
         """Number of all parameters (free and fixed)."""
@@ -159,9 +210,35 @@ class Problem:
         return np.exp(self.full(theta))
 
     def rows(self, dataset: int) -> np.ndarray:
-        """Positions of data set ``dataset``'s moduli residuals: its G' rows then its G'' rows."""
+        """Positions of data set ``dataset``'s residuals: its G' rows then its G'' rows, or its time rows."""
+        if self.time is not None and dataset in self.time.dataset:
+            return 2 * self.n_points + self.time.rows(dataset)
         pts = np.flatnonzero(self.dataset_index == dataset)
         return np.concatenate([pts, self.n_points + pts])
+
+    def point_rows(self, dataset: int) -> np.ndarray:
+        """The residual row of each point of a time data set (−1 for a shape's reference time, which is no
+        residual); :meth:`rows` for moduli."""
+        if self.time is None or dataset not in self.time.dataset:
+            return self.rows(dataset)
+        pts = self.time.points(dataset)
+        where = np.full(self.time.n, -1)
+        where[self.time.residual] = np.arange(self.time.n_residuals)
+        return np.where(where[pts] >= 0, 2 * self.n_points + where[pts], -1)
+
+    @property
+    def residual_scale(self) -> np.ndarray:
+        """Per data residual, how its log10 moves when every stiffness-like parameter and the prestress are scaled
+        by λ together: by +log10 λ (moduli, a relaxation modulus), −log10 λ (a creep compliance), not at all (a
+        relaxation's shape). What a start's centring undoes (:func:`centred_start`)."""
+        n_time = self.n_residuals - 2 * self.n_points
+        t = self.time
+        if t is None:
+            tail = -np.ones(n_time)  # the Voigt cell's time data are creep
+        else:
+            res = t.residual
+            tail = np.where(t.reference[res] >= 0, 0.0, np.where(t.relaxation[res], 1.0, -1.0))
+        return np.concatenate([np.ones(2 * self.n_points), tail])
 
     def parameters(self, theta) -> tuple:
         """The parameters as :class:`tenscell.fitting.FitParameter` records (SI units)."""
@@ -194,10 +271,13 @@ class Problem:
 
     @property
     def n_model_parameters(self) -> int:
-        """Free parameters less the exact gauge, if any (what AIC and BIC count)."""
+        """Free parameters less the exact gauge, if any, and less the common scale of the moduli when every data set
+        is a relaxation's shape (the residuals cannot see it: :attr:`~.time_series.TimeLayout.scale_blind`): what
+        AIC and BIC count."""
         g = self.gauge()
         moved = g != 0
-        return self.n_free - (1 if moved.any() and np.all(self.free[moved]) else 0)
+        blind = self.time is not None and not self.n_points and self.time.scale_blind
+        return self.n_free - (1 if moved.any() and np.all(self.free[moved]) else 0) - int(blind)
 
     def coordinate_map(self) -> np.ndarray:
         """Search coordinates to free log-parameters: ``theta = T @ u`` (identity unless a model says otherwise)."""
@@ -218,12 +298,28 @@ class Problem:
 
     @property
     def n_creep(self) -> int:
-        """Creep points (their residuals follow the moduli's); 0 for a model fitted to moduli only."""
-        return 0
+        """Time residuals (creep and relaxation points; they follow the moduli's); 0 for moduli only."""
+        return 0 if self.time is None else self.time.n_residuals
+
+    def time_points(self, dataset: int) -> np.ndarray:
+        """Positions among the time points (:meth:`time_model`) of data set ``dataset``'s."""
+        assert self.time is not None, "only asked of a problem with time data"
+        return self.time.points(dataset)
+
+    @property
+    def time_group(self) -> np.ndarray:
+        """The prestress group of every time point."""
+        assert self.time is not None, "only asked of a problem with time data"
+        return self.time.group
+
+    def time_model(self, theta) -> np.ndarray:
+        """The model's time function at every time point: creep compliance J(t) (1/Pa), relaxation modulus G(t)
+        (Pa), or for a shape G(t)/G(t_ref); NaN where the model is not a stable cell."""
+        raise NotImplementedError
 
     def creep(self, theta) -> np.ndarray:
         """Model creep compliance (1/Pa) at the creep points (models that fit creep data)."""
-        raise NotImplementedError
+        return self.time_model(theta)
 
     # -- evaluation (subclasses implement the first three) --------------------------------------
     def _evaluate_constrained(self, phi, jac: bool):
@@ -310,13 +406,24 @@ class Problem:
         """(min, max, decades) of the tendon stiffnesses (N, N, -); None for a model without tendons."""
         return None
 
+    def stiffness_at_bound(self, theta) -> bool:
+        """Whether a tendon stiffness parameter sits at a bound (the span of the stiffnesses is then set by the bound
+        box); False for a model whose stiffnesses are not laid out per tendon or family (the default)."""
+        return False
+
+    def stiffness_bound(self) -> tuple[float | None, bool]:
+        """``(D, binding)``: the bound D (decades) the fit put on the spread of the stiffnesses, and whether it
+        constrains them (narrower than their bounds); ``(None, False)`` without one."""
+        return None, False
+
     def stiffness_spread_interior(self, theta) -> tuple[float, float, float] | None:
         """Like :meth:`stiffness_spread`, over the tendons not at a bound (None: not applicable, or all at one)."""
         return None
 
     def prestress_activity(self, result, reference_frequency_hz: float = 0.1):
         """Is the prestress doing anything? Defined for the Voigt cell (:mod:`tenscell.fitting.prestress`)."""
-        raise ValueError(f"the prestress activity analysis is defined for the Voigt cell, not for {self.spec.name}")
+        raise CapabilityError(f"the prestress activity analysis is defined for the Voigt cell, not for "
+                              f"{self.spec.name} (its prestress dependence: result.structure)")
 
     def assignment_spread(self, theta) -> tuple[float, float]:
         """Largest sd (decades) of G', G'' between the assignments of a distributed property (0, 0: none)."""
@@ -334,8 +441,14 @@ def centred_start(problem: Problem, out, phi: np.ndarray, scalable: np.ndarray) 
     r = problem._residuals_from(out) / problem.weights
     if out is None or np.any(np.abs(r) >= PENALTY):
         return None
-    phi[scalable] -= float(np.mean(r)) * LN10
-    return float(np.sqrt(np.mean((r - np.mean(r)) ** 2)))
+    sign = problem.residual_scale
+    if np.all(sign == 1.0):  # moduli only
+        phi[scalable] -= float(np.mean(r)) * LN10
+        return float(np.sqrt(np.mean((r - np.mean(r)) ** 2)))
+    # time data: a creep compliance moves against the moduli, a shape not at all (Problem.residual_scale)
+    shift = float(np.dot(sign, r) / np.dot(sign, sign)) if np.any(sign) else 0.0
+    phi[scalable] -= shift * LN10
+    return float(np.sqrt(np.mean((r - sign * shift) ** 2)))
 
 
 def central_difference(fun, theta, step: float) -> np.ndarray:

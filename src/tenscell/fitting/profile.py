@@ -27,7 +27,6 @@ parameters that need one are profiled, and only for models with at most :data:`M
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -405,16 +404,13 @@ def needs_profile(result) -> tuple[tuple[str, str], ...]:
 
 
 def _held_fields(problem) -> list[tuple[str, float]]:
-    """A mechanism's fixed-layout fields: (law parameter, held value)."""
-    spec = getattr(problem, "mechanism", None)
-    if spec is None:
-        return []
-    return [(f.law_parameter, float(f.value)) for f in spec.fields if f.layout == "fixed"]
+    """The model's held fields: (law parameter, held value) (:meth:`~.models.base.FitModel.held_fields`)."""
+    return list(problem.spec.held_fields())
 
 
 def _not_supported(problem) -> str:
     """Why a problem cannot be profiled here ("" when it can)."""
-    if getattr(problem, "sparse_jacobian", False):
+    if problem.spec.capabilities.per_cell:
         return "a population model (its parameters per cell are profiled by the population analysis)"
     if problem.n_penalties:
         return "the fit has one-sided penalties (activity constraints) that −2 ln L does not include"
@@ -457,7 +453,7 @@ class _Profiler:
         self.points: dict[float, tuple[float, float, np.ndarray]] = {}  # ln value -> (m2lnL, rms, phi)
         self.refits = 0
         x0 = float(setup.phi[setup.index])
-        own = dataclasses.replace(pr, free=self.free, fixed_log=setup.phi.copy())
+        own = pr.holding(free=self.free, fixed_log=setup.phi.copy())
         m2, rms = _m2lnL(own, setup.phi[self.free], setup.sigma_known)
         self.points[x0] = (m2, rms, setup.phi.copy())
         self.x0 = x0
@@ -471,7 +467,7 @@ class _Profiler:
         near = min(self.points, key=lambda y: (abs(y - x), abs(y - self.x0)))
         fixed = self.points[near][2].copy()
         fixed[self.s.index] = x
-        pr = dataclasses.replace(self.s.problem, free=self.free, fixed_log=fixed)
+        pr = self.s.problem.holding(free=self.free, fixed_log=fixed)
         lo, hi = pr.bounds
         theta0 = np.clip(fixed[self.free], lo, hi)
         # tolerance far below any data: the search runs its hops (a short budget) instead of stopping at a target
@@ -607,15 +603,9 @@ def _setup(result, name: str) -> _Setup:
 
 
 def _freed(result, name: str, value: float, phi) -> _Setup:
-    """The fit's mechanism with the held field ``name`` laid out as one shared parameter, held at ``value``."""
-    from .models.mechanism import make_mechanism_problem
-
+    """The fit's model with the held field ``name`` laid out as one fitted parameter, held at ``value``."""
     pr = result.problem
-    mech = pr.mechanism
-    fields = tuple(dataclasses.replace(f, layout="shared", value=None) if f.law_parameter == name else f
-                   for f in mech.fields)
-    variant = dataclasses.replace(mech, fields=fields)
-    base = make_mechanism_problem(list(result.datasets), variant, pr.cell)
+    base = result.spec.freed(name).problem(list(result.datasets), pr.cell)
     where = {n: k for k, n in enumerate(pr.names)}
     keep = np.array([n in where for n in base.names])
     src = np.array([where.get(n, 0) for n in base.names])
@@ -623,7 +613,7 @@ def _freed(result, name: str, value: float, phi) -> _Setup:
     upper = np.where(keep, pr.upper[src], base.upper)
     free = np.where(keep, pr.free[src], False)
     new_phi = np.where(keep, phi[src], math.log(value))
-    problem = dataclasses.replace(base, lower=lower, upper=upper, free=free, fixed_log=new_phi.copy())
+    problem = base.holding(lower=lower, upper=upper, free=free, fixed_log=new_phi.copy())
     return _Setup(problem, base.names.index(name), new_phi, np.zeros(base.n_params, dtype=bool), result.sigma_known,
                   value)
 
@@ -703,15 +693,14 @@ def _local_error(result, name: str) -> float | None:
 
 def _shares_along(problem, free, phis) -> np.ndarray | None:
     """A mechanism's geometric share of ΔG′ (first frequency) at each profile point; None for other models."""
-    from .models.mechanism import MechanismProblem
     from .shares import structure_shares
 
-    if not isinstance(problem, MechanismProblem):
+    if not problem.spec.capabilities.structure_shares:
         return None
     out = np.full(len(phis), np.nan)
     for k, phi in enumerate(phis):
         try:
-            sh = structure_shares(dataclasses.replace(problem, free=free, fixed_log=phi), phi[free])
+            sh = structure_shares(problem.holding(free=free, fixed_log=phi), phi[free])
         except ValueError:  # not a stable cell over the whole range at this point: no share
             continue
         out[k] = sh.geometric_share_storage
@@ -742,7 +731,7 @@ def profile_intervals(result, parameters="auto", *, points: int = DEFAULT_POINTS
     ProfileSet
     """
     pr = result.problem
-    needed = needs_profile(result) if not getattr(pr, "sparse_jacobian", False) else ()
+    needed = needs_profile(result) if not pr.spec.capabilities.per_cell else ()
     sigma_known = result.sigma_known
     empty = dict(needed=needed, sigma_known=sigma_known, n_residuals=pr.n_residuals)
     why = _not_supported(pr)

@@ -11,9 +11,10 @@ from .._results import dataframe, format_repr
 from ..io.data import RheologyData
 
 if TYPE_CHECKING:
+    from ..io.relaxation_data import RelaxationData
     from ..io.creep_data import CreepData
 
-__all__ = ["FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "CreepFit", "data_axis", "noise_rms",
+__all__ = ["RelaxationFit", "FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "CreepFit", "data_axis", "noise_rms",
            "inside_noise", "accepted", "verdict_text", "noise_note", "error_fields", "information_criteria"]
 
 
@@ -22,7 +23,7 @@ def noise_rms(datasets) -> list[float | None]:
     in decades; None for a data set without them."""
     out: list[float | None] = []
     for d in datasets:
-        if getattr(d, "kind", None) == "creep":  # creep data: the sd of log10 J
+        if d.kind in ("creep", "relaxation"):  # time data: the sd of log10 J or log10 G
             out.append(float(np.sqrt(np.mean(1.0 / d.weights**2))) if d.has_sd else None)
             continue
         w = np.concatenate([d.weights_storage, d.weights_loss])
@@ -300,6 +301,8 @@ class CreepFit:
 
     rms_storage = None  # no moduli: the report prints n/a
     rms_loss = None
+    #: what the time function is, its symbol and its unit (the report's and the figure's words)
+    quantity, symbol, unit = "creep compliance", "J", "1/Pa"
 
     @property
     def rms_log10_error(self) -> float:
@@ -310,6 +313,16 @@ class CreepFit:
     def x(self) -> np.ndarray:
         """Times (s)."""
         return self.data.time_s
+
+    @property
+    def model_values(self) -> np.ndarray:
+        """The model's time function at the data's times (here J, 1/Pa)."""
+        return self.J_model
+
+    @property
+    def data_values(self) -> np.ndarray:
+        """The data's time function (here J, 1/Pa)."""
+        return self.data.compliance
 
     def __repr__(self) -> str:
         return format_repr(f"CreepFit {self.index}: {self.data.source}",
@@ -326,6 +339,87 @@ class CreepFit:
         return dataframe({"time_s": self.data.time_s, "prestress_model_N": self.prestress_model_N,
                           "creep_compliance_per_Pa": self.data.compliance, "creep_compliance_model_per_Pa": self.J_model,
                           "log10_error": self.residuals}, {"source": self.data.source})
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class RelaxationFit:
+    """How the fitted model meets one stress relaxation data set of a fit (the counterpart of :class:`CreepFit`).
+
+    Attributes
+    ----------
+    index : int
+    data : RelaxationData
+    axis : str
+        ``"time"``.
+    prestress_pa, prestress_fitted_pa : float or None
+        As in :class:`DatasetFit`.
+    prestress_model_N : ndarray, shape (n,)
+    G_model : ndarray, shape (n,)
+        Model relaxation modulus at the data's times (Pa); for a shape (``data.relative``) G(t)/G(t_ref).
+    residuals : ndarray, shape (n,)
+        Unweighted log10 errors (a shape's reference time: 0, it is no residual).
+    """
+
+    index: int
+    data: RelaxationData
+    axis: str
+    prestress_pa: float | None
+    prestress_fitted_pa: float | None
+    prestress_model_N: np.ndarray
+    G_model: np.ndarray
+    residuals: np.ndarray
+
+    rms_storage = None
+    rms_loss = None
+    symbol = "G"
+
+    @property
+    def quantity(self) -> str:
+        return "relaxation modulus (relative)" if self.data.relative else "relaxation modulus"
+
+    @property
+    def unit(self) -> str:
+        return "" if self.data.relative else "Pa"
+
+    @property
+    def rms_log10_error(self) -> float:
+        """RMS of the log10 errors at the residual points (decades; a shape's reference time is none)."""
+        r = self.residuals[1:] if self.data.relative else self.residuals
+        return float(np.sqrt(np.mean(r**2)))
+
+    @property
+    def x(self) -> np.ndarray:
+        """Times (s)."""
+        return self.data.time_s
+
+    @property
+    def model_values(self) -> np.ndarray:
+        return self.G_model
+
+    @property
+    def data_values(self) -> np.ndarray:
+        """G(t) (Pa), or a shape over its value at the reference time."""
+        G = self.data.modulus
+        return G / G[0] if self.data.relative else G
+
+    def __repr__(self) -> str:
+        return format_repr(f"RelaxationFit {self.index}: {self.data.source}",
+                           f"{self.data.n} points, {self.quantity}; rms log10 error {self.rms_log10_error:.4g}")
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary."""
+        return {"index": self.index, "data": self.data.source, "n_points": self.data.n, "axis": self.axis,
+                "relative": self.data.relative, "prestress_Pa": self.prestress_pa,
+                "prestress_fitted_Pa": self.prestress_fitted_pa, "rms_log10_error": self.rms_log10_error,
+                "residuals_log10": {"relaxation_modulus": self.residuals.tolist()}}
+
+    def to_dataframe(self):
+        """Data, model and log10 error at each time (columns with units)."""
+        col = "relaxation_modulus_relative" if self.data.relative else "relaxation_modulus_Pa"
+        model = "relaxation_modulus_model_relative" if self.data.relative else "relaxation_modulus_model_Pa"
+        return dataframe({"time_s": self.data.time_s, "prestress_model_N": self.prestress_model_N,
+                          col: self.data_values, model: self.G_model, "log10_error": self.residuals},
+                         {"source": self.data.source})
 
 
 # ---------------------------------------------------------------------------------

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -21,8 +22,10 @@ import numpy as np
 
 from .._results import CORRELATION_THRESHOLD, dataframe, format_repr, reporter
 from ..io.data import RheologyData
+from .._errors import CapabilityError
+from .prestress import prestress_activity
 from .problem import Problem
-from .records import (CreepFit, DatasetFit, data_axis, error_fields, information_criteria, noise_rms,
+from .records import (CreepFit, DatasetFit, RelaxationFit, data_axis, error_fields, information_criteria, noise_rms,
                       verdict_text)
 
 __all__ = ["FitResult", "FIT_NULL_MEANS", "report_quantities", "AS_WELL"]
@@ -131,15 +134,46 @@ class FitResult:
         """A short name of the model: ``"heterogeneous"``, ``"homogeneous"``, a mechanism's or formula's name."""
         return self.problem.label
 
+    # -- the Voigt cell's members, moved to its fitted cell (deprecated here for one release) ----------
+    def _moved(self, name: str, home: str):
+        """``result.model.<name>`` of a Voigt fit, with the DeprecationWarning naming that home; CapabilityError for
+        another model."""
+        if not self.spec.capabilities.voigt_options:
+            raise CapabilityError(f"FitResult.{name} is a member of the Voigt cell's fit, not of model "
+                                  f"{self.spec.name!r} ({self.problem.describe()}); its parameters are "
+                                  "result.parameters, its fitted model result.model")
+        warnings.warn(f"tenscell.FitResult.{name} is deprecated: use {home}", DeprecationWarning, stacklevel=3)
+        return getattr(self.model, name) if home.startswith("result.model.") else prestress_activity(self)
+
     @property
     def tendons(self) -> str:
-        """The Voigt cell's stiffness parametrization (per-tendon, per-family, uniform)."""
-        return self.spec.tendons
+        """Deprecated: the Voigt cell's stiffness layout is ``result.model.tendons`` (the fitted cell)."""
+        return self._moved("tendons", "result.model.tendons")
 
     @property
     def damping(self) -> str:
-        """The Voigt cell's damping parametrization (uniform, per-family)."""
-        return self.spec.damping
+        """Deprecated: the Voigt cell's damping layout is ``result.model.damping`` (the fitted cell)."""
+        return self._moved("damping", "result.model.damping")
+
+    @property
+    def EA(self) -> np.ndarray:
+        """Deprecated: the stiffness of every tendon (N) is ``result.model.EA`` (the fitted cell)."""
+        return self._moved("EA", "result.model.EA")
+
+    @property
+    def c(self) -> np.ndarray:
+        """Deprecated: the damping of every tendon (N·s/m) is ``result.model.c`` (the fitted cell)."""
+        return self._moved("c", "result.model.c")
+
+    @property
+    def L(self) -> float:
+        """Deprecated: the fitted strut length (m) is ``result.model.L`` (the fitted cell)."""
+        return self._moved("L", "result.model.L")
+
+    @property
+    def prestress(self):
+        """Deprecated: is the prestress doing anything? ``tenscell.fitting.prestress_activity(result)``."""
+        return self._moved("prestress", "tenscell.fitting.prestress_activity(result)")
 
     @property
     def n_free(self) -> int:
@@ -208,21 +242,6 @@ class FitResult:
 
     # -- tendons (models with a cell) -------------------------------------------------------
     @property
-    def EA(self) -> np.ndarray:
-        """Stiffness of every tendon (N), shape (m,) (the Voigt cell)."""
-        return self.model.EA
-
-    @property
-    def c(self) -> np.ndarray:
-        """Damping of every tendon (N·s/m), shape (m,) (the Voigt cell)."""
-        return self.model.c
-
-    @property
-    def L(self) -> float:
-        """Fitted strut length (m) (the Voigt cell)."""
-        return self.model.L
-
-    @property
     def stiffness_spread(self) -> tuple[float, float, float] | None:
         """(min, max, decades = log10(max/min)) of the tendon stiffnesses; None for a structure-free formula."""
         return self.problem.stiffness_spread(self.theta)
@@ -250,18 +269,21 @@ class FitResult:
         P_groups = self.group_prestress()
         P_pts = P_groups[pr.group_index]
         vals = dict(zip(pr.names, pr.values(self.theta)))
-        out: list[DatasetFit | CreepFit] = []
-        Jc = pr.creep(self.theta) if pr.n_creep else None
+        out: list[DatasetFit | CreepFit | RelaxationFit] = []
+        Jc = pr.time_model(self.theta) if pr.n_creep else None
         for k, d in enumerate(self.datasets):
             pts = np.flatnonzero(pr.dataset_index == k)
             stated = float(d.prestress[0]) if d.prestress is not None and np.unique(d.prestress).size == 1 else None
-            if d.kind == "creep":
-                assert Jc is not None  # a creep data set makes pr.n_creep > 0
-                sel = np.flatnonzero(pr.creep_dataset == k)
-                out.append(CreepFit(index=k, data=d, axis="time", prestress_pa=stated,
-                                    prestress_fitted_pa=vals.get(f"P_data[{k}]"),
-                                    prestress_model_N=P_groups[pr.creep_group[sel]],
-                                    J_model=Jc[sel], residuals=self.residuals[pr.rows(k)]))
+            if d.kind in ("creep", "relaxation"):
+                assert Jc is not None  # a time data set makes pr.n_creep > 0
+                sel = pr.time_points(k)
+                rows = pr.point_rows(k)
+                residuals = np.where(rows >= 0, self.residuals[np.maximum(rows, 0)], 0.0)  # a shape's reference: 0
+                kind = CreepFit if d.kind == "creep" else RelaxationFit
+                values = {"J_model" if d.kind == "creep" else "G_model": Jc[sel]}
+                out.append(kind(index=k, data=d, axis="time", prestress_pa=stated,
+                                prestress_fitted_pa=vals.get(f"P_data[{k}]"),
+                                prestress_model_N=P_groups[pr.time_group[sel]], residuals=residuals, **values))
                 continue
             out.append(DatasetFit(
                 index=k, data=d, axis=data_axis(d), prestress_pa=stated,
@@ -327,8 +349,8 @@ class FitResult:
         return self.model.linear(P_N=self._default_prestress_N())
 
     @cached_property
-    def prestress(self):
-        """Is the prestress doing anything? (the Voigt cell: :mod:`tenscell.fitting.prestress`)."""
+    def _prestress_activity(self):
+        # tenscell.fitting.prestress_activity(result) at the reference frequency, computed once per result
         return self.problem.prestress_activity(self)
 
     def predicted_creep(self, t_min: float = 0.1, t_max: float = 10.0, n: int = 41):

@@ -38,7 +38,7 @@ from .models.formulas import PHI0, structural_damping_moduli
 from .records import information_criteria
 
 __all__ = ["PHI0", "structural_damping_moduli", "fit_structural_damping", "information_criteria", "split_holdout",
-           "ModelScore", "ModelComparison", "compare_models", "score"]
+           "ModelScore", "ModelComparison", "compare_models", "score", "data_subset"]
 
 def fit_structural_damping(data: RheologyData, *, newtonian: bool = True, starts: int = 2, seed: int = 0):
     """Fit the structural-damping law (with or without its Newtonian term) to a frequency sweep: a
@@ -57,8 +57,8 @@ def _one_prestress(data: RheologyData) -> bool:
 
 def _frequency_sweep(data, what: str) -> RheologyData:
     if not isinstance(data, RheologyData) or not _one_prestress(data):
-        raise DataError(f"{what}: needs one frequency sweep (RheologyData at a single prestress), got "
-                         f"{getattr(data, 'source', type(data).__name__)}")
+        got = data.source if isinstance(data, RheologyData) else type(data).__name__
+        raise DataError(f"{what}: needs one frequency sweep (RheologyData at a single prestress), got {got}")
     return data
 
 
@@ -73,9 +73,9 @@ def split_holdout(data: RheologyData, f_min: float, f_max: float) -> tuple[Rheol
     ValueError
         For creep data or a prestress sweep, bad limits, or a window that leaves no point on one side.
     """
-    if getattr(data, "kind", None) == "creep":  # CreepData: times, no frequencies to hold out
-        raise ValueError(f"holdout: {data.source} is creep compliance J(t); a frequency window needs a frequency "
-                         "sweep of G', G''")
+    if data.kind not in ("frequency", "prestress"):  # a time series: times, no frequencies to hold out
+        raise ValueError(f"holdout: {data.source} is a time series ({data.kind}); a frequency window needs a "
+                         "frequency sweep of G', G''")
     f_min = positive_scalar("holdout f_min", f_min, "Hz")
     f_max = positive_scalar("holdout f_max", f_max, "Hz")
     if not f_min < f_max:
@@ -86,10 +86,12 @@ def split_holdout(data: RheologyData, f_min: float, f_max: float) -> tuple[Rheol
     if not held.any() or held.all():
         raise ValueError(f"holdout: the window {f_min:g}:{f_max:g} Hz holds {int(held.sum())} of the {data.n} points "
                          f"of {data.source}; it must leave points on both sides")
-    return _subset(data, ~held, "training"), _subset(data, held, "held out")
+    return data_subset(data, ~held, "training"), data_subset(data, held, "held out")
 
 
-def _subset(data: RheologyData, mask, what: str) -> RheologyData:
+def data_subset(data: RheologyData, mask, what: str) -> RheologyData:
+    """The points of a moduli data set where ``mask`` is True, its source marked ``(what)``."""
+
     def pick(a):
         return None if a is None else a[mask]
 

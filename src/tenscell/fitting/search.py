@@ -330,8 +330,7 @@ def _warm_start(problem: Problem, initial):
     """Free log-parameters of a warm start (None for none), checked against the problem's layout."""
     if initial is None:
         return None
-    theta = getattr(initial, "theta", initial)
-    theta = np.array(theta, dtype=float).ravel()
+    theta = np.array(initial, dtype=float).ravel()
     if theta.shape != (problem.n_free,) or not np.all(np.isfinite(theta)):
         raise ValueError(f"initial: expected {problem.n_free} finite free log-parameters (a FitResult of the same "
                          f"data and parametrization), got {theta.shape[0]} values")

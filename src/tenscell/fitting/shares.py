@@ -42,7 +42,6 @@ import numpy as np
 
 from .._checks import positive_array, positive_scalar
 from .._results import format_repr
-from .. import laws as _laws
 from ..linear.assembly import modulus
 
 if TYPE_CHECKING:
@@ -199,7 +198,7 @@ def prestress_parts(problem, phi, P: float, omega) -> tuple[np.ndarray, np.ndarr
     w = np.atleast_1d(np.asarray(omega, dtype=float))
     vals, _ = problem.law_values(phi)
     K, m = next(iter(vals.values())).shape
-    law_cls = getattr(_laws, problem.mechanism.law)
+    law_cls = problem.law_class
     G_all = np.zeros((K, w.size), dtype=complex)
     parts = np.zeros((K, 3, w.size), dtype=complex)
     l, T0 = problem.lengths, problem.T0
@@ -227,11 +226,13 @@ def _scale_and_range(problem, phi, prestress_pa, frequency_hz):
     s = math.exp(phi[names.index("s")]) if "s" in names else None
     measured = np.asarray(problem.group_measured, dtype=float)
     known = np.isfinite(measured)
-    if frequency_hz is None:
-        if problem.omega.size == 0:
-            raise ValueError("frequency_hz is required: this problem has no data points")
+    if frequency_hz is None and problem.omega.size:
         pts = np.isin(problem.group_index, np.flatnonzero(known)) if known.any() else np.ones(problem.n_points, bool)
         frequency_hz = np.unique(problem.omega[pts]) / (2 * np.pi)
+    elif frequency_hz is None and problem.time is not None:  # time data only: f = 1/(2πt) over their times
+        frequency_hz = np.unique(1.0 / (2 * np.pi * problem.time.t))
+    elif frequency_hz is None:
+        raise ValueError("frequency_hz is required: this problem has no data points")
     if s is not None and prestress_pa is None:
         if not known.any():
             raise ValueError("prestress_pa is required: no data set of this problem states a prestress")
@@ -240,6 +241,21 @@ def _scale_and_range(problem, phi, prestress_pa, frequency_hz):
     if s is None:
         P_fit = float(np.exp(problem.group_log_offset + problem.group_map @ phi[problem.prestress_slice])[0])
     return s, prestress_pa, P_fit, frequency_hz
+
+
+def _fitted_inputs(model, theta, prestress_pa, frequency_hz):
+    """``(problem, phi, s, prestress range, P)`` of a fitted mechanism: what :func:`structure_shares` takes from a
+    problem, from the fitted model and the range it recorded (ValueError for what it cannot tell)."""
+    if theta is not None:
+        raise ValueError("theta is given by the fitted mechanism itself; pass theta only with a MechanismProblem")
+    problem, phi = model.evaluation()
+    if model.s is not None and prestress_pa is None:
+        if not model.prestress_pa:
+            raise ValueError("prestress_pa is required: the fitted mechanism records no prestress")
+        prestress_pa = (min(model.prestress_pa), max(model.prestress_pa))
+    if frequency_hz is None:
+        raise ValueError("frequency_hz is required with a fitted mechanism (it records no frequencies)")
+    return problem, phi, model.s, prestress_pa, model.P
 
 
 def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
@@ -272,21 +288,16 @@ def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
         Missing ``theta`` or frequencies, a bad range, an even or too small ``points``, or a cell that is not
         stable at a prestress of the range.
     """
-    from .models.mechanism import FittedMechanism
+    from .models.base import CapabilityError, FittedModel
 
     if isinstance(points, bool) or not isinstance(points, int) or points < 3 or points % 2 == 0:
         raise ValueError(f"points must be an odd integer >= 3 (Simpson's rule), got {points!r}")
-    if isinstance(model, FittedMechanism):
-        if theta is not None:
-            raise ValueError("theta is given by the fitted mechanism itself; pass theta only with a MechanismProblem")
-        problem, phi = model._problem, model._phi
-        s, P_fit = model.s, model.P
-        if s is not None and prestress_pa is None:
-            if not model.prestress_pa:
-                raise ValueError("prestress_pa is required: the fitted mechanism records no prestress")
-            prestress_pa = (min(model.prestress_pa), max(model.prestress_pa))
-        if frequency_hz is None:
-            raise ValueError("frequency_hz is required with a fitted mechanism (it records no frequencies)")
+    fitted = isinstance(model, FittedModel)  # the fitted-model family (any kind), or else a problem
+    if not (model.capabilities if fitted else model.spec.capabilities).structure_shares:
+        raise CapabilityError(f"{model.describe()}: structure shares split a mechanism's dG*/dP into the geometric "
+                              "prestress stiffness and its law's tension terms; this model has no such split")
+    if fitted:
+        problem, phi, s, prestress_pa, P_fit = _fitted_inputs(model, theta, prestress_pa, frequency_hz)
     else:
         if theta is None:
             raise ValueError("theta (the free log-parameters) is required with a MechanismProblem")
@@ -310,10 +321,10 @@ def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
         try:
             G[i], PdG = prestress_parts(problem, phi, float(P), 2 * np.pi * f)
         except np.linalg.LinAlgError:
-            raise ValueError(f"the {problem.mechanism.name} cell is not stable at P = {P:.4g} N") from None
+            raise ValueError(f"the {problem.spec.name} cell is not stable at P = {P:.4g} N") from None
         per = p_pa[i] if s is not None else P  # d/d(measured Pa) = (P dG/dP)/p; d/dP (N) when no scale
         parts[:, i] = PdG / per
-    return StructureShares(mechanism=problem.mechanism.name, frequency_hz=f, prestress_pa=p_pa, prestress_n=P_n,
+    return StructureShares(mechanism=problem.spec.name, frequency_hz=f, prestress_pa=p_pa, prestress_n=P_n,
                            G=G, dG_transverse=parts[0], dG_axial=parts[1], dG_constitutive=parts[2])
 
 
@@ -446,7 +457,7 @@ def prestress_scale(result) -> PrestressScale | None:
         return PrestressScale(s=None, s_error_ln=None, s_note="no data set states its prestress", L_cell=L_cell,
                               measured_pa=measured, fitted_pa=fitted, P_N=P[0] if P else None)
     rel, note = result.identifiability().relative_error("s")
-    profile = getattr(result, "profile", None)
+    profile = result.profile
     span = None
     if profile is not None:
         try:
@@ -568,14 +579,13 @@ def structure_summary(result) -> StructureSummary | None:
     StructureSummary or None
     """
     from .derived import derived_quantities
-    from .models.mechanism import MechanismProblem
 
     scale = prestress_scale(result)
     if scale is None:
         return None
     pr = result.problem
-    if not isinstance(pr, MechanismProblem):
+    if not result.spec.capabilities.structure_shares:
         return StructureSummary(model=result.spec.name, law=None, shares=None, quantities=None, scale=scale)
     shares = structure_shares(pr, result.theta)
-    return StructureSummary(model=result.spec.name, law=pr.mechanism.law, shares=shares,
+    return StructureSummary(model=result.spec.name, law=result.spec.law, shares=shares,
                             quantities=derived_quantities(result, share_quantities), scale=scale)

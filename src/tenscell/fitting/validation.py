@@ -25,6 +25,7 @@ from .._results import dataframe, format_repr
 from ..io.data import RheologyData
 from .parameters import as_datasets
 from .records import data_axis
+from .scores import data_subset
 
 __all__ = ["Split", "splits", "OutOfSample", "out_of_sample", "OutOfSampleComparison", "compare_out_of_sample",
            "CUTOFFS_HZ", "NO_BETTER", "held_out_rms", "out_of_sample_verdict", "standard_baselines"]
@@ -60,15 +61,6 @@ class Split:
     dataset: int
 
 
-def _subset(d: RheologyData, mask, what: str) -> RheologyData:
-    def pick(a):
-        return None if a is None else np.asarray(a)[mask]
-
-    return RheologyData(frequency_hz=d.frequency_hz[mask], G_storage=d.G_storage[mask], G_loss=d.G_loss[mask],
-                        prestress=pick(d.prestress), G_storage_sd=pick(d.G_storage_sd), G_loss_sd=pick(d.G_loss_sd),
-                        source=f"{d.source} ({what})", comments=d.comments)
-
-
 def _short(source: str) -> str:
     name = source.replace("\\", "/").rsplit("/", 1)[-1].split(" (")[0]
     return name.rsplit(".", 1)[0] if "." in name else name
@@ -94,10 +86,10 @@ def splits(data, cutoffs_hz=CUTOFFS_HZ) -> tuple[Split, ...]:
         for label, train in masks:
             if train.sum() < _MIN_POINTS or (~train).sum() < 1:
                 continue
-            cut = _subset(d, train, "training")
+            cut = data_subset(d, train, "training")
             out.append(Split(name=f"{_short(d.source)}: {label}",
                              train=tuple(cut if j == k else e for j, e in enumerate(datasets)),
-                             held=_subset(d, ~train, "held out"), dataset=k))
+                             held=data_subset(d, ~train, "held out"), dataset=k))
     return tuple(out)
 
 

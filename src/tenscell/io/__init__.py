@@ -26,6 +26,7 @@ _EXPORTS: dict[str, tuple[str, ...]] = {
     "readers.rheocompass": ("read_rheocompass",),
     "importers": ("read_table", "from_dataframe", "ColumnMap", "guess_columns"),
     "creep_data": ("CreepData", "read_creep_csv", "write_creep_csv"),
+    "relaxation_data": ("RelaxationData", "read_relaxation_csv", "write_relaxation_csv"),
     "provenance": ("Provenance",),
     "checks": ("CHECKS",),
     "exchange": ("from_rheojax", "to_rheojax"),
@@ -38,7 +39,7 @@ __all__ = [
     # measured moduli and creep
     "RheologyData", "DataError", "read_data", "read_csv", "read_table", "read_trios", "read_rheocompass",
     "from_dataframe", "ColumnMap", "guess_columns", "bundled", "bundled_names", "CreepData", "read_creep_csv",
-    "write_creep_csv", "Provenance", "CHECKS",
+    "write_creep_csv", "RelaxationData", "read_relaxation_csv", "write_relaxation_csv", "Provenance", "CHECKS",
     # exchange with xarray and rheojax
     "from_rheojax", "to_rheojax",
     # structure files

@@ -28,7 +28,8 @@ if TYPE_CHECKING:
     import pandas as pd
 
 __all__ = ["DataError", "ColumnMapError", "ColumnMap", "guess_columns", "KNOWN_HEADERS", "Parsed", "parse", "parse_frame", "frame_table",
-           "FREQUENCY_UNITS", "MODULUS_UNITS", "PHASE_UNITS", "PRESTRESS_UNITS", "TIME_UNITS", "COMPLIANCE_UNITS"]
+           "FREQUENCY_UNITS", "MODULUS_UNITS", "PHASE_UNITS", "PRESTRESS_UNITS", "TIME_UNITS", "COMPLIANCE_UNITS",
+           "CellTable", "column_map", "trimmed", "excel_table", "read_text_file"]
 
 
 class DataError(TenscellError, ValueError):
@@ -216,7 +217,7 @@ _NAMES = {"frequency": "frequency", "storage": "G'", "loss": "G''", "magnitude":
 
 # ---- one table, whatever it came from -----------------------------------------------------
 @dataclass(frozen=True)
-class _Table:
+class CellTable:
     """Cells as text or numbers, with where each row and column sits in the source (for messages)."""
 
     source: str
@@ -228,7 +229,7 @@ class _Table:
     comments: tuple[str, ...] = ()
 
 
-def _error(table: _Table, problem: str, row: int | None = None, column: str | None = None) -> DataError:
+def _error(table: CellTable, problem: str, row: int | None = None, column: str | None = None) -> DataError:
     parts = [table.source] + ([table.where[row]] if row is not None else [])
     return DataError(", ".join(parts) + ": " + (f"column {column!r}: " if column else "") + problem)
 
@@ -262,7 +263,7 @@ def _canonical_unit(text: str) -> str | None:
     return _ALIASES.get(t.lower().replace("·", " ").replace("**", "^").replace(" ", ""))
 
 
-def _resolve(table: _Table, cmap: ColumnMap) -> dict[str, tuple[int, str]]:
+def _resolve(table: CellTable, cmap: ColumnMap) -> dict[str, tuple[int, str]]:
     """Quantity -> (column index, unit), checking that every column exists and every unit is known.
 
     Every unit the file leaves unstated is asked for in one message (not one per run).
@@ -296,7 +297,7 @@ def _resolve(table: _Table, cmap: ColumnMap) -> dict[str, tuple[int, str]]:
     return out
 
 
-def _unit_of(table: _Table, cmap: ColumnMap, quantity: str, j: int) -> str | None:
+def _unit_of(table: CellTable, cmap: ColumnMap, quantity: str, j: int) -> str | None:
     """The unit of column ``j`` holding ``quantity``: stated by the map, else written in the file; None when
     neither says it (the caller asks for every such unit at once)."""
     field = _QUANTITIES[quantity]
@@ -330,7 +331,7 @@ def _units_table(field: str) -> dict[str, float]:
             "prestress_unit": PRESTRESS_UNITS, "time_unit": TIME_UNITS, "compliance_unit": COMPLIANCE_UNITS}[field]
 
 
-def _number(table: _Table, value: Any, i: int, column: str) -> float:
+def _number(table: CellTable, value: Any, i: int, column: str) -> float:
     if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool):
         x = float(value)
     else:
@@ -349,7 +350,7 @@ def _number(table: _Table, value: Any, i: int, column: str) -> float:
     return x
 
 
-def _columns(table: _Table, cmap: ColumnMap, resolved: Mapping[str, tuple[int, str]]) -> dict[str, np.ndarray]:
+def _columns(table: CellTable, cmap: ColumnMap, resolved: Mapping[str, tuple[int, str]]) -> dict[str, np.ndarray]:
     """Each quantity's values converted to SI (Hz, Pa, rad), checked row by row."""
     out: dict[str, np.ndarray] = {}
     for quantity, (j, unit) in resolved.items():
@@ -371,7 +372,7 @@ def _columns(table: _Table, cmap: ColumnMap, resolved: Mapping[str, tuple[int, s
     return out
 
 
-def _check_ranges(table: _Table, cmap: ColumnMap, resolved: Mapping[str, tuple[int, str]],
+def _check_ranges(table: CellTable, cmap: ColumnMap, resolved: Mapping[str, tuple[int, str]],
                   si: Mapping[str, np.ndarray]) -> None:
     """Every value in the range of its quantity (:data:`tenscell._ranges.RANGES`), else DataError naming the
     first offending row, the user's header and the value and range in the user's unit."""
@@ -396,7 +397,7 @@ def _check_ranges(table: _Table, cmap: ColumnMap, resolved: Mapping[str, tuple[i
     raise _error(table, problem, i, table.names[j].strip())
 
 
-def _check_formed(table: _Table, cmap: ColumnMap, resolved: Mapping[str, tuple[int, str]],
+def _check_formed(table: CellTable, cmap: ColumnMap, resolved: Mapping[str, tuple[int, str]],
                   v: Mapping[str, np.ndarray]) -> None:
     """G' and G'' formed from another pair of columns (|G| with the phase, one modulus with tan δ) inside the
     modulus range, else DataError naming the row, the columns they came from, and the user's modulus unit."""
@@ -451,7 +452,7 @@ class Parsed:
     notes: tuple = ()  # what was done while reading (points dropped), for the provenance
 
 
-def parse(table: _Table, cmap: ColumnMap, min_points: int) -> Parsed:
+def parse(table: CellTable, cmap: ColumnMap, min_points: int) -> Parsed:
     """The values a table holds under a map, checked row by row (:class:`DataError` naming the line and column)."""
     resolved = _resolve(table, cmap)
     notes: tuple[str, ...] = ()
@@ -475,20 +476,20 @@ def parse(table: _Table, cmap: ColumnMap, min_points: int) -> Parsed:
                   tuple(table.where), used, notes)
 
 
-def frame_table(df: pd.DataFrame, source: str) -> _Table:
+def frame_table(df: pd.DataFrame, source: str) -> CellTable:
     """A DataFrame as a table (rows named by their index labels in messages)."""
     names = [str(c) for c in df.columns]
-    return _Table(source, names, df.to_numpy(dtype=object).tolist(), [f"index {label!r}" for label in df.index])
+    return CellTable(source, names, df.to_numpy(dtype=object).tolist(), [f"index {label!r}" for label in df.index])
 
 
 def parse_frame(df: pd.DataFrame, columns: ColumnMap | Mapping[str, Any] | None, source: str, min_points: int,
                 units: Mapping[str, Any]) -> Parsed:
     """:func:`parse` of a DataFrame; ``columns`` None: recognised from the column names (:func:`guess_columns`)."""
     table = frame_table(df, source)
-    return parse(table, _as_map(columns if columns is not None else guess_columns(table.names), units), min_points)
+    return parse(table, column_map(columns if columns is not None else guess_columns(table.names), units), min_points)
 
 
-def _without_onset(table: _Table, j: int) -> tuple[_Table, tuple[str, ...]]:
+def _without_onset(table: CellTable, j: int) -> tuple[CellTable, tuple[str, ...]]:
     """The rows after the stress step: a point at t = 0 (the step's onset, where J is 0 or undefined) is
     dropped, and the drop recorded; any other t <= 0 is an error later, with its line."""
     keep = [i for i, row in enumerate(table.rows)
@@ -502,7 +503,9 @@ def _without_onset(table: _Table, j: int) -> tuple[_Table, tuple[str, ...]]:
     return replace(table, rows=[table.rows[i] for i in keep], where=[table.where[i] for i in keep]), (note,)
 
 
-def _as_map(columns: ColumnMap | Mapping[str, Any] | None, units: Mapping[str, Any]) -> ColumnMap:
+def column_map(columns: ColumnMap | Mapping[str, Any] | None, units: Mapping[str, Any]) -> ColumnMap:
+    """The :class:`ColumnMap` of ``columns`` (a map, a dict of its fields, or None: tenscell's own headers) with the
+    unit fields ``units`` (ValueError naming an unknown field)."""
     if columns is None:
         columns = {"frequency": "frequency_Hz", "storage": "G_storage_Pa", "loss": "G_loss_Pa"}
     known = {f.name for f in fields(ColumnMap)}
@@ -599,7 +602,7 @@ def _read_text(path: Path) -> str:
     return read_text_file(path)
 
 
-def _text_table(path: Path, sep: str | None, header_line: int | None, units_line: bool, decimal: str) -> _Table:
+def _text_table(path: Path, sep: str | None, header_line: int | None, units_line: bool, decimal: str) -> CellTable:
     source = str(path)
     lines = _read_text(path).splitlines()
     comments = tuple(s.strip()[1:].strip() for s in lines if s.strip().startswith("#"))
@@ -621,13 +624,13 @@ def _text_table(path: Path, sep: str | None, header_line: int | None, units_line
     data = split[2:] if units_line else split[1:]
     for k, fields_ in data:
         # instruments end rows with a separator (trailing empty fields); only values beyond the header count
-        if len(_trimmed(fields_)) > len(names) or len(fields_) < len(_trimmed(names)):
-            raise DataError(f"{source}, line {k}: expected {len(_trimmed(names))} fields, found "
-                            f"{len(_trimmed(fields_))}")
-    return _Table(source, names, [f for _, f in data], [f"line {k}" for k, _ in data], units, decimal, comments)
+        if len(trimmed(fields_)) > len(names) or len(fields_) < len(trimmed(names)):
+            raise DataError(f"{source}, line {k}: expected {len(trimmed(names))} fields, found "
+                            f"{len(trimmed(fields_))}")
+    return CellTable(source, names, [f for _, f in data], [f"line {k}" for k, _ in data], units, decimal, comments)
 
 
-def _trimmed(fields_: Sequence[Any]) -> list[Any]:
+def trimmed(fields_: Sequence[Any]) -> list[Any]:
     """``fields_`` without trailing empty fields."""
     out = list(fields_)
     while out and (out[-1] is None or not str(out[-1]).strip()):
@@ -635,7 +638,7 @@ def _trimmed(fields_: Sequence[Any]) -> list[Any]:
     return out
 
 
-def _excel_table(path: Path, sheet: str | int | None, header_row: int | None, units_row: bool) -> _Table:
+def excel_table(path: Path, sheet: str | int | None, header_row: int | None, units_row: bool) -> CellTable:
     try:
         import openpyxl
     except ImportError:  # pragma: no cover - depends on the installation
@@ -667,4 +670,4 @@ def _excel_table(path: Path, sheet: str | int | None, header_row: int | None, un
     names = ["" if c is None else str(c) for c in rows[0][1]]
     units = ["" if c is None else str(c) for c in rows[1][1]] if units_row and len(rows) > 1 else None
     data = rows[2:] if units_row else rows[1:]
-    return _Table(source, names, [r for _, r in data], [f"row {k}" for k, _ in data], units)
+    return CellTable(source, names, [r for _, r in data], [f"row {k}" for k, _ in data], units)

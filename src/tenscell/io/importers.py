@@ -48,7 +48,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Mapping
 
 from .columns import (COMPLIANCE_UNITS, FREQUENCY_UNITS, KNOWN_HEADERS, MODULUS_UNITS, PHASE_UNITS, PRESTRESS_UNITS,
-                      TIME_UNITS, ColumnMap, DataError, _as_map, _excel_table, _Table, _text_table, frame_table,
+                      TIME_UNITS, ColumnMap, DataError, column_map, excel_table, CellTable, _text_table, frame_table,
                       guess_columns, parse)
 from .creep_data import CreepData
 from .data import RheologyData
@@ -61,7 +61,7 @@ __all__ = ["ColumnMap", "from_dataframe", "read_table", "guess_columns", "KNOWN_
            "MODULUS_UNITS", "PHASE_UNITS", "PRESTRESS_UNITS", "TIME_UNITS", "COMPLIANCE_UNITS", "DataError"]
 
 
-def build(table: _Table, cmap: ColumnMap, min_points: int = 1, provenance: Provenance | None = None, accept=(),
+def build(table: CellTable, cmap: ColumnMap, min_points: int = 1, provenance: Provenance | None = None, accept=(),
           *, what: str | None = None, want: str | None = None) -> RheologyData | CreepData:
     """The data a table holds under a map, as every reader ends: parsed (:func:`tenscell.io.columns.parse`),
     built (CreepData for the creep layout, RheologyData otherwise) with its provenance (``provenance`` as the
@@ -110,7 +110,7 @@ def from_dataframe(df: pd.DataFrame, columns: ColumnMap | Mapping[str, Any] | No
         CreepData when the map reads ``time`` and ``compliance``.
     """
     table = frame_table(df, source)
-    cmap = _as_map(columns if columns is not None else guess_columns(table.names), units)
+    cmap = column_map(columns if columns is not None else guess_columns(table.names), units)
     return build(table, cmap, min_points, Provenance(file=source, layout="DataFrame"), accept, want=want)
 
 
@@ -157,12 +157,12 @@ def read_table(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, A
     DataError
         Naming the file, the line (row) and the column.
     """
-    cmap = _as_map(columns, units)
+    cmap = column_map(columns, units)
     if decimal not in (".", ","):
         raise ValueError(f"decimal: expected '.' or ',', got {decimal!r}")
     p = Path(path)
     if p.suffix.lower() in (".xlsx", ".xlsm"):
-        table = _excel_table(p, sheet, header_line, units_line)
+        table = excel_table(p, sheet, header_line, units_line)
         layout = f"Excel sheet {table.source.rsplit('[', 1)[-1].rstrip(']')!r}"
     else:
         table = _text_table(p, sep, header_line, units_line, decimal)

@@ -33,22 +33,29 @@ def fit_table(result, baseline):
     header = ["dataset", "source", "prestress_Pa", "frequency_Hz", "G_storage_Pa", "G_loss_Pa",
               "G_storage_model_Pa", "G_storage_model_stderr_Pa", "G_loss_model_Pa", "G_loss_model_stderr_Pa",
               "log10_error_storage", "log10_error_loss", "G_storage_baseline_Pa", "G_loss_baseline_Pa"]
-    creep = any(f.axis == "time" for f in result.fits)
-    if creep:  # creep data sets fill these columns (and leave the moduli ones empty), moduli rows the others
-        header += ["time_s", "creep_compliance_per_Pa", "creep_compliance_model_per_Pa",
-                   "creep_compliance_model_stderr_per_Pa", "log10_error_creep", "creep_compliance_baseline_per_Pa"]
+    # time data sets fill their kind's columns (and leave the others empty), moduli rows the moduli ones; a
+    # relaxation's shape (data.relative) gives G(t)/G(t_ref) in the relaxation columns
+    kinds = [k for k in _TIME_COLUMNS if any(f.axis == "time" and f.data.kind == k for f in result.fits)]
+    if kinds:
+        header += ["time_s"] + [c for k in kinds for c in _TIME_COLUMNS[k]]
+    width = 1 + 5 * len(kinds) if kinds else 0
     se = result.model_standard_errors() * math.log(10.0)  # relative standard error of each model value
     rows = []
     for f, b in zip(result.fits, baseline.fits):
-        d, n, r = f.data, f.data.n, se[result.problem.rows(f.index)]
+        d, n = f.data, f.data.n
         if f.axis == "time":
+            where = result.problem.point_rows(f.index)  # a shape's reference time is no residual: no error
+            r = np.where(where >= 0, se[np.maximum(where, 0)], math.nan)
+            before = 5 * kinds.index(d.kind)
             for i in range(n):
                 P = float(d.prestress[i]) if d.prestress is not None else (
                     "" if f.prestress_fitted_pa is None else f.prestress_fitted_pa)
-                rows.append([f.index, d.source, P] + [""] * 11 + [
-                    float(d.time_s[i]), float(d.compliance[i]), float(f.J_model[i]), _se(f.J_model[i], r[i]),
-                    float(f.residuals[i]), float(b.J_model[i])])
+                m = f.model_values
+                rows.append([f.index, d.source, P] + [""] * 11 + [float(d.time_s[i])] + [""] * before + [
+                    float(f.data_values[i]), float(m[i]), _se(m[i], r[i]), float(f.residuals[i]),
+                    float(b.model_values[i])] + [""] * (width - 6 - before))
             continue
+        r = se[result.problem.rows(f.index)]
         for i in range(n):
             P = float(d.prestress[i]) if d.prestress is not None else (
                 "" if f.prestress_fitted_pa is None else f.prestress_fitted_pa)
@@ -56,8 +63,17 @@ def fit_table(result, baseline):
                          float(f.G_storage_model[i]), _se(f.G_storage_model[i], r[i]), float(f.G_loss_model[i]),
                          _se(f.G_loss_model[i], r[n + i]), float(f.residuals[i]), float(f.residuals[n + i]),
                          float(b.G_storage_model[i]), float(b.G_loss_model[i])]
-                        + ([""] * 6 if creep else []))
+                        + [""] * width)
     return header, rows
+
+
+#: the columns of each kind of time data in fit.csv (after ``time_s``)
+_TIME_COLUMNS = {
+    "creep": ["creep_compliance_per_Pa", "creep_compliance_model_per_Pa", "creep_compliance_model_stderr_per_Pa",
+              "log10_error_creep", "creep_compliance_baseline_per_Pa"],
+    "relaxation": ["relaxation_modulus_Pa", "relaxation_modulus_model_Pa", "relaxation_modulus_model_stderr_Pa",
+                   "log10_error_relaxation", "relaxation_modulus_baseline_Pa"],
+}
 
 
 def _se(value, relative) -> float | str:

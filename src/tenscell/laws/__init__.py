@@ -93,6 +93,7 @@ from .viscoelastic import (DEFAULT_REALIZATION_BAND_HZ, SPRINGPOT_TIME, Maxwell,
 
 
 __all__ = [
+    "LAWS",
     "TendonLaw",
     "Parameter",
     "Tangent",
@@ -119,3 +120,8 @@ __all__ = [
     "stiffening_law",
     "DEFAULT_VELOCITY_SCALE",
 ]
+
+#: every law class by name (what a :class:`~tenscell.fitting.models.mechanism.Mechanism` names in ``law``)
+LAWS: dict[str, type[TendonLaw]] = {cls.__name__: cls for cls in (Voigt, PowerDashpot, StiffeningFilament, LinearSpring,
+                                                                  Maxwell, StandardLinearSolid, Springpot,
+                                                                  TensionSpringpot, CompositeLaw)}

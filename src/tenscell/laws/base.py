@@ -204,6 +204,12 @@ class TendonLaw:
     #: True for laws whose tangent depends on frequency (internal dynamics: Maxwell, standard linear solid,
     #: springpot); they define :meth:`complex_stiffness` and have no constant (k, c)
     dynamic: ClassVar[bool] = False
+    #: the group the command line's help lists a fittable mechanism on this law in
+    #: (:class:`tenscell.fitting.models.mechanism.Mechanism`); None: the law carries no mechanism
+    mechanism_group: ClassVar[str | None] = None
+    #: the law's terms lumped into one element, as terms of a structure-free formula
+    #: (:data:`tenscell.fitting.models.formulas.TERMS`): the baseline a mechanism on this law must beat; None: none
+    lumped_terms: ClassVar[tuple[str, ...] | None] = None
     l0: Any = None
 
     # -- to implement -----------------------------------------------------------------------------
@@ -415,6 +421,16 @@ class TendonLaw:
         dk_dT = t.dk_dT[None, :] + 1j * np.multiply.outer(w, t.dc_dT)
         dk = t.dk[:, None, :] + 1j * w[None, :, None] * t.dc[:, None, :]
         return dk_dT, dk
+
+    def laplace_stiffness_derivatives(self, l, T, s) -> tuple[np.ndarray, np.ndarray]:
+        """``(∂k*/∂T, ∂k*/∂θ)`` of :meth:`laplace_stiffness` at Laplace variables ``s`` (1/s): shapes ``(n_s, m)``
+        and ``(p, n_s, m)``, θ in :attr:`names` order; at ``s = iω`` those of :meth:`complex_stiffness_derivatives`
+        (what the exact Jacobian of a creep or relaxation fit inverts). Default: from :meth:`tangent`,
+        ``∂k + s·∂c``."""
+        z = laplace_variables(s)
+        t = self.tangent(l, T)
+        return (t.dk_dT[None, :] + np.multiply.outer(z, t.dc_dT),
+                t.dk[:, None, :] + z[None, :, None] * t.dc[:, None, :])
 
     @classmethod
     def _trusted(cls, **fields):

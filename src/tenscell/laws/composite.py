@@ -192,13 +192,19 @@ class CompositeLaw(TendonLaw):
 
     def complex_stiffness_derivatives(self, l, T, omega) -> tuple[np.ndarray, np.ndarray]:
         """Each part's ``(∂k*/∂T, ∂k*/∂θ)`` assembled on the union of names (0 where a tendon lacks θ)."""
+        return self._each_derivative("complex_stiffness_derivatives", l, T, angular_frequencies(omega))
+
+    def laplace_stiffness_derivatives(self, l, T, s) -> tuple[np.ndarray, np.ndarray]:
+        """Each part's ``(∂k*/∂T, ∂k*/∂θ)`` at Laplace variables ``s``, on the union of names."""
+        return self._each_derivative("laplace_stiffness_derivatives", l, T, laplace_variables(s))
+
+    def _each_derivative(self, method: str, l, T, z) -> tuple[np.ndarray, np.ndarray]:
         l, T = _refs(l, T)
-        w = angular_frequencies(omega)
         names = self.names
-        dT = np.empty((w.size, self.m), dtype=complex)
-        dk = np.zeros((len(names), w.size, self.m), dtype=complex)
+        dT = np.empty((z.size, self.m), dtype=complex)
+        dk = np.zeros((len(names), z.size, self.m), dtype=complex)
         for law, i in zip(self.laws, self.indices):
-            sub_T, sub = law.complex_stiffness_derivatives(l[i], T[i], w)
+            sub_T, sub = getattr(law, method)(l[i], T[i], z)
             dT[:, i] = sub_T
             for r, n in enumerate(law.names):
                 dk[names.index(n)][:, i] = sub[r]

@@ -75,6 +75,8 @@ class StiffeningFilament(TendonLaw):
     b: object = 0.0
     l0: Any = None
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("c", "N·s/m", True), Parameter("b", "", True))
+    mechanism_group: ClassVar = "mechanisms: stiffening filaments"
+    lumped_terms: ClassVar = ("E0", "newtonian")
     rate_linear: ClassVar = True
 
     def __post_init__(self):

@@ -73,6 +73,8 @@ class Voigt(_SpringEA):
     c: Any
     l0: Any = None
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("c", "N·s/m", True))
+    mechanism_group: ClassVar = "mechanisms: Voigt tendons"
+    lumped_terms: ClassVar = ("E0", "newtonian")
     rate_linear: ClassVar = True
 
     def __post_init__(self):
@@ -151,6 +153,8 @@ class PowerDashpot(_SpringEA):
     beta: float = 2.0
     velocity_scale: float = DEFAULT_VELOCITY_SCALE
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("c", "N·(s/m)^beta", True))
+    mechanism_group: ClassVar = "mechanisms: power-law dashpot tendons"
+    lumped_terms: ClassVar = ("E0", "newtonian")
 
     def __post_init__(self):
         self._validate()
@@ -237,6 +241,8 @@ class LinearSpring(TendonLaw):
     c: Any
     l0: Any = None
     parameters: ClassVar = (Parameter("k", "N/m"), Parameter("c", "N·s/m", True))
+    mechanism_group: ClassVar = "mechanisms: linear springs"
+    lumped_terms: ClassVar = ("E0", "newtonian")
     rate_linear: ClassVar = True
 
     def __post_init__(self):

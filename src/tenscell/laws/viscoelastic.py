@@ -183,6 +183,19 @@ def _arm_s(k, c, s):
     return k * z / (k + z)
 
 
+def _arm_s_derivatives(k, c, s):
+    """``∂/∂k`` and ``∂/∂c`` of :func:`_arm_s`: ``(sc/(k + sc))²`` and ``s(k/(k + sc))²``, shape (n_s, m)."""
+    z = np.multiply.outer(s, c)
+    d = k + z
+    return (z / d) ** 2, s[:, None] * (k / d) ** 2
+
+
+def _log_s(s) -> np.ndarray:
+    """``log(s·t1)`` on the principal branch, shape (n_s, 1); 0 at s = 0, where it multiplies ``(s·t1)^α`` = 0."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.log(np.where(s != 0, s * SPRINGPOT_TIME, 1.0))[:, None]
+
+
 def _power_s(s, alpha):
     """``(s·t1)^α`` on the principal branch, shape (n_s, m) (``(iω·t1)^α`` at s = iω)."""
     return np.power((s * SPRINGPOT_TIME)[:, None], np.asarray(alpha, dtype=float))
@@ -235,6 +248,8 @@ class Maxwell(_DynamicSpring):
     c: Any
     l0: Any = None
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("c", "N·s/m"))
+    mechanism_group: ClassVar = "mechanisms: filament turnover (Maxwell)"
+    lumped_terms: ClassVar = ("maxwell",)
 
     def __post_init__(self):
         self._validate()
@@ -256,6 +271,14 @@ class Maxwell(_DynamicSpring):
         w = angular_frequencies(omega)
         _, dk, dc = _arm(self.EA / l, np.broadcast_to(self.c, l.shape), w)
         dT = np.broadcast_to((1.0 / l).astype(complex), (w.size, l.size)).copy()
+        return dT, np.stack([dk / l, dc])
+
+    def laplace_stiffness_derivatives(self, l, T, s):
+        """:meth:`complex_stiffness_derivatives` at Laplace variables ``s`` (``z = sc``)."""
+        l, T = self._check(l, T)
+        z = laplace_variables(s)
+        dk, dc = _arm_s_derivatives(self.EA / l, np.broadcast_to(self.c, l.shape), z)
+        dT = np.broadcast_to((1.0 / l).astype(complex), (z.size, l.size)).copy()
         return dT, np.stack([dk / l, dc])
 
     def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
@@ -293,6 +316,8 @@ class StandardLinearSolid(_DynamicSpring):
     c: Any
     l0: Any = None
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("EA_arm", "N"), Parameter("c", "N·s/m"))
+    mechanism_group: ClassVar = "mechanisms: standard linear solid"
+    lumped_terms: ClassVar = ("E0", "maxwell")
 
     def __post_init__(self):
         self._validate()
@@ -315,6 +340,14 @@ class StandardLinearSolid(_DynamicSpring):
         w = angular_frequencies(omega)
         _, dk, dc = _arm(self.EA_arm / l, np.broadcast_to(self.c, l.shape), w)
         inv = np.broadcast_to((1.0 / l).astype(complex), (w.size, l.size)).copy()
+        return inv, np.stack([inv, dk / l, dc])
+
+    def laplace_stiffness_derivatives(self, l, T, s):
+        """:meth:`complex_stiffness_derivatives` at Laplace variables ``s``."""
+        l, T = self._check(l, T)
+        z = laplace_variables(s)
+        dk, dc = _arm_s_derivatives(self.EA_arm / l, np.broadcast_to(self.c, l.shape), z)
+        inv = np.broadcast_to((1.0 / l).astype(complex), (z.size, l.size)).copy()
         return inv, np.stack([inv, dk / l, dc])
 
     def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
@@ -354,6 +387,8 @@ class Springpot(_DynamicSpring):
     alpha: Any = 0.2
     l0: Any = None
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("kappa", "N", True), Parameter("alpha", ""))
+    mechanism_group: ClassVar = "mechanisms: fractional tendons"
+    lumped_terms: ClassVar = ("E0", "springpot")
 
     def __post_init__(self):
         self._validate()
@@ -387,6 +422,14 @@ class Springpot(_DynamicSpring):
         inv = np.broadcast_to((1.0 / l).astype(complex), (w.size, l.size)).copy()
         # at ω = 0, (iω)^α·log(iω) → 0: pw is 0 there, so the product is 0
         return inv, np.stack([inv, pw / l, (self.kappa / l) * pw * _log_iw(w)])
+
+    def laplace_stiffness_derivatives(self, l, T, s):
+        """:meth:`complex_stiffness_derivatives` at Laplace variables ``s`` (principal branch of the power and log)."""
+        l, T = self._check(l, T)
+        z = laplace_variables(s)
+        pw = _power_s(z, np.broadcast_to(self.alpha, l.shape))
+        inv = np.broadcast_to((1.0 / l).astype(complex), pw.shape).copy()
+        return inv, np.stack([inv, pw / l, (self.kappa / l) * pw * _log_s(z)])
 
     def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
         """The spring ``(EA + T)/l`` with the springpot as a Prony series (:func:`springpot_prony`) per exponent.
@@ -454,6 +497,8 @@ class TensionSpringpot(_DynamicSpring):
     l0: Any = None
     parameters: ClassVar = (Parameter("EA", "N"), Parameter("kappa", "N", True), Parameter("alpha", ""),
                             Parameter("beta", "", True), Parameter("alpha_T", ""))
+    mechanism_group: ClassVar = "mechanisms: fractional tendons"
+    lumped_terms: ClassVar = ("E0", "springpot", "springpot_P")
 
     def __post_init__(self):
         self._validate()
@@ -491,6 +536,18 @@ class TensionSpringpot(_DynamicSpring):
         active = (self.beta * T / l) * pw_T
         dT = inv + (np.broadcast_to(self.beta, l.shape) / l) * pw_T
         return dT, np.stack([inv, pw / l, (self.kappa / l) * pw * log_iw, (T / l) * pw_T, active * log_iw])
+
+    def laplace_stiffness_derivatives(self, l, T, s):
+        """:meth:`complex_stiffness_derivatives` at Laplace variables ``s`` (principal branch)."""
+        l, T = self._check(l, T)
+        z = laplace_variables(s)
+        pw, pw_T = (_power_s(z, np.broadcast_to(self.alpha, l.shape)),
+                    _power_s(z, np.broadcast_to(self.alpha_T, l.shape)))
+        log_s = _log_s(z)
+        inv = np.broadcast_to((1.0 / l).astype(complex), pw.shape).copy()
+        active = (self.beta * T / l) * pw_T
+        dT = inv + (np.broadcast_to(self.beta, l.shape) / l) * pw_T
+        return dT, np.stack([inv, pw / l, (self.kappa / l) * pw * log_s, (T / l) * pw_T, active * log_s])
 
     def realization(self, l, T, band_hz=None, tol: float = DEFAULT_REALIZATION_TOL) -> Realization:
         """The spring ``(EA + T)/l`` with both springpots as Prony series (:func:`springpot_prony`), as for :class:`Springpot`."""

@@ -57,7 +57,7 @@ from .definite import positive_definite_factor
 from .rigid import deformation_basis
 from .._threads import hot_path
 
-__all__ = ["dynamic_stiffness", "dynamic_compliance", "dynamic_moduli", "dynamic_complex_modulus",
+__all__ = ["dynamic_solves", "dynamic_stiffness", "dynamic_compliance", "dynamic_moduli", "dynamic_complex_modulus",
            "check_static_stability", "cytoplasm_damping", "exact_compliance", "laplace_compliance", "DynamicKernel",
            "dynamic_kernel", "batched_compliance"]
 
@@ -89,7 +89,7 @@ def dynamic_stiffness(cell: Cell, P: float, kstar) -> np.ndarray:
     return stiffness_stack(cell, P, k)
 
 
-def _solves(cell: Cell, P: float, k: np.ndarray, both: bool) -> tuple[np.ndarray, np.ndarray | None]:
+def dynamic_solves(cell: Cell, P: float, k: np.ndarray, both: bool) -> tuple[np.ndarray, np.ndarray | None]:
     """``x = K⁻¹b`` and (if ``both`` and probe ≠ load) ``y = K⁻¹D0``, shape (n_omega, n) each."""
     b, d = np.asarray(cell.load, dtype=float), np.asarray(cell.probe, dtype=float)
     same = bool(np.array_equal(b, d))
@@ -135,7 +135,7 @@ def dynamic_compliance(cell: Cell, P: float, kstar, dkstar=None):
     """
     P = positive_scalar("P (prestress)", P, "N")
     k = _kstar(cell, kstar)
-    x, y = _solves(cell, P, k, both=dkstar is not None)
+    x, y = dynamic_solves(cell, P, k, both=dkstar is not None)
     J = x @ np.asarray(cell.probe, dtype=float)
     if dkstar is None:
         return J
@@ -181,7 +181,7 @@ def dynamic_kernel(cell: Cell) -> DynamicKernel:
     H = np.asarray(cell.prestress_hessian, dtype=float)
     rhs = np.stack([b] if same else [b, d], axis=1)
     N = deformation_basis(cell)
-    if N is not None:  # free-standing: the complement of the rigid-body motions, as in _solves
+    if N is not None:  # free-standing: the complement of the rigid-body motions, as in dynamic_solves
         A, H, rhs = N.T @ A, N.T @ H @ N, N.T @ rhs
     gram = gram_table(A)
     A, H, gram, rhs = (np.ascontiguousarray(x) for x in (A, H, gram, rhs))

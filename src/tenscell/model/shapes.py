@@ -28,6 +28,7 @@ from .equilibrium import Cell, NotPrestressableError, equilibrate, equilibrium_m
 from .structure import ACTIN, INTERMEDIATE_FILAMENT, NUCLEUS, Point, Structure
 
 __all__ = [
+    "TURN",
     "paper_cell",
     "paper_structure",
     "nucleated_cell",
@@ -347,7 +348,8 @@ def _rotation_z(angle: float) -> np.ndarray:
 
 
 # node permutation of a +120° turn about b3: A1→A3→A2→A1, C likewise, B2→B1→B3→B2, D likewise
-_TURN = {0: 2, 2: 1, 1: 0, 3: 5, 5: 4, 4: 3, 8: 6, 6: 10, 10: 8, 9: 7, 7: 11, 11: 9, 12: 12}
+#: the node permutation of the paper cell's +120° turn about its axis (what cylindrical_nodes builds on)
+TURN = {0: 2, 2: 1, 1: 0, 3: 5, 5: 4, 4: 3, 8: 6, 6: 10, 10: 8, 9: 7, 7: 11, 11: 9, 12: 12}
 
 #: threefold-symmetric cylindrical reference found by :func:`tenscell.studies.references.find_cylindrical_reference` (L = 1):
 #: (θ_C1, θ_B1, θ_D1) azimuths of C1, B1, D1 on the cylinder (rad), then the heights z_B1 and z_N (in units of L)
@@ -387,8 +389,8 @@ def cylindrical_nodes(params, L: float = 1.0) -> np.ndarray:
     x[12] = (0.0, 0.0, zn * L)
     R120 = _rotation_z(2 * math.pi / 3)
     for g in (3, 6, 7):
-        x[_TURN[g]] = R120 @ x[g]
-        x[_TURN[_TURN[g]]] = R120 @ x[_TURN[g]]
+        x[TURN[g]] = R120 @ x[g]
+        x[TURN[TURN[g]]] = R120 @ x[TURN[g]]
     return x
 
 

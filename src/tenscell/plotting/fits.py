@@ -149,13 +149,14 @@ def _plot_creep_fit(result, fit, ax, baseline=None):
     from ..io.data import generated_note
 
     d = fit.data
-    what = "J data (published law, not raw)" if generated_note(d) else "J data"
-    ax.loglog(d.time_s, d.compliance, "o", color="C2", label=what)
-    ax.loglog(d.time_s, fit.J_model, "-", color="C2", label=f"J {result.label}")
+    sym = fit.symbol
+    what = f"{sym} data (published law, not raw)" if generated_note(d) else f"{sym} data"
+    ax.loglog(d.time_s, fit.data_values, "o", color="C2", label=what)
+    ax.loglog(d.time_s, fit.model_values, "-", color="C2", label=f"{sym} {result.label}")
     if baseline is not None:
-        ax.loglog(d.time_s, baseline.fits[fit.index].J_model, ":", color="C2", label=f"J {baseline.label}")
+        ax.loglog(d.time_s, baseline.fits[fit.index].model_values, ":", color="C2", label=f"{sym} {baseline.label}")
     ax.set_xlabel("time after the step (s)")
-    ax.set_ylabel("creep compliance (1/Pa)")
+    ax.set_ylabel(f"{fit.quantity} ({fit.unit})" if fit.unit else fit.quantity)
     at = (f" at {fit.prestress_pa:.4g} Pa" if fit.prestress_pa is not None else
           f" at {fit.prestress_fitted_pa:.4g} Pa (fitted)" if fit.prestress_fitted_pa is not None else "")
     ax.set_title(wrap(f"{_short(d.source)}{at}\nrms log10 error {fit.rms_log10_error:.3g}", _width_in(ax)))

@@ -85,7 +85,7 @@ def real_cells_time_figure(study, axes: Sequence[Axes] | None = None) -> np.ndar
     if not series:
         ax[0].text(0.5, 0.5, "no time-domain fits in this run", ha="center", transform=ax[0].transAxes)
         return ax
-    data = {ts.name: ts for ts in getattr(study, "time_series", ())}
+    data = {ts.name: ts for ts in study.time_series}
     for j, name in enumerate(series):
         a = ax[j]
         fits = [f for f in study.time_domain if f.data == name]

@@ -56,7 +56,7 @@ def no_if_peaks_figure(study, title: str = "Peak of G'' without IFs against pres
     hp = np.array([p.height for p in study.peaks])
     a1, a2 = ax = new_panels(axes, 2, _PANELS, title=title)
     a1.loglog(P, fp, "o-")
-    w = getattr(study, "window_hz", 1e3)
+    w = study.window_hz
     a1.axhline(w, color="0.5", ls=":", label=f"upper end of the frequency window ({w:g} Hz)")
     a1.set_xlabel("prestress P (N)")
     a1.set_ylabel("peak frequency of G″ (Hz)")

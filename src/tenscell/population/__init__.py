@@ -23,11 +23,12 @@ _EXPORTS = {
     "PopulationResult": "table", "recovery": "table", "condition_summary": "table",
     "monte_carlo_study": "studies", "sweep_study": "studies", "read_study": "studies",
     "mechanism_ensemble": "ensemble", "EnsembleResult": "ensemble",
+    "check_scheduler": "_engine",
 }
 
 __all__ = [  # the keys of _EXPORTS (a literal list, so that tools can read it)
     "CellSource", "Condition", "EnsembleResult", "PopulationFitOptions", "PopulationResult", "SyntheticPopulation",
-    "cell_seed", "condition_summary", "fit_cell", "fit_population", "mechanism_ensemble", "monte_carlo_study",
+    "cell_seed", "check_scheduler", "condition_summary", "fit_cell", "fit_population", "mechanism_ensemble", "monte_carlo_study",
     "parse_condition", "read_sources", "read_study", "recovery", "sweep_study", "synth_population",
 ]
 

@@ -25,7 +25,6 @@ cluster give the same numbers.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -235,19 +234,20 @@ def ensemble_chunk(problem, phi, omega, P_N) -> np.ndarray:
 # the entry point
 # ---------------------------------------------------------------------------------------
 def _fitted_mechanism(model):
-    """The FittedMechanism of ``model`` (itself, or a fit's); ValueError for anything else."""
-    from ..fitting.fitted import FittedMechanism
+    """The fitted model of ``model`` (itself, or a fit's) when it has a distributed tendon property; ValueError
+    (:class:`~tenscell.fitting.models.base.CapabilityError` for a fitted model without one) for anything else."""
+    from ..fitting.models.base import CapabilityError, FittedModel
     from ..fitting.result import FitResult
 
-    if isinstance(model, FitResult):
+    if isinstance(model, FitResult):  # the one result type of every fit, not a model class
         model = model.model
-    if not isinstance(model, FittedMechanism):
-        raise ValueError(f"an ensemble needs a fitted mechanism (a FittedMechanism, or the FitResult of a mechanism), "
-                         f"got {type(model).__name__}: only a mechanism with a distributed tendon property has "
-                         "assignments to draw (a per-tendon fit or a formula has none)")
-    if not model.mechanism.heterogeneous:
-        raise ValueError(f"mechanism {model.mechanism.name} draws no tendon property from a distribution: every "
-                         "assignment is the same cell, so it has no ensemble")
+    if not isinstance(model, FittedModel):  # the fitted-model family, any kind
+        raise ValueError(f"an ensemble needs a fitted mechanism (a FittedMechanism, or the FitResult of a "
+                         f"mechanism), got {type(model).__name__}: only a mechanism with a distributed tendon "
+                         "property has assignments to draw (a per-tendon fit or a formula has none)")
+    if not model.capabilities.heterogeneous:
+        raise CapabilityError(f"{model.describe()} draws no tendon property from a distribution: every assignment is "
+                              "the same cell, so it has no ensemble")
     return model
 
 
@@ -257,10 +257,10 @@ def check_counts(K, workers=None) -> tuple[int, int | None]:
 
 
 def check_ensemble(model, K, workers=None, seed=None):
-    """``(FittedMechanism, K, workers, seed)`` checked (ValueError in one line naming the argument), before any work."""
+    """``(fitted model, K, workers, seed)`` checked (ValueError in one line naming the argument), before any work."""
     model = _fitted_mechanism(model)
     K, workers = check_counts(K, workers)
-    seed = model.mechanism.seed if seed is None else _whole("seed", seed, 0)
+    seed = None if seed is None else _whole("seed", seed, 0)  # None: the model's own
     return model, K, workers, seed
 
 
@@ -300,7 +300,6 @@ def mechanism_ensemble(model, f_hz, prestress_pa=None, *, K: int = DEFAULT_K, se
     EnsembleResult
     """
     from .._progress import progress_bar
-    from ..fitting.models.mechanism import bare_problem
     from . import _engine
 
     t0 = time.perf_counter()
@@ -309,8 +308,7 @@ def mechanism_ensemble(model, f_hz, prestress_pa=None, *, K: int = DEFAULT_K, se
     pres = list(np.atleast_1d(np.asarray(prestress_pa, dtype=float))) if prestress_pa is not None else [None]
     P_N = [model.prestress(None if p is None else float(p)) for p in pres]  # every prestress checked first
     reference = np.array([_complex(model.moduli(f, None if p is None else float(p))) for p in pres])
-    pb = bare_problem(dataclasses.replace(model.mechanism, assignments=K, seed=seed), model.cell)
-    phi = np.log([model.values[n] for n in pb.names])
+    pb, phi, seed = model.ensemble_problem(K, seed)
     omega = 2 * np.pi * f
     chunks = [(lo, min(lo + CHUNK, K)) for lo in range(0, K, CHUNK)]
     members = np.empty((K, len(P_N), f.size), dtype=complex)
@@ -328,8 +326,8 @@ def mechanism_ensemble(model, f_hz, prestress_pa=None, *, K: int = DEFAULT_K, se
         shown, unit = np.array([float(np.median(model.prestress_pa)) if p is None else p for p in pres]), "Pa"
     else:
         shown, unit = np.array(P_N), "N"
-    return EnsembleResult(mechanism=model.mechanism.name, frequency_hz=f, prestress=shown, prestress_unit=unit,
-                          members=members, reference=reference, reference_K=model.mechanism.K, seed=seed,
+    return EnsembleResult(mechanism=model.spec.name, frequency_hz=f, prestress=shown, prestress_unit=unit,
+                          members=members, reference=reference, reference_K=model.assignments, seed=seed,
                           workers=int(placed.get("workers", 0)), elapsed_s=time.perf_counter() - t0)
 
 

@@ -113,7 +113,9 @@ class PopulationFitOptions:
 
     def fit_kwargs(self, cell) -> dict:
         """Keyword arguments of :func:`tenscell.fitting.fit` for a reference ``cell``."""
-        kw = dict(tendons=self.tendons, damping=self.damping, starts=self.starts, hops=self.hops,
+        from ..fitting import VoigtModel
+
+        kw = dict(model=VoigtModel(self.tendons, self.damping), starts=self.starts, hops=self.hops,
                   patience=self.patience, max_nfev=self.max_nfev, tolerance=self.tolerance,
                   polish_effort=self.polish_effort)
         if self.fix_L:

@@ -216,13 +216,13 @@ def monte_carlo_study(n: int, directory, *, spread: float = 0.10, alpha_spread: 
     StudyResult
         ``summary``: ``n_valid``, ``fraction_within_bound``, percentiles 50/95/100 of the storage and loss changes.
     """
-    from ..sensitivity import SENSITIVITY_FREQUENCIES, _mc_spreads
+    from ..sensitivity import SENSITIVITY_FREQUENCIES, monte_carlo_spreads
 
     t0 = time.perf_counter()
     n = _whole("n", n, 1)
     chunk = _whole("chunk", chunk, 1)
     seed = _whole("seed", seed, 0)
-    spread, alpha_spread = _mc_spreads(spread, alpha_spread, parameters)
+    spread, alpha_spread = monte_carlo_spreads(spread, alpha_spread, parameters)
     f = SENSITIVITY_FREQUENCIES if f_hz is None else f_hz
     f = np.atleast_1d(positive_array("frequency", f, unit="Hz")).ravel()
     bound = positive_scalar("bound", bound)

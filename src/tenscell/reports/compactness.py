@@ -14,8 +14,8 @@ def compactness_markdown(study: CompactnessStudy, title: str | None = None) -> s
     """The front (best RMS per bound), the answer, and what the study does not show."""
     names = ", ".join(f"`{s}`" for s in study.sources)
     out = [f"# {title or 'Compactness: how narrow can the stiffness distribution be?'}", "",
-           f"Data: {names}. Model: {study.fits[0].cell.describe()}; stiffness {study.fits[0].tendons}, damping "
-           f"{study.fits[0].damping}. For each bound D on log10(max EA / min EA) the model was fitted with the "
+           f"Data: {names}. Model: {study.fits[0].cell.describe()}; stiffness {study.fits[0].model.tendons}, damping "
+           f"{study.fits[0].model.damping}. For each bound D on log10(max EA / min EA) the model was fitted with the "
            "spread constrained to at most D decades (tolerance "
            f"{num(study.tolerance)} decades RMS{' on every data set' if len(study.sources) > 1 else ''}).", ""]
     knee = study.knee

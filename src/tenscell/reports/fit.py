@@ -15,8 +15,7 @@ import math
 
 import numpy as np
 
-from ..fitting.prestress import CELL_ELASTICITY
-from ..fitting.models.voigt import FitProblem
+from ..fitting.prestress import CELL_ELASTICITY, prestress_activity
 from ..fitting.records import noise_rms
 from ..fitting.result import FitResult
 from ..io.data import RheologyData
@@ -82,7 +81,7 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
         at = (f", measured at {num(f.prestress_pa)} Pa (stated)" if f.prestress_pa is not None else
               f", prestress not stated: fitted {_parameter(result, f'P_data[{f.index}]', 'Pa')}"
               if f.prestress_fitted_pa is not None else "")
-        what = "creep compliance J(t)" if f.axis == "time" else f"{f.axis} sweep"
+        what = f"{f.quantity} {f.symbol}(t)" if f.axis == "time" else f"{f.axis} sweep"
         lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {what}{at}.")
         if f.data.provenance is not None:
             lines.append(f"     Read: {f.data.provenance.line()}.")
@@ -152,7 +151,7 @@ def section_shape(result: FitResult, baseline=None) -> list[str]:
             out.append(line)
         elif f.axis == "time":
             key = f"creep_slopes[{f.index}]"
-            out.append(f"{head}local log-log slope of the fitted creep compliance at the data's times "
+            out.append(f"{head}local log-log slope of the fitted {f.quantity} at the data's times "
                        f"{num(d.time_s.min())}–{num(d.time_s.max())} s: {q.text(key, 0, digits=3)} to "
                        f"{q.text(key, 1, digits=3)}.")
         else:
@@ -176,7 +175,7 @@ def _prestress_lines(result: FitResult, baseline, f, head: str) -> list[str]:
 
 def section_prestress(result: FitResult, baseline=None) -> list[str]:
     """Is the prestress doing anything? Elasticities and share, with the verdict in words."""
-    pa = result.prestress
+    pa = prestress_activity(result)
     q = result.derived
     out = ["## Is the prestress doing anything?", "", pa.verdict(),
            f"With standard errors: the share of the static stiffness runs from {q.text('prestress_share', 0, digits=3)}"
@@ -216,19 +215,18 @@ def section_stiffness(result: FitResult, baseline=None) -> list[str]:
             f"{q.text('stiffness_spread', 1, unit, ln=True)}: "
             f"{q.text('stiffness_spread', 2, 'decades', 3)}{extra}.")
     pr = result.problem
-    if isinstance(pr, FitProblem):  # the Voigt cell's stiffness groups and its bound on their spread
-        if any(result.parameters[g].at_bound for g in set(pr.ea_groups.tolist())):
-            line += " Stiffnesses sit at their bounds: the span is set by the bound box, not measured by the data."
-        if pr.max_decades is not None:
-            line += (f" The fit bounded the spread to {num(pr.max_decades)} decades" +
-                     (" (no constraint here: the bound is wider than the stiffness bounds)." if not pr.compact
-                      else "."))
+    if pr.stiffness_at_bound(result.theta):
+        line += " Stiffnesses sit at their bounds: the span is set by the bound box, not measured by the data."
+    decades, binding = pr.stiffness_bound()
+    if decades is not None:
+        line += (f" The fit bounded the spread to {num(decades)} decades" +
+                 (" (no constraint here: the bound is wider than the stiffness bounds)." if not binding else "."))
     return ["## Stiffness spread", "", line, ""]
 
 
 def section_held(result: FitResult, baseline=None) -> list[str]:
     """A mechanism's law parameters held at a value (not fitted, not counted, not measured by this fit)."""
-    held = [f"`{f.law_parameter}` = {num(f.value)}" for f in result.spec.fields if f.layout == "fixed"]
+    held = [f"`{name}` = {num(value)}" for name, value in result.spec.held_fields()]
     if not held:
         return []
     return ["Held, not fitted (not counted among the free parameters, and not measured by this fit): "
@@ -321,9 +319,11 @@ def section_errors(result: FitResult, baseline=None) -> list[str]:
         if f.axis == "time":
             if result.joint:
                 out += [f"Data set {f.index} (`{_name(d.source)}`):", ""]
-            e = se[result.problem.rows(f.index)]
-            out.append(table(["time (s)", "J data (1/Pa)", "J model (1/Pa)", "log10 error"],
-                             [[num(d.time_s[i]), num(d.compliance[i]), _model_value(f.J_model[i], e[i]),
+            where = result.problem.point_rows(f.index)  # a shape's reference time is no residual
+            e = np.where(where >= 0, se[np.maximum(where, 0)], np.nan)
+            unit = f" ({f.unit})" if f.unit else ""
+            out.append(table(["time (s)", f"{f.symbol} data{unit}", f"{f.symbol} model{unit}", "log10 error"],
+                             [[num(d.time_s[i]), num(f.data_values[i]), _model_value(f.model_values[i], e[i]),
                                f"{f.residuals[i]:+.4f}"] for i in range(d.n)]))
             continue
         xname = "prestress (Pa)" if f.axis == "prestress" else "frequency (Hz)"

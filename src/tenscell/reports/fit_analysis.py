@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from ..fitting.identifiability import GAUGE
-from .._results import ln_error, plus_minus
+from .._results import ln_error
 from ._format import num, pct, table
 
 __all__ = ["identifiability_section", "comparison_section", "creep_section", "provenance_line",
@@ -123,13 +123,6 @@ def comparison_section(comparison) -> list[str]:
     out.append(table(head, rows))
     out.append(f"Convention: {comparison.convention}. {comparison.n_residuals} residuals.")
     out.append("")
-    law = getattr(comparison, "structural", None)
-    if law is not None:
-        parts = [f"{sym} = {plus_minus(v, law.error(k)[0], unit, law.error(k)[1], digits=5)}"
-                 for sym, k, v, unit in (("G0", "G0", law.G0, "Pa"), ("x", "x", law.x, ""), ("μ", "mu", law.mu, "Pa·s"))]
-        corr = "; ".join(f"C({a}, {b}) = {r:+.3f}" for a, b, r in law.correlations)
-        out += [f"Structural-damping law (Φ0 = {num(law.phi0)} rad/s fixed): " + ", ".join(parts)
-                + (f"; correlations {corr}" if corr else "") + ".", ""]
     verdict = (f"AIC prefers **{comparison.best('aic')}**, BIC prefers **{comparison.best('bic')}**")
     if held:
         lo, hi = comparison.holdout

@@ -225,5 +225,5 @@ def section_profile(result, baseline=None) -> list[str]:
         return profile_lines(profile)
     from ..fitting.profile import needs_profile
 
-    needed = needs_profile(result) if not getattr(result.problem, "sparse_jacobian", False) else ()
+    needed = needs_profile(result) if not result.spec.capabilities.per_cell else ()
     return profile_lines(None, needed) if needed else []

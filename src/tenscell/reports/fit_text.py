@@ -58,7 +58,7 @@ def _residual_lines(f) -> list[str]:
     d = f.data
     out = [f"[[Residuals log10(model/data): data {f.index}]]"]
     if f.axis == "time":
-        out.append(f"    {'t (s)':>10}  {'J':>10}")
+        out.append(f"    {'t (s)':>10}  {f.symbol:>10}")
         out += [f"    {d.time_s[i]:>10.4g}  {f.residuals[i]:>+10.5f}" for i in range(d.n)]
         return out
     xname = "P (Pa)" if f.axis == "prestress" else "f (Hz)"

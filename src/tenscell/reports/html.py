@@ -82,7 +82,7 @@ def _datasets(result) -> str:
     for f in result.fits:
         d = f.data
         read = d.provenance.line() if d.provenance is not None else d.source
-        what = "creep J(t)" if f.axis == "time" else f"{f.axis} sweep"
+        what = f"{f.quantity} {f.symbol}(t)" if f.axis == "time" else f"{f.axis} sweep"
         noise = result.noise[f.index]
         rows.append((f.index, _short(d.source), f"{d.n} points, {what}", f"{f.rms_log10_error:.4g}",
                      "not stated" if noise is None else f"{noise:.3g}", read))
@@ -147,17 +147,17 @@ def comparison_html(comparison) -> str:
                 _p(f"Convention: {comparison.convention}."))
 
 
+#: the units of the per-tendon arrays a fitted model shows (FittedModel.parameter_values)
+_TENDON_UNITS = {"EA": "N", "c": "N·s/m"}
+
+
 def fitted_model_html(model) -> str:
     """A fitted model (:class:`~tenscell.fitting.models.base.FittedModel`): what it is, its values, its
     prestress."""
     rows: list[tuple[str, Any]] = [("model", model.describe())]
-    values = getattr(model, "values", None)
-    if isinstance(values, dict):
-        rows += [(k, num(v, 5)) for k, v in values.items()]
-    for name, unit in (("EA", "N"), ("c", "N·s/m")):
-        v = getattr(model, name, None)
-        if isinstance(v, np.ndarray):
-            rows.append((name, f"{v.size} tendons, {span(v, unit)}"))
+    for name, v in model.parameter_values().items():  # a value per parameter, or one per tendon (EA, c)
+        rows.append((name, f"{v.size} tendons, {span(v, _TENDON_UNITS.get(name, ''))}" if isinstance(v, np.ndarray)
+                     else num(v, 5)))
     if model.s is not None:
         rows.append(("prestress", f"model P (N) = s × prestress (Pa), s = {num(model.s, 5)} m²; the data's "
                                   f"prestresses {span(model.prestress_pa, 'Pa')}"))
@@ -185,9 +185,12 @@ def _head_tail(df, n: int = 4) -> tuple[list[str], list[list[str]]]:
 def data_html(data) -> str:
     """Measured data (:class:`~tenscell.io.data.RheologyData`, :class:`~tenscell.io.creep_data.CreepData`):
     what they are, where they came from (the provenance), their first and last points."""
-    creep = not hasattr(data, "G_storage")
-    if creep:
+    if data.kind == "creep":
         what = (f"CreepData: {data.n} points, t {span(data.time_s, 's')}, J {span(data.compliance, '1/Pa')}")
+    elif data.kind == "relaxation":
+        what = (f"RelaxationData: {data.n} points, t {span(data.time_s, 's')}, "
+                + (f"G/G(t0) {span(data.modulus / data.modulus[0], '')} (shape)" if data.relative
+                   else f"G {span(data.modulus, 'Pa')}"))
     else:
         sweep = (f"prestress sweep, P {span(data.prestress, 'Pa')}" if data.prestress is not None
                  else "frequency sweep")
@@ -196,7 +199,7 @@ def data_html(data) -> str:
     if data.provenance is not None:
         rows.append(("read as", data.provenance.line()))
     rows.append(("standard deviations", "stated" if data.has_sd else "not stated"))
-    counts = getattr(data, "counts", None)
+    counts = data.counts  # every data type has them (None: one measurement a point)
     if counts is not None:
         rows.append(("binned", f"each point stands for {span(counts)} measured points"))
     rows += [("comment", c) for c in data.comments[:3]]

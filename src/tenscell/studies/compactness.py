@@ -120,7 +120,7 @@ def compactness_study(data, decades=DEFAULT_DECADES, *, cell=None, tendons: str 
     -------
     CompactnessStudy
     """
-    from ..fitting import fit
+    from ..fitting import VoigtModel, fit
 
     D = np.array(sorted({float(d) for d in decades}, reverse=True))
     if D.size == 0 or not np.all(np.isfinite(D)) or np.any(D <= 0):
@@ -128,9 +128,9 @@ def compactness_study(data, decades=DEFAULT_DECADES, *, cell=None, tendons: str 
     fits = []
     previous = None
     for d in progress_bar(D, desc="compactness", unit="bound", progress=progress):
-        r = fit(data, cell, tendons=tendons, damping=damping, starts=starts, seed=seed, jobs=jobs,
-                tolerance=tolerance, hops=hops, patience=patience, max_decades=float(d), initial=previous,
-                progress=False, **fit_options)
+        r = fit(data, cell, model=VoigtModel(tendons, damping, max_decades=float(d)), starts=starts, seed=seed,
+                jobs=jobs, tolerance=tolerance, hops=hops, patience=patience, initial=previous, progress=False,
+                **fit_options)
         fits.append(r)
         previous = r
     order = np.argsort(D)

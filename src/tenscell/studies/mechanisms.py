@@ -274,13 +274,13 @@ def _frequency_sweep(datasets) -> int | None:
 
 
 def _fit(datasets, name: str, opts: dict, **extra):
-    from ..fitting import fit
+    from ..fitting import VoigtModel, fit
 
     if name == PER_TENDON_VOIGT:
         # the paper's fit gets the budget `make reproduce` gives it (its default hops, polishing 4× as long as
         # reaching the tolerance took): the reference must be a converged fit, not a truncated search
         # per-family damping: the 37-parameter fit of issue 18 (33 EA, 2 c, s, P_data; L is the exact gauge)
-        return fit(datasets, tendons="per-tendon", damping="per-family", progress=False, jobs=1,
+        return fit(datasets, model=VoigtModel("per-tendon", "per-family"), progress=False, jobs=1,
                    **dict(opts, hops=max(opts["hops"], PER_TENDON_HOPS), polish_effort=4.0), **extra)
     return fit(datasets, model=name, progress=False, jobs=1, **opts, **extra)
 
@@ -288,10 +288,9 @@ def _fit(datasets, name: str, opts: dict, **extra):
 def _shares(result) -> tuple[float, float]:
     """(dG'/dP, dG''/dP) carried by the geometric prestress stiffness over the data's prestress range (a mechanism);
     NaN for another model (the Voigt cell's prestress activity is in its own fit report)."""
-    from ..fitting.models.mechanism import MechanismProblem
     from ..fitting.shares import structure_shares
 
-    if not isinstance(result.problem, MechanismProblem):
+    if not result.spec.capabilities.structure_shares:
         return math.nan, math.nan
     try:
         sh = structure_shares(result.problem, result.theta)
@@ -363,7 +362,7 @@ def fits_per_model(datasets, n_free: int, structural: bool, validate: bool = Tru
         return n
     if validate:
         n += len(splits(datasets)) * (2 if structural else 1)
-    if falsify and any(getattr(d, "prestress", None) is not None and varies_with_prestress(d) for d in datasets):
+    if falsify and any(d.prestress is not None and varies_with_prestress(d) for d in datasets):
         n += 2
     return n
 

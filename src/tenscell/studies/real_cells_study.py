@@ -29,7 +29,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..fitting.validation import Split, _subset
+from ..fitting.scores import data_subset
+from ..fitting.validation import Split
 
 __all__ = ["HeldOut", "SPLITS", "G3_LIMIT", "DEFAULT_MECHANISMS", "BASELINES", "Budget", "MEDIAN_BUDGET",
            "CELL_BUDGET", "ModelScore", "G3Row", "G3Verdict", "evaluate_g3", "score_model", "median_scores",
@@ -82,7 +83,7 @@ class HeldOut:
         if train.sum() < 2 or not held.any():
             raise ValueError(f"{data.source}: {self.name} leaves {int(train.sum())} training and {int(held.sum())} "
                              f"held-out frequencies")
-        return Split(name=self.name, train=(_subset(data, train, "training"),), held=_subset(data, held, "held out"),
+        return Split(name=self.name, train=(data_subset(data, train, "training"),), held=data_subset(data, held, "held out"),
                      dataset=0)
 
 
@@ -231,7 +232,7 @@ def median_models(mechanisms: Sequence[str] = DEFAULT_MECHANISMS):
         m = get_model(name)
         f = m.formula()
         if f is not None:
-            formulas.setdefault(getattr(f, "terms", f.name), (f, []))[1].append(m.name)
+            formulas.setdefault(tuple(f.to_dict()["terms"]), (f, []))[1].append(m.name)  # one per lumped formula
         out.append((m, "mechanism", _formula_label(f) if f is not None else "", m.name))
     for f, of in formulas.values():
         out.append((f, "formula", ", ".join(of), _formula_label(f)))

@@ -21,7 +21,7 @@ from ..model.coordinates import make_coordinates
 from ..model.equilibrium import NotPrestressableError, equilibrium_matrix, member_geometry
 from ..model.shapes import (DEFAULT_DELTA, cylindrical_cell, cylindrical_nodes, if_free_delta, paper_cell,
                             paper_nodes, paper_structure, regular_cell)
-from ..model.shapes import _TURN  # the node permutation of the cell's +120° turn, which cylindrical_nodes builds on
+from ..model.shapes import TURN  # the node permutation of the cell's +120° turn, which cylindrical_nodes builds on
 from ..model.structure import INTERMEDIATE_FILAMENT, Structure
 from ..response import frequency_response
 from ._common import grid
@@ -243,7 +243,7 @@ def _turn_orbits(structure: Structure) -> np.ndarray:
         for _ in range(3):
             orbit[k] = n
             a, b = structure.tendons[k]
-            k = key[frozenset((_TURN[a], _TURN[b]))]
+            k = key[frozenset((TURN[a], TURN[b]))]
         n += 1
     ifs = structure.family_indices(INTERMEDIATE_FILAMENT)
     orbit[ifs] = orbit[ifs].min()

@@ -13,7 +13,7 @@ from .._checks import positive_scalar
 from .._progress import stage
 from .._results import dataframe, format_repr
 from .._threads import hot_path
-from ..sensitivity import (PAPER_BOUND, SENSITIVITY_FREQUENCIES, Elasticities, _base_parameters, elasticities,
+from ..sensitivity import (PAPER_BOUND, SENSITIVITY_FREQUENCIES, Elasticities, base_parameters, elasticities,
                            monte_carlo, perturbation_table, summarize)
 
 __all__ = ["SensitivityStudy", "sensitivity_study"]
@@ -116,7 +116,7 @@ def sensitivity_study(
     mcs = tuple(monte_carlo(draws, spread=change, seed=seed, parameters=which, alpha_spread=alpha_change, alpha=alpha,
                             delta=delta, L=L, P=P, EA=EA, c=c, f_hz=f_hz, progress=progress)
                 for which in ("all", "material"))
-    cell, EA_, c_ = _base_parameters(alpha, delta, L, P, EA, c, True)
+    cell, EA_, c_ = base_parameters(alpha, delta, L, P, EA, c, True)
     return SensitivityStudy(
         elasticities=el, table=table, summary=summarize(el, table, bound), monte_carlo=mcs, change=float(change),
         alpha_change=float(change if alpha_change is None else alpha_change), bound=bound, describe=cell.describe(),

@@ -23,13 +23,14 @@ from typing import ClassVar
 import numpy as np
 
 from ..._checks import positive_scalar
-from ..._errors import TenscellError
+from ..._errors import CapabilityError, TenscellError
 from ..._results import reporter
 from ...linear.linearize import LinearModel
 from ...model.equilibrium import Cell
 
-__all__ = ["Capabilities", "DATA_KINDS", "FitModel", "model_from_dict", "FittedModel", "FitFileError", "FITTED_KINDS", "cell_to_dict",
-           "cell_from_dict", "frequencies_of", "field_of", "positive_values", "prestress_from"]
+__all__ = ["Capabilities", "CapabilityError", "DATA_KINDS", "FitModel", "model_from_dict", "FittedModel", "FitFileError",
+           "FITTED_KINDS", "cell_to_dict", "cell_from_dict", "frequencies_of", "field_of", "positive_values",
+           "prestress_from"]
 
 #: every fitted-model kind by its ``format`` tag (filled by FittedModel.__init_subclass__)
 FITTED_KINDS: dict[str, type[FittedModel]] = {}
@@ -152,6 +153,28 @@ class FitModel:
         """Whether the model has a cell (a structure whose geometry and prestress carry the response)."""
         return self.family != "formula"
 
+    def with_options(self, **options) -> FitModel:
+        """The same model with the Voigt cell's options (``tendons``, ``damping``, ``min_prestress_share``,
+        ``max_decades``, ``min_prestress_elasticity``, ``elasticity_frequency_hz``) set; itself when none is given.
+        CapabilityError naming them for a model without them (``capabilities.voigt_options`` False)."""
+        if options:
+            raise CapabilityError(f"{', '.join(options)}: option(s) of the Voigt cell, not of model={self.name!r}")
+        return self
+
+    def min_points(self) -> int:
+        """The fewest points one data set needs for this model (an early check; the problem's own is exact)."""
+        return 2
+
+    def held_fields(self) -> tuple[tuple[str, float], ...]:
+        """``(name, value)`` of every law parameter the model holds at a value (not fitted, not counted; their
+        profiles free them one at a time: :meth:`freed`); none by default."""
+        return ()
+
+    def freed(self, name: str) -> FitModel:
+        """The model with its held field ``name`` (:meth:`held_fields`) laid out as one fitted parameter.
+        CapabilityError for a model without held fields."""
+        raise CapabilityError(f"model {self.name!r} holds no field {name!r} (it has no held fields to free)")
+
     def to_dict(self) -> dict:
         """JSON-ready: the class name and every field (rebuilt by :func:`model_from_dict`)."""
         return {"class": type(self).__name__, **dataclasses.asdict(self)}  # type: ignore[call-overload]
@@ -254,9 +277,38 @@ class FittedModel:
 
     # -- what each kind computes ------------------------------------------------------------
     @property
+    def spec(self) -> FitModel:
+        """The model that was fitted (:class:`FitModel`)."""
+        raise NotImplementedError
+
+    @property
+    def capabilities(self) -> Capabilities:
+        """What the fitted model can do: its model's :class:`Capabilities`."""
+        return self.spec.capabilities
+
+    @property
     def structural(self) -> bool:
         """Whether the model has a cell (False for a structure-free formula)."""
         return True
+
+    def evaluation(self):
+        """``(problem, phi)``: a problem without data that evaluates the fitted model anywhere, at its fitted
+        log-parameters ``phi`` (what :func:`tenscell.fitting.shares.structure_shares` differentiates).
+        CapabilityError for a model without one."""
+        raise CapabilityError(f"{self.describe()} has no law tension terms to split from the geometric prestress "
+                              "stiffness (structure shares are defined for a mechanism)")
+
+    @property
+    def assignments(self) -> int:
+        """K, the assignments of a distributed tendon property the fitted moduli average over (1: none)."""
+        return 1
+
+    def ensemble_problem(self, K: int, seed: int | None = None):
+        """``(problem, phi, seed)``: a problem without data whose evaluation gives the moduli of K assignments of the
+        distributed tendon property (seed: the model's own when None), at the fitted log-parameters ``phi``.
+        CapabilityError for a model without a distributed property (``capabilities.heterogeneous`` False)."""
+        raise CapabilityError(f"{self.describe()} draws no tendon property from a distribution: every assignment is "
+                              "the same cell, so it has no ensemble")
 
     @property
     def viscosity(self) -> float:
@@ -267,21 +319,32 @@ class FittedModel:
         """G′, G″ (Pa) at frequencies ``f_hz`` (Hz) and one prestress (Pa, see :meth:`prestress`)."""
         raise NotImplementedError
 
+    def parameter_values(self) -> dict:
+        """The fitted parameters by name (SI units): a number per named parameter, or an array over the tendons (the
+        Voigt cell's ``EA``, ``c``); what a fitted model shows of itself."""
+        return {}
+
+    def with_values(self, values: dict, **prestress) -> FittedModel:
+        """The same fitted model with some of its named parameters (``values``, SI units) and its prestress mapping
+        (``P`` or ``s``) replaced: one cell of a population. CapabilityError for a model whose parameters are not
+        named values (the Voigt cell's per-tendon stiffnesses); ValueError naming an unknown parameter."""
+        raise CapabilityError(f"{self.describe()} has no named parameter values to set")
+
     def tendon_law(self, assignment: int = 0):
         """The tendon law of every tendon (a :class:`tenscell.laws.TendonLaw`), for the time domain and ``show``."""
-        raise ValueError(f"{self.describe()} has no tendons: it is a structure-free formula (a baseline), not a "
+        raise CapabilityError(f"{self.describe()} has no tendons: it is a structure-free formula (a baseline), not a "
                          "tensegrity")
 
     def linear(self, prestress_pa: float | None = None, *, P_N: float | None = None) -> LinearModel:
         """The linear model at the fitted parameters (see :meth:`prestress`), or at model prestress ``P_N`` (N)."""
-        raise ValueError(f"{self.describe()} has no cell: it is a structure-free formula (a baseline), not a "
+        raise CapabilityError(f"{self.describe()} has no cell: it is a structure-free formula (a baseline), not a "
                          "tensegrity")
 
     def voigt_tendons(self, P_N: float) -> tuple[np.ndarray, np.ndarray]:
         """(EA in N, c in N·s/m) per tendon of the Voigt tendons equivalent at rest at model prestress ``P_N``:
         the fitted ones for Voigt tendons, the tangent stiffness and damping of the linear model otherwise
         (what ``show`` and the time domain's Voigt law take)."""
-        raise ValueError(f"{self.describe()} has no tendons: it is a structure-free formula (a baseline), not a "
+        raise CapabilityError(f"{self.describe()} has no tendons: it is a structure-free formula (a baseline), not a "
                          "tensegrity")
 
     def describe(self) -> str:
@@ -294,6 +357,18 @@ class FittedModel:
     def to_dict(self) -> dict:
         """JSON-ready (fit.json's ``"model"`` entry); :func:`fitted_from_dict` rebuilds it."""
         raise NotImplementedError
+
+    def _named_values(self) -> dict:
+        """``parameter_values`` of a model whose parameters are its ``values`` dict (a mechanism, a formula)."""
+        return dict(self.values)  # type: ignore[attr-defined]  # the subclasses that call this have named values
+
+    def _replaced_values(self, values: dict, prestress: dict) -> FittedModel:
+        """``with_values`` of a model whose parameters are its ``values`` dict (a mechanism, a formula)."""
+        own = self.values  # type: ignore[attr-defined]  # the subclasses that call this have named values
+        unknown = sorted(set(values) - set(own))
+        if unknown:
+            raise ValueError(f"{unknown[0]!r} is not a parameter of {self.describe()} (parameters: {', '.join(own)})")
+        return dataclasses.replace(self, values={**own, **values}, **prestress)  # type: ignore[type-var]
 
     def _resolve_P(self, prestress_pa, P_N) -> float:
         return self.prestress(prestress_pa) if P_N is None else positive_scalar("P_N", P_N, "N")

@@ -39,8 +39,10 @@ import numpy as np
 import scipy.special
 
 from ...io.data import DataError
-from ..parameters import _is_creep, as_datasets, bounds_by_name, fixed_by_name, kind_bounds
+from ..parameters import Parameters, as_datasets, bounds_by_name, fixed_by_name, kind_bounds
 from ..problem import PENALTY, Problem, draw_start, jitter, log_residual_blocks
+from ..time_series import (TimeLayout, data_layout, modulus_scales, relative_values, time_residual_values,
+                           time_values)
 from ..._results import format_repr
 from .base import Capabilities, FitFileError, FitModel, FittedModel, field_of, frequencies_of, model_from_dict, positive_values, prestress_from
 
@@ -77,36 +79,36 @@ def structural_damping_moduli(omega, G0: float, x: float, mu: float, phi0: float
     return pl + 1j * omega * mu
 
 
-def _term(term: str, p: dict, omega: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, dict]:
-    """A term's G* and its derivatives by the ln of each of its parameters (a dict name -> array)."""
-    iw = 1j * omega
+def _term(term: str, p: dict, z: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, dict]:
+    """A term's G* at complex Laplace variables ``z`` (``iω`` for the moduli; principal branch of every power) and
+    its derivatives by the ln of each of its parameters (a dict name -> array)."""
     if term == "E0":
-        G = np.full(omega.shape, p["E0"], dtype=complex)
+        G = np.full(z.shape, p["E0"], dtype=complex)
         return G, {"E0": G}
     if term == "aP":
         G = (p["a"] * P).astype(complex)
         return G, {"a": G}
     if term in ("structural", "structural_P"):
         a = p["alpha"]
-        base = math.gamma(1 - a) * (iw / PHI0) ** a
+        base = math.gamma(1 - a) * (z / PHI0) ** a
         mod = p["G0"] + (p["g"] * P if term == "structural_P" else 0.0)
         G = mod * base
-        d = {"G0": p["G0"] * base, "alpha": G * a * (np.log(iw / PHI0) - scipy.special.digamma(1 - a))}
+        d = {"G0": p["G0"] * base, "alpha": G * a * (np.log(z / PHI0) - scipy.special.digamma(1 - a))}
         if term == "structural_P":
             d["g"] = p["g"] * P * base
         return G, d
     if term in ("springpot", "springpot_2"):
         A, a = ("A", "alpha") if term == "springpot" else ("A_2", "alpha_2")
-        G = p[A] * iw ** p[a]
-        return G, {A: G, a: G * p[a] * np.log(iw)}
+        G = p[A] * z ** p[a]
+        return G, {A: G, a: G * p[a] * np.log(z)}
     if term == "springpot_P":
-        G = p["B"] * P * iw ** p["alpha_T"]
-        return G, {"B": G, "alpha_T": G * p["alpha_T"] * np.log(iw)}
+        G = p["B"] * P * z ** p["alpha_T"]
+        return G, {"B": G, "alpha_T": G * p["alpha_T"] * np.log(z)}
     if term == "maxwell":
-        x = iw * p["tau"]
+        x = z * p["tau"]
         G = p["E_M"] * x / (1 + x)
         return G, {"E_M": G, "tau": p["E_M"] * x / (1 + x) ** 2}
-    G = iw * p["eta"]  # newtonian
+    G = z * p["eta"]  # newtonian
     return G, {"eta": G}
 
 
@@ -138,8 +140,8 @@ class Formula(FitModel):
 
     @property
     def capabilities(self) -> Capabilities:
-        """Moduli (and creep where a term has a time-domain form: the time-series issue adds them); no cell."""
-        return Capabilities(structural=False)
+        """Moduli, creep and relaxation (its modulus continued to the Laplace variable); no cell."""
+        return Capabilities(data_kinds=frozenset({"moduli", "creep", "relaxation"}), structural=False)
 
     @property
     def parameter_rows(self) -> tuple[tuple[str, str, str], ...]:
@@ -158,11 +160,16 @@ class Formula(FitModel):
     def complex_modulus(self, values: dict, omega, P, *, derivatives: bool = False):
         """G* (Pa) at angular frequencies ``omega`` (rad/s) and prestresses ``P`` (Pa), broadcast; with
         ``derivatives`` also ``{name: dG*/d ln value}``."""
-        omega, P = np.broadcast_arrays(np.asarray(omega, dtype=float), np.asarray(P, dtype=float))
-        G = np.zeros(omega.shape, dtype=complex)
+        return self.laplace_modulus(values, 1j * np.asarray(omega, dtype=float), P, derivatives=derivatives)
+
+    def laplace_modulus(self, values: dict, s, P, *, derivatives: bool = False):
+        """G*(s) (Pa) continued to complex Laplace variables ``s`` (1/s; ``iω`` gives :meth:`complex_modulus`) at
+        prestresses ``P`` (Pa), broadcast; with ``derivatives`` also ``{name: dG*/d ln value}``."""
+        z, P = np.broadcast_arrays(np.asarray(s, dtype=complex), np.asarray(P, dtype=float))
+        G = np.zeros(z.shape, dtype=complex)
         dG: dict[str, np.ndarray] = {}
         for t in self.terms:
-            g, d = _term(t, values, omega, P)
+            g, d = _term(t, values, z, P)
             G = G + g
             for k, v in d.items():
                 dG[k] = dG.get(k, 0.0) + v
@@ -191,20 +198,13 @@ def _builtin() -> dict[str, Formula]:
 #: the standard baselines by name
 FORMULAS: dict[str, Formula] = _builtin()
 
-#: a law's terms lumped into one element (without its prestress coupling)
-_LAW_TERMS = {"Voigt": ("E0", "newtonian"), "Maxwell": ("maxwell",), "StandardLinearSolid": ("E0", "maxwell"),
-              "Springpot": ("E0", "springpot"), "TensionSpringpot": ("E0", "springpot", "springpot_P")}
-
-
 def lumped_formula(mechanism) -> Formula:
     """A mechanism's own structure-free formula: its law's terms as one lumped element (a distribution of a
     property lumped with it), its cytoplasm, and the same prestress coupling — the law's tension term where it has
     one, else a modulus proportional to P (what P·Kp gives without a structure); a springpot law with an exponent
     per family lumps into two springpots (``springpot_2``), as many exponents as the mechanism has. Module
-    docstring."""
-    terms = _LAW_TERMS.get(mechanism.law)
-    if terms is None:
-        raise ValueError(f"mechanism {mechanism.name!r}: no lumped formula is defined for law {mechanism.law}")
+    docstring. The law's terms are its class attribute ``lumped_terms`` (:class:`tenscell.laws.TendonLaw`)."""
+    terms = tuple(mechanism.law_class.lumped_terms)  # the law's own (checked when the mechanism was built)
     if "springpot_P" not in terms:
         terms = ("aP", *terms)
     if "springpot" in terms and any(f.kind == "exponent" and f.layout == "family" for f in mechanism.fields):
@@ -225,14 +225,7 @@ class FormulaProblem(Problem):
     """A formula against one or several data sets (built by :func:`make_formula_problem`)."""
 
     formula: Formula
-    names: tuple
-    units: tuple
-    descriptions: tuple
-    kinds: tuple
-    lower: np.ndarray
-    upper: np.ndarray
-    free: np.ndarray
-    fixed_log: np.ndarray
+    params: Parameters
     n_formula: int  # the formula's own parameters (they come first; then P_data[k])
     sources: tuple
     omega: np.ndarray
@@ -244,6 +237,8 @@ class FormulaProblem(Problem):
     y_obs: np.ndarray
     weights: np.ndarray
     cell: None = None
+    #: creep and relaxation points (:mod:`tenscell.fitting.time_series`)
+    time: TimeLayout | None = None
 
     def __repr__(self) -> str:
         return (f"FormulaProblem({self.formula.name}: {self.n_free} free of {self.n_params} parameters, "
@@ -266,42 +261,68 @@ class FormulaProblem(Problem):
     def _values(self, phi) -> dict:
         return dict(zip(self.names[: self.n_formula], np.exp(phi[: self.n_formula])))
 
-    def _at(self, phi, omega, P, jac: bool):
-        G, dG = self.formula.complex_modulus(self._values(phi), omega, P, derivatives=True)
+    def _at(self, phi, z, P, jac: bool, groups=None):
+        """G* (Pa) at complex Laplace variables ``z`` (``iω`` for the moduli) and prestresses ``P`` (Pa), with
+        ``jac`` its derivatives by every parameter (the prestress ones through each point's group ``groups``)."""
+        G, dG = self.formula.laplace_modulus(self._values(phi), z, P, derivatives=True)
         if not jac:
             return G, None
-        D = np.zeros((omega.size, self.n_params), dtype=complex)
+        D = np.zeros((z.size, self.n_params), dtype=complex)
         for i, n in enumerate(self.names[: self.n_formula]):
             D[:, i] = dG[n]
         if self.n_params > self.n_formula:
             # P enters the prestress terms linearly, each through one coefficient (a, g, B): d G/d ln P is the sum of
             # their derivatives by the ln of that coefficient
             G_P = sum((dG[n] for n in ("a", "g", "B") if n in dG), np.zeros_like(G))
-            D[:, self.prestress_slice] = G_P[:, None] * self.group_map[self.group_index]
+            D[:, self.prestress_slice] = G_P[:, None] * self.group_map[groups]
         return G, D
 
     def _evaluate_constrained(self, phi, jac: bool):
-        P = np.exp(self.group_log_offset + self.group_map @ phi[self.prestress_slice])[self.group_index]
-        return self._at(phi, self.omega, P, jac)
+        Pg = np.exp(self.group_log_offset + self.group_map @ phi[self.prestress_slice])
+        mod = self._at(phi, 1j * self.omega, Pg[self.group_index], jac, self.group_index)
+        if self.time is None:
+            return mod, None
+        groups = self.time.node_group
+        G, D = self._at(phi, self.time.nodes, Pg[groups], jac, groups)
+        return mod, time_values(self.time, G, D)
 
     def _residuals_from(self, out) -> np.ndarray:
-        G = out[0]
+        (G, _), tim = out
         if not (np.all(np.isfinite(G)) and np.all(G.real > 0) and np.all(G.imag > 0)):
             return np.full(self.y_obs.size, PENALTY)
-        return self.weights * (np.concatenate([np.log10(G.real), np.log10(G.imag)]) - self.y_obs)
+        parts = [np.log10(G.real), np.log10(G.imag)]
+        if tim is not None:
+            assert self.time is not None  # time values come with a time layout
+            lt = time_residual_values(self.time, tim[0])[0]
+            if not np.all(np.isfinite(lt)):
+                return np.full(self.y_obs.size, PENALTY)
+            parts.append(lt)
+        return self.weights * (np.concatenate(parts) - self.y_obs)
 
     def _jacobian_from(self, out) -> np.ndarray:
-        G, D = out
-        return self.weights[:, None] * log_residual_blocks(G, D[:, self.free])
+        (G, D), tim = out
+        blocks = [log_residual_blocks(G, D[:, self.free])]
+        if tim is not None:
+            assert self.time is not None
+            dl = time_residual_values(self.time, *tim)[1]
+            assert dl is not None  # asked with the derivatives
+            blocks.append(np.nan_to_num(dl[:, self.free]))
+        return self.weights[:, None] * np.vstack(blocks)
 
     def moduli(self, theta) -> tuple[np.ndarray, np.ndarray]:
-        G = self._evaluate_constrained(self.full(theta), jac=False)[0]
+        G = self._evaluate_constrained(self.full(theta), jac=False)[0][0]
         return G.real, G.imag
 
     def moduli_at(self, theta, f_hz, P_N) -> tuple[np.ndarray, np.ndarray]:
         f, P = np.broadcast_arrays(np.asarray(f_hz, dtype=float), np.asarray(P_N, dtype=float))
-        G = self._at(self.full(theta), 2 * np.pi * f, P, jac=False)[0]
+        G = self._at(self.full(theta), 2j * np.pi * f, P, jac=False)[0]
         return G.real, G.imag
+
+    def time_model(self, theta) -> np.ndarray:
+        """J(t) (1/Pa), G(t) (Pa) or a shape's G(t)/G(t_ref) at every time point."""
+        assert self.time is not None
+        tim = self._evaluate_constrained(self.full(theta), jac=False)[1]
+        return relative_values(self.time, tim[0])
 
     def initial_guess(self, rng: np.random.Generator) -> np.ndarray:
         return draw_start(self, rng, _SCALABLE)
@@ -365,26 +386,21 @@ def _prestress(datasets, uses_prestress: bool):
 
 def make_formula_problem(data, formula: Formula, *, bounds: dict | None = None,
                          fixed: dict | None = None) -> FormulaProblem:
-    """Set up the fit of a formula to one or several data sets (moduli only; ``bounds`` and ``fixed`` as for
+    """Set up the fit of a formula to one or several data sets (moduli, creep, relaxation: its modulus continued to
+    the Laplace variable, :mod:`tenscell.fitting.time_series`; ``bounds`` and ``fixed`` as for
     :func:`tenscell.fitting.models.mechanism.make_mechanism_problem`)."""
     datasets = as_datasets(data)
-    if any(_is_creep(d) for d in datasets):
-        raise ValueError(f"model={formula.name!r}: creep data are fitted by models with a cell only")
     rows = formula.parameter_rows
     p_names, p_units, p_desc, p_kinds, groups, point_group, P_med = _prestress(datasets, formula.uses_prestress)
     names = tuple([r[0] for r in rows] + p_names)
     units = tuple([r[1] for r in rows] + p_units)
     kinds = tuple([r[2] for r in rows] + p_kinds)
     descs = tuple([f"{r[0]} of {formula.name}" for r in rows] + p_desc)
-    n_points = sum(d.n for d in datasets)
-    if 2 * n_points < len(names):
-        raise DataError(f"{len(datasets)} data set(s) with {n_points} points give {2 * n_points} residuals, fewer "
-                        f"than the {len(names)} parameters of formula {formula.name!r}")
-    Gs = np.concatenate([d.G_storage for d in datasets])
-    omega = 2 * np.pi * np.concatenate([d.frequency_hz for d in datasets])
-    S = float(np.median(Gs))
-    w_m = float(np.exp(np.mean(np.log(omega))))
-    G_loss = float(np.median(np.concatenate([d.G_loss for d in datasets])))
+    layout = data_layout(datasets, point_group)
+    if layout["y_obs"].size < len(names):
+        raise DataError(f"{len(datasets)} data set(s) give {layout['y_obs'].size} residuals, fewer than the "
+                        f"{len(names)} parameters of formula {formula.name!r}")
+    S, w_m, G_loss = modulus_scales(datasets)
     defaults = {"ratio": (1e-6 * S / P_med, 1e3 * S / P_med), "P_data": (1e-3 * P_med, 1e3 * P_med),
                 "stiffness": (1e-6 * S, 1e3 * S)}
     for k in ("coefficient", "time", "exponent", "viscosity"):
@@ -395,17 +411,12 @@ def make_formula_problem(data, formula: Formula, *, bounds: dict | None = None,
     for g, (_, _, links) in enumerate(groups):
         for j, v in links.items():
             group_map[g, j] = v
+    params = Parameters(names=names, units=units, descriptions=descs, kinds=kinds, lower=lower, upper=upper,
+                        free=free, fixed_log=fixed_log)
     return FormulaProblem(
-        formula=formula, names=names, units=units, descriptions=descs, kinds=kinds, lower=lower, upper=upper,
-        free=free, fixed_log=fixed_log, n_formula=len(rows), sources=tuple(d.source for d in datasets), omega=omega,
-        dataset_index=np.concatenate([np.full(d.n, k) for k, d in enumerate(datasets)]),
-        group_index=np.concatenate(point_group).astype(int),
+        formula=formula, params=params, n_formula=len(rows), sources=tuple(d.source for d in datasets),
         group_log_offset=np.array([g[1] for g in groups]), group_map=group_map,
-        group_measured=np.array([g[0] for g in groups]),
-        y_obs=np.concatenate([np.log10(Gs), np.log10(np.concatenate([d.G_loss for d in datasets]))]),
-        weights=np.concatenate([np.concatenate([d.weights_storage for d in datasets]),
-                                np.concatenate([d.weights_loss for d in datasets])]),
-    )
+        group_measured=np.array([g[0] for g in groups]), **layout)
 
 
 # ---------------------------------------------------------------------------------------
@@ -437,6 +448,9 @@ class FittedFormula(FittedModel):
     source: str = ""
     FORMAT = FORMULA_FORMAT
 
+    #: a formula has no cell (what :attr:`FitResult.cell` and the consumers of a fitted model read)
+    cell = None
+
     def __post_init__(self):
         self._check_prestress()
         object.__setattr__(self, "values", {k: float(v) for k, v in self.values.items()})
@@ -444,6 +458,12 @@ class FittedFormula(FittedModel):
     @property
     def structural(self) -> bool:
         return False
+
+    def parameter_values(self) -> dict:
+        return self._named_values()
+
+    def with_values(self, values: dict, **prestress) -> FittedFormula:
+        return self._replaced_values(values, prestress)  # type: ignore[return-value]
 
     @property
     def spec(self):

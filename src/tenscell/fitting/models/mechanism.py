@@ -50,13 +50,16 @@ from ...io.data import DataError
 from ...model.equilibrium import Cell
 from .heterogeneity import DISTRIBUTIONS, assignments
 from .mechanism_kernel import EvaluationPlan, MechanismEvaluation, evaluate, evaluate_planned, law_values, plan_points
-from ..parameters import bounds_by_name, fixed_by_name, _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
+from ..parameters import (Parameters, as_datasets, bounds_by_name, default_bounds, family_groups, fixed_by_name,
+                          prestress_layout)
 from ..._results import format_repr
 from ...linear.dynamic import DynamicKernel, dynamic_kernel
 from ...linear.linearize import LinearModel
 from .base import (Capabilities, FitFileError, FitModel, FittedModel, cell_from_dict, cell_to_dict, field_of, frequencies_of, model_from_dict,
                    positive_values, prestress_from)
 from ..problem import PENALTY as _PENALTY, Problem, draw_start, jitter, log_residual_blocks
+from ..time_series import (TimeLayout, data_layout, modulus_scales, relative_values, time_residual_values,
+                           time_values)
 
 __all__ = ["Field", "Mechanism", "KINDS", "MechanismProblem", "make_mechanism_problem", "MechanismEvaluation", "bare_problem",
            "FittedMechanism", "MECHANISM_FORMAT"]
@@ -137,6 +140,10 @@ class Mechanism(FitModel):
     seed : int
         Seed of the assignments.
     description : str
+    multimodal : bool
+        Fits of the mechanism have several basins on typical data (measured on the bundled pair:
+        ``bench/multimodal_catalog.py``): the search keeps its basin hops after two starts agree. A fit.json written
+        before this field existed reads False.
     """
 
     name: str
@@ -146,6 +153,7 @@ class Mechanism(FitModel):
     assignments: int = 8
     seed: int = 0
     description: str = ""
+    multimodal: bool = False
 
     def __post_init__(self):
         names = [f.law_parameter for f in self.fields]
@@ -153,6 +161,12 @@ class Mechanism(FitModel):
             raise ValueError(f"mechanism {self.name!r}: a law parameter is laid out twice")
         if isinstance(self.assignments, bool) or not isinstance(self.assignments, int) or self.assignments < 1:
             raise ValueError(f"mechanism {self.name!r}: assignments must be an integer >= 1")
+        _check_law(self.name, self.law)
+
+    @property
+    def law_class(self) -> type[_laws.TendonLaw]:
+        """The tendon law's class (:data:`tenscell.laws.LAWS`)."""
+        return _laws.LAWS[self.law]
 
     @property
     def heterogeneous(self) -> bool:
@@ -166,14 +180,28 @@ class Mechanism(FitModel):
 
     @property
     def capabilities(self) -> Capabilities:
-        """Moduli; the structure's share of dG*/dP; held fields to profile; its lumped formula."""
-        return Capabilities(structure_shares=True, profile_fields=any(f.layout == "fixed" for f in self.fields),
-                            lumped_terms=True, heterogeneous=self.heterogeneous)
+        """Moduli, creep and relaxation; the structure's share of dG*/dP; held fields to profile; its lumped formula;
+        multimodal when the catalog says so."""
+        return Capabilities(data_kinds=frozenset({"moduli", "creep", "relaxation"}), structure_shares=True,
+                            profile_fields=any(f.layout == "fixed" for f in self.fields), lumped_terms=True,
+                            heterogeneous=self.heterogeneous, multimodal=bool(self.multimodal))
 
     @property
     def group(self) -> str:
-        return {"Voigt": "mechanisms: Voigt tendons", "Maxwell": "mechanisms: filament turnover (Maxwell)",
-                "StandardLinearSolid": "mechanisms: standard linear solid"}.get(self.law, "mechanisms: fractional tendons")
+        """The law's own group (its ``mechanism_group``)."""
+        return str(self.law_class.mechanism_group)
+
+    def held_fields(self) -> tuple[tuple[str, float], ...]:
+        """``(law parameter, value)`` of every field of the fixed layout."""
+        return tuple((f.law_parameter, float(f.value)) for f in self.fields if f.layout == "fixed")
+
+    def freed(self, name: str) -> Mechanism:
+        """The mechanism with the held field ``name`` laid out as one shared parameter."""
+        if name not in dict(self.held_fields()):
+            return super().freed(name)  # type: ignore[return-value]  # it raises
+        fields = tuple(dataclasses.replace(f, layout="shared", value=None) if f.law_parameter == name else f
+                       for f in self.fields)
+        return dataclasses.replace(self, fields=fields)
 
     def baseline(self):
         """Its own structure-free formula (:func:`tenscell.fitting.models.formulas.lumped_formula`)."""
@@ -192,6 +220,25 @@ class Mechanism(FitModel):
         return cls(**{**fields, "fields": tuple(Field(**f) for f in fields["fields"])})
 
 
+
+
+def _check_law(name: str, law: str) -> None:
+    """ValueError naming the law and what it lacks, unless ``law`` is a law of :data:`tenscell.laws.LAWS` that can
+    carry a mechanism: per-tendon parameters, the group the command line lists it in and its lumped formula's terms
+    (class attributes of the law: a mechanism on any law needs no table of its own here)."""
+    from .formulas import TERMS
+
+    cls = _laws.LAWS.get(law)
+    if cls is None:
+        raise ValueError(f"mechanism {name!r}: tenscell.laws has no law {law!r} (laws: {', '.join(_laws.LAWS)})")
+    lacks = [what for what, ok in (
+        ("per-tendon parameters (parameters)", bool(cls.parameters)),
+        ("the group the command line lists its mechanisms in (mechanism_group)", bool(cls.mechanism_group)),
+        (f"the terms of its lumped formula (lumped_terms, some of {', '.join(TERMS)})",
+         bool(cls.lumped_terms) and set(cls.lumped_terms or ()) <= set(TERMS)),
+    ) if not ok]
+    if lacks:
+        raise ValueError(f"mechanism {name!r}: law {law} cannot carry a mechanism: it lacks {'; '.join(lacks)}")
 
 
 def _field_params(f: Field, fams: list[str]) -> list[tuple[str, str, str, str]]:
@@ -227,14 +274,7 @@ class MechanismProblem(Problem):
 
     mechanism: Mechanism
     cell: Cell
-    names: tuple
-    units: tuple
-    descriptions: tuple
-    kinds: tuple
-    lower: np.ndarray
-    upper: np.ndarray
-    free: np.ndarray
-    fixed_log: np.ndarray
+    params: Parameters
     n_field: int  # parameters of the fields (they come first)
     field_maps: tuple  # per field: (law parameter, D (K, m, n_params) d ln x/d φ, const (K, m)) ln x = const + D φ
     shape_maps: tuple  # per field with a distribution: (law parameter, shape's index, distribution, u (K, m))
@@ -258,12 +298,17 @@ class MechanismProblem(Problem):
     #: when the problem is built (None: made in ``__post_init__``), never on first use
     kernel: DynamicKernel | None = None
     plan: EvaluationPlan | None = None
+    #: creep and relaxation points (:mod:`tenscell.fitting.time_series`) and the plan of their contour nodes
+    time: TimeLayout | None = None
+    time_plan: EvaluationPlan | None = None
 
     def __post_init__(self):
         if self.kernel is None:
             object.__setattr__(self, "kernel", dynamic_kernel(self.cell))
         if self.plan is None:
             object.__setattr__(self, "plan", plan_points(self.omega, self.group_index))
+        if self.time is not None and self.time_plan is None:
+            object.__setattr__(self, "time_plan", plan_points(self.time.nodes, self.time.node_group))
         for _, D, const in self.field_maps:  # shared by every evaluation (law_values hands them out)
             D.setflags(write=False)
             const.setflags(write=False)
@@ -299,7 +344,7 @@ class MechanismProblem(Problem):
     @property
     def law_class(self) -> type[_laws.TendonLaw]:
         """The tendon law's class (:mod:`tenscell.laws`)."""
-        return getattr(_laws, self.mechanism.law)
+        return self.mechanism.law_class
 
     @property
     def law_names(self) -> tuple:
@@ -321,6 +366,9 @@ class MechanismProblem(Problem):
 
     # -- at the data points ----------------------------------------------------------------
     def _at_data(self, phi, jac: bool) -> MechanismEvaluation | None:
+        if not self.n_points:  # time data only
+            return MechanismEvaluation(G=np.zeros(0, complex), G_assign=np.zeros((1, 0), complex),
+                                       dG=np.zeros((0, self.n_params), complex) if jac else None)
         dP = None
         if jac:
             dP = np.zeros((self.n_points, self.n_params))
@@ -328,18 +376,42 @@ class MechanismProblem(Problem):
         assert self.plan is not None
         return evaluate_planned(self, phi, self.plan, self.omega, self._group_P(phi), jac, dP)
 
+    def _at_times(self, phi, jac: bool):
+        """``(time function at every time point, its d/dφ or None)`` from ``G*(s)`` at the contour nodes
+        (:func:`~tenscell.fitting.time_series.time_values`); None where the cell is not stable."""
+        assert self.time is not None and self.time_plan is not None
+        dP = None
+        if jac:
+            dP = np.zeros((self.time.nodes.size, self.n_params))
+            dP[:, self.prestress_slice] = self.group_map[self.time.node_group]
+        out = evaluate_planned(self, phi, self.time_plan, self.time.nodes, self._group_P(phi), jac, dP, laplace=True)
+        return None if out is None else time_values(self.time, out.G, out.dG)
+
     def _evaluate_constrained(self, phi, jac: bool):
-        return self._at_data(phi, jac)
+        return self._at_data(phi, jac), (None if self.time is None else self._at_times(phi, jac))
 
     def _residuals_from(self, out) -> np.ndarray:
-        if out is None or not (np.all(out.G.real > 0) and np.all(out.G.imag > 0)):
+        mod, tim = out
+        if mod is None or not (np.all(mod.G.real > 0) and np.all(mod.G.imag > 0)):
             return np.full(self.y_obs.size, _PENALTY)
-        return self.weights * (np.concatenate([np.log10(out.G.real), np.log10(out.G.imag)]) - self.y_obs)
+        parts = [np.log10(mod.G.real), np.log10(mod.G.imag)]
+        if self.time is not None:
+            lt = None if tim is None else time_residual_values(self.time, tim[0])[0]
+            if lt is None or not np.all(np.isfinite(lt)):
+                return np.full(self.y_obs.size, _PENALTY)
+            parts.append(lt)
+        return self.weights * (np.concatenate(parts) - self.y_obs)
 
     def _jacobian_from(self, out) -> np.ndarray:
-        if out is None or out.dG is None:
+        mod, tim = out
+        if mod is None or mod.dG is None or (self.time is not None and tim is None):
             return np.zeros((self.y_obs.size, self.n_free))
-        return self.weights[:, None] * log_residual_blocks(out.G, out.dG[:, self.free])
+        blocks = [log_residual_blocks(mod.G, mod.dG[:, self.free])]
+        if self.time is not None:
+            dl = time_residual_values(self.time, *tim)[1]
+            assert dl is not None  # asked with the derivatives
+            blocks.append(np.nan_to_num(dl[:, self.free]))
+        return self.weights[:, None] * np.vstack(blocks)
 
     def moduli(self, theta) -> tuple[np.ndarray, np.ndarray]:
         """Model G', G'' (Pa) at the data points; NaN where the model is not a stable cell."""
@@ -347,6 +419,19 @@ class MechanismProblem(Problem):
         if out is None:
             return np.full(self.n_points, np.nan), np.full(self.n_points, np.nan)
         return out.G.real, out.G.imag
+
+    def time_model(self, theta) -> np.ndarray:
+        """J(t) (1/Pa), G(t) (Pa) or a shape's G(t)/G(t_ref) at every time point; NaN where not a stable cell."""
+        assert self.time is not None
+        tim = self._at_times(self.full(theta), jac=False)
+        return relative_values(self.time, None if tim is None else tim[0])
+
+    def laplace_moduli(self, phi, s, P_N) -> np.ndarray:
+        """``G*(s)`` (Pa) at complex Laplace variables ``s`` (1/s) and model prestresses ``P_N`` (N), broadcast, at
+        log-parameters ``phi``; NaN where not a stable cell."""
+        s, P = np.broadcast_arrays(np.asarray(s, dtype=complex), np.asarray(P_N, dtype=float))
+        out = evaluate(self, phi, s, P, False, laplace=True)
+        return np.full(s.shape, np.nan + 0j) if out is None else out.G.reshape(s.shape)
 
     def assignments_subset(self, lo: int, hi: int) -> "MechanismProblem":
         """The same problem restricted to assignments ``lo .. hi-1`` (a slice of every field's and shape's map).
@@ -364,7 +449,7 @@ class MechanismProblem(Problem):
     def assignment_spread(self, theta) -> tuple[float, float]:
         """Largest spread (decades) of G' and of G'' between the K assignments over the data points."""
         out = self._at_data(self.full(theta), jac=False)
-        if out is None or out.G_assign.shape[0] < 2:
+        if out is None or out.G_assign.shape[0] < 2 or not out.G.size:
             return 0.0, 0.0
         Ga = out.G_assign
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -403,7 +488,7 @@ class MechanismProblem(Problem):
         if not 0 <= int(assignment) < K:
             raise ValueError(f"assignment must lie in 0..{K - 1}, got {assignment!r}")
         vals, _ = self.law_values(phi)
-        return getattr(_laws, self.mechanism.law)._trusted(**{n: v[int(assignment)] for n, v in vals.items()})
+        return self.law_class._trusted(**{n: v[int(assignment)] for n, v in vals.items()})
 
     def moduli_at(self, theta, f_hz, P_N) -> tuple[np.ndarray, np.ndarray]:
         f, P = np.broadcast_arrays(np.asarray(f_hz, dtype=float), np.asarray(P_N, dtype=float))
@@ -452,7 +537,7 @@ class MechanismProblem(Problem):
 # ---------------------------------------------------------------------------------------
 def _layout(mech: Mechanism, cell: Cell, law_cls):
     """Field parameters (names, units, kinds, descriptions) and the maps of :attr:`MechanismProblem.field_maps`."""
-    groups, fams = _family_groups(cell)
+    groups, fams = family_groups(cell)
     law_names = tuple(p.name for p in law_cls.parameters)
     given = {f.law_parameter for f in mech.fields}
     if given != set(law_names):
@@ -493,8 +578,8 @@ def make_mechanism_problem(data, model, cell: Cell | None = None, *, bounds: dic
 
     Parameters
     ----------
-    data : RheologyData or sequence of RheologyData
-        As for :func:`tenscell.fitting.fit` (creep data are not supported here).
+    data : RheologyData, CreepData or RelaxationData, or a sequence of them
+        As for :func:`tenscell.fitting.fit`: moduli, creep and relaxation (:mod:`tenscell.fitting.time_series`).
     model : Mechanism
         The spec (a built-in one: :data:`~tenscell.fitting.models.catalog.MECHANISMS`).
     cell : Cell, optional
@@ -510,7 +595,7 @@ def make_mechanism_problem(data, model, cell: Cell | None = None, *, bounds: dic
     Raises
     ------
     ValueError
-        Unknown mechanism or names, bad bounds or fixed values, creep data, too few points.
+        Unknown mechanism or names, bad bounds or fixed values, too few points.
     """
     from ...model.shapes import paper_cell
 
@@ -519,28 +604,23 @@ def make_mechanism_problem(data, model, cell: Cell | None = None, *, bounds: dic
                          f"got {model!r}")
     mech = model
     datasets = as_datasets(data)
-    if any(_is_creep(d) for d in datasets):
-        raise ValueError(f"model={mech.name!r}: creep data are fitted by the per-tendon Voigt fit only")
     cell = paper_cell() if cell is None else cell
-    law_cls = getattr(_laws, mech.law, None)
-    if law_cls is None or not hasattr(law_cls, "complex_stiffness"):
-        raise ValueError(f"mechanism {mech.name!r}: tenscell.laws has no law {mech.law!r} with a dynamic tangent")
-    rows, per_field, groups = _layout(mech, cell, law_cls)
+    rows, per_field, groups = _layout(mech, cell, mech.law_class)
     if mech.viscosity:
         rows.append(("eta_cytoplasm", "Pa·s", "viscosity", "cytoplasm viscosity in parallel with the structure"))
-    p_names, p_units, p_desc, p_kinds, pgroups, point_group = _prestress_layout(datasets)
+    p_names, p_units, p_desc, p_kinds, pgroups, point_group = prestress_layout(datasets)
     n_field = len(rows) - int(mech.viscosity)
     names = tuple([r[0] for r in rows] + p_names)
     units = tuple([r[1] for r in rows] + p_units)
     kinds = tuple([r[2] for r in rows] + p_kinds)
     descs = tuple([r[3] for r in rows] + p_desc)
-    n_points = sum(d.n for d in datasets)
-    if 2 * n_points < len(names):
-        raise DataError(f"{len(datasets)} data set(s) with {n_points} points give {2 * n_points} residuals, fewer "
-                        f"than the {len(names)} parameters of mechanism {mech.name!r}")
+    layout = data_layout(datasets, point_group)
+    if layout["y_obs"].size < len(names):
+        raise DataError(f"{len(datasets)} data set(s) give {layout['y_obs'].size} residuals, fewer than the "
+                        f"{len(names)} parameters of mechanism {mech.name!r}")
     L_ref = float(cell.strut_length)
     defaults, S, w_m, P_med = default_bounds(datasets, L_ref)
-    G_loss = float(np.median(np.concatenate([d.G_loss for d in datasets])))
+    G_loss = modulus_scales(datasets)[2]
     lower, upper = bounds_by_name(names, kinds, bounds, defaults, S, w_m, G_loss)
     free, fixed_log = fixed_by_name(names, lower, upper, fixed)
     field_maps, shape_maps = _maps(per_field, groups, len(names), mech.K, mech.seed)
@@ -548,40 +628,27 @@ def make_mechanism_problem(data, model, cell: Cell | None = None, *, bounds: dic
     for g, (_, _, _, links) in enumerate(pgroups):
         for j, v in links.items():
             group_map[g, j] = v
+    params = Parameters(names=names, units=units, descriptions=descs, kinds=kinds, lower=lower, upper=upper,
+                        free=free, fixed_log=fixed_log)
     return MechanismProblem(
-        mechanism=mech, cell=cell, names=names, units=units, descriptions=descs, kinds=kinds, lower=lower,
-        upper=upper, free=free, fixed_log=fixed_log, n_field=n_field, field_maps=field_maps, shape_maps=shape_maps,
+        mechanism=mech, cell=cell, params=params, n_field=n_field, field_maps=field_maps, shape_maps=shape_maps,
         eta_index=n_field if mech.viscosity else None, L_ref=L_ref,
         lengths=np.asarray(cell.lengths, dtype=float), T0=np.asarray(cell.T0, dtype=float),
-        sources=tuple(d.source for d in datasets),
-        omega=2 * np.pi * np.concatenate([d.frequency_hz for d in datasets]),
-        dataset_index=np.concatenate([np.full(d.n, k) for k, d in enumerate(datasets)]),
-        group_index=np.concatenate(point_group).astype(int),
-        group_log_offset=np.array([g[2] for g in pgroups]), group_map=group_map,
-        group_measured=np.array([g[1] for g in pgroups]),
-        y_obs=np.concatenate([np.log10(np.concatenate([d.G_storage for d in datasets])),
-                              np.log10(np.concatenate([d.G_loss for d in datasets]))]),
-        weights=np.concatenate([np.concatenate([d.weights_storage for d in datasets]),
-                                np.concatenate([d.weights_loss for d in datasets])]),
-        prestress_start=len(rows),
-    )
+        sources=tuple(d.source for d in datasets), group_log_offset=np.array([g[2] for g in pgroups]),
+        group_map=group_map, group_measured=np.array([g[1] for g in pgroups]), prestress_start=len(rows), **layout)
 
 
 def bare_problem(mech: Mechanism, cell: Cell) -> MechanismProblem:
     """A problem without data: the mechanism's own parameters only, for :meth:`MechanismProblem.evaluate`."""
-    from ... import laws
-
-    rows, per_field, groups = _layout(mech, cell, getattr(laws, mech.law))
+    rows, per_field, groups = _layout(mech, cell, mech.law_class)
     if mech.viscosity:
         rows.append(("eta_cytoplasm", "Pa·s", "viscosity", "cytoplasm viscosity"))
     n = len(rows)
     field_maps, shape_maps = _maps(per_field, groups, n, mech.K, mech.seed)
     z = np.zeros(0)
+    params = Parameters.from_rows(rows, np.full(n, -np.inf), np.full(n, np.inf), np.ones(n, bool), np.zeros(n))
     return MechanismProblem(
-        mechanism=mech, cell=cell, names=tuple(r[0] for r in rows), units=tuple(r[1] for r in rows),
-        descriptions=tuple(r[3] for r in rows), kinds=tuple(r[2] for r in rows), lower=np.full(n, -np.inf),
-        upper=np.full(n, np.inf), free=np.ones(n, bool), fixed_log=np.zeros(n),
-        n_field=n - int(mech.viscosity), field_maps=field_maps, shape_maps=shape_maps,
+        mechanism=mech, cell=cell, params=params, n_field=n - int(mech.viscosity), field_maps=field_maps, shape_maps=shape_maps,
         eta_index=n - 1 if mech.viscosity else None, L_ref=float(cell.strut_length),
         lengths=np.asarray(cell.lengths, float), T0=np.asarray(cell.T0, float), sources=(), omega=z,
         dataset_index=z.astype(int), group_index=z.astype(int), group_log_offset=z, group_map=np.zeros((0, 0)),
@@ -660,6 +727,28 @@ class FittedMechanism(FittedModel):
         """The cytoplasm viscosity η (Pa·s), 0 without one."""
         return float(self.values.get("eta_cytoplasm", 0.0))
 
+    def parameter_values(self) -> dict:
+        return self._named_values()
+
+    def with_values(self, values: dict, **prestress) -> FittedMechanism:
+        return self._replaced_values(values, prestress)  # type: ignore[return-value]
+
+    @property
+    def assignments(self) -> int:
+        return self.mechanism.K
+
+    def evaluation(self):
+        return self._problem, self._phi
+
+    def ensemble_problem(self, K: int, seed: int | None = None):
+        """``(problem, phi, seed)``: the mechanism's K assignments (seed: the mechanism's own when None) as a problem
+        without data (:func:`bare_problem`), at the fitted log-parameters ``phi``."""
+        if not self.mechanism.heterogeneous:
+            return super().ensemble_problem(K, seed)
+        seed = self.mechanism.seed if seed is None else int(seed)
+        pb = bare_problem(dataclasses.replace(self.mechanism, assignments=int(K), seed=seed), self.cell)
+        return pb, np.log([self.values[n] for n in pb.names]), seed
+
     def tendon_law(self, assignment: int = 0):
         """The law of every tendon in assignment ``assignment`` (0 ≤ k < K) of a distributed property."""
         return self._problem.tendon_law(self._phi, assignment)
@@ -713,6 +802,6 @@ class FittedMechanism(FittedModel):
                                f"({', '.join(names)})")
         vals, _ = self._problem.law_values(self._phi)
         try:  # the law's own checks (the hot paths build it unchecked)
-            getattr(_laws, self.mechanism.law)(**{n: v.ravel() for n, v in vals.items()})
+            self.mechanism.law_class(**{n: v.ravel() for n, v in vals.items()})
         except ValueError as err:
             raise FitFileError(f"model.values: {err}") from None

@@ -90,7 +90,7 @@ def plan_points(omega, group_index) -> EvaluationPlan:
     one grid; a prestress sweep at one frequency is one grid), so every grid is evaluated only where some point
     needs it, and a data set adds at most one grid per distinct frequency set.
     """
-    w = np.asarray(omega, dtype=float).ravel()
+    w = np.asarray(omega).ravel()  # angular frequencies (rad/s), or complex Laplace variables (1/s)
     gi = np.asarray(group_index, dtype=int).ravel()
     by_set: dict[bytes, tuple[np.ndarray, list]] = {}
     for g in np.unique(gi):
@@ -124,26 +124,28 @@ def law_values(problem, phi) -> tuple[dict, dict]:
     return vals, dln
 
 
-def evaluate(problem, phi, omega, P, jac: bool, dP=None) -> MechanismEvaluation | None:
-    """Moduli at angular frequencies ``omega`` (rad/s) and model prestresses ``P`` (N), per point, anywhere.
+def evaluate(problem, phi, omega, P, jac: bool, dP=None, *, laplace: bool = False) -> MechanismEvaluation | None:
+    """Moduli at angular frequencies ``omega`` (rad/s) and model prestresses ``P`` (N), per point, anywhere; with
+    ``laplace`` the complex modulus ``G*(s)`` at complex Laplace variables ``omega`` (1/s) instead.
 
     ``dP`` (N, n_params): d ln P / d φ of each point (for the Jacobian). None where not a stable cell. The points
     are planned here (:func:`plan_points`, prestress groups from the distinct values of ``P``); a problem's own
     data points use the plan made once (:func:`evaluate_planned`).
     """
-    omega = np.asarray(omega, dtype=float).ravel()
+    omega = np.asarray(omega, dtype=complex if laplace else float).ravel()
     P_groups, group = np.unique(np.asarray(P, dtype=float).ravel(), return_inverse=True)
-    return evaluate_planned(problem, phi, plan_points(omega, group), omega, P_groups, jac, dP)
+    return evaluate_planned(problem, phi, plan_points(omega, group), omega, P_groups, jac, dP, laplace=laplace)
 
 
 def evaluate_planned(problem, phi, plan: EvaluationPlan, omega, P_groups, jac: bool,
-                     dP=None) -> MechanismEvaluation | None:
-    """Moduli at the points of ``plan`` (angular frequencies ``omega``, rad/s), prestress ``P_groups[g]`` (N) in
-    group g; ``dP`` (N, n_params) is d ln P / d φ of each point (with ``jac``). None where not a stable cell."""
+                     dP=None, *, laplace: bool = False) -> MechanismEvaluation | None:
+    """Moduli at the points of ``plan`` (angular frequencies ``omega``, rad/s; with ``laplace`` complex Laplace
+    variables, 1/s, and ``G*(s)``), prestress ``P_groups[g]`` (N) in group g; ``dP`` (N, n_params) is d ln P / d φ of
+    each point (with ``jac``). None where not a stable cell."""
     vals, dln = law_values(problem, phi)
     K, m = next(iter(vals.values())).shape
     N = plan.n_points
-    laws = _tangents(problem, plan, vals, P_groups, K, m, jac)
+    laws = _tangents(problem, plan, vals, P_groups, K, m, jac, laplace)
     kstar = laws[0]
     P = np.repeat(P_groups[plan.group_index], K)  # rows (point, assignment)
     try:
@@ -160,15 +162,16 @@ def evaluate_planned(problem, phi, plan: EvaluationPlan, omega, P_groups, jac: b
         dG = _derivatives(problem, laws, out, J, G, P.reshape(N, K), vals, dln, dP)
     G_assign = G.T
     if problem.eta_index is not None:
-        visc = 1j * omega * math.exp(phi[problem.eta_index])
+        visc = (omega if laplace else 1j * omega) * math.exp(phi[problem.eta_index])
         G_assign = G_assign + visc[None]
         if dG is not None:
             dG[:, problem.eta_index] += visc
     return MechanismEvaluation(G=G_assign.mean(axis=0), G_assign=G_assign, dG=dG)
 
 
-def _tangents(problem, plan: EvaluationPlan, vals: dict, P_groups, K: int, m: int, jac: bool):
-    """``k*`` (N, K, m) at every point, and with ``jac`` ``∂k*/∂T`` (N, K, m) and ``∂k*/∂x_p`` (p, N, K, m).
+def _tangents(problem, plan: EvaluationPlan, vals: dict, P_groups, K: int, m: int, jac: bool, laplace: bool = False):
+    """``k*`` (N, K, m) at every point, and with ``jac`` ``∂k*/∂T`` (N, K, m) and ``∂k*/∂x_p`` (p, N, K, m); at
+    complex Laplace variables with ``laplace`` (the laws' ``laplace_stiffness``).
 
     One law per grid, its tendons those of every (group, assignment) of the grid side by side.
     """
@@ -186,10 +189,12 @@ def _tangents(problem, plan: EvaluationPlan, vals: dict, P_groups, K: int, m: in
         rows = grid.rows
         pick = slice(None) if rows is not None else grid.cell
         rows = grid.points if rows is None else rows
-        kstar[rows] = law.complex_stiffness(l, T, grid.omega).reshape(U, K, m)[pick]
+        stiffness, derivatives = ((law.laplace_stiffness, law.laplace_stiffness_derivatives) if laplace else
+                                  (law.complex_stiffness, law.complex_stiffness_derivatives))
+        kstar[rows] = stiffness(l, T, grid.omega).reshape(U, K, m)[pick]
         if jac:
             assert dk_dT is not None
-            dT, dx = law.complex_stiffness_derivatives(l, T, grid.omega)
+            dT, dx = derivatives(l, T, grid.omega)
             dk_dT[rows] = dT.reshape(U, K, m)[pick]
             if dk is None:
                 dk = np.empty((dx.shape[0], N, K, m), dtype=complex)

@@ -40,8 +40,8 @@ import scipy.sparse
 
 from ..._results import format_repr
 from ...io.data import DataError, RheologyData
-from ..identifiability import Identifiability, _combinations, _sigma, errors_from_covariance
-from ..parameters import as_datasets
+from ..identifiability import Identifiability, combinations, sigma_estimate, errors_from_covariance
+from ..parameters import Parameters, as_datasets
 from ..problem import LN10, Problem
 from .base import FITTED_KINDS, Capabilities, FitFileError, FitModel, FittedModel, field_of, model_from_dict
 
@@ -111,10 +111,11 @@ class Population(FitModel):
 
     @property
     def capabilities(self) -> Capabilities:
-        """The base model's, for many cells at once (per-cell parameters; no structure shares of a population)."""
+        """The base model's, for many cells at once (per-cell parameters; moduli of each cell; no structure shares of a
+        population)."""
         base = self.base.capabilities
-        return Capabilities(data_kinds=base.data_kinds, structural=base.structural, heterogeneous=base.heterogeneous,
-                            multimodal=base.multimodal, per_cell=True)
+        return Capabilities(data_kinds=frozenset({"moduli"}), structural=base.structural,
+                            heterogeneous=base.heterogeneous, multimodal=base.multimodal, per_cell=True)
 
     def problem(self, data, cell=None, *, bounds=None, fixed=None) -> PopulationProblem:
         return make_population_problem(data, self, cell, bounds=bounds, fixed=fixed)
@@ -153,14 +154,7 @@ class PopulationProblem(Problem):
 
     population: Population
     cells: tuple
-    names: tuple
-    units: tuple
-    descriptions: tuple
-    kinds: tuple
-    lower: np.ndarray
-    upper: np.ndarray
-    free: np.ndarray
-    fixed_log: np.ndarray
+    params: Parameters
     n_shared: int
     base_shared: np.ndarray
     base_own: np.ndarray
@@ -336,10 +330,8 @@ class PopulationProblem(Problem):
         n = self.n_points
         group_offsets = np.cumsum([0] + [self.cells[k].n_groups for k in cells])[:-1]
         return dataclasses.replace(
-            self, cells=tuple(self.cells[k] for k in cells), names=tuple(self.names[i] for i in keep),
-            units=tuple(self.units[i] for i in keep), descriptions=tuple(self.descriptions[i] for i in keep),
-            kinds=tuple(self.kinds[i] for i in keep), lower=self.lower[keep], upper=self.upper[keep],
-            free=self.free[keep], fixed_log=self.fixed_log[keep], base_fixed_log=self.base_fixed_log[cells],
+            self, cells=tuple(self.cells[k] for k in cells), params=self.params.subset(keep),
+            base_fixed_log=self.base_fixed_log[cells],
             reference_cell=int(np.argmin(np.abs(cells - self.reference_cell))),
             sources=tuple(self.sources[k] for k in cells), omega=self.omega[pts],
             dataset_index=np.concatenate([np.full(r.size, j) for j, r in enumerate(rows)]),
@@ -370,7 +362,7 @@ class PopulationProblem(Problem):
         own[self.n_shared:] = True
         if not np.any(own & self.free):
             return phi
-        held = dataclasses.replace(self, free=self.free & own, fixed_log=np.asarray(phi, dtype=float).copy())
+        held = self.holding(free=self.free & own, fixed_log=np.asarray(phi, dtype=float).copy())
         theta, _, _ = local_fit(held, phi[held.free], max_nfev)
         return held.full(theta)
 
@@ -505,9 +497,10 @@ def make_population_problem(data, population: Population, cell=None, *, bounds: 
     fixed_log = np.concatenate([first.fixed_log[shared], np.array([pb.fixed_log[own] for pb in cells]).ravel()])
     offsets = np.cumsum([0] + [pb.n_groups for pb in cells])[:-1]
     log_G = [float(np.mean(pb.y_obs[: pb.n_points])) for pb in cells]
+    params = Parameters(names=tuple(names), units=tuple(units), descriptions=tuple(descs), kinds=tuple(kinds),
+                        lower=lower, upper=upper, free=free, fixed_log=fixed_log)
     return PopulationProblem(
-        population=population, cells=cells, names=tuple(names), units=tuple(units), descriptions=tuple(descs),
-        kinds=tuple(kinds), lower=lower, upper=upper, free=free, fixed_log=fixed_log, n_shared=int(shared.size),
+        population=population, cells=cells, params=params, n_shared=int(shared.size),
         base_shared=shared, base_own=own, base_fixed_log=np.array([pb.fixed_log for pb in cells]),
         reference_cell=int(np.argsort(log_G)[(n_cells - 1) // 2]), sources=tuple(d.source for d in datasets),
         omega=np.concatenate([pb.omega for pb in cells]),
@@ -645,7 +638,7 @@ def _block_analysis(problem, pars, r, B_all, blocks, cell_rows, shared, analysed
     h += np.sum(Us[:, :rank] ** 2, axis=1)
     chi2 = float(r @ r)
     dof = r.size - rank - own_rank
-    sigma, source = _sigma(sigma_known, chi2, dof)
+    sigma, source = sigma_estimate(sigma_known, chi2, dof)
     V = Vts.T
     names = tuple(problem.names[i] for i in shared)
     # the full null space: (u, −G_k u) for each unseen shared direction u (and each block's own null vectors)
@@ -675,7 +668,7 @@ def _block_analysis(problem, pars, r, B_all, blocks, cell_rows, shared, analysed
         rtol=rtol, gauge_removed=False, excluded=tuple(excluded[:n_shared_excluded]),
         fixed=tuple(problem.names[i] for i in np.flatnonzero(~problem.free)), n_residuals=r.size, sigma=sigma,
         sigma_source=source, dof=dof, chi2=chi2, standard_errors=se, null_share=null_share, correlation=corr,
-        combinations=_combinations(V, ss, rank, names, sigma), leverage=h, directions=V,
+        combinations=combinations(V, ss, rank, names, sigma), leverage=h, directions=V,
         cell_names=tuple(cell_names), cell_standard_errors=np.concatenate(cell_se) if cell_se else np.zeros(0),
         cell_null_share=np.concatenate(cell_null) if cell_null else np.zeros(0),
         cell_excluded=tuple(excluded[n_shared_excluded:]))
@@ -740,7 +733,7 @@ class FittedPopulation(FittedModel):
     @property
     def cell(self):
         """The typical cell's reference cell (None for a structure-free formula)."""
-        return getattr(self.typical, "cell", None)
+        return self.typical.cell  # every fitted model of one cell has one (None: a formula)
 
     def describe(self) -> str:
         return f"the typical cell of the fitted population {self.population.name} ({len(self.cells)} cells)"
@@ -749,15 +742,9 @@ class FittedPopulation(FittedModel):
         """Cell ``k``'s own fitted model: the typical cell with cell ``k``'s per-cell values."""
         if not 0 <= int(k) < len(self.cells):
             raise ValueError(f"cell must lie in 0..{len(self.cells) - 1}, got {k!r}")
-        values, pre = dict(getattr(self.typical, "values", {})), {}
-        for name, v in self.per_cell.items():
-            if name in values:
-                values[name] = v[int(k)]
-            elif name in ("P", "s"):
-                pre[name] = v[int(k)]
-            else:
-                raise ValueError(f"per-cell parameter {name!r} is not a value of {self.typical.describe()}")
-        return dataclasses.replace(self.typical, values=values, source=self.cells[int(k)], **pre)  # type: ignore[type-var]
+        values = {n: v[int(k)] for n, v in self.per_cell.items() if n not in ("P", "s")}
+        pre = {n: v[int(k)] for n, v in self.per_cell.items() if n in ("P", "s")}
+        return self.typical.with_values(values, source=self.cells[int(k)], **pre)
 
     # every consumer of a fitted model gets the typical cell's answers
     def moduli(self, f_hz, prestress_pa: float | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -766,6 +753,10 @@ class FittedPopulation(FittedModel):
     @property
     def viscosity(self) -> float:
         return self.typical.viscosity
+
+    def parameter_values(self) -> dict:
+        """The typical cell's (each per-cell parameter at its median over the cells)."""
+        return self.typical.parameter_values()
 
     def tendon_law(self, assignment: int = 0):
         return self.typical.tendon_law(assignment)

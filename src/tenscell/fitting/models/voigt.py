@@ -76,8 +76,8 @@ from .base import Capabilities, FitModel
 from .voigt_fitted import MODEL_FORMAT, FittedCell, scaled_cell
 from .voigt_results import VoigtResults
 from .voigt_kernel import _Evaluation, evaluate
-from ..parameters import (DAMPING_MODES, TENDON_MODES, as_datasets, check_options, data_arrays, parameter_layout,
-                     prestress_varies, required_points)
+from ..parameters import (DAMPING_MODES, TENDON_MODES, Parameters, as_datasets, check_options, data_arrays,
+                          parameter_layout, prestress_varies, required_points)
 
 __all__ = ["TENDON_MODES", "DAMPING_MODES", "VoigtModel", "FitProblem", "FittedCell", "scaled_cell", "MODEL_FORMAT", "make_problem", "required_points", "as_datasets"]
 
@@ -144,6 +144,20 @@ class VoigtModel(FitModel):
         return Formula("voigt (lumped)", ("aP", "E0", "newtonian"),
                        "the structure-free formula of the Voigt cell: a·P + E0 + iωη")
 
+    def with_options(self, **options) -> VoigtModel:
+        """The Voigt cell with these options changed (the name and description follow the layout)."""
+        fields = dict(tendons=self.tendons, damping=self.damping, min_prestress_share=self.min_prestress_share,
+                      max_decades=self.max_decades, min_prestress_elasticity=self.min_prestress_elasticity,
+                      elasticity_frequency_hz=self.elasticity_frequency_hz)
+        unknown = sorted(set(options) - set(fields))
+        if unknown:
+            raise TypeError(f"VoigtModel has no option {unknown[0]!r} (options: {', '.join(fields)})")
+        return VoigtModel(**{**fields, **options}) if options else self
+
+    def min_points(self) -> int:
+        """:func:`~tenscell.fitting.parameters.required_points` of this layout (the paper cell's two families)."""
+        return required_points(self.tendons, self.damping)
+
     @property
     def constrained(self) -> bool:
         """Whether an activity constraint or a bound on the stiffness spread shapes the search space."""
@@ -168,15 +182,10 @@ class FitProblem(VoigtResults, Problem):
 
     Attributes
     ----------
-    names : tuple of str
-        All parameter names.
-    units, descriptions, kinds : tuple of str
-        ``kinds`` is one of ``"EA"``, ``"c"``, ``"P"``, ``"s"``, ``"P_data"``, ``"L"`` per parameter.
-    lower, upper : ndarray
-        Log-space bounds of all parameters.
-    free : ndarray of bool
-    fixed_log : ndarray
-        Log values of all parameters (used for the fixed ones).
+    params : Parameters
+        Every parameter (:class:`~tenscell.fitting.parameters.Parameters`; read as ``names``, ``units``,
+        ``descriptions``, ``kinds``, ``lower``, ``upper``, ``free``, ``fixed_log``): ``kinds`` is one of ``"EA"``,
+        ``"c"``, ``"P"``, ``"s"``, ``"P_data"``, ``"L"`` per parameter.
     sources : tuple of str
         The data sets' sources, in order.
     dataset_index : ndarray of int, shape (N,)
@@ -192,14 +201,7 @@ class FitProblem(VoigtResults, Problem):
         Angular frequency (rad/s) of ``min_prestress_elasticity``.
     """
 
-    names: tuple
-    units: tuple
-    descriptions: tuple
-    kinds: tuple
-    lower: np.ndarray
-    upper: np.ndarray
-    free: np.ndarray
-    fixed_log: np.ndarray
+    params: Parameters
     tendons: str
     damping: str
     n_ea: int
@@ -319,6 +321,19 @@ class FitProblem(VoigtResults, Problem):
             nan = np.full(self.omega.size, np.nan)
             return nan, nan.copy()
         return out.G.real, out.G.imag
+
+    def time_points(self, dataset: int) -> np.ndarray:
+        """Positions among the creep points of data set ``dataset``'s."""
+        return np.flatnonzero(self.creep_dataset == dataset)
+
+    @property
+    def time_group(self) -> np.ndarray:
+        """The prestress group of every creep point."""
+        return self.creep_group
+
+    def time_model(self, theta) -> np.ndarray:
+        """The model's creep compliance (1/Pa) at every creep point (:meth:`creep`)."""
+        return self.creep(theta)
 
     def creep(self, theta) -> np.ndarray:
         """Model creep compliance (1/Pa) at the creep points, shape (n_creep,); NaN where the model is unstable."""

@@ -16,7 +16,7 @@ from ..._checks import positive_scalar
 from ..._results import format_repr
 from ...linear.linearize import LinearModel, linearize
 from ...model.equilibrium import Cell, equilibrate
-from .base import FitFileError, FittedModel, cell_from_dict, cell_to_dict, prestress_from
+from .base import FitFileError, FittedModel, cell_from_dict, cell_to_dict, model_from_dict, prestress_from
 
 __all__ = ["FittedCell", "scaled_cell", "MODEL_FORMAT"]
 
@@ -63,6 +63,10 @@ class FittedCell(FittedModel):
         Tendon damping (N·s/m).
     P, s, prestress_pa, source
         See :class:`FittedModel`.
+    tendons, damping : str or None
+        How the fit laid the stiffnesses and the damping out (``"per-tendon"``, ``"per-family"``, ``"uniform"``;
+        ``"uniform"``, ``"per-family"``): the :class:`~tenscell.fitting.models.voigt.VoigtModel` fitted. None in a
+        fit.json written before tenscell recorded them.
     """
 
     cell: Cell
@@ -72,6 +76,8 @@ class FittedCell(FittedModel):
     s: float | None = None
     prestress_pa: tuple = ()
     source: str = ""
+    tendons: str | None = None
+    damping: str | None = None
     FORMAT = MODEL_FORMAT
 
     def __post_init__(self):
@@ -85,6 +91,18 @@ class FittedCell(FittedModel):
     def L(self) -> float:
         """Strut length (m)."""
         return float(self.cell.strut_length)
+
+    @property
+    def spec(self):
+        """The :class:`~tenscell.fitting.models.voigt.VoigtModel` of this fit's layout (the paper's per-tendon
+        stiffnesses and one damping where the fit.json does not record it)."""
+        # by the registry of model classes: this module is imported by the Voigt model's own
+        return model_from_dict({"class": "VoigtModel", "tendons": self.tendons or "per-tendon",
+                                "damping": self.damping or "uniform"})
+
+    def parameter_values(self) -> dict:
+        """``EA`` (N) and ``c`` (N·s/m) of every tendon."""
+        return {"EA": self.EA, "c": self.c}
 
     def tendon_law(self, assignment: int = 0):
         from ...laws import Voigt
@@ -117,11 +135,18 @@ class FittedCell(FittedModel):
     def to_dict(self) -> dict:
         """JSON-ready description that :func:`fitted_from_dict` turns back into the same model (floats exact)."""
         return {"format": MODEL_FORMAT, **cell_to_dict(self.cell, EA=self.EA, c=self.c), "strut_length_m": self.L,
-                **self._prestress_fields()}
+                **self._prestress_fields(), "tendons": self.tendons, "damping": self.damping}
 
     @classmethod
     def from_dict(cls, obj: dict) -> FittedCell:
         cell, sf = cell_from_dict(obj)
         if sf.EA is None or sf.c is None:
             raise FitFileError("model.structure: the fitted cell's tendons have no EA or c")
-        return cls(cell=cell, EA=sf.EA, c=sf.c, **prestress_from(obj))
+        layout: dict[str, str | None] = {}
+        for key, allowed in (("tendons", ("per-tendon", "per-family", "uniform")), ("damping", ("uniform", "per-family"))):
+            value = obj.get(key)  # absent from a fit.json written before tenscell recorded the layout
+            if value is not None and value not in allowed:
+                raise FitFileError(f"model.{key}: one of {', '.join(allowed)}, got {value!r}")
+            layout[key] = value
+        return cls(cell=cell, EA=sf.EA, c=sf.c, tendons=layout["tendons"], damping=layout["damping"],
+                   **prestress_from(obj))

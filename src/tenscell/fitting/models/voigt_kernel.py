@@ -18,6 +18,7 @@ import numpy as np
 
 from ...laws import Voigt
 from ...linear.assembly import modulus
+from ...linear.definite import first_indefinite
 from ...linear.family import prestress_grid_modes
 
 if TYPE_CHECKING:
@@ -88,9 +89,11 @@ def spectrum(p: FitProblem, phi) -> _Spectrum | None:
     if wh is None:
         return None
     B, Ht, bt, Dt = wh
-    lam, W = prestress_grid_modes(Ht, np.matmul(B[None] * k[:, None, :], B.T[None]), P)
-    if not np.all(lam > 0):
+    Kmt = np.matmul(B[None] * k[:, None, :], B.T[None])
+    # the one criterion (linear.definite): the whitened K0 of each group is congruent to K0 (C0 is definite)
+    if first_indefinite(P[:, None, None] * Ht[None] + Kmt) is not None:
         return None
+    lam, W = prestress_grid_modes(Ht, Kmt, P)
     alpha = np.einsum("gnk,n->gk", W, Dt)  # probe projections, D0·v_k
     beta = np.einsum("gnk,n->gk", W, bt)  # load projections, −H0·v_k
     Kpt = Ht[None] + np.matmul(B[None] * kP[:, None, :], B.T[None])

@@ -14,7 +14,7 @@ import numpy as np
 from ..._threads import hot_path
 from ...linear.linearize import linearize
 from ...model.equilibrium import Cell
-from ..prestress import REFERENCE_FREQUENCY_HZ, PrestressActivity
+from ..prestress import REFERENCE_FREQUENCY_HZ, PrestressActivity, prestress_activity as activity_of
 from .voigt_fitted import FittedCell, scaled_cell
 
 __all__ = ["VoigtResults", "GRID_POINTS", "prestress_activity"]
@@ -27,7 +27,6 @@ class VoigtResults:
     """The result hooks of :class:`~tenscell.fitting.models.voigt.FitProblem` (a mixin: it reads the problem's
     fields, declared here for the type checker)."""
 
-    names: tuple
     cell: Cell
     L_ref: float
     tendons: str
@@ -42,6 +41,12 @@ class VoigtResults:
     elasticity_omega: float
 
     if TYPE_CHECKING:  # Problem's, which FitProblem also derives from (defining them here would shadow those)
+        @property
+        def names(self) -> tuple: ...
+
+        @property
+        def compact(self) -> bool: ...
+
         def values(self, theta) -> np.ndarray: ...
 
         def parameters(self, theta) -> tuple: ...
@@ -79,6 +84,13 @@ class VoigtResults:
             return None
         e = self.tendon_values(theta)[0][inside]
         return float(e.min()), float(e.max()), float(math.log10(e.max() / e.min()))
+
+    def stiffness_at_bound(self, theta) -> bool:
+        pars = self.parameters(theta)
+        return any(pars[g].at_bound for g in set(self.ea_groups.tolist()))
+
+    def stiffness_bound(self) -> tuple[float | None, bool]:
+        return self.max_decades, bool(self.compact)
 
     def moduli_at(self, theta, f_hz, P_N) -> tuple[np.ndarray, np.ndarray]:
         """G', G'' (Pa) at ``f_hz`` (Hz) and model prestresses ``P_N`` (N, at the fitted strut length), broadcast:
@@ -126,7 +138,7 @@ class VoigtResults:
                    "prestress_pa": tuple(float(p) for p in stated)}
         else:
             pre = {"P": float(result.prestress_model(dataset=result.single_prestress_dataset())[0])}
-        return FittedCell(cell=scaled_cell(self.cell, L), EA=EA, c=c,
+        return FittedCell(cell=scaled_cell(self.cell, L), EA=EA, c=c, tendons=self.tendons, damping=self.damping,
                           source=" + ".join(d.source for d in result.datasets), **pre)
 
     def prestress_activity(self, result, reference_frequency_hz: float = REFERENCE_FREQUENCY_HZ):
@@ -147,7 +159,7 @@ class VoigtResults:
         from ..curves import frequency_slopes, shape_quantities
 
         out = shape_quantities(result)
-        pa = result.prestress
+        pa = activity_of(result)
         summary = pa.to_dict()
         out["prestress_share"] = np.array([summary["share_min"], summary["share_max"]])
         out["prestress_storage"] = np.array([summary["dlnGstorage_dlnP"]["min"], summary["dlnGstorage_dlnP"]["max"]])
@@ -174,7 +186,7 @@ class VoigtResults:
             "tendon_stiffness_spread": {"min_N": lo, "max_N": hi, "decades": dec},
             "tendon_stiffness_spread_not_at_bounds": (
                 None if inner is None else dict(zip(("min_N", "max_N", "decades"), inner))),
-            "prestress_activity": result.prestress.to_dict(),
+            "prestress_activity": activity_of(result).to_dict(),
             "predicted_creep": result.predicted_creep().to_dict(),
         }
 

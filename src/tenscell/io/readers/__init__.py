@@ -36,7 +36,7 @@ from ._blocks import TEMPERATURE_TOLERANCE_C, Probe, Request
 __all__ = ["READERS", "read_data", "detect_layout", "expected", "TEMPERATURE_TOLERANCE_C", "Probe", "Request"]
 
 #: the readers, in the order that breaks ties (module names in this package)
-READERS = ("trios", "rheocompass", "excel", "tenscell_csv", "table")
+READERS = ("trios", "rheocompass", "excel", "tenscell_csv", "relaxation_csv", "table")
 
 
 def _reader(name: str):
@@ -59,7 +59,7 @@ def detect_layout(path: str | os.PathLike[str] | Probe) -> str:
 def read_data(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, Any] | None = None, *,
               step: int | str | None = None, temperature: float | None = None, sheet: str | int | None = None,
               min_points: int = 1, accept=(), **units: Any):
-    """Measured moduli or creep compliance from any file tenscell reads, whatever wrote it.
+    """Measured moduli, creep compliance or stress relaxation from any file tenscell reads, whatever wrote it.
 
     The layout is recognised from the content: a TRIOS export (:func:`~tenscell.io.readers.trios.read_trios`),
     a RheoCompass export (:func:`~tenscell.io.readers.rheocompass.read_rheocompass`), an Excel workbook,
@@ -89,7 +89,7 @@ def read_data(path: str | os.PathLike[str], columns: ColumnMap | Mapping[str, An
 
     Returns
     -------
-    RheologyData or CreepData
+    RheologyData, CreepData or RelaxationData
         With ``provenance``: the file, the layout, the step and temperature, the columns, the unit conversions.
 
     Raises

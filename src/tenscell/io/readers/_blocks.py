@@ -16,7 +16,7 @@ from typing import Any, Mapping
 
 from ..._errors import option
 from ..checks import accepted_checks, refuse
-from ..columns import ColumnMap, DataError, _as_map, _read_text, _Table, guess_columns
+from ..columns import CellTable, ColumnMap, DataError, column_map, guess_columns, read_text_file
 from ..importers import build
 from ..provenance import Provenance
 
@@ -38,7 +38,7 @@ class Probe:
 
     @cached_property
     def text(self) -> str:
-        return _read_text(self.path)
+        return read_text_file(self.path)
 
     @cached_property
     def lines(self) -> list[str]:
@@ -79,7 +79,7 @@ class Request:
         """The map for a table with these column names: the one asked for, else the one its headers say (None when
         they say nothing tenscell recognises); the units asked for override the map's."""
         cmap = guess_columns(names) if self.columns is None else self.columns
-        return None if cmap is None else _as_map(cmap, self.units)
+        return None if cmap is None else column_map(cmap, self.units)
 
 
 @dataclass(frozen=True)
@@ -89,7 +89,7 @@ class Block:
 
     number: int
     name: str
-    table: _Table
+    table: CellTable
     temperature_c: float | None
     declared_points: int | None = None
     declared_where: str = ""
@@ -122,7 +122,7 @@ def _readable(block: Block, columns) -> bool:
     """The block holds data this map (or the recognised headers) reads: creep, or moduli over more than one
     frequency (an amplitude sweep at one frequency is not a frequency sweep)."""
     try:
-        cmap = guess_columns(block.table.names) if columns is None else _as_map(columns, {})
+        cmap = guess_columns(block.table.names) if columns is None else column_map(columns, {})
     except ValueError:
         return False
     if cmap is None:

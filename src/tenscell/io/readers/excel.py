@@ -6,7 +6,7 @@ is one. Read with openpyxl (``pip install "tenscell[excel]"``).
 """
 from __future__ import annotations
 
-from ..columns import DataError, _as_map, _excel_table, guess_columns
+from ..columns import DataError, column_map, excel_table, guess_columns
 from ..importers import read_table
 from ._blocks import Probe, Request
 from .table import is_units_row
@@ -24,11 +24,11 @@ def detect(probe: Probe) -> int:
 
 def read(probe: Probe, request: Request):
     """The sheet the request names (default the first), from its first recognised header row."""
-    probe_table = _excel_table(probe.path, request.sheet, None, False)
+    probe_table = excel_table(probe.path, request.sheet, None, False)
     rows = [probe_table.names] + [["" if c is None else str(c) for c in r] for r in probe_table.rows]
     for i, r in enumerate(rows[:50]):
         if (request.columns is None and guess_columns(r) is not None) or (
-                request.columns is not None and _names_all(_as_map(request.columns, request.units), r)):
+                request.columns is not None and _names_all(column_map(request.columns, request.units), r)):
             line = int(probe_table.where[i - 1].split()[-1]) if i else None
             units_row = i + 1 < len(rows) and is_units_row(rows[i + 1])
             columns = request.columns if request.columns is not None else guess_columns(r)

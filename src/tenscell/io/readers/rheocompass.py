@@ -15,7 +15,7 @@ import os
 import re
 from typing import Any, Mapping
 
-from ..columns import ColumnMap, DataError, _Table, _trimmed
+from ..columns import ColumnMap, DataError, CellTable, trimmed
 from ..provenance import Provenance
 from ._blocks import Block, Probe, Request, choose, decimal_mark, read_block, temperature_of
 
@@ -71,7 +71,7 @@ def blocks_of(probe: Probe) -> list[Block]:
             number = int(counts[0]) if counts else pos
             if len(counts) > 1:
                 declared, declared_where = int(counts[1]), f"'{_POINTS} {counts[0]} {counts[1]}' (line {marker + 1})"
-        names = _trimmed([s.strip() for s in _split(lines[k0].lstrip(), sep)][1:])
+        names = trimmed([s.strip() for s in _split(lines[k0].lstrip(), sep)][1:])
         if k0 + 1 >= len(lines):
             raise DataError(f"{source}, line {k0 + 2}: the units line of the interval is missing")
         unit_fields = _split(lines[k0 + 1], sep)
@@ -79,7 +79,7 @@ def blocks_of(probe: Probe) -> list[Block]:
         rows, where = _rows(lines, k0 + 2, sep)
         text = " ".join(preamble)
         decimal = decimal_mark(rows) if sep != "," else "."
-        table = _Table(source, names, rows, where, units, decimal,
+        table = CellTable(source, names, rows, where, units, decimal,
                        meta + tuple(s.strip().replace(sep, " ") for s in preamble if s.strip()))
         blocks.append(Block(number, f"interval {number}", table, temperature_of(text, names, rows, text),
                             declared, declared_where))
@@ -93,7 +93,7 @@ def _rows(lines: list[str], k: int, sep: str) -> tuple[list[list[str]], list[str
         f = _split(lines[k], sep)
         if f[0].strip().endswith(":"):  # "Result:", "Interval and data points:": the table has ended
             break
-        if not f[0].strip() and len(_trimmed(f)) > 0:
+        if not f[0].strip() and len(trimmed(f)) > 0:
             f = f[1:]  # the leading empty field of the long layout
         rows.append([s.strip() for s in f])
         where.append(f"line {k + 1}")

@@ -23,7 +23,7 @@ import os
 import re
 from typing import Any, Mapping
 
-from ..columns import ColumnMap, DataError, _Table, _trimmed
+from ..columns import ColumnMap, DataError, CellTable, trimmed
 from ..provenance import Provenance
 from ._blocks import Block, Probe, Request, choose, decimal_mark, read_block, temperature_of
 
@@ -93,7 +93,7 @@ def _labelled_blocks(source: str, lines: list[str]) -> list[Block]:
             pending = {}
             blocks.append(current)
         elif current is not None and not current["rows"] and current["units"] is None and (
-                label == "Units" or (not label and len(_trimmed(f)) > 1)):
+                label == "Units" or (not label and len(trimmed(f)) > 1)):
             current["units"] = [s.strip() for s in f[1:]]
         elif label == "Data point":
             _data_point(source, k, f, current)
@@ -110,9 +110,9 @@ def _data_point(source: str, k: int, f: list[str], current: dict | None) -> None
     more fields than the block has columns)."""
     if current is None:
         raise DataError(f"{source}, line {k}: a 'Data point' row before any 'Variables' row (column names)")
-    if len(_trimmed(f[1:])) > len(_trimmed(current["names"])):
-        raise DataError(f"{source}, line {k}: expected {len(_trimmed(current['names']))} fields after "
-                        f"'Data point', found {len(_trimmed(f[1:]))}")
+    if len(trimmed(f[1:])) > len(trimmed(current["names"])):
+        raise DataError(f"{source}, line {k}: expected {len(trimmed(current['names']))} fields after "
+                        f"'Data point', found {len(trimmed(f[1:]))}")
     current["rows"].append([s.strip() for s in f[1:]])
     current["where"].append(f"line {k}")
 
@@ -141,7 +141,7 @@ def _split_by_step_column(source: str, b: dict, meta: tuple[str, ...], before: i
     for n, (value, idx) in enumerate(groups.items(), start=before + 1):
         name = b.get("name") or (f"Step {value}" if value else "")
         sub = [rows[i] for i in idx]
-        table = _Table(source, names, sub, [where[i] for i in idx], b["units"], decimal_mark(sub),
+        table = CellTable(source, names, sub, [where[i] for i in idx], b["units"], decimal_mark(sub),
                        meta + ((f"step {n}: {name}",) if name else ()))
         out.append(Block(n, name, table, temperature_of(name, names, sub, " ".join(meta)),
                          declared if len(groups) == 1 else None, declared_where))
@@ -157,7 +157,7 @@ def _text_blocks(source: str, lines: list[str]) -> list[Block]:
         end = starts[n] if n < len(starts) else len(lines)
         section = next((k for k in range(k0 + 1, end) if lines[k].startswith("[")), end)
         name, names, units, rows, where = _text_step(source, lines, list(range(k0 + 1, section)), k0)
-        table = _Table(source, names, rows, where, units, decimal_mark(rows), meta + (f"step {n}: {name}",))
+        table = CellTable(source, names, rows, where, units, decimal_mark(rows), meta + (f"step {n}: {name}",))
         blocks.append(Block(n, name, table, temperature_of(name, names, rows)))
     return blocks
 
@@ -173,8 +173,8 @@ def _text_step(source: str, lines: list[str], body: list[int], k0: int):
     rows, where, k = [], [], filled[2] + 1
     while k <= body[-1] and lines[k].strip():
         f = [s.strip() for s in lines[k].rstrip("\r\n").split("\t")]
-        if len(_trimmed(f)) > len(names):
-            raise DataError(f"{source}, line {k + 1}: expected {len(_trimmed(names))} fields, found {len(_trimmed(f))}")
+        if len(trimmed(f)) > len(names):
+            raise DataError(f"{source}, line {k + 1}: expected {len(trimmed(names))} fields, found {len(trimmed(f))}")
         rows.append(f)
         where.append(f"line {k + 1}")
         k += 1
