@@ -13,6 +13,7 @@ from pathlib import Path
 
 from ._args import (RANGES, add_cluster_options, add_data_options, add_out, data_options_from_args, ensemble_size,
                     integer, number)
+from ._cost import Cost
 
 #: the fit's parametrizations (the same tuples as tenscell.fitting.TENDON_MODES / DAMPING_MODES,
 #: written out so that building the parser does not import the fitting code; a test checks they agree)
@@ -546,6 +547,7 @@ def run(args) -> int:
     from .._parallel import background, jobs_for
     from .._progress import stage
     from ..io.outputs import OutputSet
+    from ._cost import announce
 
     spec = spec_from_args(args)
     check_contradictions(args)
@@ -560,6 +562,9 @@ def run(args) -> int:
     for line in read_lines:  # what was read, now that every check has passed
         stage(line)
     args.jobs = jobs_for(args.starts, args.jobs)
+    cost = fit_cost(spec, datasets, args)
+    if cost.seconds > ANNOUNCE_S:
+        announce(cost)
     stage(f"fitting {sum(d.n for d in datasets)} points with {spec.name}: {args.starts} start(s), "
           f"{args.jobs} process(es)")
     clock = _Clock(getattr(args, "started", None))
@@ -616,14 +621,78 @@ def _validation(args, spec, datasets, space):
     return validation if validation.splits else None  # no split leaves enough points to fit every model
 
 
+#: an estimated run longer than this (s) is announced before it starts (`tenscell fit`, its profile)
+ANNOUNCE_S = 10.0
+#: basin-hopping moves of a fit (fitting.fit's default; the command line does not change it)
+FIT_HOPS = 30
+
+
+def _evaluation_time(problem, theta) -> float:
+    """Seconds of one model evaluation (residuals and Jacobian) of ``problem`` at ``theta``, measured now (under the
+    machine's present load) with the BLAS threads the search uses."""
+    from .._threads import limited
+    from ._cost import measure
+
+    with limited():
+        return measure(lambda: problem.jacobian(theta), max_calls=5)
+
+
+def fit_cost(spec, datasets, args) -> Cost:
+    """The fit's estimated cost (:class:`tenscell.cli._cost.Cost`): one model evaluation timed here, × the
+    evaluations its search is expected to take (:data:`tenscell.cli._cost.EVALUATIONS_PER_START_HOP` × starts ×
+    (hops + 1)), over its processes; the baseline runs beside it, the profile is estimated when its parameters are
+    known."""
+    import numpy as np
+
+    from ..fitting.entry import prepare
+    from ..fitting.models.catalog import PER_TENDON_VOIGT
+    from ._cost import EVALUATIONS_PER_START_HOP
+
+    problem = spec.problem(*prepare(datasets, None, args.max_points, spec))
+    per = _evaluation_time(problem, problem.initial_guess(np.random.default_rng(args.seed)))
+    rate = EVALUATIONS_PER_START_HOP["voigt-per-tendon" if spec.name == PER_TENDON_VOIGT else "mechanism"]
+    runs = args.starts * (FIT_HOPS + 1)
+    return Cost("model evaluation", int(round(rate * runs)), per, max(1, min(args.jobs, args.starts)),
+                detail=f"of {problem.n_free} free parameters: {args.starts} start(s) × up to {FIT_HOPS + 1} "
+                       f"least-squares runs × about {rate:g} evaluations; fewer when the tolerance is met early")
+
+
+def profile_cost(result, names) -> Cost:
+    """The profile's estimated cost: per parameter, at most the refits its bar counts (the grid, the thresholds,
+    the refinements), each a search of ``REFIT_HOPS + 1`` runs warm-started at the fit, one model evaluation timed
+    here at the fit's parameters."""
+    from ..fitting.models.catalog import PER_TENDON_VOIGT
+    from ..fitting.profile import DEFAULT_POINTS, DEFAULT_REFINE, REFIT_HOPS, REFIT_NFEV
+    from ._cost import EVALUATIONS_PER_START_HOP
+
+    per = _evaluation_time(result.problem, result.theta)
+    rate = EVALUATIONS_PER_START_HOP["voigt-per-tendon" if result.spec.name == PER_TENDON_VOIGT else "mechanism"]
+    refits = len(names) * (DEFAULT_POINTS + 4 + 4 * DEFAULT_REFINE)
+    evaluations = (REFIT_HOPS + 1) * min(rate, REFIT_NFEV)
+    return Cost("refit", refits, per * evaluations, 1,
+                detail=f"at most: {len(names)} parameter(s) × {DEFAULT_POINTS + 4 + 4 * DEFAULT_REFINE} refits, each "
+                       f"{REFIT_HOPS + 1} least-squares runs of about {min(rate, REFIT_NFEV):g} evaluations of "
+                       f"{result.n_free - 1} free parameters")
+
+
 def _profile(args, result) -> None:
-    """``--profile``: the profile intervals of the parameters that need them, kept on the result (or none)."""
+    """``--profile``: the profile intervals of the parameters that need them, kept on the result (or none); the
+    estimate first when it is long."""
     if args.profile == "no":
         return
     from .._progress import stage
+    from ..fitting.profile import profile_plan
+    from ._cost import announce
 
-    profile = result.compute_profile("needed" if args.profile == "yes" else "auto",
-                                     notify=lambda line: stage(line))
+    mode = "needed" if args.profile == "yes" else "auto"
+    todo, _ = profile_plan(result, mode)
+    if todo:
+        cost = profile_cost(result, [n for n, _ in todo])
+        if cost.seconds > ANNOUNCE_S:
+            stage(f"profile of {len(todo)} parameter(s) the local analysis cannot bound: "
+                  f"{', '.join(n for n, _ in todo[:8])}{', ...' if len(todo) > 8 else ''}")
+            announce(cost)
+    profile = result.compute_profile(mode, notify=lambda line: stage(line))
     stage(f"profile: {profile.not_run}" if profile.not_run else
           f"profile: {len(profile)} parameter(s), {profile.refits} refits, {profile.cpu_s:.1f} s CPU")
 

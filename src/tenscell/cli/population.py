@@ -1,7 +1,9 @@
 """``tenscell synth-population``, ``fit-population`` and ``large-study``: populations and large studies on Dask."""
 from __future__ import annotations
 
+import os
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 from ._args import (add_cluster_options, add_data_options, add_out, data_options_from_args, frequencies, integer, number,
@@ -339,15 +341,26 @@ def _run_in(work: Path, what: str, run):
     """
     created = not work.exists()
     try:
-        return run()
-    except BaseException as err:
+        with _resume_hint(work, what):
+            return run()
+    except BaseException:
         if created and discard_empty_work(work, remove_dir=True):
             raise
-        if isinstance(err, KeyboardInterrupt) and _finished(work):
-            # the one line the command prints for it (tenscell.cli.main prints a KeyboardInterrupt's message)
-            raise KeyboardInterrupt(f"{what}: interrupted; finished results are kept in {work}/; run the same "
-                                    "command with --resume to continue") from None
         raise
+
+
+@contextmanager
+def _resume_hint(work: Path, what: str):
+    """An interrupt inside, while the work directory holds finished records (during the run, or after its last
+    record while the results are written), ends with the one line that says how to continue: --resume."""
+    try:
+        yield
+    except KeyboardInterrupt as err:
+        if not _finished(work) or "--resume" in str(err):
+            raise
+        # the one line the command prints for it (tenscell.cli.main prints a KeyboardInterrupt's message)
+        raise KeyboardInterrupt(f"{what}: interrupted; finished results are kept in {work}/; run the same "
+                                "command with --resume to continue") from None
 
 
 def _failed_line(table, out_target) -> str:
@@ -401,7 +414,7 @@ def run_fit(args) -> int:
             shutil.rmtree(work, ignore_errors=True)
         print(f"tenscell fit-population: {_failed_line(t, out.target)}", file=sys.stderr)
         return 1
-    with out as d:
+    with _resume_hint(work, "tenscell fit-population"), out as d:  # every record is kept until the set is written
         result.write(d, truth=truth)
     shutil.rmtree(work, ignore_errors=True)
     print(f"tenscell fit-population: {len(t)} cells, {n_ok} fitted ({int(t['converged'].sum())} converged), "
@@ -688,8 +701,8 @@ def run_study(args) -> int:
     # everything read from the parts is read before they move into the output set
     medians = result.medians() if result.kind == "sweep" else None
     report = study_markdown(result)
-    with out as d:
-        (work / PARTS).rename(d / PARTS)
+    with _resume_hint(work, "tenscell large-study"), out as d:
+        _link_tree(work / PARTS, d / PARTS)  # linked, not moved: an interrupt here leaves the parts to --resume
         shutil.copy2(work / "study.json", d / "study.json")
         write_json(d / "summary.json", result.summary)
         if medians is not None:
@@ -699,6 +712,19 @@ def run_study(args) -> int:
     print(f"tenscell large-study {args.study}: {result.n_rows} rows in {result.n_parts} parts; "
           f"{result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0
+
+
+def _link_tree(source: Path, target: Path) -> None:
+    """``target`` a copy of the directory ``source`` made of hard links (copies where the file system has none)."""
+    import shutil
+
+    def link(src, dst):
+        try:
+            os.link(src, dst)
+        except OSError:
+            shutil.copy2(src, dst)
+
+    shutil.copytree(source, target, copy_function=link)
 
 
 def _notifier(command: str):
