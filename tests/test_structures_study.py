@@ -21,6 +21,10 @@ def test_the_study_follows_the_protocol_and_plans_every_fit():
     assert warm.needs == ("6-strut paper cell/springpot-alpha-family+visc/free/seed 0",
                           "6-strut paper cell/springpot-alpha-family+visc/free/seed 1")
     assert STUDY.plan({"anchors": ["exact"], "structures": ["6-strut paper cell"]}).count() == len(MECHANISMS)
+    # a heavy structure: the free fit from one seed, each anchored fit warm only (one start)
+    heavy = STUDY.plan({"structures": ["30-strut sphere"], "mechanisms": [MECHANISMS[0]]})
+    assert [t.key.split("/", 2)[2] for t in heavy.tasks] == ["free/seed 0", "×/÷1.5/warm", "exact/warm"]
+    assert heavy.tasks[1].args[-1]["starts"] == 1
 
 
 @pytest.mark.parametrize("options, match", [

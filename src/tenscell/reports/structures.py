@@ -25,8 +25,9 @@ def structures_markdown(study) -> str:
            f"Data: {', '.join(study.sources)}. Each mechanism is fitted on each structure free, with the model's "
            "physical prestress σ (the tendons' virial stress Σ T·l/(3V), V the hull of the nodes; "
            "docs/conventions.md) within ×/÷1.5 of the measured prestress, and with σ equal to it. The free fit runs "
-           "from several seeds, each anchored fit from the best free fit (warm) and from a fresh seed; the band is "
-           "the worse of the two RMS over every fit whose cost lies within 10 % of the best.", "",
+           "from several seeds, each anchored fit from the best free fit (warm) and from a fresh seed (the 30-strut "
+           "sphere and the lattice, whose fits cost 10–50 times the paper cell's: one free seed, anchored fits warm "
+           "only); the band is the worse of the two RMS over every fit whose cost lies within 10 % of the best.", "",
            f"**{check.label}: {'met' if check.met else 'not met'}.** {check.detail}", ""]
     out += ["## Structures ranked", "",
             "Each structure's best mechanism with at most 8 free parameters (all of them when none has so few), "

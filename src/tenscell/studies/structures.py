@@ -8,6 +8,8 @@ of :data:`STRUCTURES` three times over: free, with the model's physical prestres
 
 * the free fit from several seeds; each anchored fit from the best free fit (a warm start, s moved into the anchor's
   window) and from a fresh seed;
+* the 30-strut sphere and the lattice, whose fits cost 10–50 times the paper cell's (:data:`HEAVY`), run the free
+  fit from one seed and each anchored fit warm only;
 * the table gives each (structure, mechanism, anchor) its best fit and the **band** of the RMS over every fit whose
   cost lies within 10 % of the best (:data:`BAND`): the fits the data cannot tell apart.
 
@@ -256,6 +258,9 @@ def _key(structure, mechanism, anchor, start) -> str:
     return f"{structure}/{mechanism}/{anchor}/{start}"
 
 
+#: a structure whose fits weigh this much or more (relative to the paper cell's) runs fewer of them
+#: (:func:`_structure_tasks`)
+HEAVY = 4.0
 #: relative cost of one fit on each structure (the paper cell: 1), for the estimate before the run
 _WEIGHT = {"6-strut paper cell": 1.0, "6-strut, no IFs": 0.3, "6-strut + nucleus": 2.0, "6-strut, elastic struts": 1.5,
            "12-strut sphere": 1.5, "30-strut sphere": 12.0, "lattice 2×1×1": 4.0}
@@ -267,6 +272,33 @@ def _check_choice(what: str, given, allowed) -> tuple:
     if bad or not given:
         raise ValueError(f"{what} must be a non-empty selection of {', '.join(allowed)}; got {bad[0] if bad else given!r}")
     return given
+
+
+def _structure_tasks(st, mechanisms, anchors, seeds, datasets, search) -> list[Task]:
+    """The fits of one structure: per mechanism the free fit from each seed, each anchored fit warm (from the free
+    fits) and fresh. A heavy structure (:data:`HEAVY`) runs the free fit from the first seed and each anchored fit
+    warm only, with one start: its fits cost 10–50 times the paper cell's."""
+    w = _WEIGHT.get(st, 1.0)
+    heavy = w >= HEAVY and "free" in anchors
+    seeds = seeds[:1] if heavy else seeds
+    warm_search = {**search, "starts": 1} if heavy else search
+    tasks = []
+    for mech in mechanisms:
+        free = [_key(st, mech, "free", f"seed {s}") for s in seeds]
+        if "free" in anchors:
+            tasks += [Task(k, "fit", fit_task, (st, mech, "free", s, datasets, search), weight=w)
+                      for k, s in zip(free, seeds)]
+        for a in anchors:
+            if a == "free":
+                continue
+            if "free" in anchors:
+                tasks.append(Task(_key(st, mech, a, "warm"), "fit", fit_task,
+                                  (st, mech, a, None, datasets, warm_search), needs=tuple(free),
+                                  weight=w / search["starts"] if heavy else w))
+            if not heavy:
+                tasks.append(Task(_key(st, mech, a, f"seed {seeds[0]}"), "fit", fit_task,
+                                  (st, mech, a, seeds[0], datasets, search), weight=w))
+    return tasks
 
 
 class StructuresStudy:
@@ -295,20 +327,7 @@ class StructuresStudy:
         search = {**SEARCH, **dict(opts.get("search") or {})}
         tasks = []
         for st in structures:
-            w = _WEIGHT.get(st, 1.0)
-            for mech in mechanisms:
-                free = [_key(st, mech, "free", f"seed {s}") for s in seeds]
-                if "free" in anchors:
-                    tasks += [Task(k, "fit", fit_task, (st, mech, "free", s, datasets, search), weight=w)
-                              for k, s in zip(free, seeds)]
-                for a in anchors:
-                    if a == "free":
-                        continue
-                    if "free" in anchors:
-                        tasks.append(Task(_key(st, mech, a, "warm"), "fit", fit_task,
-                                          (st, mech, a, None, datasets, search), needs=tuple(free), weight=w))
-                    tasks.append(Task(_key(st, mech, a, f"seed {seeds[0]}"), "fit", fit_task,
-                                      (st, mech, a, seeds[0], datasets, search), weight=w))
+            tasks += _structure_tasks(st, mechanisms, anchors, seeds, datasets, search)
         return Plan(study=self.name, options={"datasets": datasets, "structures": structures,
                                               "mechanisms": mechanisms, "anchors": anchors, "seeds": seeds,
                                               "search": search}, tasks=tuple(tasks))
