@@ -102,3 +102,7 @@ __all__ = [
     "profile_intervals",
     "profile_parameter",
 ]
+
+from .._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home
