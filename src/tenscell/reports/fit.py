@@ -17,7 +17,7 @@ import numpy as np
 
 from ..fitting.prestress import CELL_ELASTICITY
 from ..fitting.models.voigt import FitProblem
-from ..fitting.records import noise_rms
+from ..fitting.records import STATUSES, noise_rms
 from ..fitting.result import FitResult
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
@@ -67,7 +67,7 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
     """What was fitted to what, the verdict, the search."""
     pr = result.problem
     noise = noise_rms(result.datasets)
-    verdict = "**converged**" if result.tolerance_met else "**NOT converged**"
+    verdict = f"**{result.verdict}** ({STATUSES[result.status]})"
     if result.converged and not result.tolerance_met:
         # the data say how well they can be fitted: a fit inside their noise has nothing left to explain
         verdict = ("**inside the data's noise** (the optimizer's tolerance is not met, but every data set that misses "
@@ -97,9 +97,24 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
         + (f" (the tolerance was first met after {result.time_to_tolerance_s:.2f} s)"
            if result.time_to_tolerance_s is not None else " (the tolerance was never met)")
         + f"; {result.n_evaluations} model evaluations.",
+        criteria_line(result),
         "",
     ]
     return lines
+
+
+def criteria_line(result: FitResult) -> str:
+    """The fit's AIC and BIC, how they count σ, and lmfit's values of the same residuals beside them."""
+    aic, bic = result.information_criteria()
+    aic_l, bic_l = result.information_criteria_lmfit()
+    k = result.problem.n_model_parameters
+    counted = (f"k = {k} parameters and the noise σ, estimated from the residuals (−2 ln L = n ln(2π RSS/n) + n)"
+               if not result.sigma_known else f"k = {k} parameters; σ from the data's standard deviations")
+    return (f"- AIC {num(aic, 5)}, BIC {num(bic, 5)} ({counted}; n = {result.problem.n_residuals} residuals). "
+            f"In lmfit's convention (n ln(χ²/n) + 2k, + k ln n; σ not counted): AIC {num(aic_l, 5)}, BIC "
+            f"{num(bic_l, 5)}. Differences between models fitted to the same data are what matters; "
+            + ("they agree in both conventions." if not result.sigma_known else
+               "with stated standard deviations the two conventions can rank models differently."))
 
 
 def section_datasets(result: FitResult, baseline=None) -> list[str]:
