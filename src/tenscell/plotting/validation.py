@@ -18,7 +18,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from matplotlib.axes import Axes
 
-from ._style import legend_below, new_axes, new_panels, styled, wrap
+from ._style import figure_of, legend_below, new_axes, new_panels, styled, wrap
 
 __all__ = ["heldout_bands", "heldout_bands_figure", "population_cells", "population_cells_figure", "slope_scatter",
            "cell_slopes_figure", "validation_figures", "LINE_COLORS"]
@@ -94,7 +94,7 @@ def heldout_bands_figure(models: Sequence[str], low, high, best=None, *, columns
                          limit: float | None = None, reference: str | None = None, title: str | None = None) -> Axes:
     """:func:`heldout_bands` on a new figure, its legend below (arguments as there)."""
     ax = heldout_bands(models, low, high, best, columns=columns, limit=limit, reference=reference)
-    fig = ax.figure
+    fig = figure_of(ax)
     if title:
         fig.suptitle(wrap(title, 0.95 * fig.get_figwidth()), fontsize="medium")
     legend_below([ax])
