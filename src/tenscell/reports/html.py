@@ -20,7 +20,7 @@ from ..fitting.records import STATUSES
 from ._format import num
 
 __all__ = ["fit_html", "data_html", "frequency_response_html", "fitted_model_html", "comparison_html",
-           "population_html", "ensemble_html", "html_table"]
+           "population_html", "ensemble_html", "structure_html", "html_table"]
 
 #: the one inline style of every table (notebook themes style the rest)
 _TABLE = 'style="border-collapse: collapse; margin: 0.3em 0"'
@@ -273,3 +273,17 @@ def ensemble_html(result) -> str:
     return _div(f"EnsembleResult: {result.mechanism}", _pairs(rows),
                 _p("One cell of this mechanism differs from the mean by about the spread; every point's mean, sd and "
                    "5–95 % band: .to_dataframe()."))
+
+
+# ------------------------------------------------------------------------------------------------
+# structures
+# ------------------------------------------------------------------------------------------------
+def structure_html(structure) -> str:
+    """A :class:`~tenscell.model.Structure` or a :class:`~tenscell.model.Cell`: what its ``repr`` says, then the
+    interactive 3D view (:func:`tenscell.plotting.interactive.view_html`: plotly, or the static view with the
+    command that installs it)."""
+    from ..plotting.interactive import view_html
+
+    head, *lines = repr(structure).splitlines()
+    facts = "<ul>" + "".join(f"<li>{escape(line.strip())}</li>" for line in lines) + "</ul>"
+    return _div(head.strip("<>"), facts, view_html(structure))
