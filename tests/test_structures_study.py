@@ -95,3 +95,15 @@ def test_a_small_run():
 def test_sigma_scale_of_every_structure():
     for name in STRUCTURES:
         assert virial_prestress(structure_cell(name)).sigma_per_P > 0, name
+
+
+def test_a_looser_anchor_fitting_worse_than_a_tighter_one_is_marked():
+    from tenscell.studies.structures import _mark_unconverged
+
+    rows = [{"anchor": "free", "cost": 2.0}, {"anchor": "×/÷1.5", "cost": 1.0}, {"anchor": "exact", "cost": 1.5}]
+    _mark_unconverged(rows, nested=True)
+    assert [r["worse_than_tighter"] for r in rows] == [True, False, False]
+    rows = [{"anchor": "free", "cost": 2.0, "worse_than_tighter": False}, {"anchor": "exact", "cost": 1.0,
+                                                                          "worse_than_tighter": False}]
+    _mark_unconverged(rows, nested=False)  # elastic struts: the bounds do not nest
+    assert not any(r["worse_than_tighter"] for r in rows)

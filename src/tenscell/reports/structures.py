@@ -43,11 +43,15 @@ def structures_markdown(study) -> str:
     for r in t.records():
         rows.append((r["structure"], r["mechanism"], r["anchor"], r["n_free"], *(_n(r[c]) for c in rms_cols),
                      _band(r), f"{r['fits_in_band']}/{r['fits']}", _n(r["sigma_over_measured"], 3), _n(r["bic"], 4),
-                     r["at_bound"] or "", r["errors"] or ""))
+                     r["at_bound"] or "", "worse than a tighter σ: not converged" if r["worse_than_tighter"] else "",
+                     r["errors"] or ""))
     head = ("structure", "mechanism", "σ", "free", *(f"RMS {c[4:-8]}" for c in rms_cols), "band (worse RMS)",
-            "in band", "σ/measured", "BIC", "at a bound", "failed")
+            "in band", "σ/measured", "BIC", "at a bound", "search", "failed")
     out += [table(head, rows), ""]
-    out += [f"CPU: {study.cpu_s:.0f} s over {len(study.records)} fits (each measured in its worker).", "",
+    out += ["A row marked *not converged* fits worse than the same structure and mechanism under a tighter σ (whose "
+            "fits are fits of the looser problem too): its search stopped above its optimum, which is at most the "
+            "tighter row's RMS.", "",
+            f"CPU: {study.cpu_s:.0f} s over {len(study.records)} fits (each measured in its worker).", "",
             "*What this does not show*: σ is one continuum reading of the structure's member forces, compared with a "
             "traction-based prestress that sees only the stress the substrate balances; a structure that fits at the "
             "anchor is consistent with the measured prestress, not shown to carry it. Where members carry "
