@@ -17,6 +17,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from ._style import figure_of, legend_below, new_axes, new_panels, styled, wrap
 
@@ -156,6 +157,11 @@ def population_cells(measured_stiffness, measured_exponent, model_stiffness, mod
             ax.plot(10.0 ** xs, fitted[1] + fitted[0] * xs, "-", color=style["color"], lw=1.3)
             slopes.append(f"{name} {fitted[0]:+.3f}")
     ax.set_xscale("log")
+    # 1-2-5 ticks in plain numbers: a population spans about a decade, where 10^n ticks alone say little and
+    # matplotlib's minor labels overlap
+    ax.xaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+    ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("stiffness k (Pa)")
     ax.set_ylabel("exponent α")
     head = f"{title}\n" if title else ""
