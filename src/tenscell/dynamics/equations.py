@@ -275,7 +275,14 @@ class EquationsOfMotion:
                 raise SimulationError(f"the constrained damping system is singular at t={t:.6g} s")
             return ("lu", lu)
         try:
-            return ("chol", scipy.linalg.cho_factor(C, lower=True, check_finite=False))
+            chol = scipy.linalg.cho_factor(C, lower=True, check_finite=False)
+            pivots = np.abs(np.diag(chol[0]))
+            # the same rule as the constrained system's LU above, on the squared pivots: a C(q) singular in exact
+            # arithmetic (an undamped part) factors on some BLAS kernels with a pivot of rounding size, and the
+            # integration would only meet it later
+            if not np.all(np.isfinite(pivots)) or pivots.min() ** 2 <= 1e-14 * pivots.max() ** 2:
+                raise np.linalg.LinAlgError("a pivot of rounding size")
+            return ("chol", chol)
         except (np.linalg.LinAlgError, ValueError):
             slack = np.flatnonzero(~active & self.cable).tolist()
             raise SimulationError(

@@ -8,6 +8,7 @@ import warnings
 import numpy as np
 
 from .._checks import positive_scalar
+from .._deprecated import REMOVED_IN, SINCE
 from .._errors import CapabilityError
 from ..io.thinning import DEFAULT_MAX_POINTS, bin_datasets
 from .models import get_model
@@ -125,7 +126,8 @@ def _spec(model, voigt_options: dict):
     if not voigt_options:
         return spec
     named = ", ".join(f"{k}=" for k in voigt_options)
-    warnings.warn(f"tenscell.fit({named}) is deprecated: the Voigt cell's options are its own, "
+    warnings.warn(f"tenscell.fit({named}) is deprecated (since {SINCE}, removed in {REMOVED_IN}): the Voigt cell's "
+                  "options are its own, "
                   f"fit(data, model=VoigtModel({named.replace('=', '=...')})) (tenscell.fitting.VoigtModel)",
                   DeprecationWarning, stacklevel=3)
     if not spec.capabilities.voigt_options:  # a default value was never refused with another model
