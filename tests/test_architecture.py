@@ -130,6 +130,8 @@ DYNAMIC_IMPORTS: dict[tuple[str, str], str] = {
                                    "the caller)",
     ("_optional", "require"): "optional third-party dependencies by name (never a tenscell module), with the "
                               "command that installs a missing one",
+    ("_deprecated", "moved"): "the new home of a name of the last release that moved (MOVED): imported only when "
+                              "the old name is used, with its DeprecationWarning; removed with the shims",
 }
 
 #: what other work in progress will remove, each with who removes it; a test fails once an entry has gone, so

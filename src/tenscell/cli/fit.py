@@ -61,7 +61,8 @@ BUNDLED_FREQUENCY_PRESTRESS_PA = 1000.0
 
 def register(sub) -> None:
     p = sub.add_parser(
-        "fit", help="fit the tensegrity model to measured G', G'' or creep J(t) (CSV; several files: one joint fit)",
+        "fit", help="fit the tensegrity model to measured G', G'', creep J(t) or relaxation G(t) (CSV; several files: "
+                    "one joint fit)",
         description="Fit tendon stiffnesses, damping, prestress and strut length so that the model's G', G'' "
                     "match files of measured moduli (frequency sweep, prestress sweep or |G|/phase) or creep "
                     "compliance: tenscell's CSV, TA TRIOS and Anton Paar RheoCompass text exports, or CSV/TSV/Excel "
@@ -75,7 +76,8 @@ def register(sub) -> None:
                     "Exit status 0 if every data "
                     "set's RMS of the log10 errors reached --tolerance or lies inside the data's own noise (their "
                     "sd columns), 1 if not, 2 for bad input.")
-    p.add_argument("data", nargs="+", help="file(s) of measured moduli or creep compliance, or bundled:NAME")
+    p.add_argument("data", nargs="+", help="file(s) of measured moduli, creep compliance or stress relaxation, or "
+                                           "bundled:NAME")
     p.add_argument("--prestress", action="append", type=stated_prestress, metavar="FILE=PA",
                    help="the prestress (Pa) at which the data in FILE were measured (repeatable)")
     p.add_argument("--tendons", choices=TENDON_MODES, default="per-tendon",
