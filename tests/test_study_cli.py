@@ -26,8 +26,8 @@ def test_every_study_follows_the_protocol_and_calibrates_every_kind_of_its_tasks
     assert set(plan.kinds()) <= probed, f"{name}: no probe for {set(plan.kinds()) - probed}"
     assert plan.figures > 0 and plan.tasks
     # the estimate counts every task of the plan: each kind's rate doubled doubles its share of the estimate
-    rates = {k: 1.0 for k in probed} | {FIGURE: 1.0}
-    assert plan.estimate_cpu({k: 2.0 for k in probed}) == pytest.approx(2 * plan.estimate_cpu(rates))
+    rates = dict.fromkeys(probed, 1.0) | {FIGURE: 1.0}
+    assert plan.estimate_cpu(dict.fromkeys(probed, 2.0)) == pytest.approx(2 * plan.estimate_cpu(rates))
 
 
 def test_the_parser_lists_every_study_and_loads_none():

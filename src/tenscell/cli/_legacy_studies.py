@@ -13,7 +13,7 @@ from pathlib import Path
 STUDY_ENSEMBLE_K = 1000
 
 #: the options each of these studies takes (dest -> default when not given), as the protocol's studies declare theirs
-LEGACY_OPTIONS = {
+LEGACY_OPTIONS: dict[str, dict] = {
     "mechanisms": {"data": (), "seed": 0, "starts": 4, "jobs": None, "tolerance": 0.01, "mechanisms": None,
                    "hops": 10, "ensemble": None, "workers": None, "scheduler": None},
     "real-cells": {"seed": 0, "starts": None, "jobs": None, "mechanisms": None, "hops": None, "data_dir": None,

@@ -100,12 +100,14 @@ def register(sub) -> None:
                    help="refit the model and its structure-free baselines (its own formula, the structural-damping "
                         "law with and without a Newtonian term) on held-out splits of the data (frequency sweeps cut "
                         "at 1, 10, 30 Hz; prestress sweeps without some prestresses) and rank them in the report by "
-                        "their held-out error; auto: for every model but the 36-parameter per-tendon cell")
+                        "their held-out error; auto: when it costs at most a quarter of the fit's own CPU, else the "
+                        "line says what it would cost")
     p.add_argument("--profile", choices=("auto", "yes", "no"), default="auto",
                    help="profile-likelihood intervals of the parameters the local analysis cannot bound (at a bound, "
                         "undetermined, one-sided) and of a mechanism's held fields: each held at 9 values over its "
                         "bounds while the others are refitted (about 15-20 refits per parameter), in the report and "
-                        "fit.json; auto: for models with at most 12 free parameters")
+                        "fit.json; auto: for models with at most 12 free parameters, when it costs at most a quarter of "
+                        "the fit's own CPU, else the line says what it would cost")
     p.add_argument("--holdout", type=_holdout, metavar="FMIN:FMAX", default=None,
                    help="train on the points outside FMIN..FMAX Hz and report every model's error on the held-out "
                         "points (one frequency sweep)")
@@ -525,9 +527,11 @@ def run(args) -> int:
     with background() as worker:
         # while the fit runs, the worker fits the baseline and imports the plotting stack; then it draws the
         # figure while this process writes the report: the figure is most of the time after the fit
+        cpu = time.process_time()
         result, baseline = run_fit(datasets, spec, args.starts, args.seed, args.jobs, args.tolerance,
                                    args.baseline_starts, worker=worker, warm_plotting=True, **space)
-        _profile(args, result)
+        rate = (time.process_time() - cpu) / max(result.n_evaluations, 1)  # CPU s per evaluation of the fit
+        _profile(args, result, rate)
         timing = clock.timing(result)
         timing["outputs_started_s"] = clock.now()
         # the report's ± need one model evaluation per parameter: half of them in the worker, before the figure
@@ -536,7 +540,7 @@ def run(args) -> int:
         from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
-        validation = _validation(args, spec, datasets, space)
+        validation = _validation(args, spec, datasets, space, rate * result.n_evaluations)
         outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure,
                               validation=validation)
     ensemble = _ensemble(args, result, datasets)
@@ -554,12 +558,20 @@ def run(args) -> int:
 
 #: free parameters above which --validate auto skips the refits (the per-tendon cell: 36 parameters per refit)
 VALIDATE_AUTO_MAX_PARAMETERS = 12
+#: --validate auto and --profile auto run their refits when expected to cost at most this share of the fit's CPU
+AUTO_SHARE = 0.25
+#: evaluations of one profile refit (warm-started from its neighbour on the grid), and refits per parameter
+#: (9 grid points, 3 refinements per side, the bracket's ends), as measured on the bundled pair
+PROFILE_REFIT_EVALUATIONS = 30
+PROFILE_REFITS = 19
 
 
-def _validation(args, spec, datasets, space):
-    """The model and its structure-free baselines out of sample (``--validate``), or None."""
+def _validation(args, spec, datasets, space, fit_cpu: float):
+    """The model and its structure-free baselines out of sample (``--validate``), or None. ``fit_cpu``: the fit's
+    own CPU seconds, against which auto weighs the refits (each split: the model refitted with half the fit's
+    starts, each baseline formula for about a tenth of that)."""
     from .._progress import stage
-    from ..fitting.validation import compare_out_of_sample, standard_baselines
+    from ..fitting.validation import compare_out_of_sample, splits, standard_baselines
 
     if args.validate == "no":
         return None
@@ -567,17 +579,33 @@ def _validation(args, spec, datasets, space):
         stage(f"out of sample: not run for {spec.name} ({VALIDATE_AUTO_MAX_PARAMETERS}+ parameters per refit; "
               "--validate yes runs it)")
         return None
+    n = len(splits(datasets))
+    cost = n * fit_cpu * (2 / args.starts) * (1 + 0.1 * (1 + len(standard_baselines(datasets))))
+    if args.validate == "auto" and cost > AUTO_SHARE * fit_cpu:
+        stage(f"out of sample: not run by default ({n} splits, refits of about {cost:.0f} s of CPU against "
+              f"{fit_cpu:.1f} s for the fit; --validate yes runs them)")
+        return None
     validation = compare_out_of_sample(spec, datasets, standard_baselines(datasets), model_options=space,
                                        notify=stage, starts=2, seed=args.seed, hops=8, patience=3,
                                        tolerance=args.tolerance, max_points=None)
     return validation if validation.splits else None  # no split leaves enough points to fit every model
 
 
-def _profile(args, result) -> None:
-    """``--profile``: the profile intervals of the parameters that need them, kept on the result (or none)."""
+def _profile(args, result, rate: float) -> None:
+    """``--profile``: the profile intervals of the parameters that need them, kept on the result (or none).
+    ``rate``: CPU seconds per evaluation of the fit, by which auto weighs the refits against the fit."""
     if args.profile == "no":
         return
     from .._progress import stage
+    from ..fitting.profile import MAX_FREE, needs_profile
+
+    if args.profile == "auto" and result.problem.n_free <= MAX_FREE:
+        needed = needs_profile(result)
+        cost = len(needed) * PROFILE_REFITS * PROFILE_REFIT_EVALUATIONS * rate
+        if needed and cost > AUTO_SHARE * rate * result.n_evaluations:
+            stage(f"profile: not run by default ({', '.join(n for n, _ in needed)}: about {cost:.1f} s of CPU "
+                  f"against {rate * result.n_evaluations:.1f} s for the fit; --profile yes runs it)")
+            return
 
     profile = result.compute_profile("needed" if args.profile == "yes" else "auto",
                                      notify=lambda line: stage(line))

@@ -239,6 +239,12 @@ class Problem:
         """Penalty residuals and their Jacobian (none by default)."""
         return np.zeros(0), (np.zeros((0, self.n_free)) if jac else None)
 
+    def _evaluate_cells(self, cells, phis, jac: bool) -> tuple:
+        """What :meth:`_evaluate_constrained` gives for each of ``cells`` (problems of this one's model and layout,
+        e.g. a population's) at its own log-parameters ``phis[c]``: one by one here; a model whose kernel evaluates
+        many cells at once overrides it (:func:`tenscell.fitting.models.mechanism_kernel.evaluate_cells`)."""
+        return tuple(pb._evaluate_constrained(phi, jac) for pb, phi in zip(cells, phis))
+
     def residuals(self, theta) -> np.ndarray:
         """Weighted data residuals ``w·(log10 model − log10 data)`` at free log-parameters ``theta``."""
         return self._residuals_from(self._evaluate_constrained(self.full(theta), jac=False))

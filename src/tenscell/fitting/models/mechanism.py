@@ -49,7 +49,8 @@ from ... import laws as _laws
 from ...io.data import DataError
 from ...model.equilibrium import Cell
 from .heterogeneity import DISTRIBUTIONS, assignments
-from .mechanism_kernel import EvaluationPlan, MechanismEvaluation, evaluate, evaluate_planned, law_values, plan_points
+from .mechanism_kernel import (EvaluationPlan, MechanismEvaluation, evaluate, evaluate_cells, evaluate_planned, law_values,
+                               plan_points)
 from ..parameters import bounds_by_name, fixed_by_name, _family_groups, _is_creep, _prestress_layout, as_datasets, default_bounds
 from ..._results import format_repr
 from ...linear.dynamic import DynamicKernel, dynamic_kernel
@@ -137,6 +138,9 @@ class Mechanism(FitModel):
     seed : int
         Seed of the assignments.
     description : str
+    multimodal : bool
+        Its fits have several basins on typical data: the search keeps hopping after two starts agree
+        (:class:`~tenscell.fitting.models.base.Capabilities`; the catalog marks the ones measured so).
     """
 
     name: str
@@ -146,6 +150,7 @@ class Mechanism(FitModel):
     assignments: int = 8
     seed: int = 0
     description: str = ""
+    multimodal: bool = False
 
     def __post_init__(self):
         names = [f.law_parameter for f in self.fields]
@@ -168,7 +173,7 @@ class Mechanism(FitModel):
     def capabilities(self) -> Capabilities:
         """Moduli; the structure's share of dG*/dP; held fields to profile; its lumped formula."""
         return Capabilities(structure_shares=True, profile_fields=any(f.layout == "fixed" for f in self.fields),
-                            lumped_terms=True, heterogeneous=self.heterogeneous)
+                            lumped_terms=True, heterogeneous=self.heterogeneous, multimodal=self.multimodal)
 
     @property
     def group(self) -> str:
@@ -330,6 +335,9 @@ class MechanismProblem(Problem):
 
     def _evaluate_constrained(self, phi, jac: bool):
         return self._at_data(phi, jac)
+
+    def _evaluate_cells(self, cells, phis, jac: bool) -> tuple:
+        return evaluate_cells(cells, phis, jac)  # many cells in one batched solve (a population)
 
     def _residuals_from(self, out) -> np.ndarray:
         if out is None or not (np.all(out.G.real > 0) and np.all(out.G.imag > 0)):
