@@ -268,7 +268,10 @@ class Problem:
 
     def dataset_rms(self, theta) -> np.ndarray:
         """RMS of the unweighted log10 residuals of each data set (decades), shape (n_datasets,)."""
-        r = self.residuals(theta) / self.weights
+        return self.dataset_rms_of(self.residuals(theta) / self.weights)
+
+    def dataset_rms_of(self, r) -> np.ndarray:
+        """:meth:`dataset_rms` of unweighted log10 residuals ``r`` already evaluated (decades)."""
         return np.array([math.sqrt(float(np.mean(r[self.rows(k)] ** 2))) for k in range(self.n_datasets)])
 
     # -- the search's moves ---------------------------------------------------------------------
@@ -370,12 +373,13 @@ def draw_start(problem: Problem, rng: np.random.Generator, scalable_kinds, candi
     lo, hi = problem.lower, problem.upper
     mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
     scal = np.array([k in scalable_kinds or k in ("s", "P") for k in problem.kinds]) & problem.free
-    best = None
-    for _ in range(candidates):
-        phi = problem.fixed_log.copy()
+    phis = np.tile(problem.fixed_log, (candidates, 1))
+    for phi in phis:  # the draws in the order they were always drawn, then evaluated together
         draw = mid + rng.uniform(-0.6, 0.6, mid.size) * half
         phi[problem.free] = draw[problem.free]
-        score = centred_start(problem, problem._evaluate_constrained(phi, jac=False), phi, scal)
+    best = None
+    for phi, out in zip(phis, problem._evaluate_cells((problem,) * candidates, phis, jac=False)):
+        score = centred_start(problem, out, phi, scal)
         if score is None:
             continue
         if best is None or score < best[0]:

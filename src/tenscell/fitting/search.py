@@ -238,11 +238,13 @@ def local_fit(problem: Problem, theta, max_nfev: int):
     return _least_squares(problem, theta, max_nfev)
 
 
-def _assess(problem: Problem, theta, tolerances) -> tuple[float, float, float, bool]:
+def _assess(problem: Problem, theta, tolerances, fun) -> tuple[float, float, float, bool]:
     """(rms over all data, worst data set's rms, worst data set's rms over its tolerance, penalties within 1 % of
-    their bound)."""
-    per_set = problem.dataset_rms(theta)
-    return problem.rms(theta), float(per_set.max()), float(np.max(per_set / tolerances)), problem.feasible(theta)
+    their bound), from the residuals ``fun`` of the run that ended at ``theta`` (data, then penalties)."""
+    r = np.asarray(fun)[: problem.n_residuals] / problem.weights
+    per_set = problem.dataset_rms_of(r)
+    rms = float(np.sqrt(np.mean(r**2)))
+    return rms, float(per_set.max()), float(np.max(per_set / tolerances)), problem.feasible(theta)
 
 
 def _step(problem: Problem, chain: _Chain, settings: _Settings, max_nfev: int) -> _Chain:
@@ -263,7 +265,7 @@ def _step(problem: Problem, chain: _Chain, settings: _Settings, max_nfev: int) -
         if not first:
             chain.hops += 1
         if first or res.cost < chain.cost:
-            rms, score, ratio, feasible = _assess(problem, theta, settings.tolerances)
+            rms, score, ratio, feasible = _assess(problem, theta, settings.tolerances, res.fun)
             if not first:
                 chain.stale = 0 if score < 0.95 * chain.score else chain.stale + 1
             chain.theta, chain.cost, chain.rms, chain.score, chain.feasible = theta, float(res.cost), rms, score, feasible
