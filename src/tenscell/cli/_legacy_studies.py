@@ -52,11 +52,8 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     log(written)
 
 
-#: model evaluations (residuals and Jacobian: one unit of a fit's work) one start of a mechanism's fit takes in
-#: the mechanisms study per basin-hopping move allowed (--hops + 1 least-squares runs at most), the median over the
-#: built-in mechanisms, and the per-tendon fit's (30 hops at least, polished 4x as long), both counted on the bundled
-#: data (bench/calibrate_study_cost.py prints them; 2 cores, load about 9)
-EVALUATIONS_PER_START_HOP = {"mechanism": 20.0, "voigt-per-tendon": 34.0}
+#: model evaluations per start and basin-hopping move, shared with `tenscell fit`'s estimate (defined in _cost)
+from ._cost import EVALUATIONS_PER_START_HOP  # noqa: E402
 
 
 def _cpu_per_call(fn, calls: int = 5) -> float:
