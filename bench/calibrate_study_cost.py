@@ -1,4 +1,4 @@
-"""The constants of `tenscell study mechanisms`' cost estimate (tenscell.cli.study.EVALUATIONS_PER_START_HOP).
+"""The constants of `tenscell study mechanisms`' cost estimate (tenscell.cli._legacy_studies.EVALUATIONS_PER_START_HOP).
 
 Fits every mechanism of the study to the bundled data with the study's search (4 starts, 10 hops, seed 0, one
 process), counts its model evaluations (residuals and Jacobian) per start and per allowed hop, and times one

@@ -120,7 +120,9 @@ def test_reproduce_fit_stage_runs_and_writes_every_file(tmp_path, monkeypatch):
     monkeypatch.setenv("TENSCELL_PROGRESS", "0")
     monkeypatch.setattr(reproduce, "FIT_SEARCH", {"starts": 1, "seed": 0, "jobs": 1, "tolerance": 1.0,
                                                   "baseline_starts": 1, "hops": 0})
-    monkeypatch.setattr(reproduce, "MECHANISM_SEARCH", {"starts": 1, "seed": 0, "hops": 0})
+    from tenscell.studies import leading
+
+    monkeypatch.setattr(leading, "SEARCH", {"starts": 1, "seed": 0, "hops": 0})
     said = []
     reproduce.reproduce_fit(tmp_path, said.append)
     for stem in ("fig4_prestress_fit", "fig5_frequency_fit", "fig5_frequency_fit_active_prestress",
@@ -128,4 +130,4 @@ def test_reproduce_fit_stage_runs_and_writes_every_file(tmp_path, monkeypatch):
         assert (tmp_path / f"{stem}.json").is_file() and (tmp_path / f"{stem}.png").is_file(), stem
         assert "<!DOCTYPE html>" in (tmp_path / f"{stem}.html").read_text(encoding="utf-8"), stem
     table = (tmp_path / "mechanisms_vs_per_tendon.md").read_text()
-    assert all(f"| {m} |" in table for m in reproduce.REPRODUCE_MECHANISMS)
+    assert all(f"| {m} |" in table for m in leading.MECHANISMS)

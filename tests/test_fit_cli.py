@@ -160,10 +160,10 @@ def test_fit_creep_file(tmp_path):
 
 
 def test_study_sensitivity_from_fit_takes_the_fitted_paper_cell(fit_json, tmp_path, capsys):
-    from tenscell.cli.study import _fitted_paper_cell
+    from tenscell.studies.sensitivity import paper_cell_of_fit
 
     path, result = fit_json
-    kw = _fitted_paper_cell(path)
+    kw = paper_cell_of_fit(path)
     assert kw["L"] == pytest.approx(result.model.L) and kw["P"] == pytest.approx(
         result.value("s") * np.median(result.data.prestress))
     np.testing.assert_array_equal(kw["EA"], result.model.EA)

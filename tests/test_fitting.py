@@ -436,7 +436,8 @@ def test_search_stops_when_the_starts_agree():
     from it reach the patience, long before each start has spent its own patience (4 × 6 moves)."""
     from tenscell.fitting.search import best_chain, run_search
 
-    chains, stop = run_search(_Toy(), starts=4, hops=30, patience=6, tolerance=1e-3, seed=0, progress=False)
+    chains, stop = run_search(_Toy(), starts=4, hops=30, patience=6, tolerance=1e-3, seed=0, progress=False,
+                              multimodal=True)
     assert stop.startswith("4 starts agree on the best fit") and "6 moves from it" in stop
     assert sum(ch.hops for ch in chains) == 6  # the round of first steps, then six moves: the rule's own count
     best = best_chain(chains)
@@ -449,11 +450,43 @@ def test_search_stops_at_its_plateau_and_says_so():
     from tenscell.fitting.search import run_search
 
     chains, stop = run_search(_Toy(undetermined=True), starts=4, hops=30, patience=6, tolerance=1e-3, seed=0,
-                              progress=False)
+                              progress=False, multimodal=False)
     assert stop.startswith("plateau") and "out of this search's reach" in stop
     assert not all(ch.finished for ch in chains)
     # the starts reached the same RMS at different c: agreement in RMS alone is not agreement
     assert np.ptp([ch.rms for ch in chains]) < 1e-9 and np.ptp([ch.theta[2] for ch in chains]) > 0.05
+
+
+def test_a_model_with_one_basin_stops_when_two_starts_agree_at_a_well_conditioned_optimum():
+    """Not multimodal: the first two starts reach the toy's one optimum, which is well conditioned, and the search
+    ends there — no basin hopping, the other starts never run; the same optimum as the hopping search."""
+    from tenscell.fitting.search import best_chain, run_search, well_conditioned
+
+    chains, stop = run_search(_Toy(), starts=4, hops=30, patience=6, tolerance=1e-3, seed=0, progress=False,
+                              multimodal=False)
+    assert stop.startswith("2 starts agree on a well-conditioned optimum")
+    assert sum(ch.hops for ch in chains) == 0 and [ch.theta is None for ch in chains] == [False, False, True, True]
+    np.testing.assert_allclose(best_chain(chains).theta, [1.1 / 3 + 2 / 3, 1.1 / 3 + 5 / 3, 0.5], atol=1e-7)
+    # the conditioning it asks: a parameter that moves no residual leaves the optimum undetermined
+    assert well_conditioned(_Toy(), best_chain(chains).theta)
+    assert not well_conditioned(_Toy(undetermined=True), best_chain(chains).theta)
+    # a parameter at its bound is determined by the bound
+    assert well_conditioned(_Toy(undetermined=True), np.array([1.0, 2.0, 5.0]))
+
+
+def test_a_move_that_comes_back_to_its_optimum_stops_there():
+    """A basin-hopping move whose run returns to the optimum it left ends at once, with that optimum, and counts as
+    a move that found nothing better: fewer evaluations than the full polish, the same answer."""
+    from tenscell.fitting import search
+
+    toy = _Toy()
+    theta, _, _ = search.local_fit(toy, np.zeros(3), 100)
+    cost = 0.5 * float(np.sum(toy.residuals(theta) ** 2))
+    back, res, nfev = search._least_squares(toy, theta + 0.01, 100, home=(theta, cost))
+    full, _, nfev_full = search._least_squares(toy, theta + 0.01, 100)
+    np.testing.assert_array_equal(back, theta)
+    assert res.cost == cost and nfev < nfev_full
+    np.testing.assert_allclose(full, theta, atol=1e-8)
 
 
 def test_stopping_rules_in_a_fit_depend_on_the_seed_only():

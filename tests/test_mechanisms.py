@@ -407,8 +407,8 @@ def test_mechanism_kernel_against_the_per_point_path(name, joint):
     pb = make_mechanism_problem(joint, get_model(name))
     theta = pb.initial_guess(np.random.default_rng(3))
     phi = pb.full(theta)
-    out = pb._evaluate_constrained(phi, jac=False)
-    assert out is not None and len(pb.plan.grids) == 2  # the prestress sweep at 0.1 Hz; the frequency sweep
+    out, at_times = pb._evaluate_constrained(phi, jac=False)  # the moduli at the data points; no time data
+    assert out is not None and at_times is None and len(pb.plan.grids) == 2  # the prestress sweep at 0.1 Hz; the frequency sweep
     P = pb._group_P(phi)[pb.group_index]
     eta = math.exp(phi[pb.eta_index]) if pb.eta_index is not None else 0.0
     K = out.G_assign.shape[0]

@@ -8,7 +8,7 @@ import pytest
 
 from tenscell.cli import main
 from tenscell.cli.fit import BUNDLED_FREQUENCY_PRESTRESS_PA
-from tenscell.cli.reproduce import MECHANISM_SEARCH, _same_fit_command
+from tenscell.studies.leading import SEARCH, fit_command
 from tenscell.fitting import RECOMMENDED, fit, get_model
 from tenscell.fitting.entry import prepare
 from tenscell.io.data import bundled
@@ -31,8 +31,8 @@ def test_a_stated_prestress_is_the_one_parameter_between_reproduce_and_the_study
 
 def test_the_printed_command_repeats_reproduces_fit(tmp_path, monkeypatch):
     monkeypatch.setenv("TENSCELL_PROGRESS", "0")
-    r = fit(_reproduce_data(), model=NAME, jobs=1, progress=False, **MECHANISM_SEARCH)
-    command = _same_fit_command(_reproduce_data(), NAME).replace("DIR", str(tmp_path / "fit"))
+    r = fit(_reproduce_data(), model=NAME, jobs=1, progress=False, **SEARCH)
+    command = fit_command(NAME, BUNDLED_FREQUENCY_PRESTRESS_PA).replace("DIR", str(tmp_path / "fit"))
     assert command.startswith("tenscell fit ") and f"--prestress bundled:fabry2001={BUNDLED_FREQUENCY_PRESTRESS_PA:g}" \
         in command
     assert main(command.split()[1:] + ["--jobs", "1"]) in (0, 1)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from tenscell.cli import main
-from tenscell.cli import study as study_cli
+from tenscell.cli import _legacy_studies as study_cli
 from tenscell.fitting.models.catalog import PER_TENDON_VOIGT
 from tenscell.io.data import bundled
 

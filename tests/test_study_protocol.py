@@ -91,3 +91,67 @@ def test_every_model_declares_its_capabilities():
     assert pop.per_cell and not pop.structure_shares
     with pytest.raises(ValueError, match="data_kinds"):
         Capabilities(data_kinds=frozenset({"stress"}))
+
+
+# ---- options, calibration and the estimate ------------------------------------------------------------------
+from tenscell.studies.protocol import FIGURE, Machine, calibrate, flag, study_options  # noqa: E402
+
+
+def test_a_study_takes_its_own_options_and_refuses_others_in_flag_syntax():
+    class S:
+        name, options = "s", {"draws": 200, "from_fit": None}
+
+    assert study_options(S(), {"draws": 3}) == {"draws": 3, "from_fit": None}
+    with pytest.raises(ValueError, match="--data-dir: study s takes no such option .*--draws, --from-fit"):
+        study_options(S(), {"data_dir": "x"})
+    assert flag("time_domain") == "--time-domain"
+
+
+def test_the_share_of_a_cpu_follows_fair_sharing():
+    quiet = Machine(cpus=2, others=0.0)
+    assert quiet.share(1) == 1.0 and quiet.share(2) == 1.0 and quiet.share(4) == 0.5
+    busy = Machine(cpus=2, others=6.0)
+    assert busy.share(1) == pytest.approx(2 / 7) and busy.share(2) == pytest.approx(0.25)
+
+
+def test_a_starved_calibration_implies_the_demand_of_the_others():
+    from tenscell._parallel import CpuUse
+
+    # a quarter of a CPU while 2 CPUs were all busy: fair sharing means 7 others wanted them
+    m = Machine.measure(CpuUse(wall_s=1.0, cpu_s=0.25, cpus=2, busy_elsewhere=1.75, source="/proc/stat"))
+    assert m.others == pytest.approx(7.0) and m.share(1) == pytest.approx(0.25)
+    # a whole CPU: only what the others used counts
+    m = Machine.measure(CpuUse(wall_s=1.0, cpu_s=1.0, cpus=2, busy_elsewhere=0.5, source="/proc/stat"))
+    assert m.others == pytest.approx(0.5)
+
+
+def test_the_wall_estimate_goes_wave_by_wave_over_the_workers():
+    tasks = [Task(f"f{i}", "fit", _square, (i,)) for i in range(4)] + [Task("c", "refit", _add, (), needs=("f0", "f1"),
+                                                                            weight=3.0)]
+    plan = Plan("demo", {}, tasks, jobs=2, figures=2.0)
+    rates = {"fit": 1.0, "refit": 2.0, FIGURE: 0.5}
+    # wave 1: four 1 s fits on two workers (2 s), wave 2: one 6 s refit, then two figure units in this process
+    assert plan.estimate_wall(rates) == pytest.approx(2.0 + 6.0 + 1.0)
+    # others keep 2 CPUs busy: two workers of ours get half a CPU each, one gets two thirds
+    assert plan.estimate_wall(rates, Machine(cpus=2, others=2.0)) == pytest.approx(4.0 + 9.0 + 1.5)
+    with pytest.raises(KeyError, match="refit"):
+        plan.estimate_wall({"fit": 1.0, FIGURE: 1.0})
+
+
+def _spin(n):
+    total = 0
+    for k in range(n):
+        total += k * k
+    return total
+
+
+def test_calibration_rates_are_cpu_per_unit_of_weight():
+    probe = Task("probe", "fit", _spin, (200_000,), weight=0.5)
+    plan = Plan("demo", {}, [Task("a", "fit", _spin, (400_000,))], calibration=[probe])
+    rates, machine = calibrate(plan)
+    # the task does twice the probe's work: one unit is twice the probe, so the probe's weight is 0.5
+    _, cpu, _ = __import__("tenscell.studies.protocol", fromlist=["_timed"])._timed(_spin, 400_000)
+    assert rates["fit"] == pytest.approx(cpu, rel=0.6)
+    assert 0 < machine.share(1) <= 1
+    with pytest.raises(ValueError, match="needs no other task"):
+        Plan("demo", {}, [], calibration=[Task("p", "fit", _add, (), needs=("a",))])

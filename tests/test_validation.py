@@ -75,7 +75,7 @@ def test_standard_baselines_follow_the_prestress():
 def test_the_fit_command_ranks_the_model_and_its_baselines_out_of_sample(tmp_path, capsys):
     out = tmp_path / "fit"
     code = cli_main(["fit", "bundled:fabry2001", "--model", "voigt-compact", "--starts", "1", "--tolerance", "1",
-                     "--out", str(out)])
+                     "--validate", "yes", "--out", str(out)])
     assert code in (0, 1)
     doc = json.loads((out / "fit.json").read_text())["out_of_sample"]
     names = {m["model"] for m in doc["models"]}
@@ -90,6 +90,13 @@ def test_the_fit_command_ranks_the_model_and_its_baselines_out_of_sample(tmp_pat
     assert cli_main(["fit", "bundled:fabry2001", "--model", "voigt-compact", "--starts", "1", "--tolerance", "1",
                      "--validate", "no", "--out", str(out2)]) in (0, 1)
     assert json.loads((out2 / "fit.json").read_text())["out_of_sample"] is None
+    # by default the refits run only when they cost at most a quarter of the fit: here the line says what they
+    # would cost and how to ask for them
+    out3 = tmp_path / "fit3"
+    assert cli_main(["fit", "bundled:fabry2001", "--model", "voigt-compact", "--starts", "1", "--tolerance", "1",
+                     "--out", str(out3)]) in (0, 1)
+    assert json.loads((out3 / "fit.json").read_text())["out_of_sample"] is None
+    assert "out of sample: not run by default" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("flag", ["--validate", "--validate=maybe"])

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Callable
 
 __all__ = ["Cost", "BUDGET_S", "EVALUATIONS_PER_START_HOP", "measure", "check", "announce", "duration", "size",
-           "total_memory"]
+           "total_memory", "estimate_plan"]
 
 #: model evaluations a fit takes per start and basin-hopping move allowed (--hops + 1 least-squares runs at most): the
 #: median over the built-in mechanisms, and the per-tendon fit's (30 hops at least, polished 4x as long), both counted
@@ -128,6 +128,43 @@ def announce(cost: Cost) -> None:
     from .._progress import stage
 
     stage(cost.line())
+
+
+def estimate_plan(plan) -> tuple[dict, float]:
+    """A study plan's estimate (:mod:`tenscell.studies.protocol`): its calibration run here (and one figure, when
+    the plan has figures), the wall time at the share of a CPU the machine gives now, announced in one line; a
+    plan beyond :data:`BUDGET_S` is refused naming the options that size it. Returns ``(rates, wall seconds)``
+    (NaN when a kind of task has no calibration: the line says the estimate comes with the first tasks)."""
+    import math
+
+    from ..studies.protocol import FIGURE, Task, calibrate, figure_probe
+
+    extra = (Task("one figure", FIGURE, figure_probe),) if plan.figures else ()
+    rates, machine = calibrate(plan, extra)
+    missing = sorted(k for k in plan.kinds() if k not in rates)
+    if missing:
+        from .._progress import stage
+
+        stage(f"no estimate before the first task of kind {missing[0]!r} has run ({len(plan.tasks)} tasks)")
+        return rates, math.nan
+    wall = plan.estimate_wall(rates, machine)
+    kinds = "; ".join(f"{_units(w)} × {duration(rates[k])} of CPU per {k}" for k, w in plan.kinds().items())
+    figures = f"; {_units(plan.figures)} × {duration(rates[FIGURE])} per {FIGURE} unit" if plan.figures else ""
+    workers = f", up to {plan.jobs} workers" if plan.jobs > 1 else ""
+    line = (f"estimated {duration(wall)} ({len(plan.tasks)} task(s): {kinds}{figures}; measured here, "
+            f"{machine.line()}{workers})")
+    if wall > BUDGET_S:
+        flags = ", ".join(plan.sized_by) or "the study's options"
+        raise ValueError(f"{plan.sized_by[0] if plan.sized_by else 'study ' + plan.study}: {line}; more than the "
+                         f"{duration(BUDGET_S)} one run may take: give smaller {flags}")
+    from .._progress import stage
+
+    stage(line)
+    return rates, wall
+
+
+def _units(w: float) -> str:
+    return f"{w:,.0f}" if w >= 10 or w == int(w) else f"{w:.2g}"
 
 
 def duration(seconds: float) -> str:

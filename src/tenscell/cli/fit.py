@@ -113,12 +113,14 @@ def register(sub) -> None:
                    help="refit the model and its structure-free baselines (its own formula, the structural-damping "
                         "law with and without a Newtonian term) on held-out splits of the data (frequency sweeps cut "
                         "at 1, 10, 30 Hz; prestress sweeps without some prestresses) and rank them in the report by "
-                        "their held-out error; auto: for every model but the 36-parameter per-tendon cell")
+                        "their held-out error; auto: when it costs at most a quarter of the fit's own CPU, else the "
+                        "line says what it would cost")
     p.add_argument("--profile", choices=("auto", "yes", "no"), default="auto",
                    help="profile-likelihood intervals of the parameters the local analysis cannot bound (at a bound, "
                         "undetermined, one-sided) and of a mechanism's held fields: each held at 9 values over its "
                         "bounds while the others are refitted (about 15-20 refits per parameter), in the report and "
-                        "fit.json; auto: for models with at most 12 free parameters")
+                        "fit.json; auto: for models with at most 12 free parameters, when it costs at most a quarter of "
+                        "the fit's own CPU, else the line says what it would cost")
     p.add_argument("--holdout", type=_holdout, metavar="FMIN:FMAX", default=None,
                    help="train on the points outside FMIN..FMAX Hz and report every model's error on the held-out "
                         "points (one frequency sweep)")
@@ -588,9 +590,11 @@ def run(args) -> int:
     with background() as worker:
         # while the fit runs, the worker fits the baseline and imports the plotting stack; then it draws the
         # figure while this process writes the report: the figure is most of the time after the fit
+        cpu = _cpu_s()
         result, baseline = run_fit(datasets, spec, args.starts, args.seed, args.jobs, args.tolerance,
                                    args.baseline_starts, worker=worker, warm_plotting=True, **space)
-        _profile(args, result)
+        fit_cpu = _cpu_s() - cpu  # its worker processes included (joined when the search ended)
+        _profile(args, result, fit_cpu)
         timing = clock.timing(result)
         timing["outputs_started_s"] = clock.now()
         # the report's ± need one model evaluation per parameter: half of them in the worker, before the figure
@@ -599,7 +603,7 @@ def run(args) -> int:
         from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
-        validation = _validation(args, spec, datasets, space)
+        validation = _validation(args, spec, datasets, space, fit_cpu)
         outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure,
                               validation=validation)
     ensemble = _ensemble(args, result, datasets)
@@ -618,18 +622,36 @@ def run(args) -> int:
 
 #: free parameters above which --validate auto skips the refits (the per-tendon cell: 36 parameters per refit)
 VALIDATE_AUTO_MAX_PARAMETERS = 12
+#: --validate auto and --profile auto run their refits when expected to cost at most this share of the fit's CPU
+AUTO_SHARE = 0.25
 
 
-def _validation(args, spec, datasets, space):
-    """The model and its structure-free baselines out of sample (``--validate``), or None."""
+def _cpu_s() -> float:
+    """CPU seconds of this process and of its finished children (a search's worker processes)."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return time.process_time() + r.ru_utime + r.ru_stime
+
+
+def _validation(args, spec, datasets, space, fit_cpu: float):
+    """The model and its structure-free baselines out of sample (``--validate``), or None. ``fit_cpu``: the fit's
+    own CPU seconds, against which auto weighs the refits (each split: the model refitted with half the fit's
+    starts, each baseline formula for about a tenth of that)."""
     from .._progress import stage
-    from ..fitting.validation import compare_out_of_sample, standard_baselines
+    from ..fitting.validation import compare_out_of_sample, splits, standard_baselines
 
     if args.validate == "no":
         return None
     if args.validate == "auto" and spec.problem(datasets).n_free > VALIDATE_AUTO_MAX_PARAMETERS:
         stage(f"out of sample: not run for {spec.name} ({VALIDATE_AUTO_MAX_PARAMETERS}+ parameters per refit; "
               "--validate yes runs it)")
+        return None
+    n = len(splits(datasets))
+    cost = n * fit_cpu * (2 / args.starts) * (1 + 0.1 * (1 + len(standard_baselines(datasets))))
+    if args.validate == "auto" and cost > AUTO_SHARE * fit_cpu:
+        stage(f"out of sample: not run by default ({n} splits, refits of about {cost:.0f} s of CPU against "
+              f"{fit_cpu:.1f} s for the fit; --validate yes runs them)")
         return None
     validation = compare_out_of_sample(spec, datasets, standard_baselines(datasets), model_options=space,
                                        notify=stage, starts=2, seed=args.seed, hops=8, patience=3,
@@ -691,9 +713,10 @@ def profile_cost(result, names) -> Cost:
                        f"{result.n_free - 1} free parameters")
 
 
-def _profile(args, result) -> None:
+def _profile(args, result, fit_cpu: float) -> None:
     """``--profile``: the profile intervals of the parameters that need them, kept on the result (or none); the
-    estimate first when it is long."""
+    estimate first when it is long. ``auto`` runs them when they are expected to cost at most :data:`AUTO_SHARE` of
+    the fit's own CPU (``fit_cpu`` s), and otherwise says what they would cost."""
     if args.profile == "no":
         return
     from .._progress import stage
@@ -704,6 +727,11 @@ def _profile(args, result) -> None:
     todo, _ = profile_plan(result, mode)
     if todo:
         cost = profile_cost(result, [n for n, _ in todo])
+        if args.profile == "auto" and cost.seconds > AUTO_SHARE * fit_cpu:
+            stage(f"profile: not run by default ({', '.join(n for n, _ in todo[:8])}"
+                  f"{', ...' if len(todo) > 8 else ''}: {cost.line()}, against {fit_cpu:.1f} s of CPU for the fit; "
+                  "--profile yes runs it)")
+            return
         if cost.seconds > ANNOUNCE_S:
             stage(f"profile of {len(todo)} parameter(s) the local analysis cannot bound: "
                   f"{', '.join(n for n, _ in todo[:8])}{', ...' if len(todo) > 8 else ''}")

@@ -5,7 +5,6 @@ output set (staged, committed when every stage succeeded).
 """
 from __future__ import annotations
 
-import math
 import sys
 import time
 from pathlib import Path
@@ -82,68 +81,20 @@ def reproduce_fit(out: Path, log) -> None:
     _reproduce_mechanisms(out, data, result, log)
 
 
-#: the mechanisms `make reproduce` fits beside the joint per-tendon fit: the one-exponent springpot, the
-#: few-parameter mechanism with the lowest BIC in `tenscell study mechanisms` on the bundled data (its structure a
-#: passenger) and the recommended one, whose geometric prestress stiffness carries the prestress dependence
-#: (docs/fitting.md); this run re-measures them against the per-tendon fit
-REPRODUCE_MECHANISMS = ("springpot+visc", "springpot-tension+visc", "springpot-alpha-family+visc")
-#: the search of those fits: `tenscell fit`'s defaults (4 starts, seed 0, up to 30 hops), so that the command the
-#: report prints gives the same numbers
-MECHANISM_SEARCH: dict[str, Any] = {"starts": 4, "seed": 0}
-
-
-def _same_fit_command(data, name: str) -> str:
-    """The `tenscell fit` command that repeats this run's fit of mechanism ``name`` to the bundled data."""
-    stated = f" --prestress bundled:fabry2001={data[1].prestress[0]:g}" if data[1].prestress is not None else ""
-    return (f"tenscell fit bundled:stamenovic2002 bundled:fabry2001{stated} --model {name} "
-            f"--starts {MECHANISM_SEARCH['starts']} --seed {MECHANISM_SEARCH['seed']} --out DIR")
-
-
 def _reproduce_mechanisms(out: Path, data, per_tendon, log) -> None:
     """The study's answer on the bundled data: the leading mechanisms beside the joint per-tendon fit (one table)."""
-    from ..fitting import RECOMMENDED, fit
     from ..io.outputs import write_csv_rows, write_json, write_text
-    from ..reports._format import table
-    from ..studies.mechanisms import _scores, _shares, _spread
+    from ..studies.leading import leading_mechanisms
 
-    fits = {"voigt-per-tendon": per_tendon}
-    fits.update({m: fit(data, model=m, jobs=2, progress=False, **MECHANISM_SEARCH) for m in REPRODUCE_MECHANISMS})
-    rows = []
-    for name, r in fits.items():
-        rms, aic, bic, k = _scores(r)
-        share = _shares(r)[0]  # the study's share of dG'/dP (NaN without the split: the per-tendon Voigt cell)
-        rows.append((name, k, _spread(r), *rms, aic, bic, None if math.isnan(share) else share))
-    win = min(rows[1:], key=lambda x: x[6])
-    P = data[1].prestress[0]
-    write_csv_rows(out / "mechanisms_vs_per_tendon.csv", ["model", "free_parameters", "stiffness_spread_decades",
-                                                          "rms_prestress_sweep", "rms_frequency_sweep", "AIC",
-                                                          "BIC", "geometric_share_dGstorage_dP"], rows)
-    md = ["# The leading few-parameter mechanisms beside the paper's per-tendon fit", "",
-          f"Both bundled data sets, fitted jointly, **the frequency sweep stated at {P:g} Pa** (so its prestress is "
-          f"data, not a fitted parameter); each mechanism: {MECHANISM_SEARCH['starts']} starts, seed "
-          f"{MECHANISM_SEARCH['seed']}, `tenscell fit`'s default search. The few-parameter mechanism with the lowest "
-          f"BIC here, **{win[0]}** ({win[1]} free parameters), has BIC "
-          f"{win[6]:.1f} against {rows[0][6]:.1f} for the per-tendon fit ({rows[0][1]} parameters): "
-          + ("the mechanism is preferred." if win[6] < rows[0][6] else "the per-tendon fit is preferred."), "",
-          table(("model", "free parameters", "stiffness spread (dec)", "RMS prestress sweep",
-                 "RMS frequency sweep", "AIC", "BIC", "P·Kp share of dG′/dP"),
-                [(n, k, f"{sp:.2f}", f"{a:.4f}", f"{b:.4f}", f"{aic:.1f}", f"{bic:.1f}",
-                  "n/a" if g is None else f"{100 * g:.0f} %") for n, k, sp, a, b, aic, bic, g in rows]),
-          f"*P·Kp share*: the share of dG′/dP over the prestress sweep carried by the paper's geometric prestress "
-          f"stiffness (the rest: the tendon law's tension terms). The recommended model, **{RECOMMENDED}**, is the "
-          "one whose structure carries the prestress dependence (docs/fitting.md).", "",
-          f"The same fit of {win[0]} on the command line: `{_same_fit_command(data, win[0])}`.", "",
-          "**Why other pages give other numbers for this mechanism.** `tenscell study mechanisms "
-          "bundled:stamenovic2002 bundled:fabry2001` (and docs/fitting.md, which quotes it) does not state the "
-          "frequency sweep's prestress: the fit places it itself (one more free parameter, `P_data[1]`), which "
-          f"fits better than holding it at {P:g} Pa, so its RMS and BIC are lower and its parameter count one "
-          "higher. Neither prestress is measured: the bundled frequency sweep states none.", "",
-          "All mechanisms: `tenscell study mechanisms bundled:stamenovic2002 bundled:fabry2001 --out DIR`.", ""]
-    write_text(out / "mechanisms_vs_per_tendon.md", "\n".join(md))
-    write_json(out / f"mechanism_{win[0]}.json", fits[win[0]].to_dict())
-    log(f"mechanisms_vs_per_tendon.csv, .md, mechanism_{win[0]}.json ({win[0]} with the frequency sweep stated at "
-        f"{P:g} Pa: {win[1]} parameters, rms {win[3]:.4f}/{win[4]:.4f}, BIC {win[6]:.1f} against {rows[0][6]:.1f} "
-        "for the per-tendon fit)")
+    c = leading_mechanisms(data, per_tendon, jobs=2)
+    t = c.table()
+    write_csv_rows(out / f"{t.name}.csv", list(t.columns), t.rows)
+    write_text(out / "mechanisms_vs_per_tendon.md", c.markdown())
+    win = c.winner
+    write_json(out / f"mechanism_{win.model}.json", c.fits[win.model].to_dict())
+    log(f"mechanisms_vs_per_tendon.csv, .md, mechanism_{win.model}.json ({win.model} with the frequency sweep stated "
+        f"at {c.prestress_pa:g} Pa: {win.free_parameters} parameters, rms {win.rms[0]:.4f}/{win.rms[1]:.4f}, BIC "
+        f"{win.bic:.1f} against {c.per_tendon.bic:.1f} for the per-tendon fit)")
 
 
 def reproduce_dynamics(out: Path, log) -> None:
@@ -184,14 +135,15 @@ def reproduce_dynamics(out: Path, log) -> None:
 
 def reproduce_variants(out: Path, log) -> None:
     """All five variant studies into ``out/variants/<name>/``."""
-    from .study import NOT_VARIANTS, STUDIES
+    from ..studies.protocol import run_study
+    from .study import VARIANTS, load_study, write_result
 
-    for name, run_study in STUDIES.items():
-        if name in NOT_VARIANTS:
-            continue
+    for name in VARIANTS:
         d = out / "variants" / name
         d.mkdir(parents=True, exist_ok=True)
-        run_study(d, lambda msg, name=name: log(f"variants/{name}: " + msg))
+        result = run_study(load_study(name), {})
+        write_result(result, d)
+        log(f"variants/{name}: {', '.join(result.files())}")
 
 
 def reproduce_show(out: Path, log) -> None:

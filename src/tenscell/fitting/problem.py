@@ -335,6 +335,12 @@ class Problem:
         """Penalty residuals and their Jacobian (none by default)."""
         return np.zeros(0), (np.zeros((0, self.n_free)) if jac else None)
 
+    def _evaluate_cells(self, cells, phis, jac: bool) -> tuple:
+        """What :meth:`_evaluate_constrained` gives for each of ``cells`` (problems of this one's model and layout,
+        e.g. a population's) at its own log-parameters ``phis[c]``: one by one here; a model whose kernel evaluates
+        many cells at once overrides it (:func:`tenscell.fitting.models.mechanism_kernel.evaluate_cells`)."""
+        return tuple(pb._evaluate_constrained(phi, jac) for pb, phi in zip(cells, phis))
+
     def residuals(self, theta) -> np.ndarray:
         """Weighted data residuals ``w·(log10 model − log10 data)`` at free log-parameters ``theta``."""
         return self._residuals_from(self._evaluate_constrained(self.full(theta), jac=False))
@@ -358,7 +364,10 @@ class Problem:
 
     def dataset_rms(self, theta) -> np.ndarray:
         """RMS of the unweighted log10 residuals of each data set (decades), shape (n_datasets,)."""
-        r = self.residuals(theta) / self.weights
+        return self.dataset_rms_of(self.residuals(theta) / self.weights)
+
+    def dataset_rms_of(self, r) -> np.ndarray:
+        """:meth:`dataset_rms` of unweighted log10 residuals ``r`` already evaluated (decades)."""
         return np.array([math.sqrt(float(np.mean(r[self.rows(k)] ** 2))) for k in range(self.n_datasets)])
 
     # -- the search's moves ---------------------------------------------------------------------
@@ -477,12 +486,13 @@ def draw_start(problem: Problem, rng: np.random.Generator, scalable_kinds, candi
     lo, hi = problem.lower, problem.upper
     mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
     scal = np.array([k in scalable_kinds or k in ("s", "P") for k in problem.kinds]) & problem.free
-    best = None
-    for _ in range(candidates):
-        phi = problem.fixed_log.copy()
+    phis = np.tile(problem.fixed_log, (candidates, 1))
+    for phi in phis:  # the draws in the order they were always drawn, then evaluated together
         draw = mid + rng.uniform(-0.6, 0.6, mid.size) * half
         phi[problem.free] = draw[problem.free]
-        score = centred_start(problem, problem._evaluate_constrained(phi, jac=False), phi, scal)
+    best = None
+    for phi, out in zip(phis, problem._evaluate_cells((problem,) * candidates, phis, jac=False)):
+        score = centred_start(problem, out, phi, scal)
         if score is None:
             continue
         if best is None or score < best[0]:

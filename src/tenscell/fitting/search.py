@@ -30,8 +30,15 @@ converged (:func:`~tenscell.fitting.records.accepted`).
 * the tolerance was met earlier (at some start's step) and the polishing
   since that step has used ``polish_effort`` × the model evaluations it took
   to get there, or, while the tolerance is not met,
-* **the starts agree**: at least two starts hold the best fit (RMS within
-  0.1 % of the best, every free log-parameter within 0.05 of it, i.e. 5 %) and
+* **two starts agree at a well-conditioned optimum** of a model that is not
+  multimodal (its ``capabilities.multimodal`` is False): two starts hold the
+  best fit (RMS within 0.1 % of the best, every free log-parameter within 0.05
+  of it, i.e. 5 %) and the fit's Jacobian there is well conditioned (the
+  parameters not at a bound, scaled to unit columns, have a Gram matrix whose
+  Cholesky pivots span at most :data:`WELL_CONDITIONED_SPAN`): an isolated
+  optimum that two independent starts fell into is the basin the model has;
+  basin hopping is kept for the models that declare several. Or
+* **the starts agree** (any model): at least two starts hold the best fit and
   their moves since their last 5 % improvement add up to ``patience``: moves
   from the same optimum by different starts are draws of the same
   neighbourhood, so their failures pool (one start alone must fail
@@ -56,6 +63,11 @@ RMS 0.070 / 0.017 and stopped; with 12 they reach 0.026 / 0.034 and
 0.0148 / 0.0100, the optima a search without the early stops finds, for about
 twice the evaluations of those fits (1,246 against 628).
 
+A basin-hopping move whose trust-region run comes back to the optimum it left
+(every free log-parameter within 0.05 of it and the cost within 0.2 %) ends
+there: the rest of the run would only polish the same optimum again, and the
+move counts as one that found nothing better.
+
 A step that meets the polish target or exhausts the polishing budget ends the
 search at once: the starts after it in that round are not run (or, in worker
 processes, their steps are dropped). So a fit that reaches its tolerance takes
@@ -66,18 +78,20 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import scipy.optimize
 
 from .._checks import positive_scalar
+from .._errors import TenscellError
 from .._parallel import Workers
 from .._progress import progress_bar
 from .._threads import limited
 from .problem import Problem
 
 __all__ = ["run_search", "best_chain", "merged_history", "count", "local_fit", "stopped_by_budget", "BUDGET",
-           "AGREE_RMS", "AGREE_LOG", "PLATEAU_GAIN"]
+           "AGREE_RMS", "AGREE_LOG", "PLATEAU_GAIN", "WELL_CONDITIONED_SPAN", "well_conditioned"]
 
 #: two starts hold the same optimum when their RMS agree within this fraction and every free log-parameter within
 #: :data:`AGREE_LOG` (the stopping rule of the module docstring)
@@ -86,13 +100,24 @@ AGREE_RMS = 1e-3
 AGREE_LOG = 0.05
 #: the plateau: the best RMS improved by less than this fraction over ``patience × starts`` steps
 PLATEAU_GAIN = 0.01
+#: an optimum is well conditioned when the Gram matrix of its Jacobian (the free parameters not at a bound, columns
+#: scaled to unit norm) has Cholesky pivots within this span (a lower bound of its condition number: about 10⁴ in
+#: the Jacobian's), so that two starts that reach it within :data:`AGREE_LOG` hold one isolated point
+WELL_CONDITIONED_SPAN = 1e8
+
+
+class _Returned(TenscellError):
+    """A basin-hopping move's run came back to the optimum it left (raised from the objective, caught by the run
+    that made the move: it never leaves the search)."""
 
 
 class _Objective:
     """Residuals (data, then penalties) and Jacobian in search coordinates, sharing one evaluation per point."""
 
-    def __init__(self, problem: Problem):
+    def __init__(self, problem: Problem, home=None):
         self.problem = problem
+        # (free log-parameters, cost) of the optimum a basin-hopping move left: coming back to it ends the run
+        self.home = home
         # a block-sparse Jacobian (Problem.sparse_jacobian) stays sparse: its problems search their own log-parameters
         self.T = None if problem.sparse_jacobian else problem.coordinate_map()
         self.constrained = problem.n_penalties > 0
@@ -115,7 +140,16 @@ class _Objective:
     def fun(self, u):
         out = self._eval(u)
         r = self.problem._residuals_from(out)
-        return np.concatenate([r, self.problem._penalty_from(out, jac=False)[0]]) if self.constrained else r
+        r = np.concatenate([r, self.problem._penalty_from(out, jac=False)[0]]) if self.constrained else r
+        if self.home is not None:
+            self._check_home(u, r)
+        return r
+
+    def _check_home(self, u, r) -> None:
+        theta, cost = self.home
+        if 0.5 * float(r @ r) <= cost * (1 + AGREE_RMS) ** 2 and \
+                float(np.max(np.abs(self.theta(u) - theta), initial=0.0)) <= AGREE_LOG:
+            raise _Returned
 
     def jac(self, u):
         out = self._eval(u)
@@ -161,6 +195,7 @@ class _Settings:
     polish: float  # the polish target, as a fraction of each data set's tolerance
     t_begin: float
     plateau_steps: int  # the plateau rule's window: patience × starts steps
+    multimodal: bool = True  # keep hopping after two starts agree at a well-conditioned optimum
 
 
 def _clip(lo, hi, u):
@@ -168,19 +203,31 @@ def _clip(lo, hi, u):
     return np.clip(u, lo + pad, hi - pad)
 
 
-def _least_squares(problem: Problem, theta, max_nfev: int):
-    """One trust-region run from ``theta`` (free log-parameters), in the search coordinates."""
-    obj = _Objective(problem)
+class _Back:
+    """The result of a move's run that came back to the optimum it left (what :func:`_step` reads of one)."""
+
+    def __init__(self, cost: float):
+        self.cost, self.message, self.status = cost, "came back to the optimum it left", 0
+
+
+def _least_squares(problem: Problem, theta, max_nfev: int, home=None):
+    """One trust-region run from ``theta`` (free log-parameters), in the search coordinates; ``home`` (free
+    log-parameters, cost) of the optimum a basin-hopping move left, which ends the run if it comes back."""
+    obj = _Objective(problem, home)
     lo, hi = problem.coordinate_bounds()
     u0 = _clip(lo, hi, problem.to_coordinates(theta))
     # a sparse Jacobian: each trust-region step solved iteratively (LSMR), in time linear in its nonzeros; solved
     # to 1e-10 (LSMR's default 1e-6 leaves inexact steps that stop short: 3 of 6 starts of a 4-cell mechanism
     # population ended at RMS 0.003 instead of 0, as the exact dense steps did not)
     sparse = {"tr_solver": "lsmr", "tr_options": {"atol": 1e-10, "btol": 1e-10}} if problem.sparse_jacobian else {}
-    res = scipy.optimize.least_squares(
-        obj.fun, u0, jac=obj.jac, bounds=(lo, hi), method="trf", x_scale="jac",
-        max_nfev=max_nfev, xtol=1e-10, ftol=1e-10, gtol=1e-10, **sparse,
-    )
+    try:
+        res = scipy.optimize.least_squares(
+            obj.fun, u0, jac=obj.jac, bounds=(lo, hi), method="trf", x_scale="jac",
+            max_nfev=max_nfev, xtol=1e-10, ftol=1e-10, gtol=1e-10, **sparse,
+        )
+    except _Returned:
+        assert home is not None
+        return home[0], _Back(home[1]), obj.nfev
     return obj.theta(res.x), res, obj.nfev
 
 
@@ -193,11 +240,13 @@ def local_fit(problem: Problem, theta, max_nfev: int):
     return _least_squares(problem, theta, max_nfev)
 
 
-def _assess(problem: Problem, theta, tolerances) -> tuple[float, float, float, bool]:
+def _assess(problem: Problem, theta, tolerances, fun) -> tuple[float, float, float, bool]:
     """(rms over all data, worst data set's rms, worst data set's rms over its tolerance, penalties within 1 % of
-    their bound)."""
-    per_set = problem.dataset_rms(theta)
-    return problem.rms(theta), float(per_set.max()), float(np.max(per_set / tolerances)), problem.feasible(theta)
+    their bound), from the residuals ``fun`` of the run that ended at ``theta`` (data, then penalties)."""
+    r = np.asarray(fun)[: problem.n_residuals] / problem.weights
+    per_set = problem.dataset_rms_of(r)
+    rms = float(np.sqrt(np.mean(r**2)))
+    return rms, float(per_set.max()), float(np.max(per_set / tolerances)), problem.feasible(theta)
 
 
 def _step(problem: Problem, chain: _Chain, settings: _Settings, max_nfev: int) -> _Chain:
@@ -212,13 +261,13 @@ def _step(problem: Problem, chain: _Chain, settings: _Settings, max_nfev: int) -
             x0 = problem.initial_guess(chain.rng) if chain.initial is None else chain.initial
         else:
             x0 = problem.perturb(chain.theta, chain.rng)
-        theta, res, nfev = _least_squares(problem, x0, max_nfev)
+        theta, res, nfev = _least_squares(problem, x0, max_nfev, None if first else (chain.theta, chain.cost))
         chain.nfev += nfev
         chain.last_nfev = nfev
         if not first:
             chain.hops += 1
         if first or res.cost < chain.cost:
-            rms, score, ratio, feasible = _assess(problem, theta, settings.tolerances)
+            rms, score, ratio, feasible = _assess(problem, theta, settings.tolerances, res.fun)
             if not first:
                 chain.stale = 0 if score < 0.95 * chain.score else chain.stale + 1
             chain.theta, chain.cost, chain.rms, chain.score, chain.feasible = theta, float(res.cost), rms, score, feasible
@@ -232,6 +281,63 @@ def _step(problem: Problem, chain: _Chain, settings: _Settings, max_nfev: int) -
     chain.finished = (chain.hops >= settings.hops or chain.stale >= settings.patience
                       or chain.met_ratio <= settings.polish)
     return chain
+
+
+def well_conditioned(problem: Problem, theta) -> bool:
+    """Whether ``theta`` is a well-conditioned point of ``problem``: the Gram matrix of its Jacobian over the free
+    parameters not at a bound, columns scaled to unit norm, passes the one criterion of positive definiteness
+    (:func:`tenscell.linear.definite.positive_definite_factor`) with its pivots within
+    :data:`WELL_CONDITIONED_SPAN`."""
+    import scipy.sparse as sp
+
+    from .._errors import NotPositiveDefiniteError
+    from ..linear.definite import damping_span, positive_definite_factor
+
+    theta = np.asarray(theta, dtype=float)
+    lo, hi = problem.bounds
+    pad = 1e-6 * (hi - lo)
+    inside = np.flatnonzero((theta > lo + pad) & (theta < hi - pad))
+    if inside.size == 0:
+        return True  # every parameter at a bound: the bounds determine the point
+    # the problem's own Jacobian: block-sparse where the problem's is (a population's)
+    J: Any = problem._jacobian_from(problem._evaluate_constrained(problem.full(theta), jac=True))
+    J = sp.csc_matrix(J)[:, inside] if sp.issparse(J) else np.asarray(J)[:, inside]
+    G: Any = J.T @ J
+    G = G.toarray() if sp.issparse(G) else np.asarray(G)
+    norms = np.sqrt(np.diagonal(G))
+    if not np.all(norms > 0):
+        return False  # a parameter that moves no residual
+    try:
+        L = positive_definite_factor(G / np.outer(norms, norms), what="the Gram matrix of the fit's Jacobian")
+    except NotPositiveDefiniteError:
+        return False
+    return damping_span(L) <= WELL_CONDITIONED_SPAN
+
+
+def _agrees(ch: _Chain, best: _Chain) -> bool:
+    """Start ``ch`` holds the optimum of ``best`` (module docstring)."""
+    assert ch.theta is not None and best.theta is not None
+    return ch.rms <= best.rms * (1 + AGREE_RMS) and float(np.max(np.abs(ch.theta - best.theta), initial=0.0)) <= AGREE_LOG
+
+
+def _isolated_rule(problem: Problem, chains, settings: _Settings, judged: dict) -> str:
+    """For a model that is not multimodal: the stop reason when two starts agree at a well-conditioned optimum,
+    else "" (``judged``: the conditioning of each best point judged so far, by its bytes)."""
+    if settings.multimodal:
+        return ""
+    ran = [ch for ch in chains if ch.theta is not None]
+    best = min(ran, key=lambda ch: (ch.cost, ch.start))
+    agree = [ch for ch in ran if _agrees(ch, best)]
+    if len(agree) < 2:
+        return ""
+    key = best.theta.tobytes()
+    if key not in judged:
+        with limited():
+            judged[key] = well_conditioned(problem, best.theta)
+    if not judged[key]:
+        return ""
+    return (f"{len(agree)} starts agree on a well-conditioned optimum (rms {best.rms:.4g}); the model is not "
+            "multimodal, so no basin hopping")
 
 
 def best_chain(chains) -> _Chain:
@@ -255,6 +361,7 @@ def _rounds(problem, chains, settings, jobs, polish_effort, bar):
     """
     budget = None  # evaluations left for polishing, once the tolerance is met
     best_rms: list[float] = []  # the best RMS after each step, for the plateau rule
+    judged: dict = {}  # the conditioning of the best points met so far
     # worker processes kept across rounds, stopped cleanly on Ctrl-C (tenscell._parallel)
     with Workers(min(jobs, len(chains))) as workers:
         while True:
@@ -268,6 +375,8 @@ def _rounds(problem, chains, settings, jobs, polish_effort, bar):
             for k, ch in zip(active, steps):
                 chains[k] = ch
                 budget, stop = _polish_rule(chains, ch, budget, settings, polish_effort)
+                if not stop:
+                    stop = _isolated_rule(problem, chains, settings, judged)
                 if not stop and budget is None:
                     stop = _answer_rule(chains, settings, best_rms)
                 if stop:
@@ -304,8 +413,7 @@ def _answer_rule(chains, settings: _Settings, best_rms: list) -> str:
     best = min(ran, key=lambda ch: (ch.cost, ch.start))
     best_rms.append(best.rms)
     assert best.theta is not None
-    agree = [ch for ch in ran if ch.rms <= best.rms * (1 + AGREE_RMS)
-             and float(np.max(np.abs(ch.theta - best.theta), initial=0.0)) <= AGREE_LOG]
+    agree = [ch for ch in ran if _agrees(ch, best)]
     moves = sum(ch.stale for ch in agree)
     if len(agree) >= min(2, len(chains)) and moves >= settings.patience:
         return (f"{len(agree)} starts agree on the best fit (rms {best.rms:.4g}) and {moves} moves from it found "
@@ -367,18 +475,21 @@ def count(name: str, value, minimum: int) -> int:
 def run_search(problem, *, starts: int = 4, seed: int | None = 0, jobs: int = 1, tolerance: float = 0.01,
                hops: int = 30, patience: int = 12, max_nfev: int = 100, polish: float = 0.2,
                polish_effort: float = 0.5, initial=None, progress: bool | None = None, desc: str = "fit",
-               t_begin: float | None = None, noise=None):
+               t_begin: float | None = None, noise=None, multimodal: bool | None = None):
     """The multi-start search on any problem; returns ``(chains, stop reason)`` (options as for :func:`fit`).
 
     ``problem`` is a :class:`~tenscell.fitting.problem.Problem`: it brings its own ``initial_guess(rng)`` and
     ``perturb(theta, rng)``. ``noise`` (per data set: the RMS of its stated sd in decades, or None;
     :func:`~tenscell.fitting.records.noise_rms`) raises a data set's tolerance to its noise (module docstring).
     ``t_begin`` (``time.monotonic()``) is the moment the history's times count from (default: now).
+    ``multimodal``: whether the search keeps hopping after two starts agree at a well-conditioned optimum (default:
+    the model's ``capabilities.multimodal``).
     """
     t_begin = time.monotonic() if t_begin is None else t_begin
     starts = count("starts", starts, 1)
     settings = _settings(hops, patience, max_nfev, tolerance, polish, polish_effort, t_begin,
-                         _tolerances(tolerance, noise, problem.n_datasets), starts)
+                         _tolerances(tolerance, noise, problem.n_datasets), starts,
+                         problem.spec.capabilities.multimodal if multimodal is None else bool(multimodal))
     chains = _chains(problem, starts, seed, initial)
     with progress_bar(total=settings.hops + 1, desc=desc, unit="round", progress=progress) as bar:
         stop = _rounds(problem, chains, settings, count("jobs", jobs, 1), float(polish_effort), bar)
@@ -395,7 +506,7 @@ def _tolerances(tolerance, noise, n_datasets: int) -> np.ndarray:
 
 
 def _settings(hops, patience, max_nfev, tolerance, polish, polish_effort, t_begin, tolerances,
-              starts: int) -> _Settings:
+              starts: int, multimodal: bool = True) -> _Settings:
     """The search's stopping rules, checked (one line naming the option on bad input)."""
     positive_scalar("tolerance", tolerance, "decades")
     if not (isinstance(polish_effort, (int, float)) and math.isfinite(polish_effort) and polish_effort >= 0):
@@ -403,7 +514,7 @@ def _settings(hops, patience, max_nfev, tolerance, polish, polish_effort, t_begi
     patience = count("patience", patience, 1)
     return _Settings(hops=count("hops", hops, 0), patience=patience, max_nfev=count("max_nfev", max_nfev, 1),
                      tolerances=tolerances, polish=positive_scalar("polish", polish), t_begin=t_begin,
-                     plateau_steps=patience * starts)
+                     plateau_steps=patience * starts, multimodal=multimodal)
 
 
 def _chains(problem: Problem, starts: int, seed, initial) -> list[_Chain]:

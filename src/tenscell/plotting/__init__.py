@@ -18,7 +18,7 @@ Topics: :mod:`~tenscell.plotting.paper` (Figs. 2–3),
 """
 from __future__ import annotations
 
-from ._style import STYLE, colors, figure_of, moduli_panels, png_bytes, save, style
+from ._style import STYLE, calibration_figure, colors, figure_of, moduli_panels, png_bytes, save, style
 from .dynamics import creep_loglog, force_displacement_loop, harmonic_spectrum, time_traces
 from .fits import (compactness_front, data_points, fit_figure, fit_panels, measured, plot_fit, plot_profile,
                    plot_residuals, profile_panels, residual_panels, stiffness_histogram)
@@ -59,7 +59,7 @@ def _register() -> None:
     register_plotters({name: getattr(module, name) for module in (dynamics, fits, interactive, paper, population,
                                                                   spectra, structures, variants)
                        for name in module.__all__ if callable(getattr(module, name))})
-    register_plotters({"save": save, "png_bytes": png_bytes})
+    register_plotters({"save": save, "png_bytes": png_bytes, "calibration_figure": calibration_figure})
 
 
 _register()

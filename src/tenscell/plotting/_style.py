@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 from ..io.outputs import atomic_path
 
 __all__ = ["STYLE", "style", "styled", "colors", "new_axes", "new_panels", "moduli_panels", "figure_of", "save",
-           "png_bytes", "label_moduli", "wrap", "legend_outside", "legend_below"]
+           "png_bytes", "label_moduli", "wrap", "legend_outside", "legend_below", "calibration_figure"]
 
 #: rcParams applied (as a context, never globally) to figures tenscell creates
 STYLE: dict[str, Any] = {
@@ -182,3 +182,14 @@ def png_bytes(fig: Any) -> bytes:
     with _closing(fig) as figure:
         figure.savefig(buffer, format="png")
     return buffer.getvalue()
+
+
+def calibration_figure(x, y) -> Figure:
+    """A small log-log figure of ``y`` against ``x`` (3 × 2 in, 100 dpi): the unit in which a study's cost estimate
+    counts the figures it will draw (:func:`tenscell.studies.protocol.figure_probe`)."""
+    with style():
+        fig = plt.figure(figsize=(3.0, 2.0), dpi=100, layout="constrained")
+        ax = fig.add_subplot()
+        ax.loglog(x, y)
+        ax.set_xlabel("frequency (Hz)")
+    return fig

@@ -7,6 +7,7 @@ from .compactness import compactness_markdown
 from .ensemble import ensemble_markdown
 from .fit import fit_markdown
 from .fit_text import fit_text
+from .leading import leading_markdown
 from .html import (comparison_html, data_html, ensemble_html, fit_html, fitted_model_html, frequency_response_html,
                    population_html, structure_html)
 from .html_page import fit_report_html, markdown_report_html
@@ -19,7 +20,7 @@ from .studies import no_if_markdown, references_markdown, semiflexible_markdown,
 __all__ = [
     "fit_markdown", "fit_text", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
-    "ensemble_markdown", "population_fit_markdown", "fit_html", "data_html", "frequency_response_html",
+    "ensemble_markdown", "population_fit_markdown", "leading_markdown", "fit_html", "data_html", "frequency_response_html",
     "fitted_model_html", "comparison_html", "population_html", "ensemble_html", "structures_markdown",
     "structure_html", "fit_report_html", "markdown_report_html",
 ]

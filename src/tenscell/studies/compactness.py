@@ -120,19 +120,39 @@ def compactness_study(data, decades=DEFAULT_DECADES, *, cell=None, tendons: str 
     -------
     CompactnessStudy
     """
-    from ..fitting import VoigtModel, fit
-
-    D = np.array(sorted({float(d) for d in decades}, reverse=True))
-    if D.size == 0 or not np.all(np.isfinite(D)) or np.any(D <= 0):
-        raise ValueError(f"decades must be positive numbers, got {list(decades)!r}")
+    D = _bounds(decades)
     fits = []
     previous = None
     for d in progress_bar(D, desc="compactness", unit="bound", progress=progress):
-        r = fit(data, cell, model=VoigtModel(tendons, damping, max_decades=float(d)), starts=starts, seed=seed,
-                jobs=jobs, tolerance=tolerance, hops=hops, patience=patience, initial=previous, progress=False,
-                **fit_options)
-        fits.append(r)
-        previous = r
+        previous = bound_fit(data, d, dict(cell=cell, tendons=tendons, damping=damping, starts=starts, seed=seed,
+                                           jobs=jobs, tolerance=tolerance, hops=hops, patience=patience,
+                                           **fit_options), previous)
+        fits.append(previous)
+    return _front(D, fits, tolerance)
+
+
+def _bounds(decades) -> np.ndarray:
+    """The bounds (decades), each once, widest first (ValueError naming ``decades``)."""
+    D = np.array(sorted({float(d) for d in decades}, reverse=True))
+    if D.size == 0 or not np.all(np.isfinite(D)) or np.any(D <= 0):
+        raise ValueError(f"decades must be positive numbers, got {list(decades)!r}")
+    return D
+
+
+def bound_fit(data, max_decades: float, options: dict, previous=None):
+    """The fit of ``data`` by the Voigt cell with the stiffness spread bounded by ``max_decades``, warm-started from
+    ``previous`` (the fit at the next wider bound, or None); ``options`` for :func:`tenscell.fitting.fit`, with the
+    cell's ``tendons`` (default per-tendon) and ``damping`` (default uniform)."""
+    from ..fitting import VoigtModel, fit
+
+    options = dict(options)
+    tendons, damping = options.pop("tendons", "per-tendon"), options.pop("damping", "uniform")
+    return fit(data, model=VoigtModel(tendons, damping, max_decades=float(max_decades)), initial=previous,
+               progress=False, **options)
+
+
+def _front(D: np.ndarray, fits: list, tolerance: float) -> CompactnessStudy:
+    """The study from the fit at each bound of ``D`` (in the order of ``D``)."""
     order = np.argsort(D)
     fits = [fits[i] for i in order]
     search = np.array([max(f.rms_log10_error for f in r.fits) for r in fits])
@@ -149,3 +169,79 @@ def _decades(result) -> float:
     spread = result.stiffness_spread
     assert spread is not None  # a Voigt cell has tendons
     return float(spread[2])
+
+
+# ---- the study protocol (tenscell study compactness DATA...) --------------------------------------------------
+#: a fit at one bound per start, in units of one evaluation of the model at a start (residuals and Jacobian,
+#: :func:`_evaluation_probe`), as measured on the bundled data with the study's search (20 hops, patience 6)
+#: (bench/calibrate_study_units.py)
+UNITS_PER_START = 20.0
+
+
+def _evaluation_probe(data, damping: str):
+    """One unit of the study's work: one evaluation (residuals and Jacobian) of the model at a start."""
+    from .._threads import limited
+    from ..fitting.entry import prepare
+    from ..fitting.models.voigt import VoigtModel
+
+    spec = VoigtModel(tendons="per-tendon", damping=damping)
+    problem = spec.problem(*prepare(data, None, 100, spec))
+    theta = problem.initial_guess(np.random.default_rng(0))
+    with limited():
+        return problem.jacobian(theta)
+
+
+class _Compactness:
+    """``tenscell study compactness DATA...``: one fit per bound, widest first, each warm-started from the one
+    before (so they run in a chain; each fit's starts over ``jobs`` workers)."""
+
+    name = "compactness"
+    options = {"data": (), "decades": DEFAULT_DECADES, "damping": "uniform", "starts": 4, "seed": 0, "jobs": None,
+               "tolerance": 0.01}
+
+    def plan(self, options):
+        from .._parallel import jobs_for
+        from .protocol import Plan, Task, study_options
+
+        opts = study_options(self, options)
+        if not opts["data"]:
+            raise ValueError("study compactness needs data files (e.g. bundled:fabry2001)")
+        D = _bounds(opts["decades"])
+        fit_options = {"damping": opts["damping"], "starts": opts["starts"], "seed": opts["seed"],
+                       "jobs": jobs_for(opts["starts"], opts["jobs"]), "tolerance": opts["tolerance"], "hops": 20,
+                       "patience": 6}
+        tasks, before = [], ()
+        for d in D:
+            key = f"fit with the spread at most {d:g} decades"
+            tasks.append(Task(key, "evaluation", bound_fit, (tuple(opts["data"]), float(d), fit_options),
+                              needs=before, weight=UNITS_PER_START * opts["starts"]))
+            before = (key,)
+        probe = Task("one evaluation of the model", "evaluation", _evaluation_probe,
+                     (tuple(opts["data"]), opts["damping"]))
+        return Plan(self.name, {**opts, "bounds": D}, tuple(tasks), calibration=(probe,), figures=2.0,
+                    sized_by=("--decades", "--starts"))
+
+    def assemble(self, plan, results):
+        from .._results import reporter
+        from .protocol import Figure, StudyResult, Table
+
+        s = _front(plan.options["bounds"], [results[t.key] for t in plan.tasks], plan.options["tolerance"])
+        front = Table.from_records("compactness", [dict(zip(s.HEADER, row)) for row in s.rows()])
+        figures = [Figure("compactness_front.png", "compactness_front", (s.decades, s.rms),
+                          {"tolerance": s.tolerance, "knee": s.knee,
+                           "title": "Best fit against the bound on the stiffness spread"})]
+        tables = [front]
+        knee = s.knee_fit
+        if knee is not None:
+            families = knee.cell.structure.families
+            figures.append(Figure("compactness_histogram.png", "stiffness_histogram", (knee.model.EA,),
+                                  {"families": families, "title": "Stiffnesses at the narrowest bound within "
+                                                                  f"tolerance ({s.knee:g} decades)"}))
+            tables.append(Table.from_records("compactness_knee_stiffness", [
+                {"tendon": j, "family": fam, "EA_N": float(e)} for j, (fam, e) in enumerate(zip(families, knee.model.EA))]))
+        return StudyResult(self.name, tables=tuple(tables), figures=tuple(figures),
+                           pages=(("compactness.md", reporter("compactness_markdown")(s)),), data=s)
+
+
+#: the study of ``tenscell study compactness`` (:mod:`tenscell.studies.protocol`)
+STUDY = _Compactness()

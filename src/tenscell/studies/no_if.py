@@ -222,3 +222,45 @@ def _crossing(Ps, fp, f_cross, exponent) -> float:
         return float(math.exp(np.interp(x, lf[order], lP[order])))
     k = int(order[0] if x < lf[order[0]] else order[-1])
     return float(math.exp(lP[k] + (x - lf[k]) / exponent))
+
+
+# ---- the study protocol (tenscell study no-if) -----------------------------------------------------------------
+#: the study's work in units of one point of the references' validity map (:func:`tenscell.studies._common.
+#: reference_probe`): the cell without IFs (its reference a root of det A in δ) and then 14 G'' peaks, 12 moduli
+#: curves and C0's eigenpairs, as measured (bench/calibrate_study_units.py)
+NO_IF_UNITS = 80.0
+
+
+class _NoIF:
+    """``tenscell study no-if``: one task (the study's defaults), calibrated by a few reference cells."""
+
+    name = "no-if"
+    options: dict = {}
+
+    def plan(self, options):
+        from .references import REFERENCE_PROBE
+        from .protocol import Plan, Task, study_options
+
+        return Plan(self.name, study_options(self, options), (Task("no-if: moduli and G'' peaks", "reference point",
+                                                                   no_if_study, weight=NO_IF_UNITS),),
+                    calibration=(REFERENCE_PROBE,), figures=6.8)
+
+    def assemble(self, plan, results):
+        from .._results import reporter
+        from .protocol import Figure, StudyResult, Table
+
+        s = results["no-if: moduli and G'' peaks"]
+        moduli = Table.from_records("no_if_moduli", [
+            {"prestress": P, "frequency_Hz": f, "G_storage_noIF": a, "G_loss_noIF": b, "G_storage_IF": c,
+             "G_loss_IF": d} for (P, f, a, b), (_, _, c, d) in zip(s.without.rows(), s.with_ifs.rows())])
+        peaks = Table.from_records("no_if_peaks", [
+            {"prestress": float(P), "peak_frequency_Hz": p.frequency_hz, "peak_G_loss": p.height,
+             "G_storage_at_peak": p.storage} for P, p in zip(s.without.prestress, s.peaks)])
+        return StudyResult(self.name, tables=(moduli, peaks),
+                           figures=(Figure("no_if_moduli.png", "no_if_figure", (s,)),
+                                    Figure("no_if_peaks.png", "no_if_peaks_figure", (s,))),
+                           pages=(("no_if.md", reporter("no_if_markdown")(s)),), data=s)
+
+
+#: the study of ``tenscell study no-if`` (:mod:`tenscell.studies.protocol`)
+STUDY = _NoIF()

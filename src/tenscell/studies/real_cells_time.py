@@ -24,6 +24,8 @@ the late times, the fitted values, the model's curve on a dense grid) with the s
 """
 from __future__ import annotations
 
+from typing import Any
+
 import math
 import time
 from dataclasses import dataclass, field
@@ -40,7 +42,7 @@ FIT_NODES = 16
 LATE_S = 1.0
 #: the search of a baseline's fit (a formula: a few parameters, one basin), to a tolerance no data meet (it runs
 #: until its starts agree: the law's own optimum, exact on data the law made)
-BASELINE_SEARCH = dict(starts=2, hops=2, tolerance=1e-9)
+BASELINE_SEARCH: dict[str, Any] = {"starts": 2, "hops": 2, "tolerance": 1e-9}
 #: basin-hopping moves of a mechanism's time-domain fit per start (each evaluation inverts G*(s) at every time)
 MECHANISM_HOPS = 4
 

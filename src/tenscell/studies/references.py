@@ -27,7 +27,7 @@ from ..response import frequency_response
 from ._common import grid
 
 __all__ = ["ReferenceMap", "prestress_map", "ReferencesStudy", "references_study", "VALID", "NOT_PRESTRESSABLE",
-           "NOT_STABLE", "find_cylindrical_reference"]
+           "NOT_STABLE", "find_cylindrical_reference", "if_free_point", "reference_responses", "join_maps"]
 
 
 #: status codes of :func:`prestress_map`
@@ -198,26 +198,44 @@ class ReferencesStudy:
         return references_figure(self.responses, P, axes=ax, **kw)
 
 
+#: the study's grids: prestresses (N) and frequencies (Hz) of the moduli, the validity map's α and δ (rad), the α
+#: (rad) of the IF-free curve's points
+PRESTRESS = (500.0, 1000.0, 4500.0)
+FREQUENCY_HZ = np.logspace(-2, 3, 51)
+MAP_ALPHA = np.radians(np.arange(-25.0, 35.1, 2.5))
+MAP_DELTA = np.radians(np.arange(30.0, 65.1, 1.25))
+CURVE_ALPHA = np.radians([-10.0, -5.0, 0.0, 5.0, 10.0, 15.0, 20.0])
+
+
 def references_study(
-    prestress=(500.0, 1000.0, 4500.0),
-    f_hz=np.logspace(-2, 3, 51),
+    prestress=PRESTRESS,
+    f_hz=FREQUENCY_HZ,
     *,
     EA: float = 1.0,
     c: float = 1.0,
-    map_alpha=np.radians(np.arange(-25.0, 35.1, 2.5)),
-    map_delta=np.radians(np.arange(30.0, 65.1, 1.25)),
-    curve_alpha=np.radians([-10.0, -5.0, 0.0, 5.0, 10.0, 15.0, 20.0]),
+    map_alpha=MAP_ALPHA,
+    map_delta=MAP_DELTA,
+    curve_alpha=CURVE_ALPHA,
 ) -> ReferencesStudy:
     """The valid-reference map and the moduli of the spherical, regular, cylindrical and IF-free cells."""
     Ps = grid("prestress", prestress, "N")
-    f = grid("frequency", f_hz, "Hz")
     mp = prestress_map(map_alpha, map_delta, P=float(Ps[len(Ps) // 2]), EA=EA)
-    curve = []
-    for a in np.atleast_1d(curve_alpha):
-        try:
-            curve.append((float(a), if_free_delta(float(a))))
-        except NotPrestressableError:
-            continue
+    curve = [if_free_point(a) for a in np.atleast_1d(curve_alpha)]
+    return _references(mp, curve, reference_responses(prestress, f_hz, EA, c), EA, c)
+
+
+def if_free_point(alpha: float) -> tuple[float, float] | None:
+    """``(α, δ*(α))`` (rad) of the IF-free prestressable curve, None where it has no point."""
+    try:
+        return float(alpha), if_free_delta(float(alpha))
+    except NotPrestressableError:
+        return None
+
+
+def reference_responses(prestress=PRESTRESS, f_hz=FREQUENCY_HZ, EA: float = 1.0, c: float = 1.0) -> dict:
+    """The spherical, regular, cylindrical and IF-free cells: ``{name: (cell, FrequencyResponse)}``."""
+    Ps = grid("prestress", prestress, "N")
+    f = grid("frequency", f_hz, "Hz")
     sph = paper_cell()
     cells = {
         f"spherical (α={math.degrees(sph.parameters['alpha']):g}°, δ={math.degrees(sph.parameters['delta']):g}°)": sph,
@@ -225,9 +243,25 @@ def references_study(
         "cylindrical": cylindrical_cell(),
         "spherical, no IFs (regular member)": paper_cell(intermediate_filaments=False),
     }
-    responses = {k: frequency_response(v, f, Ps, EA=EA, c=c) for k, v in cells.items()}
-    return ReferencesStudy(map=mp, if_free_curve=np.array(curve).reshape(-1, 2), cells=cells, responses=responses,
-                           EA=float(EA), c=float(c))
+    return {k: (v, frequency_response(v, f, Ps, EA=EA, c=c)) for k, v in cells.items()}
+
+
+def _references(mp: ReferenceMap, curve, responses: dict, EA: float, c: float) -> ReferencesStudy:
+    points = [p for p in curve if p is not None]
+    return ReferencesStudy(map=mp, if_free_curve=np.array(points).reshape(-1, 2),
+                           cells={k: cell for k, (cell, _) in responses.items()},
+                           responses={k: r for k, (_, r) in responses.items()}, EA=float(EA), c=float(c))
+
+
+def join_maps(maps) -> ReferenceMap:
+    """One :class:`ReferenceMap` from maps of consecutive δ rows over the same α (and the same P and EA)."""
+    maps = list(maps)
+    first = maps[0]
+    if any(not np.array_equal(m.alpha, first.alpha) or m.P != first.P or m.EA != first.EA for m in maps):
+        raise ValueError("join_maps: the maps must share their alpha grid, P and EA")
+    return ReferenceMap(alpha=first.alpha, delta=np.concatenate([m.delta for m in maps]),
+                        status=np.vstack([m.status for m in maps]), min_tension=np.vstack([m.min_tension for m in maps]),
+                        if_tension=np.vstack([m.if_tension for m in maps]), P=first.P, EA=first.EA)
 
 
 # ---- the cylindrical reference: form-finding with the stability test of linear/ ----------------------------
@@ -346,3 +380,83 @@ def find_cylindrical_reference(
             return params
         reasons.append(f"start {k}: unstable (K0 = P·Kp + Σ EA a aᵀ/l is not positive definite)")
     raise NotPrestressableError("no stable cylindrical reference found: " + "; ".join(reasons))
+
+
+# ---- the study protocol (tenscell study references) ------------------------------------------------------------
+#: the map's δ rows are computed in this many blocks (tasks that may run in parallel)
+MAP_BLOCKS = 4
+#: the work of one point of the IF-free curve (a root of det A in δ: about 170 determinants) and of the four
+#: cells' moduli (the IF-free cell's reference is such a root), in units of one point of the validity map (:func:`reference_probe`), as
+#: measured (bench/calibrate_study_units.py)
+ROOT_UNITS = 95.0
+RESPONSES_UNITS = 100.0
+
+
+def _map_block(alpha, delta, P: float) -> ReferenceMap:
+    return prestress_map(alpha, delta, P=P)
+
+
+class _References:
+    """``tenscell study references``: the validity map in blocks of δ rows, each point of the IF-free curve, the four
+    cells' moduli; all independent tasks."""
+
+    name = "references"
+    options: dict = {}
+
+    def plan(self, options):
+        from .._parallel import usable_cpus
+        from .protocol import Plan, Task, study_options
+
+        P = float(PRESTRESS[len(PRESTRESS) // 2])
+        blocks = np.array_split(np.arange(MAP_DELTA.size), MAP_BLOCKS)
+        tasks = [Task(f"validity map, δ rows {b[0] + 1}-{b[-1] + 1} of {MAP_DELTA.size}", "reference point",
+                      _map_block, (MAP_ALPHA, MAP_DELTA[b], P), weight=float(b.size * MAP_ALPHA.size)) for b in blocks]
+        tasks += [Task(f"IF-free curve at α = {math.degrees(a):g}°", "reference point", if_free_point, (float(a),),
+                       weight=ROOT_UNITS) for a in CURVE_ALPHA]
+        tasks.append(Task("moduli of the four references", "reference point", reference_responses,
+                          weight=RESPONSES_UNITS))
+        return Plan(self.name, study_options(self, options), tuple(tasks),
+                    calibration=(REFERENCE_PROBE,), figures=6.3, jobs=min(usable_cpus(), len(tasks)))
+
+    def assemble(self, plan, results):
+        from .._results import reporter
+        from .protocol import Figure, StudyResult, Table
+
+        mp = join_maps([results[t.key] for t in plan.tasks[:MAP_BLOCKS]])
+        curve = [results[t.key] for t in plan.tasks[MAP_BLOCKS:-1]]
+        s = _references(mp, curve, results[plan.tasks[-1].key], 1.0, 1.0)
+        status = ("valid", "not prestressable", "K0 not positive definite")
+        ref_map = Table.from_records("reference_map", [
+            {"alpha_deg": math.degrees(a), "delta_deg": math.degrees(d), "status": status[mp.status[i, k]],
+             "min_tension": float(mp.min_tension[i, k]), "if_tension": float(mp.if_tension[i, k])}
+            for i, d in enumerate(mp.delta) for k, a in enumerate(mp.alpha)])
+        moduli = Table.from_records("references_moduli", [
+            {"reference": name, "prestress": P, "frequency_Hz": f, "G_storage": a, "G_loss": b}
+            for name, r in s.responses.items() for P, f, a, b in r.rows()])
+        first = next(iter(s.responses.values()))
+        P = float(first.prestress[len(first.prestress) // 2])
+        return StudyResult(self.name, tables=(ref_map, moduli),
+                           figures=(Figure("reference_map.png", "reference_map_figure", (mp, s.if_free_curve)),
+                                    Figure("references.png", "references_figure", (s.responses, P))),
+                           pages=(("references.md", reporter("references_markdown")(s)),), data=s)
+
+
+#: the study of ``tenscell study references`` (:mod:`tenscell.studies.protocol`)
+STUDY = _References()
+
+
+def reference_probe():
+    """Four points of the references' validity map (:func:`prestress_map`): the paper
+    cell built at four references q0(α, δ) and linearized. One point is the unit of work of the studies that build
+    reference cells (a study's estimate, :mod:`tenscell.studies.protocol`)."""
+    return prestress_map(MAP_ALPHA[10:12], MAP_DELTA[10:12], P=PRESTRESS[1])
+
+
+def _probe_task():
+    from .protocol import Task
+
+    return Task("four reference cells", "reference point", reference_probe, weight=4.0)
+
+
+#: the calibration probe of one unit "reference point" (4 units)
+REFERENCE_PROBE = _probe_task()

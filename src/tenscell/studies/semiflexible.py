@@ -282,3 +282,50 @@ def semiflexible_study(
         euler_EI_per_P=float(1.0 / euler_critical_prestress(cell, 1.0)), P=P, c_strut=float(c_strut),
         EA=float(EA), c=float(c), cell=cell,
     )
+
+
+# ---- the study protocol (tenscell study semiflexible) ----------------------------------------------------------
+#: the study's work (its defaults: 25 strut stiffnesses, the bisection for the softest stable strut) in units of
+#: :func:`_probe`, as measured
+SEMIFLEXIBLE_UNITS = 2.4
+
+
+def _probe() -> SemiflexibleStudy:
+    """One unit of the study's work: the study at three strut stiffnesses."""
+    return semiflexible_study(EA_strut=(1e4, 1e6, 1e8))
+
+
+class _Semiflexible:
+    """``tenscell study semiflexible``: one task (the study's defaults), calibrated by a small grid of it."""
+
+    name = "semiflexible"
+    options: dict = {}
+
+    def plan(self, options):
+        from .protocol import Plan, Task, study_options
+
+        return Plan(self.name, study_options(self, options),
+                    (Task("semiflexible: G', G'' against the strut stiffness", "grid", semiflexible_study,
+                          weight=SEMIFLEXIBLE_UNITS),),
+                    calibration=(Task("three strut stiffnesses", "grid", _probe),), figures=4.1)
+
+    def assemble(self, plan, results):
+        from .._results import reporter
+        from .protocol import Figure, StudyResult, Table
+
+        s = next(iter(results.values()))
+        f = s.frequency_hz
+        moduli = Table.from_records("semiflexible", [
+            {"EA_strut": float(e), "frequency_Hz": float(f[k]), "G_storage": float(s.G[i, k].real),
+             "G_loss": float(s.G[i, k].imag), "G_storage_rigid": float(s.G_rigid[k].real),
+             "G_loss_rigid": float(s.G_rigid[k].imag)} for i, e in enumerate(s.EA_strut) for k in range(f.size)])
+        convergence = Table.from_records("semiflexible_convergence", [
+            {"EA_strut": float(e), "max_rel_diff_storage": float(a), "max_rel_diff_loss": float(b)}
+            for e, a, b in zip(s.EA_strut, s.error_storage, s.error_loss)])
+        return StudyResult(self.name, tables=(moduli, convergence),
+                           figures=(Figure("semiflexible.png", "semiflexible_figure", (s,)),),
+                           pages=(("semiflexible.md", reporter("semiflexible_markdown")(s)),), data=s)
+
+
+#: the study of ``tenscell study semiflexible`` (:mod:`tenscell.studies.protocol`)
+STUDY = _Semiflexible()

@@ -5,6 +5,7 @@ the tools of :mod:`tenscell.sensitivity`.
 """
 from __future__ import annotations
 
+from typing import Any
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,7 +17,10 @@ from .._threads import hot_path
 from ..sensitivity import (PAPER_BOUND, SENSITIVITY_FREQUENCIES, Elasticities, base_parameters, elasticities,
                            monte_carlo, perturbation_table, summarize)
 
-__all__ = ["SensitivityStudy", "sensitivity_study"]
+__all__ = ["SensitivityStudy", "sensitivity_study", "paper_cell_of_fit", "MONTE_CARLO_SETS"]
+
+#: the Monte Carlo sets of the study: every parameter varied, then the material parameters only
+MONTE_CARLO_SETS = ("all", "material")
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -108,17 +112,123 @@ def sensitivity_study(
     :func:`monte_carlo` (``change`` is also the Monte Carlo spread).
     """
     bound = positive_scalar("bound", bound)
+    base = dict(alpha=alpha, delta=delta, L=L, P=P, EA=EA, c=c, f_hz=f_hz)
     stage("sensitivity: elasticities", progress=progress)
-    el = elasticities(alpha=alpha, delta=delta, L=L, P=P, EA=EA, c=c, f_hz=f_hz)
+    el = elasticities(**base)
     stage(f"sensitivity: ±{100 * change:g}% one at a time", progress=progress)
-    table = perturbation_table(change=change, alpha_change=alpha_change, alpha=alpha, delta=delta, L=L, P=P, EA=EA,
-                               c=c, f_hz=f_hz)
-    mcs = tuple(monte_carlo(draws, spread=change, seed=seed, parameters=which, alpha_spread=alpha_change, alpha=alpha,
-                            delta=delta, L=L, P=P, EA=EA, c=c, f_hz=f_hz, progress=progress)
-                for which in ("all", "material"))
+    table = perturbation_table(change=change, alpha_change=alpha_change, **base)
+    mcs = tuple(monte_carlo(draws, spread=change, seed=seed, parameters=which, alpha_spread=alpha_change,
+                            progress=progress, **base) for which in MONTE_CARLO_SETS)
+    return _sensitivity(el, table, mcs, change=change, alpha_change=alpha_change, bound=bound, **base)
+
+
+def _sensitivity(el, table, mcs, *, change, alpha_change, bound, alpha, delta, L, P, EA, c, f_hz) -> SensitivityStudy:
+    """The study from its parts (the base point's options as given to each part)."""
     cell, EA_, c_ = base_parameters(alpha, delta, L, P, EA, c, True)
     return SensitivityStudy(
         elasticities=el, table=table, summary=summarize(el, table, bound), monte_carlo=mcs, change=float(change),
         alpha_change=float(change if alpha_change is None else alpha_change), bound=bound, describe=cell.describe(),
         P=float(P), L=float(L), alpha=float(alpha), delta=float(cell.parameters["delta"]), EA=EA_, c=c_,
     )
+
+
+def paper_cell_of_fit(path) -> dict:
+    """The base point of the study for the fitted paper cell in fit.json ``path``: ``alpha``, ``delta``, ``L``,
+    ``P``, ``EA``, ``c`` (ValueError naming ``--from-fit`` when the fit is not one of the paper's Voigt cell)."""
+    from ..fitting.fitted import load_fit
+
+    model: Any = load_fit(path)  # a fitted Voigt cell once its capabilities say so (EA, c, L)
+    if not model.capabilities.voigt_options:  # the study varies the Voigt cell's own α, δ, L, EA and c
+        raise ValueError(f"--from-fit {path}: the sensitivity study varies the paper cell's α, δ, L, EA and c; this "
+                         f"fit is {model.describe()}, not a fit of the Voigt cell (tenscell fit without --model)")
+    p = model.cell.parameters
+    if not {"alpha", "delta"} <= set(p) or not p.get("intermediate_filaments", False):
+        raise ValueError(f"--from-fit {path}: the sensitivity study varies the paper cell's α, δ and L; this fit's "
+                         f"cell is {model.cell.describe()}")
+    return {"alpha": float(p["alpha"]), "delta": float(p["delta"]), "L": model.L, "P": model.prestress(),
+            "EA": model.EA, "c": model.c}
+
+
+# ---- the study protocol (tenscell study sensitivity) -----------------------------------------------------------
+#: the elasticities and the ±10 % table in units of the elasticities alone (:func:`elasticities`), as measured
+ONE_AT_A_TIME_UNITS = 2.5
+#: draws of the Monte Carlo set of every parameter timed for the estimate (the unit: one draw of the probe, the
+#: cell built once for all its draws), and one draw of each set in that unit, as measured
+#: (bench/calibrate_study_units.py)
+PROBE_DRAWS = 16
+DRAW_UNITS = {"all": 0.75, "material": 0.12}
+
+
+def _one_at_a_time(change, base: dict) -> tuple:
+    return elasticities(**base), perturbation_table(change=change, **base)
+
+
+def _monte_carlo_set(draws: int, seed: int, which: str, change: float, base: dict):
+    return monte_carlo(draws, spread=change, seed=seed, parameters=which, progress=False, **base)
+
+
+class _Sensitivity:
+    """``tenscell study sensitivity``: the elasticities and the ±10 % table (one task), each Monte Carlo set (one
+    task each, ``draws`` units); ``from_fit``: the base point of a fit of the paper cell (a fit.json)."""
+
+    name = "sensitivity"
+    options = {"draws": 200, "seed": 0, "from_fit": None}
+
+    def plan(self, options):
+        from .._parallel import usable_cpus
+        from ..fitting.search import count
+        from .protocol import Plan, Task, study_options
+
+        opts = study_options(self, options)
+        draws = count("--draws", opts["draws"], 1)
+        base = dict(alpha=0.0, delta=None, L=1.0, P=1000.0, EA=1.0, c=1.0, f_hz=SENSITIVITY_FREQUENCIES)
+        if opts["from_fit"] is not None:
+            base.update(paper_cell_of_fit(opts["from_fit"]))
+        change = 0.10
+        tasks = [Task("elasticities and the ±10 % table", "elasticities", _one_at_a_time, (change, base),
+                      weight=ONE_AT_A_TIME_UNITS)]
+        tasks += [Task(f"Monte Carlo, {which} parameters ({draws} draws)", "draw", _monte_carlo_set,
+                       (draws, opts["seed"], which, change, base),
+                       weight=float(draws) * DRAW_UNITS[which])
+                  for which in MONTE_CARLO_SETS]
+        probes = [Task("the elasticities", "elasticities", elasticities, (), weight=1.0),
+                  Task(f"{PROBE_DRAWS} Monte Carlo draws", "draw", _monte_carlo_set,
+                       (PROBE_DRAWS, opts["seed"], "all", change, base), weight=float(PROBE_DRAWS))]
+        return Plan(self.name, {**opts, "base": base, "change": change}, tuple(tasks), calibration=tuple(probes),
+                    figures=8.0, jobs=min(usable_cpus(), len(tasks)), sized_by=("--draws",))
+
+    def assemble(self, plan, results):
+        from .._results import reporter
+        from .protocol import Figure, StudyResult, Table
+
+        el, table = results[plan.tasks[0].key]
+        mcs = tuple(results[t.key] for t in plan.tasks[1:])
+        s = _sensitivity(el, table, mcs, change=plan.options["change"], alpha_change=None, bound=PAPER_BOUND,
+                         **plan.options["base"])
+        f = el.frequency_hz
+        tables = (
+            Table.from_records("elasticities", [
+                {"parameter": n, "group": g, "value": float(v), "method": m, "frequency_Hz": float(f[k]),
+                 "dlnGstorage_dlnp": float(el.storage[i, k]), "dlnGloss_dlnp": float(el.loss[i, k])}
+                for i, (n, g, v, m) in enumerate(zip(el.names, el.groups, el.values, el.methods))
+                for k in range(f.size)]),
+            Table.from_records("perturbations", [
+                {"parameter": r.name, "group": r.group, "dGstorage_minus": r.storage[0], "dGstorage_plus": r.storage[1],
+                 "dGloss_minus": r.loss[0], "dGloss_plus": r.loss[1], "note": r.note} for r in table]),
+            Table.from_records("sensitivity_table", [
+                {"group": x.group, "n": x.n, "max_abs_elasticity_storage": x.max_elasticity_storage,
+                 "max_abs_elasticity_loss": x.max_elasticity_loss, "max_change_storage": x.max_change_storage,
+                 "max_change_loss": x.max_change_loss, "holds_8pct": x.holds, "note": x.note} for x in s.summary]),
+            Table.from_records("monte_carlo", [
+                {"set": mc.label, "draw": i, "valid": bool(mc.valid[i]), "max_change_storage": float(mc.change_storage[i]),
+                 "max_change_loss": float(mc.change_loss[i]), "reason": mc.reasons[i]}
+                for mc in mcs for i in range(mc.factors.shape[0])]),
+        )
+        return StudyResult(self.name, tables=tables,
+                           figures=(Figure("elasticities.png", "elasticities_figure", (el,)),
+                                    Figure("monte_carlo.png", "monte_carlo_figure", (list(mcs),))),
+                           pages=(("sensitivity.md", reporter("sensitivity_markdown")(s)),), data=s)
+
+
+#: the study of ``tenscell study sensitivity`` (:mod:`tenscell.studies.protocol`)
+STUDY = _Sensitivity()

@@ -163,3 +163,46 @@ def stiffening_study(
             kt[i, k] = lin.law.tangent_at_rest(cell.lengths, P * cell.T0)[0][j]
     return StiffeningStudy(b=bs, prestress=Ps, frequency_hz=f, G=G, static=st, if_tangent=kt, EA=EA, c=c,
                            family=family, cell=cell)
+
+
+# ---- the study protocol (tenscell study stiffening) ------------------------------------------------------------
+#: the study's work (its defaults: 6 exponents × 41 prestresses) in units of :func:`_probe` (one exponent at 4
+#: prestresses), as measured
+STIFFENING_UNITS = 36.0
+
+
+def _probe() -> StiffeningStudy:
+    """One unit of the study's work: one exponent at four prestresses."""
+    return stiffening_study(b=(0.01,), prestress=(500.0, 1000.0, 2000.0, 4500.0))
+
+
+class _Stiffening:
+    """``tenscell study stiffening``: one task (the study's defaults), calibrated by a small grid of it."""
+
+    name = "stiffening"
+    options: dict = {}
+
+    def plan(self, options):
+        from .protocol import Plan, Task, study_options
+
+        return Plan(self.name, study_options(self, options),
+                    (Task("stiffening: G', G'' against P for each exponent", "grid", stiffening_study,
+                          weight=STIFFENING_UNITS),),
+                    calibration=(Task("one exponent at four prestresses", "grid", _probe),), figures=2.3)
+
+    def assemble(self, plan, results):
+        from .._results import reporter
+        from .protocol import Figure, StudyResult, Table
+
+        s = next(iter(results.values()))
+        rows = [{"b": float(b), "prestress": float(P), "frequency_Hz": float(f), "G_storage": float(s.G[i, k, j].real),
+                 "G_loss": float(s.G[i, k, j].imag), "G_static": float(s.static[i, k]),
+                 "IF_tangent_N_per_m": float(s.if_tangent[i, k])}
+                for i, b in enumerate(s.b) for k, P in enumerate(s.prestress) for j, f in enumerate(s.frequency_hz)]
+        return StudyResult(self.name, tables=(Table.from_records("stiffening", rows),),
+                           figures=(Figure("stiffening.png", "stiffening_figure", (s,)),),
+                           pages=(("stiffening.md", reporter("stiffening_markdown")(s)),), data=s)
+
+
+#: the study of ``tenscell study stiffening`` (:mod:`tenscell.studies.protocol`)
+STUDY = _Stiffening()

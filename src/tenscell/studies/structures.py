@@ -305,6 +305,9 @@ class StructuresStudy:
     """The study (protocol :class:`~tenscell.studies.protocol.Study`): ``name = "structures"``."""
 
     name = "structures"
+    #: the options :meth:`plan` takes (the protocol's ``Study.options``; None: the study's default)
+    options: Mapping[str, Any] = {"datasets": None, "structures": None, "mechanisms": None, "anchors": None,
+                                  "seeds": None, "search": None}
 
     def plan(self, options: Mapping[str, Any]) -> Plan:
         """Options: ``datasets`` (default :func:`bundled_pair`), ``structures``, ``mechanisms``, ``anchors``
@@ -323,7 +326,7 @@ class StructuresStudy:
         structures = _check_choice("structures", opts.get("structures"), tuple(STRUCTURES))
         mechanisms = _check_choice("mechanisms", opts.get("mechanisms"), MECHANISMS)
         anchors = _check_choice("anchors", opts.get("anchors"), tuple(ANCHORS))
-        seeds = tuple(int(s) for s in opts.get("seeds", SEEDS)) or SEEDS
+        seeds = tuple(int(s) for s in (opts.get("seeds") or SEEDS)) or SEEDS
         search = {**SEARCH, **dict(opts.get("search") or {})}
         tasks = []
         for st in structures:

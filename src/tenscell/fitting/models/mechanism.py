@@ -49,7 +49,8 @@ from ... import laws as _laws
 from ...io.data import DataError
 from ...model.equilibrium import Cell
 from .heterogeneity import DISTRIBUTIONS, assignments
-from .mechanism_kernel import EvaluationPlan, MechanismEvaluation, evaluate, evaluate_planned, law_values, plan_points
+from .mechanism_kernel import (EvaluationPlan, MechanismEvaluation, evaluate, evaluate_cells, evaluate_planned,
+                               law_values, plan_points)
 from ..parameters import (Parameters, as_datasets, bounds_by_name, default_bounds, family_groups, fixed_by_name,
                           prestress_layout)
 from ..._results import format_repr
@@ -389,6 +390,12 @@ class MechanismProblem(Problem):
 
     def _evaluate_constrained(self, phi, jac: bool):
         return self._at_data(phi, jac), (None if self.time is None else self._at_times(phi, jac))
+
+    def _evaluate_cells(self, cells, phis, jac: bool) -> tuple:
+        if any(pb.time is not None for pb in cells):  # time data: each cell's own contour, one by one
+            return tuple(pb._evaluate_constrained(phi, jac) for pb, phi in zip(cells, phis))
+        # moduli only: many cells in one batched solve (a population), each as _evaluate_constrained pairs it
+        return tuple((mod, None) for mod in evaluate_cells(cells, phis, jac))
 
     def _residuals_from(self, out) -> np.ndarray:
         mod, tim = out

@@ -14,6 +14,10 @@ gives the law parameter of every tendon in every assignment k (K × m values,
 
 The moduli are ``G* = mean_k (0.5/L)/J_k + iωη``.
 
+**Many cells at once** (a population, :func:`evaluate_cells`): cells whose data points share one plan are
+evaluated together, each at its own parameters: one law evaluation per grid with the tendons of every cell side by
+side, one batched solve for every cell's points, the chain rule cell by cell in one contraction.
+
 **The plan.** A law is evaluated on a grid of frequencies for a set of tendons. The points of a data set pair a
 frequency with a prestress group (a frequency sweep: many frequencies at one prestress; a prestress sweep: one
 frequency at many), so the points are split once, when the problem is built, into grids whose prestress groups
@@ -33,7 +37,7 @@ from ...linear.dynamic import batched_compliance
 from .heterogeneity import DISTRIBUTIONS
 
 __all__ = ["MechanismEvaluation", "Grid", "EvaluationPlan", "plan_points", "law_values", "evaluate",
-           "evaluate_planned"]
+           "evaluate_planned", "evaluate_cells"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -223,4 +227,129 @@ def _derivatives(problem, laws, out, J, G, P, vals: dict, dln: dict, dP) -> np.n
     # P dG/dP along the prestress: at fixed k*, and through the tensions P·T0 in k*
     dG_P = dG_dJ * P * dJ_dP.reshape(N, K) + np.einsum("nkm,nkm,m->nk", g, dk_dT, problem.T0) * P
     dG += dG_P.sum(axis=1)[:, None] * dP
+    return dG / K
+
+
+# ---- many cells at once (a population) ----------------------------------------------------------------------
+def evaluate_cells(problems, phis, jac: bool) -> tuple:
+    """Each mechanism problem of ``problems`` (cells of one population: the same mechanism, cell and parameter
+    layout) at its own log-parameters ``phis[c]``, as ``problem._at_data(phis[c], jac)`` gives it (a
+    :class:`MechanismEvaluation`, or None where not a stable cell), the cells whose points share a plan evaluated
+    together (module docstring)."""
+    phis = np.asarray(phis, dtype=float)
+    out: list = [None] * len(problems)
+    batches: dict = {}
+    for c, pb in enumerate(problems):
+        batches.setdefault((pb.omega.tobytes(), pb.group_index.tobytes()), []).append(c)
+    for cells in batches.values():
+        group = [problems[c] for c in cells]
+        try:
+            done = _evaluate_batch(group, phis[cells], jac)
+        except np.linalg.LinAlgError:  # a singular cell: each cell alone (the others keep their moduli)
+            done = [pb._at_data(phi, jac) for pb, phi in zip(group, phis[cells])]
+        for c, e in zip(cells, done):
+            out[c] = e
+    return tuple(out)
+
+
+def _cell_law_values(problems, phis) -> tuple[dict, dict]:
+    """Per law parameter: values (C, K, m) and d ln value / d φ ((K, m, n) shared, or (C, K, m, n) per cell)."""
+    first = problems[0]
+    if first.shape_maps:  # a distribution's quantiles depend on each cell's shape parameter
+        each = [law_values(pb, phi) for pb, phi in zip(problems, phis)]
+        return ({n: np.stack([v[n] for v, _ in each]) for n in each[0][0]},
+                {n: np.stack([d[n] for _, d in each]) for n in each[0][1]})
+    vals, dln = {}, {}
+    for name, D, const in first.field_maps:
+        vals[name] = np.exp(const + np.einsum("kmq,cq->ckm", D, phis))
+        dln[name] = D
+    return vals, dln
+
+
+def _evaluate_batch(problems, phis, jac: bool) -> list:
+    """:func:`evaluate_cells` for cells of one plan: C cells, N points each, K assignments, m tendons."""
+    first = problems[0]
+    plan = first.plan
+    C, N = len(problems), plan.n_points
+    vals, dln = _cell_law_values(problems, phis)
+    K, m = next(iter(vals.values())).shape[1:]
+    sl = first.prestress_slice
+    offsets = np.array([pb.group_log_offset for pb in problems])  # (C, G): stated prestresses differ by cell
+    maps = np.array([pb.group_map for pb in problems])
+    P_groups = np.exp(offsets + np.einsum("cgp,cp->cg", maps, phis[:, sl]))
+    laws = _cell_tangents(first, plan, vals, P_groups, C, K, m, jac)
+    P = np.repeat(P_groups[:, plan.group_index], K, axis=1)  # (C, N·K): rows (cell, point, assignment)
+    out = batched_compliance(first.kernel, P.ravel(), laws[0].reshape(C * N * K, m), gradient=jac)
+    J = (out[0] if jac else out).reshape(C, N, K)
+    G = continuum_factor(first.L_ref) / J
+    dG = None
+    if jac:
+        dP = np.zeros((C, N, first.n_params))
+        dP[:, :, sl] = maps[:, plan.group_index]
+        dG = _cell_derivatives(first, laws, out, J, G, P.reshape(C, N, K), vals, dln, dP)
+    G_assign = np.swapaxes(G, 1, 2)  # (C, K, N)
+    if first.eta_index is not None:
+        visc = 1j * first.omega[None] * np.exp(phis[:, first.eta_index])[:, None]  # (C, N)
+        G_assign = G_assign + visc[:, None]
+        if dG is not None:
+            dG[:, :, first.eta_index] += visc
+    ok = np.all(np.isfinite(J), axis=(1, 2))
+    return [MechanismEvaluation(G=G_assign[c].mean(axis=0), G_assign=G_assign[c], dG=None if dG is None else dG[c])
+            if ok[c] else None for c in range(C)]
+
+
+def _cell_tangents(problem, plan: EvaluationPlan, vals: dict, P_groups, C: int, K: int, m: int, jac: bool):
+    """:func:`_tangents` for C cells: ``k*`` (C, N, K, m), ``∂k*/∂T`` (C, N, K, m), ``∂k*/∂x_p`` (p, C, N, K, m).
+
+    One law per grid, its tendons those of every (cell, group, assignment) side by side.
+    """
+    N = plan.n_points
+    kstar = np.empty((C, N, K, m), dtype=complex)
+    dk_dT = np.empty((C, N, K, m), dtype=complex) if jac else None
+    dk = None
+    for grid in plan.grids:
+        Gg = grid.groups.size
+        shape = (C, Gg, K, m)
+        T = np.broadcast_to(P_groups[:, grid.groups][:, :, None, None] * problem.T0, shape).ravel()
+        l = np.broadcast_to(problem.lengths, shape).ravel()
+        law = problem.law_class._trusted(**{n: np.broadcast_to(v[:, None], shape).ravel() for n, v in vals.items()})
+        U = grid.omega.size
+        rows = grid.points if grid.rows is None else grid.rows
+        pick = slice(None) if grid.rows is not None else grid.cell
+
+        dims = (U, C, Gg, K, m)
+        kstar[:, rows] = _by_cell(law.complex_stiffness(l, T, grid.omega), dims, pick)
+        if jac:
+            assert dk_dT is not None
+            dT, dx = law.complex_stiffness_derivatives(l, T, grid.omega)
+            dk_dT[:, rows] = _by_cell(dT, dims, pick)
+            if dk is None:
+                dk = np.empty((dx.shape[0], C, N, K, m), dtype=complex)
+            dk[:, :, rows] = _by_cell(dx, dims, pick, (dx.shape[0],))
+    return kstar, dk_dT, dk
+
+
+def _by_cell(a, dims, pick, lead=()) -> np.ndarray:
+    """A grid's law output (..., U, C·Gg·K·m) as (..., C, U·Gg, K, m) (a point's row: u·Gg + g), its points picked."""
+    U, C, Gg, K, m = dims
+    a = np.moveaxis(a.reshape(*lead, U, C, Gg, K, m), len(lead) + 1, len(lead))
+    return a.reshape(*lead, C, U * Gg, K, m)[..., pick, :, :]
+
+
+def _cell_derivatives(problem, laws, out, J, G, P, vals: dict, dln: dict, dP) -> np.ndarray:
+    """:func:`_derivatives` for C cells: ``dG/dφ`` (C, N, n_params), each cell at its own parameters."""
+    _, dk_dT, dk = laws
+    _, dJ_dk, dJ_dP = out
+    C, N, K = J.shape
+    dG_dJ = -G / J
+    g = dJ_dk.reshape(C, N, K, -1) * dG_dJ[..., None]
+    dG = np.zeros((C, N, problem.n_params), dtype=complex)
+    for p, name in enumerate(problem.law_names):
+        d = dln[name]
+        chain = vals[name][..., None] * (d[None] if d.ndim == 3 else d)  # (C, K, m, n_params)
+        if not chain.any():
+            continue  # a held field
+        dG += np.einsum("cnkm,ckmq->cnq", g * dk[p], chain)
+    dG_P = dG_dJ * P * dJ_dP.reshape(C, N, K) + np.einsum("cnkm,cnkm,m->cnk", g, dk_dT, problem.T0) * P
+    dG += dG_P.sum(axis=2)[..., None] * dP
     return dG / K

@@ -236,7 +236,8 @@ class PopulationProblem(Problem):
 
     # -- evaluation -------------------------------------------------------------------------------
     def _evaluate_constrained(self, phi, jac: bool):
-        return tuple(pb._evaluate_constrained(p, jac) for pb, p in zip(self.cells, self.cell_phis(phi)))
+        # every cell at once where the base model's kernel can (Problem._evaluate_cells)
+        return self.cells[0]._evaluate_cells(self.cells, self.cell_phis(phi), jac)
 
     def _residuals_from(self, out) -> np.ndarray:
         r = np.empty(self.n_residuals)
