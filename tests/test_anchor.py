@@ -103,9 +103,9 @@ def test_an_anchored_fit_reports_its_ratio_and_its_anchor(pair):
 
 def test_the_voigt_cells_ratio_follows_its_strut_length(pair):
     """σ ∝ P/L² on the fitted cell: the same moduli at (λ²s, λL) give the same σ/measured."""
-    from tenscell.fitting import fit
+    from tenscell.fitting import VoigtModel, fit
 
-    search = dict(starts=1, hops=1, patience=1, seed=0, progress=False, max_nfev=5, tendons="uniform")
+    search = dict(starts=1, hops=1, patience=1, seed=0, progress=False, max_nfev=5, model=VoigtModel("uniform"))
     a = fit(pair, fixed={"L": 1.0, "s": 0.3}, **search)
     b = fit(pair, fixed={"L": 2.0, "s": 1.2}, **search)
     assert prestress_ratio(a)[0] == pytest.approx(0.3 * virial_prestress(paper_cell()).sigma_per_P, rel=1e-12)

@@ -21,7 +21,7 @@ import tenscell
 from tenscell.fitting.curves import frequency_slopes, prestress_slopes
 from tenscell.io.data import bundled
 from tenscell.reports.fit import fit_markdown
-from tenscell.fitting import VoigtModel
+from tenscell.fitting import VoigtModel, prestress_activity
 
 H = 1e-3
 RTOL = 1e-4
@@ -65,8 +65,8 @@ def test_prestress_lines_elasticities_and_creep_errors_match_an_independent_prop
     q = r.derived
     checks = {
         "prestress_lines[0]": lambda x: prestress_slopes(x, dataset=0),
-        "reference_storage": lambda x: x.prestress.reference_storage,
-        "reference_share": lambda x: x.prestress.reference_share,
+        "reference_storage": lambda x: prestress_activity(x).reference_storage,
+        "reference_share": lambda x: prestress_activity(x).reference_share,
         "creep_alpha": lambda x: x.predicted_creep().alpha,
         "creep_J": lambda x: x.predicted_creep().J[::10],
     }

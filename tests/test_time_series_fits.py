@@ -137,9 +137,10 @@ def test_the_command_line_fits_a_mechanism_to_creep(tmp_path):
 @pytest.mark.skipif(not HL60.exists(), reason="the measured HL60 creep is in ../shared/data/real-cells (not shipped)")
 def test_the_command_line_fits_the_measured_hl60_creep(tmp_path):
     out = tmp_path / "hl60"
+    # one HL60 cell: the scatter of the measured curve alone is several hundredths of a decade (0.049 here), so the
+    # exit status is 0 at a tolerance of 0.1 decades and 1 at the default 0.01
     code = cli_main(["fit", str(HL60), "--model", "springpot-alpha-family+visc", "--starts", "1", "--profile", "no",
-                     "--validate", "no", "--out", str(out)])
+                     "--validate", "no", "--tolerance", "0.1", "--out", str(out)])
     assert code == 0
     doc = json.loads((out / "fit.json").read_text())
-    # one HL60 cell: the scatter of the measured curve alone is several hundredths of a decade
     assert doc["kind"] == "creep" and doc["rms_log10_error"] < 0.1
