@@ -29,7 +29,8 @@ MODEL_GROUPS = {
     "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc",
                                        "springpot-alpha-family+visc", "springpot-lognormal-kappa+visc"),
     "structure-free formulas (baselines)": ("structural-damping", "structural-damping+newtonian",
-                                            "structural-damping-prestress", "structural-damping-prestress+newtonian"),
+                                            "structural-damping-prestress", "structural-damping-prestress+newtonian",
+                                            "modified-power-law+constant"),
 }
 RECOMMENDED_MODEL = "springpot-alpha-family+visc"
 MODEL_NAMES = tuple(n for names in MODEL_GROUPS.values() for n in names)
