@@ -143,35 +143,57 @@ def _study_compactness(out: Path, log, args=None) -> None:
     log(written)
 
 
+def write_study_result(out: Path, result) -> list[str]:
+    """Every table (``NAME.csv``), figure and page of a :class:`~tenscell.studies.protocol.StudyResult` into
+    ``out``: the names written."""
+    from .. import plotting
+    from ..io.outputs import write_csv_rows, write_text
+
+    for t in result.tables:
+        write_csv_rows(out / f"{t.name}.csv", list(t.columns), t.rows)
+    for f in result.figures:
+        plotting.save(f.draw(), out / f.name)
+    for name, text in result.pages:
+        write_text(out / name, text)
+    return list(result.files())
+
+
 def _study_mechanisms(out: Path, log, args=None) -> None:
+    import dataclasses
+    import time
+
     from .. import plotting
     from .._parallel import jobs_for
-    from ..io.outputs import write_csv_rows, write_text
     from ..plotting.mechanisms import mechanisms_figure
-    from ..reports.mechanisms import STUDY_COLUMNS, mechanisms_markdown, study_table_rows
-    from ..studies.mechanisms import mechanisms_study
+    from ..studies.mechanisms import MechanismsStudy, assemble_study
+    from ..studies.protocol import execute
 
     datasets = args.datasets  # read and checked before the study began (run)
     names = _study_models(args)
     K = STUDY_ENSEMBLE_K if args.ensemble is None else args.ensemble
-    s = mechanisms_study(datasets, mechanisms=names, starts=args.starts, hops=args.hops, seed=args.seed,
-                         tolerance=args.tolerance, jobs=jobs_for(len(names), args.jobs), ensemble=K or None,
-                         workers=args.workers, scheduler=args.scheduler, notify=lambda line: log(f"ensemble: {line}"))
-    write_csv_rows(out / "mechanisms.csv", list(STUDY_COLUMNS), study_table_rows(s))
+    study = MechanismsStudy()
+    plan = study.plan({"datasets": datasets, "mechanisms": names, "starts": args.starts, "hops": args.hops,
+                       "seed": args.seed, "tolerance": args.tolerance, "ensemble": K or None,
+                       "workers": args.workers, "scheduler": args.scheduler})
+    jobs = jobs_for(len(plan.tasks), args.jobs)
+    plan.options["jobs"] = jobs
+    t0 = time.monotonic()
+    results, records = execute(plan, jobs=jobs, rates=study.rates, notify=lambda line: log(line))
+    s = assemble_study(plan, results, elapsed_s=time.monotonic() - t0)
+    result = dataclasses.replace(study.result(s), tasks=records, elapsed_s=s.elapsed_s)
+    written = write_study_result(out, result)
     plotting.save(mechanisms_figure(s, datasets), out / "mechanisms.png")
-    report = mechanisms_markdown(s)
-    write_text(out / "mechanisms.md", report)
-    print(report.split("## The goals")[0].split("\n\n", 2)[-1], flush=True)
-    written = "mechanisms.csv, mechanisms.png, mechanisms.md"
+    written.append("mechanisms.png")
+    print(result.summary, flush=True)
     if s.ensemble is not None:
         from .fit import ENSEMBLE_FILES, write_ensemble
 
         write_ensemble(out, s.ensemble, f"Ensemble of `{s.ensemble.mechanism}`, the distributed mechanism with the "
                                         "lowest BIC")
-        written += ", " + ", ".join(ENSEMBLE_FILES)
+        written += list(ENSEMBLE_FILES)
     elif K:
         log("no ensemble: none of the mechanisms fitted draws a tendon property from a distribution")
-    log(written)
+    log(", ".join(written) + f" ({result.cpu_s:.0f} s of CPU in {len(records)} tasks)")
 
 
 #: model evaluations (residuals and Jacobian: one unit of a fit's work) one start of a mechanism's fit takes in
@@ -206,10 +228,10 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate
                     falsify: bool = True):
     """The mechanisms study's cost (:class:`tenscell.cli._cost.Cost`): the CPU time of one model evaluation of each
     model, timed here at a start of its fit with the BLAS threads the search uses, × the evaluations its fits are
-    expected to take (:data:`EVALUATIONS_PER_START_HOP` × starts × hops for the main fit; the same at the refits'
-    budget, :data:`tenscell.studies.mechanisms.REFIT`, for each of the others that
-    :func:`~tenscell.studies.mechanisms.fits_per_model` counts), over ``jobs`` workers at the CPU share the
-    machine's load leaves them (:func:`cpu_share`)."""
+    expected to take (:data:`EVALUATIONS_PER_START_HOP` × starts × hops for the main fit, and the same for each
+    referee's refit that :func:`~tenscell.studies.mechanisms.fits_per_model` counts: refits run to the main fit's
+    standard), over ``jobs`` workers at the CPU share the machine's load leaves them (:func:`cpu_share`). An upper
+    bound: a model that misses the data in sample is not refereed, and a warm refit often stops sooner."""
     import numpy as np
 
     from .._threads import limited
@@ -217,11 +239,11 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate
     from ..fitting.entry import prepare
     from ..fitting.models.catalog import PER_TENDON_VOIGT
     from ..fitting.models.voigt import VoigtModel
-    from ..studies.mechanisms import PER_TENDON_HOPS, REFIT, fits_per_model
+    from ..studies.mechanisms import PER_TENDON_HOPS, fits_per_model
     from ._cost import Cost
 
     cpu, evaluations, fits = 0.0, 0, 0
-    refit = REFIT["starts"] * (REFIT["hops"] + 1)
+    refit = starts * (hops + 1)
     with limited():
         for name in names:
             per_tendon = name == PER_TENDON_VOIGT
@@ -240,8 +262,7 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate
     per = cpu / max(evaluations, 1)
     return Cost("model evaluation", max(evaluations, 1), per / share, workers,
                 detail=f"({len(names)} model(s), {fits} fits: each model × {starts} start(s) × up to {hops} hop(s),"
-                       f" its anchored, structure-free, held-out and unlike refits × {REFIT['starts']} × "
-                       f"{REFIT['hops']}; {per * 1e3:.2g} ms of CPU each, at {share:.0%} of a CPU per worker: load "
+                       f" its held-out, anchored and unlike refits to the same budget; {per * 1e3:.2g} ms of CPU each, at {share:.0%} of a CPU per worker: load "
                        f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs)")
 
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -233,6 +234,7 @@ class HeldOutScore:
     n_band: int
     train_rms: float
     reference_train_rms: float = math.nan
+    cpu_s: float = math.nan  # CPU seconds of the refit (NaN: not measured)
 
     @property
     def converged(self) -> bool:
@@ -258,8 +260,9 @@ def score_split(result, split: Split, full=None, cost: float = BAND_COST) -> Hel
 
 def refit_split(spec, split: Split, full=None, *, cell=None, bounds=None, fixed=None, **search) -> HeldOutScore:
     """``spec`` refitted on ``split``'s training data (:func:`refit`, warm at ``full``) and scored."""
+    c0 = time.process_time()
     r = refit(spec, split.train, full, cell=cell, bounds=bounds, fixed=fixed, **search)
-    return score_split(r, split, full)
+    return dataclasses.replace(score_split(r, split, full), cpu_s=time.process_time() - c0)
 
 
 @dataclass(frozen=True, eq=False, repr=False)

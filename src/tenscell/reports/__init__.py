@@ -7,6 +7,7 @@ from .compactness import compactness_markdown
 from .ensemble import ensemble_markdown
 from .fit import fit_markdown
 from .fit_text import fit_text
+from .mechanisms import mechanisms_markdown, mechanisms_summary
 from .html import (comparison_html, data_html, ensemble_html, fit_html, fitted_model_html, frequency_response_html,
                    population_html)
 from .population import population_markdown, study_markdown
@@ -18,7 +19,8 @@ __all__ = [
     "fit_markdown", "fit_text", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
     "ensemble_markdown", "population_fit_markdown", "fit_html", "data_html", "frequency_response_html",
-    "fitted_model_html", "comparison_html", "population_html", "ensemble_html",
+    "fitted_model_html", "comparison_html", "population_html", "ensemble_html", "mechanisms_markdown",
+    "mechanisms_summary",
 ]
 
 
