@@ -162,9 +162,7 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     import dataclasses
     import time
 
-    from .. import plotting
     from .._parallel import jobs_for
-    from ..plotting.mechanisms import mechanisms_figure
     from ..studies.mechanisms import MechanismsStudy, assemble_study
     from ..studies.protocol import execute
 
@@ -182,8 +180,6 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     s = assemble_study(plan, results, elapsed_s=time.monotonic() - t0)
     result = dataclasses.replace(study.result(s), tasks=records, elapsed_s=s.elapsed_s)
     written = write_study_result(out, result)
-    plotting.save(mechanisms_figure(s, datasets), out / "mechanisms.png")
-    written.append("mechanisms.png")
     print(result.summary, flush=True)
     if s.ensemble is not None:
         from .fit import ENSEMBLE_FILES, write_ensemble

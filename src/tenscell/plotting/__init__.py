@@ -51,9 +51,10 @@ __all__ = [
 def _register() -> None:
     """Every drawing function of the topic modules, for the results' ``plot()`` (:func:`tenscell._results.plotter`)."""
     from .._results import register_plotters
+    from . import mechanisms, real_cells  # the studies' figures (tenscell.studies.protocol.Figure names them)
 
     register_plotters({name: getattr(module, name) for module in (dynamics, fits, paper, population, spectra,
-                                                                  structures, variants)
+                                                                  structures, variants, mechanisms, real_cells)
                        for name in module.__all__ if callable(getattr(module, name))})
     register_plotters({"save": save})
 

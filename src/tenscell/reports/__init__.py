@@ -8,6 +8,7 @@ from .ensemble import ensemble_markdown
 from .fit import fit_markdown
 from .fit_text import fit_text
 from .mechanisms import mechanisms_markdown, mechanisms_summary
+from .real_cells import real_cells_markdown, real_cells_tables, validation_tables
 from .html import (comparison_html, data_html, ensemble_html, fit_html, fitted_model_html, frequency_response_html,
                    population_html)
 from .population import population_markdown, study_markdown
@@ -20,7 +21,7 @@ __all__ = [
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
     "ensemble_markdown", "population_fit_markdown", "fit_html", "data_html", "frequency_response_html",
     "fitted_model_html", "comparison_html", "population_html", "ensemble_html", "mechanisms_markdown",
-    "mechanisms_summary",
+    "mechanisms_summary", "real_cells_markdown", "real_cells_tables", "validation_tables",
 ]
 
 

@@ -248,6 +248,7 @@ class MechanismStudy:
     ensemble: EnsembleResult | None = None  # the best distributed mechanism's (tenscell.population.ensemble)
     baselines: tuple = ()  # the baseline pool's OutOfSample rows (tenscell.fitting.validation)
     baseline_fits: dict = field(default_factory=dict)  # {baseline name: (free parameters, rms per data set, BIC)}
+    datasets: tuple = ()  # the data sets fitted
 
     @property
     def cpu_s(self) -> float:
@@ -828,10 +829,11 @@ class MechanismsStudy:
 
     def result(self, study: MechanismStudy):
         """The :class:`~tenscell.studies.protocol.StudyResult` of an assembled study: its tables, page, checks."""
-        from .protocol import StudyResult
+        from .protocol import Figure, StudyResult
 
         return StudyResult(study=self.name, tables=study_tables(study), data=study, checks=_checks(study),
-                           summary=_summary(study), pages=(("mechanisms.md", _markdown(study)),))
+                           summary=_summary(study), pages=(("mechanisms.md", _markdown(study)),),
+                           figures=(Figure("mechanisms.png", "mechanisms_figure", (study, study.datasets)),))
 
 
 def _structural(name: str) -> bool:
@@ -932,7 +934,8 @@ def assemble_study(plan, results: Mapping[str, Any], elapsed_s: float = math.nan
                                    "jobs": o.get("jobs", 1), "refit": "the main fit's search, warm at the main fit",
                                    "baseline_cpu_s": base_cpu - sum(_cpu_of(results[f"baseline/{n}"]) for n in given
                                                                     if f"baseline/{n}" in results)},
-                          ensemble=results.get("ensemble"), baselines=tuple(pool_rows), baseline_fits=fits)
+                          ensemble=results.get("ensemble"), baselines=tuple(pool_rows), baseline_fits=fits,
+                          datasets=tuple(o["datasets"]))
 
 
 def _rms_text(values) -> str:
