@@ -90,10 +90,15 @@ def register(sub) -> None:
     p.add_argument("--bound", action="append", type=_bound, metavar="KIND=LO:HI", default=None,
                    help="bounds of every parameter of a kind, in SI units (repeatable): EA (N), c (N·s/m), P (N), "
                         "s (m²), P_data (Pa), L (m); e.g. --bound EA=1e-3:1e3")
-    p.add_argument("--anchored", action="store_true",
-                   help="hold the prestress gauge to the paper's convention: the prestress scale s in [0.01, 100] m², "
-                        "i.e. the strut length L = s^-1/2 in 0.1-10 m (the same as --bound s=0.01:100; needs a data "
-                        "set that states its prestress in Pa)")
+    p.add_argument("--anchored", nargs="?", const="", default=None, metavar="FACTOR|exact",
+                   help="hold the model's physical prestress σ (the tendons' virial stress, Σ T·l/(3V) over the hull "
+                        "of the nodes; docs/conventions.md) within ×/÷FACTOR of the measured prestress (default 1.5), "
+                        "or equal to it (exact); needs a data set that states its prestress in Pa. Written "
+                        "--anchored=exact or --anchored 2 before another flag")
+    p.add_argument("--gauge-window", action="store_true",
+                   help="hold the prestress scale s in [0.01, 100] m² (strut lengths 0.1-10 m in the paper's "
+                        "convention; the same as --bound s=0.01:100): a window on the gauge, not an anchor (it never "
+                        "binds on the bundled data; --anchored is the physical anchor)")
     p.add_argument("--fix", action="append", type=_fixed, metavar="NAME=VALUE", default=None,
                    help="hold a parameter fixed, by its name in fit.json, in SI units (repeatable): e.g. --fix L=1, "
                         "--fix c=0.5, --fix P=20, --fix c_actin=2, --fix EA_intermediate_filament=0.3")
@@ -218,17 +223,50 @@ def spec_from_args(args):
     return spec
 
 
-def _anchored(bounds: dict, plain) -> dict:
-    """``bounds`` with the prestress scale held to the anchored range (``--anchored``)."""
-    from ..fitting.shares import ANCHORED_S
+def anchor_from_args(args):
+    """The anchor of ``--anchored [FACTOR|exact]`` (None without the flag); ValueError in one line naming the flag
+    and its syntax, before any file is read."""
+    text = getattr(args, "anchored", None)
+    if text is None:
+        return None
+    if getattr(args, "gauge_window", False):
+        raise ValueError("--anchored holds σ to the measured prestress and --gauge-window holds s in 0.01-100 m²: "
+                         "give one of them")
+    from ..fitting.anchor import parse_anchor
+
+    return parse_anchor(text)
+
+
+def _no_scale(flag: str, plain) -> None:
+    if "s" not in plain.names:
+        raise ValueError(f"{flag}: this fit has no prestress scale s (no data set states its prestress in Pa: "
+                         "give a prestress sweep, or --prestress FILE=PA)")
+
+
+def _anchored(bounds: dict, fixed: dict, plain, anchor, cell) -> tuple[dict, dict]:
+    """``bounds`` and ``fixed`` with σ held to the measured prestress (``--anchored``)."""
+    flag = f"--anchored{'=exact' if anchor.is_exact else ''}"
+    if "s" in bounds or "s" in fixed:
+        how = "--bound s=LO:HI" if "s" in bounds else "--fix s=VALUE"
+        raise ValueError(f"{flag} sets the prestress scale s itself (σ held {anchor.label} of the measured "
+                         f"prestress); give it or {how}, not both")
+    if cell is None:
+        raise ValueError(f"{flag}: model {plain.spec.name} is a structure-free formula: it has no structure, so no "
+                         "σ to hold to the measured prestress")
+    _no_scale("--anchored", plain)
+    opts = anchor.fit_options(cell, plain.names, fixed)
+    return {**bounds, **opts["bounds"]}, opts["fixed"]
+
+
+def _gauge_window(bounds: dict, plain) -> dict:
+    """``bounds`` with the prestress scale in the gauge window (``--gauge-window``)."""
+    from ..fitting.shares import GAUGE_WINDOW_S
 
     if "s" in bounds:
-        raise ValueError("--anchored sets the prestress scale's bounds itself (s in 0.01-100 m²); give it or "
+        raise ValueError("--gauge-window sets the prestress scale's bounds itself (s in 0.01-100 m²); give it or "
                          "--bound s=LO:HI, not both")
-    if "s" not in plain.names:
-        raise ValueError("--anchored: this fit has no prestress scale s (no data set states its prestress in Pa: "
-                         "give a prestress sweep, or --prestress FILE=PA)")
-    return {**bounds, "s": ANCHORED_S}
+    _no_scale("--gauge-window", plain)
+    return {**bounds, "s": GAUGE_WINDOW_S}
 
 
 def search_space(args, datasets, spec) -> dict:
@@ -239,8 +277,12 @@ def search_space(args, datasets, spec) -> dict:
 
     plain = spec.problem(datasets)
     bounds = dict(args.bound or ())
-    if getattr(args, "anchored", False):
-        bounds = _anchored(bounds, plain)
+    user_fixed = dict(args.fix or ())
+    anchor = anchor_from_args(args)
+    if getattr(args, "gauge_window", False):
+        bounds = _gauge_window(bounds, plain)
+    if anchor is not None:
+        bounds, user_fixed = _anchored(bounds, user_fixed, plain, anchor, plain.cell)
     for key, (lo, hi) in bounds.items():
         if key not in plain.kinds and key not in plain.names:
             raise ValueError(f"--bound {key}={lo:g}:{hi:g}: no parameter or parameter kind {key!r} in this fit "
@@ -250,7 +292,7 @@ def search_space(args, datasets, spec) -> dict:
         bounded = spec.problem(datasets, bounds=bounds)
     except ValueError as err:
         raise ValueError(f"--bound: {err}") from None
-    fixed = dict(args.fix or ())
+    fixed = user_fixed
     lower, upper = [math.exp(x) for x in bounded.lower], [math.exp(x) for x in bounded.upper]
     for name, v in fixed.items():
         if name not in plain.names:
@@ -508,6 +550,7 @@ def run(args) -> int:
 
     spec = spec_from_args(args)
     check_contradictions(args)
+    anchor_from_args(args)  # a bad --anchored: one line before any file is read
     _check_ensemble(args, spec)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets, read_lines = read_inputs(args, _min_points(spec))

@@ -582,3 +582,7 @@ def _rms(r) -> float | None:
 
 def _short(source: str) -> str:
     return source.replace("\\", "/").rsplit("/", 1)[-1]
+
+from .._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

@@ -396,3 +396,7 @@ def _chains(problem: Problem, starts: int, seed, initial) -> list[_Chain]:
     chains = [_Chain(start=k, rng=rngs[k]) for k in range(starts)]
     chains[0].initial = _warm_start(problem, initial)
     return chains
+
+from .._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

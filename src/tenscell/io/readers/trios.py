@@ -96,19 +96,25 @@ def _labelled_blocks(source: str, lines: list[str]) -> list[Block]:
                 label == "Units" or (not label and len(_trimmed(f)) > 1)):
             current["units"] = [s.strip() for s in f[1:]]
         elif label == "Data point":
-            if current is None:
-                raise DataError(f"{source}, line {k}: a 'Data point' row before any 'Variables' row (column names)")
-            if len(_trimmed(f[1:])) > len(_trimmed(current["names"])):
-                raise DataError(f"{source}, line {k}: expected {len(_trimmed(current['names']))} fields after "
-                                f"'Data point', found {len(_trimmed(f[1:]))}")
-            current["rows"].append([s.strip() for s in f[1:]])
-            current["where"].append(f"line {k}")
+            _data_point(source, k, f, current)
         elif current is None and raw.strip() and not raw.startswith("["):
             meta.append(raw.strip().replace("\t", " "))
     out: list[Block] = []
     for b in blocks:
         out.extend(_split_by_step_column(source, b, tuple(meta), len(out)))
     return out
+
+
+def _data_point(source: str, k: int, f: list[str], current: dict | None) -> None:
+    """Add the ``Data point`` row ``f`` (line ``k``) to the block ``current`` (DataError before any block, or with
+    more fields than the block has columns)."""
+    if current is None:
+        raise DataError(f"{source}, line {k}: a 'Data point' row before any 'Variables' row (column names)")
+    if len(_trimmed(f[1:])) > len(_trimmed(current["names"])):
+        raise DataError(f"{source}, line {k}: expected {len(_trimmed(current['names']))} fields after "
+                        f"'Data point', found {len(_trimmed(f[1:]))}")
+    current["rows"].append([s.strip() for s in f[1:]])
+    current["where"].append(f"line {k}")
 
 
 def _declared(source: str, b: dict) -> tuple[int | None, str]:
