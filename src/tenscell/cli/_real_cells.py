@@ -130,7 +130,7 @@ def write_real_cells(out: Path, log, args, jobs: int) -> None:
 
     from ..studies.protocol import execute
     from ..studies.real_cells_study import RealCellsStudy, assemble_real_cells, load_average
-    from .study import write_study_result
+    from ._study_output import write_study_result
 
     names, med, cell, max_cells = budgets(args)
     w0, load0 = time.perf_counter(), load_average()

@@ -143,21 +143,6 @@ def _study_compactness(out: Path, log, args=None) -> None:
     log(written)
 
 
-def write_study_result(out: Path, result) -> list[str]:
-    """Every table (``NAME.csv``), figure and page of a :class:`~tenscell.studies.protocol.StudyResult` into
-    ``out``: the names written."""
-    from .. import plotting
-    from ..io.outputs import write_csv_rows, write_text
-
-    for t in result.tables:
-        write_csv_rows(out / f"{t.name}.csv", list(t.columns), t.rows)
-    for f in result.figures:
-        plotting.save(f.draw(), out / f.name)
-    for name, text in result.pages:
-        write_text(out / name, text)
-    return list(result.files())
-
-
 def _study_mechanisms(out: Path, log, args=None) -> None:
     import dataclasses
     import time
@@ -165,6 +150,7 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
     from .._parallel import jobs_for
     from ..studies.mechanisms import MechanismsStudy, assemble_study
     from ..studies.protocol import execute
+    from ._study_output import write_study_result
 
     datasets = args.datasets  # read and checked before the study began (run)
     names = _study_models(args)

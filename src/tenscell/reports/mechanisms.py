@@ -45,7 +45,7 @@ def _fit_rows(study):
                _rms(r.rms), f"{r.aic:.1f}", f"{r.bic:.1f}",
                f"{r.n_determined}/{r.n_free}" + (f" ({len(r.at_bound)} at bound)" if r.at_bound else ""),
                "yes" if r.converged else "no", f"{num(r.slope_range[0], 2)} … {num(r.slope_range[1], 2)}",
-               f"{_pct(r.geometric_share[0])} / {_pct(r.geometric_share[1])}")
+               f"{_pct(r.geometric_share[0])} / {_pct(r.geometric_share[1])}", num(r.sigma_ratio, 3))
 
 
 def _not_refereed(r) -> str:
@@ -162,8 +162,9 @@ def _referee_section(study) -> list[str]:
         table(("model", "held out mean / worst", "refits converged", "own formula held out", "structure adds",
                "strongest baseline: mean / worst", "better than the baselines"), _referee_rows(study)),
         "## At the anchor", "",
-        "*Anchored*: refitted with the model's prestress held to the measured one (σ/measured: the model's "
-        "prestress over the measured; n/a where this model has none defined). *Unlike*: the anchored model's RMS on "
+        "*Anchored*: refitted with the model's physical prestress σ (the mean normal stress of the tendons' virial "
+        "stress, docs/conventions.md) held within ×/÷1.5 of the measured one (σ/measured printed; the free fit's is "
+        "in the table above). *Unlike*: the anchored model's RMS on "
         "data cells do not show (stiffness independent of prestress / an exponent rising with prestress / G″ "
         "independent of prestress) over its anchored RMS on the cell data; below 2× it does not discriminate. "
         "*Δα*: the change of the local G′ slope at 0.1 Hz from the lowest to the highest measured prestress, of the "
@@ -203,7 +204,8 @@ def mechanisms_markdown(study) -> str:
            "above.", "",
            "## The fits", "",
            table(("model", "kind", "free", "stiffness spread (dec)", "RMS per data set", "AIC", "BIC",
-                  "determined within 10 %", "converged", "G' slope 0.01–1000 Hz", "P·Kp share of dG′/dP / dG″/dP"),
+                  "determined within 10 %", "converged", "G' slope 0.01–1000 Hz", "P·Kp share of dG′/dP / dG″/dP",
+                  "σ/measured"),
                  _fit_rows(study)),
            *_referee_section(study), *_notes(study), *_answer(study),
            "## The goals", "",

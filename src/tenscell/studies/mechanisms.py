@@ -45,7 +45,8 @@ from typing import TYPE_CHECKING, Any, Mapping, cast
 import numpy as np
 
 from ..fitting.models.catalog import MECHANISMS, PER_TENDON_VOIGT
-from ..fitting.shares import GAUGE_WINDOW_S as ANCHORED_S  # the referee switches the study to fitting.anchor
+from ..fitting.anchor import DEFAULT_FACTOR
+from ..fitting.shares import GAUGE_WINDOW_S
 
 if TYPE_CHECKING:
     from ..fitting.validation import OutOfSampleComparison
@@ -53,7 +54,7 @@ if TYPE_CHECKING:
 
 __all__ = ["MechanismRow", "MechanismStudy", "MechanismsStudy", "mechanisms_study", "GOALS", "SLOPE_GRID_PER_DECADE",
            "ANCHOR_S", "Anchored", "Falsified", "ExponentTest", "BaselineVerdict", "DISCRIMINATES", "ISSUE33_GOALS",
-           "REFEREE_MAX_RMS", "EXPONENT_FREQUENCY_HZ", "fits_per_model", "baseline_pool", "anchor_options",
+           "REFEREE_MAX_RMS", "EXPONENT_FREQUENCY_HZ", "ANCHOR_FACTOR", "fits_per_model", "baseline_pool", "anchor_options",
            "exponent_change", "default_models", "CALIBRATION_CPU_S", "study_tables", "HELDOUT_COLUMNS",
            "BASELINE_COLUMNS", "main_fit", "MainFit", "Skipped", "assemble_study"]
 
@@ -75,7 +76,9 @@ ISSUE33_GOALS = {"max_free": 8, "max_rms": 0.02, "anchor_factor": 1.5, "unlike_r
                  "baseline_factor": 0.8}
 #: the prestress window of the free fit (the paper's convention: strut length L = s^(-1/2) in 0.1–10 m): a gauge
 #: window, not an anchor
-ANCHOR_S = ANCHORED_S
+ANCHOR_S = GAUGE_WINDOW_S
+#: the anchored fits hold the model's physical prestress σ within ×/÷ this factor of the measured prestress
+ANCHOR_FACTOR = DEFAULT_FACTOR
 #: a model whose RMS on an unlike data set is below this many times its RMS on the cell data does not discriminate
 DISCRIMINATES = 2.0
 #: the referee's refits (held out, anchored, unlike, flat loss tangent) are run for the models whose worst RMS in
@@ -201,6 +204,7 @@ class MechanismRow:
     exponent: ExponentTest | None = None
     baselines: BaselineVerdict | None = None
     exponent_change: float = math.nan  # free fit: Δα over the measured prestress range (EXPONENT_FREQUENCY_HZ)
+    sigma_ratio: float = math.nan  # free fit: its physical prestress σ over the measured (NaN: not defined)
     notes: tuple = ()  # what was not run, and why
     cpu_s: float = math.nan  # CPU seconds of every fit of this model (its tasks' process time)
     cpu_main_s: float = math.nan  # CPU seconds of its main fit alone
@@ -466,15 +470,25 @@ def exponent_change(result, prestress_pa: tuple[float, float], frequency_hz: flo
     return alphas[1] - alphas[0] if all(map(math.isfinite, alphas)) else math.nan
 
 
-def anchor_options(datasets) -> dict:
-    """The options of :func:`tenscell.fitting.fit` that hold a model's prestress to the measured one: the one place
-    the anchor is defined for this study. Today: the prestress scale s held in :data:`ANCHOR_S`."""
-    return {"bounds": {"s": ANCHOR_S}}
+def anchor_options(name, datasets) -> dict:
+    """The options of :func:`tenscell.fitting.fit` that hold model ``name``'s physical prestress σ within ×/÷
+    :data:`ANCHOR_FACTOR` of the measured prestress (:class:`tenscell.fitting.anchor.Anchor`): the one place the
+    study's anchor is defined."""
+    from ..fitting.anchor import Anchor
+
+    return Anchor(ANCHOR_FACTOR).options_for(name, datasets)
 
 
 def _sigma_ratio(result) -> float:
-    """The fitted model's prestress σ over the measured one (NaN: not defined for this model)."""
-    return math.nan
+    """The fitted model's physical prestress σ over the measured one (the geometric mean over the data's stated
+    prestresses; NaN: not defined for this model)."""
+    from ..fitting.anchor import prestress_ratio
+
+    try:
+        r = prestress_ratio(result)
+    except ValueError:  # a cell whose nodes span no volume has no σ
+        return math.nan
+    return math.nan if r is None else math.sqrt(r[0] * r[1])
 
 
 def _model_moduli(result, f, k):
@@ -565,7 +579,8 @@ def main_fit(name, datasets, opts: dict) -> MainFit:
         alternatives_spread=_alternatives_spread(result), assignment_spread=result.assignment_spread[0],
         converged=bool(result.converged), elapsed_s=time.monotonic() - t0, curves=curves, model=result.model,
         heterogeneous=spec.heterogeneous, structural=spec.structural, geometric_share=_shares(result),
-        s=_scale(result), exponent_change=math.nan if span is None else exponent_change(result, span))
+        s=_scale(result), exponent_change=math.nan if span is None else exponent_change(result, span),
+        sigma_ratio=_sigma_ratio(result) if spec.structural else math.nan)
     return MainFit(name=name, result=result, fields=fields, refereed=refereed, note=note,
                    cpu_s=time.process_time() - c0)
 
@@ -593,7 +608,7 @@ def anchored_task(name: str, datasets, opts: dict, main: MainFit):
     if not main.refereed or not math.isfinite(_scale(main.result)):
         return Skipped(main.note or "no data set states its prestress: nothing to anchor")
     c0 = time.process_time()
-    r = refit(name, datasets, main.result, **anchor_options(datasets), **opts)
+    r = refit(name, datasets, main.result, **anchor_options(name, datasets), **opts)
     _, bic = r.information_criteria()
     span = _measured_range(datasets)
     return Anchored(rms=r.dataset_rms, bic=bic, s=_scale(r),
@@ -613,7 +628,7 @@ def unlike_task(name: str, kind: str, datasets, opts: dict, anchored):
     a, result = anchored
     c0 = time.process_time()
     ds = unlike_sets(datasets, (kind,))[kind]
-    r = refit(name, ds, result, **anchor_options(ds), **opts)
+    r = refit(name, ds, result, **anchor_options(name, ds), **opts)
     return Falsified(kind=kind, rms=r.dataset_rms, ratio=max(r.dataset_rms) / max(max(a.rms), 1e-12),
                      cpu_s=time.process_time() - c0)
 
@@ -630,7 +645,7 @@ def flat_task(name: str, datasets, opts: dict, anchored):
     span = _measured_range(datasets)
     assert span is not None  # anchored: some data set states its prestresses
     ds = unlike_sets(datasets, (FLAT_LOSS_TANGENT,))[FLAT_LOSS_TANGENT]
-    r = refit(name, ds, result, **anchor_options(ds), **opts)
+    r = refit(name, ds, result, **anchor_options(name, ds), **opts)
     return ExponentTest(prestress_pa=span, real=a.exponent_change, flat=exponent_change(r, span),
                         flat_rms=r.dataset_rms, cpu_s=time.process_time() - c0)
 
@@ -999,7 +1014,8 @@ def _main_fields(r: MechanismRow) -> dict:
             "determined_within_10pct": r.n_determined, "at_bound": " ".join(r.at_bound), "converged": r.converged,
             "ripple_Gstorage_slope": r.ripple, "Gstorage_slope_min": r.slope_range[0],
             "Gstorage_slope_max": r.slope_range[1], "alternatives_spread_decades": r.alternatives_spread,
-            "prestress_scale_s_m2": r.s, "geometric_share_dGstorage_dP": r.geometric_share[0],
+            "prestress_scale_s_m2": r.s, "sigma_over_measured": r.sigma_ratio,
+            "geometric_share_dGstorage_dP": r.geometric_share[0],
             "geometric_share_dGloss_dP": r.geometric_share[1],
             "formula": "" if f is None else f[0], "formula_parameters": "" if f is None else f[1],
             "formula_rms_per_dataset_decades": "" if f is None else _rms_text(f[2]),
