@@ -580,7 +580,7 @@ def run(args) -> int:
         from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
-        validation = _validation(args, spec, datasets, space)
+        validation = _validation(args, spec, datasets, space, result)
         outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure,
                               validation=validation)
     ensemble = _ensemble(args, result, datasets)
@@ -600,8 +600,9 @@ def run(args) -> int:
 VALIDATE_AUTO_MAX_PARAMETERS = 12
 
 
-def _validation(args, spec, datasets, space):
-    """The model and its structure-free baselines out of sample (``--validate``), or None."""
+def _validation(args, spec, datasets, space, result):
+    """The model and its structure-free baselines out of sample (``--validate``), or None: the model's refits start
+    warm at its fit (``result``) and are checked against it, each baseline's at its own fit to all the data."""
     from .._progress import stage
     from ..fitting.validation import compare_out_of_sample, standard_baselines
 
@@ -612,8 +613,8 @@ def _validation(args, spec, datasets, space):
               "--validate yes runs it)")
         return None
     validation = compare_out_of_sample(spec, datasets, standard_baselines(datasets), model_options=space,
-                                       notify=stage, starts=2, seed=args.seed, hops=8, patience=3,
-                                       tolerance=args.tolerance, max_points=None)
+                                       full={spec.name: result}, notify=stage, starts=2, seed=args.seed, hops=8,
+                                       patience=3, tolerance=args.tolerance, max_points=None)
     return validation if validation.splits else None  # no split leaves enough points to fit every model
 
 
