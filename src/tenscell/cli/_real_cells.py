@@ -26,11 +26,12 @@ POPULATION_CPU_S = 30.0
 EVALUATIONS_PER_START_HOP = 12.0
 #: what the command writes
 FILES = ("real_cells.md", "real_cells_medians.csv", "real_cells_g3.csv", "real_cells_cells.csv",
-         "real_cells_medians.png", "real_cells_slopes.png", "validation_tables.md")
+         "real_cells_medians.png", "real_cells_slopes.png", "validation_tables.md", "validation_heldout.png",
+         "validation_slopes.png")
 #: what ``--time-domain`` adds
 TIME_FILES = ("real_cells_time.csv", "real_cells_time.png")
 #: what ``--populations`` adds
-POPULATION_FILES = ("real_cells_populations.csv", "real_cells_exponent_stiffness.csv")
+POPULATION_FILES = ("real_cells_populations.csv", "real_cells_exponent_stiffness.csv", "validation_population.png")
 
 
 def check_inputs(args) -> None:

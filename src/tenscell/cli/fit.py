@@ -37,8 +37,11 @@ MODEL_NAMES = tuple(n for names in MODEL_GROUPS.values() for n in names)
 #: the name of tenscell 0.2 (every name --model takes)
 MECHANISM_NAMES = MODEL_NAMES
 
-#: the files of one fit: extension -> name in `tenscell fit --out`
-FIT_FILES = {"json": "fit.json", "csv": "fit.csv", "md": "report.md", "png": "fit.png"}
+#: the files of one fit: extension -> name in `tenscell fit --out` (report.html: report.md with its figures, one
+#: self-contained page)
+FIT_FILES = {"json": "fit.json", "csv": "fit.csv", "md": "report.md", "png": "fit.png", "html": "report.html"}
+#: the profile-likelihood figure, written beside them when the fit profiled a parameter (`--profile`)
+PROFILE_FILE = "profile.png"
 #: the files an ensemble adds to an output set (`fit --model ... --ensemble K`, `study mechanisms`)
 ENSEMBLE_FILES = ("ensemble.csv", "ensemble.png", "ensemble.md")
 
@@ -67,7 +70,9 @@ def register(sub) -> None:
                     "that states its prestress (a prestress_Pa column, or --prestress FILE=PA) is linked to the "
                     "others by one prestress scale; otherwise its prestress is a fitted, reported parameter. "
                     "bundled:NAME reads a data set shipped with tenscell (fabry2001, stamenovic2002). "
-                    "Writes fit.json, fit.csv, fit.png and report.md into --out. Exit status 0 if every data "
+                    "Writes fit.json, fit.csv, fit.png, report.md and report.html (the report with its figures: the "
+                    "fit, the residuals, the profiles) into --out, and profile.png when a parameter was profiled. "
+                    "Exit status 0 if every data "
                     "set's RMS of the log10 errors reached --tolerance or lies inside the data's own noise (their "
                     "sd columns), 1 if not, 2 for bad input.")
     p.add_argument("data", nargs="+", help="file(s) of measured moduli or creep compliance, or bundled:NAME")
@@ -421,12 +426,16 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=No
     (:func:`tenscell.fitting.validation.compare_out_of_sample`), in fit.json and the report.
 
     ``timing`` (optional): the command's own clock, stored in fit.json as is.
-    ``figure`` (optional): a future of the figure's PNG bytes (:func:`fit_png`,
-    drawn in a worker process meanwhile); without it the figure is drawn here.
+    ``figure`` (optional): a future of the figures' PNG bytes (:func:`fit_figures`,
+    drawn in a worker process meanwhile); without it the figures are drawn here.
+
+    The keys are those of :data:`FIT_FILES`, and ``"profile"`` (:data:`PROFILE_FILE`) when the result holds
+    profiles (:meth:`~tenscell.fitting.FitResult.compute_profile`).
     """
     from ..io.outputs import write_bytes, write_csv_rows, write_json, write_text
     from ..io.tables import fit_table
     from ..reports.fit import fit_markdown
+    from ..reports.html_page import fit_report_html
 
     doc = result.to_dict()
     own = baseline is result  # a fit that is its own baseline (a homogeneous Voigt cell, a formula)
@@ -442,31 +451,37 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=No
     if timing is not None:
         doc["timing"] = timing
     header, rows = fit_table(result, baseline)
-    markdown = fit_markdown(result, None if own else baseline, title=title, comparison=comparison,
-                            validation=validation)
-    if figure is None:  # drawn here: only then does this process import the plotting stack (0.35 s)
-        from .. import plotting
-        from ..plotting.fits import fit_panels
-
-        fig = fit_panels(result, baseline=baseline, title=title)
-        png = lambda path: plotting.save(fig, path)  # noqa: E731
-    else:
-        data = figure.result()
-        png = lambda path: write_bytes(path, data)  # noqa: E731
-    return {
+    report_baseline = None if own else baseline
+    markdown = fit_markdown(result, report_baseline, title=title, comparison=comparison, validation=validation)
+    # drawn here without a worker's: only then does this process import the plotting stack (0.35 s)
+    pngs = fit_figures(result, baseline, title, result.profile) if figure is None else figure.result()
+    html = fit_report_html(result, report_baseline, title=title, comparison=comparison, validation=validation,
+                           figures=pngs)
+    outputs = {
         "json": lambda path: write_json(path, doc),
         "csv": lambda path: write_csv_rows(path, header, rows),
         "md": lambda path: write_text(path, markdown),
-        "png": png,
+        "png": lambda path: write_bytes(path, pngs["fit"]),
+        "html": lambda path: write_text(path, html),
     }
+    if pngs.get("profile"):
+        outputs["profile"] = lambda path: write_bytes(path, pngs["profile"])
+    return outputs
 
 
-def fit_png(result, baseline, title) -> bytes:
-    """The fit's figure as PNG bytes (for a worker process: the image is the same as :func:`fit_outputs` draws)."""
+def fit_figures(result, baseline, title, profile=None) -> dict:
+    """The fit's figures as PNG bytes: ``"fit"`` (data and model, fit.png), ``"residuals"`` and, for a
+    :class:`~tenscell.fitting.profile.ProfileSet` that profiled something, ``"profile"`` (profile.png). For a
+    worker process (a pickled result carries no profile: it is passed beside it); the images are those
+    :func:`fit_outputs` draws."""
     from .. import plotting
-    from ..plotting.fits import fit_panels
+    from ..plotting.fits import fit_panels, profile_panels, residual_panels
 
-    return plotting.png_bytes(fit_panels(result, baseline=baseline, title=title))
+    pngs = {"fit": plotting.png_bytes(fit_panels(result, baseline=baseline, title=title)),
+            "residuals": plotting.png_bytes(residual_panels(result, baseline=baseline))}
+    if profile is not None and len(profile.profiles):
+        pngs["profile"] = plotting.png_bytes(profile_panels(profile, title=f"Profile likelihood: {title}"))
+    return pngs
 
 
 def _warm_plotting() -> None:
@@ -576,7 +591,7 @@ def run(args) -> int:
         timing["outputs_started_s"] = clock.now()
         # the report's ± need one model evaluation per parameter: half of them in the worker, before the figure
         result.compute_derived(worker)
-        figure = worker.submit(fit_png, result, baseline, title)
+        figure = worker.submit(fit_figures, result, baseline, title, result.profile)
         from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
@@ -585,8 +600,9 @@ def run(args) -> int:
                               validation=validation)
     ensemble = _ensemble(args, result, datasets)
     with out as d:
-        for ext, name in FIT_FILES.items():
-            outputs[ext](d / name)
+        files = {**FIT_FILES, "profile": PROFILE_FILE}
+        for key, write in outputs.items():
+            write(d / files[key])
         if ensemble is not None:
             write_ensemble(d, ensemble, f"Ensemble of the fitted `{spec.name}`")
     each = "; ".join(f"{Path(f.data.source).name} {f.rms_log10_error:.5f}" for f in result.fits)

@@ -48,7 +48,7 @@ def _register_fit(sub) -> None:
                     "a glob, or one long table with a 'cell' column and optionally 'condition') on a Dask "
                     "cluster: a local one by default, an existing one with --scheduler. Each cell's record is "
                     "written as it completes into OUT.partial/; an interrupted run continues with --resume. "
-                    "The output set (population.csv/.parquet, summary.csv, cells.jsonl, report.md, figures) "
+                    "The output set (population.csv/.parquet, summary.csv, cells.jsonl, report.md, report.html, figures) "
                     "appears in --out only when every cell has a record. See docs/populations.md.")
     p.add_argument("input", help="directory, glob (quote it) or long table (.csv/.parquet)")
     add_out(p)
@@ -77,7 +77,7 @@ def _register_fit(sub) -> None:
 #: length is one)
 JOINT_MODELS = tuple(n for group, names in MODEL_GROUPS.items() if not group.startswith("the paper") for n in names)
 #: the files of a joint fit's output set
-JOINT_FILES = ("fit.json", "fit.csv", "cells.csv", "report.md", "fit.png")
+JOINT_FILES = ("fit.json", "fit.csv", "cells.csv", "report.md", "fit.png", "report.html")
 
 
 def _add_joint_options(p) -> None:
@@ -85,7 +85,7 @@ def _add_joint_options(p) -> None:
     g.add_argument("--joint", action="store_true",
                    help="fit one model to every cell at once: each cell has its own value of the --per-cell "
                         "parameter(s), every other parameter is shared by the population (writes fit.json, fit.csv, "
-                        "cells.csv, report.md, fit.png; see docs/populations.md)")
+                        "cells.csv, report.md, fit.png, report.html; see docs/populations.md)")
     g.add_argument("--model", choices=JOINT_MODELS, default=None, metavar="NAME",
                    help=f"the model of one cell in a joint fit (default {RECOMMENDED_MODEL}): a mechanism or a "
                         f"structure-free formula of `tenscell fit --model` ({', '.join(JOINT_MODELS)})")
@@ -530,6 +530,7 @@ def run_joint(args) -> int:
     result = fitting.fit(datasets, model=population, starts=args.starts, hops=args.hops, seed=args.seed, jobs=jobs,
                          tolerance=args.tolerance, max_points=None)
     from ..fitting.population_scores import population_cells
+    from ..reports.html_page import markdown_report_html
     from ..reports.population_fit import population_fit_markdown
     from .. import plotting
     from ..plotting.population import population_fit_figure
@@ -541,12 +542,14 @@ def run_joint(args) -> int:
     header, rows = fit_table(result, result)
     report = population_fit_markdown(result, cells, title=title)
     png = plotting.png_bytes(population_fit_figure(result, cells, title=title))
+    page = markdown_report_html(report, [("Every cell's data and the joint fit (fit.png).", png)])
     with out as d:
         write_json(d / "fit.json", doc)
         write_csv_rows(d / "fit.csv", header, rows)
         write_text(d / "cells.csv", cells.to_csv(index=False))
         write_text(d / "report.md", report)
         write_bytes(d / "fit.png", png)
+        write_text(d / "report.html", page)
     shared = ", ".join(f"{p.name} = {p.value:.4g}" for p in result.parameters[: problem.n_shared])
     print(f"tenscell fit-population --joint: {population.name}, {problem.n_cells} cells: rms log10 error "
           f"{result.rms_log10_error:.4f} (worst cell {float(np.max(result.dataset_rms)):.4f}; tolerance "

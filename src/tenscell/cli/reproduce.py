@@ -37,11 +37,11 @@ def _write_fit(out: Path, stem: str, result, baseline, title: str, log) -> None:
     from .fit import fit_outputs
 
     outputs = fit_outputs(result, baseline, title=title)
-    for ext in ("png", "csv", "json", "md"):
+    for ext in ("png", "csv", "json", "md", "html"):
         outputs[ext](out / f"{stem}.{ext}")
     pa = result.prestress
     each = ", ".join(f"{f.rms_log10_error:.4f}" for f in result.fits)
-    log(f"{stem}.png, .csv, .json, .md (rms {each}, homogeneous {baseline.rms_log10_error:.3f}; "
+    log(f"{stem}.png, .csv, .json, .md, .html (rms {each}, homogeneous {baseline.rms_log10_error:.3f}; "
         f"dlnG'/dlnP at {pa.reference_frequency_hz:g} Hz {pa.reference_storage.min():.3g} to "
         f"{pa.reference_storage.max():.3g})")
 

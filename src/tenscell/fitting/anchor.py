@@ -72,6 +72,12 @@ class Anchor:
         """``"σ exact"`` or ``"σ ×/÷1.5"``."""
         return "σ exact" if self.is_exact else f"σ ×/÷{self.factor:g}"
 
+    @property
+    def words(self) -> str:
+        """``"σ equal to the measured prestress"`` or ``"σ within ×/÷1.5 of the measured prestress"``."""
+        return ("σ equal to the measured prestress" if self.is_exact else
+                f"σ within ×/÷{self.factor:g} of the measured prestress")
+
     def scale(self, cell) -> float:
         """``s_σ`` (m²): the prestress scale at which σ equals the measured prestress on ``cell``."""
         return virial_prestress(cell).scale_m2

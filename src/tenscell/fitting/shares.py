@@ -585,7 +585,7 @@ class StructureSummary:
         if sc.s is None or sc.ratio is None or sc.L_paper is None:
             return ""
         where = "inside" if sc.in_gauge_window else "outside"
-        held = "" if sc.anchor is None else f" (held {sc.anchor.label} by the fit)"
+        held = "" if sc.anchor is None else f" (the fit held {sc.anchor.words})"
         sigma = "" if sc.sigma_ratio is None else (f"The model's physical prestress σ (the tendons' virial stress) is "
                                                    f"{sc.sigma_ratio:.3g} × the measured one{held}. ")
         return (f"{sigma}The model prestress P/L_cell² is {100 * sc.ratio:.3g} % of the measured one (s = {sc.s:.3g} "

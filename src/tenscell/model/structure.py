@@ -453,6 +453,18 @@ class Structure:
             raise ValueError(f"members: expected 'tendons', 'struts' or 'nodes', got {members!r}")
         return dataframe({**cols, **columns}, {"structure": self.name})
 
+    def _repr_html_(self) -> str:
+        from .._results import reporter
+
+        return reporter("structure_html")(self)  # the repr's lines and the interactive 3D view (reports/html.py)
+
+    def view(self, **kw):
+        """The interactive 3D view (plotly, ``pip install 'tenscell[view]'``):
+        :func:`tenscell.plotting.structure_view`; returns the plotly Figure (``.show()``, ``.write_html(path)``)."""
+        from .._results import plotter
+
+        return plotter("structure_view")(self, **kw)
+
     def plot(self, ax=None, **kw):
         """The structure in 3D, coloured as the paper's Fig. 1 (:func:`tenscell.plotting.structure_3d`)."""
         from .._results import plotter

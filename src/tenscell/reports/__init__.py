@@ -10,18 +10,21 @@ from .fit_text import fit_text
 from .mechanisms import mechanisms_markdown, mechanisms_summary
 from .real_cells import real_cells_markdown, real_cells_tables, validation_tables
 from .html import (comparison_html, data_html, ensemble_html, fit_html, fitted_model_html, frequency_response_html,
-                   population_html)
+                   population_html, structure_html)
+from .html_page import fit_report_html, markdown_report_html
 from .population import population_markdown, study_markdown
 from .population_fit import population_fit_markdown
 from .sensitivity import sensitivity_markdown
+from .structures import structures_markdown
 from .studies import no_if_markdown, references_markdown, semiflexible_markdown, stiffening_markdown
 
 __all__ = [
     "fit_markdown", "fit_text", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
     "ensemble_markdown", "population_fit_markdown", "fit_html", "data_html", "frequency_response_html",
-    "fitted_model_html", "comparison_html", "population_html", "ensemble_html", "mechanisms_markdown",
-    "mechanisms_summary", "real_cells_markdown", "real_cells_tables", "validation_tables",
+    "fitted_model_html", "comparison_html", "population_html", "ensemble_html", "structures_markdown",
+    "structure_html", "fit_report_html", "markdown_report_html", "mechanisms_markdown", "mechanisms_summary",
+    "real_cells_markdown", "real_cells_tables", "validation_tables",
 ]
 
 

@@ -136,7 +136,7 @@ def _sigma_line(sc) -> str:
         return ("σ / measured: not defined (the cell's nodes span no volume, so its tendons' virial stress per unit "
                 "volume is not).")
     held = ("a free fit: nothing held σ" if sc.anchor is None else
-            f"the fit held it {sc.anchor.label} of the measured prestress (anchored)")
+            f"the fit held {sc.anchor.words} (anchored)")
     err = ln_error(sc.s_error_ln) if sc.anchor is None or not sc.anchor.is_exact else ""
     return (f"**σ / measured = {num(sc.sigma_ratio, 3)}**{' ' + err if err else ''}: the model's physical prestress "
             f"({PRESTRESS_CONVENTION}; {num(sc.sigma_per_P, 4)} Pa per N of P on this cell) over the measured one, "

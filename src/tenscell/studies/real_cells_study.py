@@ -917,6 +917,11 @@ class RealCellsStudy:
                    Figure("real_cells_slopes.png", "real_cells_slopes_figure", (study,))]
         if study.time_domain:
             figures.append(Figure("real_cells_time.png", "real_cells_time_figure", (study,)))
+        # the validation page's (docs/update_validation.py copies them there)
+        figures += [Figure(f"{name}.png", "validation_figure", (study, name))
+                    for name in ("validation_heldout", "validation_slopes") if study.scores]
+        if study.populations:
+            figures.append(Figure("validation_population.png", "validation_figure", (study, "validation_population")))
         pages = (("validation_tables.md", reporter("validation_tables")(study)),
                  ("real_cells.md", reporter("real_cells_markdown")(study)))
         checks = [Check(label=f"G3 ({study.g3.split}, the whole band ≤ {study.g3.limit:g} on both lines)",
