@@ -182,6 +182,23 @@ def _referee_section(study) -> list[str]:
               _baseline_rows(study))]
 
 
+def _a_priori_section(study) -> list[str]:
+    """The structures' slopes with no fitted parameter (tenscell.studies.a_priori), the inextensible limit."""
+    t = study.a_priori
+    if t is None:
+        return []
+    rows = [(r["structure"], r["mechanisms"] if r["mechanisms"] >= 0 else "n/a", num(r["dG_storage_dsigma"], 3),
+             num(r["data_dG_storage_dP"], 3), num(r["dG_storage_dsigma_over_data"], 3), num(r["data_dG_loss_dP"], 3))
+            for r in t.records() if math.isinf(r["EA_over_sigma_L2"])]
+    return ["## A priori: each structure with no fitted parameter", "",
+            "dG′/dσ at 0.1 Hz of each structure with inextensible tendons (σ the structure's physical prestress; "
+            "no parameter of any fit enters), against the slope of the data's line; in that limit dG″/dσ → 0 (the "
+            "structure's mechanisms are undamped). At finite EA/(σL²) the slopes are a one-parameter family and "
+            "dG″/dσ scales with the tendons' loss tangent: `a_priori.csv` (`tenscell.studies.a_priori`). The "
+            "structures fitted with σ anchored: `tenscell.studies.structures`.", "",
+            table(("structure", "mechanisms (inextensible)", "dG′/dσ", "data dG′/dP", "ratio", "data dG″/dP"), rows)]
+
+
 def mechanisms_summary(study) -> str:
     """A few lines for the command line: the lowest BIC and issue 33's goals."""
     win = study.winner
@@ -207,7 +224,7 @@ def mechanisms_markdown(study) -> str:
                   "determined within 10 %", "converged", "G' slope 0.01–1000 Hz", "P·Kp share of dG′/dP / dG″/dP",
                   "σ/measured"),
                  _fit_rows(study)),
-           *_referee_section(study), *_notes(study), *_answer(study),
+           *_a_priori_section(study), *_referee_section(study), *_notes(study), *_answer(study),
            "## The goals", "",
            table(("goal (issue 33)", "closest model", "its numbers", "met"),
                  [(g, n, how, "yes" if ok else "**no**") for g, n, how, ok in study.goals_issue33()]),

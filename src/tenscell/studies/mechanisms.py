@@ -90,7 +90,8 @@ REFIT_MAX_FREE = 12
 EXPONENT_FREQUENCY_HZ = 0.1
 #: CPU seconds per task by kind on the bundled pair (2 cores, quiet: a calibration the estimate starts from; the
 #: run revises it as tasks finish)
-CALIBRATION_CPU_S = {"fit": 5.0, "fit-per-tendon": 35.0, "formula": 0.3, "refit": 4.0, "formula-refit": 0.3,
+CALIBRATION_CPU_S = {"a priori": 3.0, "fit": 5.0, "fit-per-tendon": 35.0, "formula": 0.3, "refit": 4.0,
+                     "formula-refit": 0.3,
                      "ensemble": 6.0}
 
 
@@ -253,6 +254,7 @@ class MechanismStudy:
     baselines: tuple = ()  # the baseline pool's OutOfSample rows (tenscell.fitting.validation)
     baseline_fits: dict = field(default_factory=dict)  # {baseline name: (free parameters, rms per data set, BIC)}
     datasets: tuple = ()  # the data sets fitted
+    a_priori: Any = None  # the structures' parameter-free slopes (tenscell.studies.a_priori: a Table), None: not run
 
     @property
     def cpu_s(self) -> float:
@@ -650,6 +652,14 @@ def flat_task(name: str, datasets, opts: dict, anchored):
                         flat_rms=r.dataset_rms, cpu_s=time.process_time() - c0)
 
 
+def a_priori_task(datasets):
+    """Each structure's slopes dG′/dσ and dG″/dσ with no fitted parameter, against the data's lines
+    (:func:`tenscell.studies.a_priori.a_priori_table`; a task)."""
+    from .a_priori import a_priori_table
+
+    return a_priori_table(datasets)
+
+
 def ensemble_task(datasets, K: int, where: dict, *mains: MainFit):
     """The ensemble of the distributed mechanism with the lowest BIC (None when none was fitted)."""
     from ..population.ensemble import ensemble_at_data
@@ -815,6 +825,7 @@ class MechanismsStudy:
 
     def plan(self, options: Mapping[str, Any]):
         from ..fitting.validation import splits
+        from .falsification import varies_with_prestress
         from .protocol import Plan, Task
 
         o = _options(options)
@@ -835,6 +846,8 @@ class MechanismsStudy:
             where = {"workers": o["workers"], "scheduler": o["scheduler"], "progress": False}
             tasks.append(Task("ensemble", "ensemble", ensemble_task, (o["datasets"], o["ensemble"], where),
                               needs=heterogeneous))
+        if any(getattr(d, "prestress", None) is not None and varies_with_prestress(d) for d in o["datasets"]):
+            tasks.insert(0, Task("a priori", "a priori", a_priori_task, (o["datasets"],)))
         o.update(models=tuple(names), given=tuple(given), pool=tuple(pool), own=own,
                  splits=tuple(s.name for s in split_list))
         return Plan(self.name, o, tuple(tasks))
@@ -846,7 +859,8 @@ class MechanismsStudy:
         """The :class:`~tenscell.studies.protocol.StudyResult` of an assembled study: its tables, page, checks."""
         from .protocol import Figure, StudyResult
 
-        return StudyResult(study=self.name, tables=study_tables(study), data=study, checks=_checks(study),
+        tables = study_tables(study) + ((study.a_priori,) if study.a_priori is not None else ())
+        return StudyResult(study=self.name, tables=tables, data=study, checks=_checks(study),
                            summary=_summary(study), pages=(("mechanisms.md", _markdown(study)),),
                            figures=(Figure("mechanisms.png", "mechanisms_figure", (study, study.datasets)),))
 
@@ -865,8 +879,8 @@ def _cpu_of(*records) -> float:
 def _out_of_sample(name: str, mine_fit: MainFit, results, o: dict):
     from ..fitting.validation import OutOfSample
 
-    scores = [results[f"heldout/{name}/{s}"] for s in o["splits"]]
-    if not scores or any(isinstance(s, Skipped) for s in scores):
+    scores = [results.get(f"heldout/{name}/{s}") for s in o["splits"]]  # none for a model not refereed
+    if not scores or any(s is None or isinstance(s, Skipped) for s in scores):
         return None
     return OutOfSample.from_scores(name, True, mine_fit.fields["n_free"], scores)
 
@@ -950,7 +964,7 @@ def assemble_study(plan, results: Mapping[str, Any], elapsed_s: float = math.nan
                                    "baseline_cpu_s": base_cpu - sum(_cpu_of(results[f"baseline/{n}"]) for n in given
                                                                     if f"baseline/{n}" in results)},
                           ensemble=results.get("ensemble"), baselines=tuple(pool_rows), baseline_fits=fits,
-                          datasets=tuple(o["datasets"]))
+                          datasets=tuple(o["datasets"]), a_priori=results.get("a priori"))
 
 
 def _rms_text(values) -> str:
