@@ -8,7 +8,8 @@ import pytest
 
 from tenscell.io import bundled
 from tenscell.io.data import DataError, RheologyData
-from tenscell.studies.falsification import DEFAULT_EXPONENT_RISE, UNLIKE_KINDS, unlike_data, unlike_sets
+from tenscell.studies.falsification import (DEFAULT_EXPONENT_RISE, FLAT_LOSS_TANGENT, UNLIKE_KINDS, unlike_data,
+                                            unlike_sets)
 
 STAM, FABRY = bundled("stamenovic2002"), bundled("fabry2001")
 
@@ -50,6 +51,31 @@ def test_flat_keeps_grid_and_noise_and_removes_the_trend():
     assert "prestress-independent" in u.source and "noisy" in u.source
 
 
+def _trend_coefficients(d, values):
+    return np.polyfit(np.log(d.prestress), np.log(values), 2)
+
+
+def test_loss_independent_flattens_g_loss_only_and_keeps_each_point_off_the_trend():
+    d = _noisy(STAM)
+    u = unlike_data(d, "loss-independent-of-prestress")
+    assert np.array_equal(u.G_storage, d.G_storage) and np.array_equal(u.prestress, d.prestress)
+    c, cu = _trend_coefficients(d, d.G_loss), _trend_coefficients(u, u.G_loss)
+    assert abs(cu[0]) < 1e-10 and abs(cu[1]) < 1e-9
+    lp = np.log(d.prestress)
+    assert np.allclose(np.log(u.G_loss) - np.polyval(cu, lp), np.log(d.G_loss) - np.polyval(c, lp), atol=1e-12)
+
+
+def test_flat_loss_tangent_keeps_g_storage_and_flattens_the_loss_tangent_to_its_median_value():
+    u = unlike_data(STAM, FLAT_LOSS_TANGENT)
+    assert np.array_equal(u.G_storage, STAM.G_storage)
+    tan, tan_u = STAM.G_loss / STAM.G_storage, u.G_loss / u.G_storage
+    # the data's fall (0.33 -> 0.27) is gone; what is left is each point's deviation from the quadratic trend
+    assert np.ptp(tan) > 0.05 and np.ptp(tan_u) < 0.02 * np.ptp(tan)
+    c, cu = _trend_coefficients(STAM, tan), _trend_coefficients(u, tan_u)
+    assert abs(cu[0]) < 1e-10 and abs(cu[1]) < 1e-9
+    assert math.exp(cu[2]) == pytest.approx(math.exp(np.polyval(c, math.log(np.median(STAM.prestress)))), rel=1e-9)
+
+
 def test_exponent_rising_adds_the_rise_to_the_exponent_and_to_the_phase():
     d = _grid()
     u = unlike_data(d, "exponent-rising", exponent_rise=0.1)
@@ -84,6 +110,7 @@ def test_bad_requests():
         unlike_sets([FABRY])
     with pytest.raises(ValueError, match="kind"):
         unlike_data(STAM, "stiffer")
+    assert FLAT_LOSS_TANGENT not in UNLIKE_KINDS and set(unlike_sets([STAM], [FLAT_LOSS_TANGENT])) == {FLAT_LOSS_TANGENT}
     with pytest.raises(ValueError, match="exponent_rise"):
         unlike_data(STAM, "exponent-rising", exponent_rise=-0.1)
     with pytest.raises(DataError, match="smaller rise"):

@@ -8,7 +8,7 @@ import pytest
 import scipy.stats
 
 from tenscell.fitting import fit
-from tenscell.fitting.models.formulas import FORMULAS, Formula, lumped_formula
+from tenscell.fitting.models.formulas import FORMULAS, Formula, lumped_formula, series_formula
 from tenscell.fitting.models.catalog import MECHANISMS
 from tenscell.fitting.scores import (compare_models, fit_structural_damping, information_criteria, split_holdout,
                                      structural_damping_moduli)
@@ -63,6 +63,52 @@ def test_lumped_formula_jacobian_and_prestress_coupling(mech):
     theta = np.random.default_rng(2).uniform(*p.bounds)
     J = p.jacobian(theta)
     np.testing.assert_allclose(J, p.jacobian_fd(theta), rtol=1e-6, atol=1e-8 * np.abs(J).max())
+
+
+@pytest.mark.parametrize("mech", ["springpot-alpha-family+visc", "voigt-compact+visc", "maxwell"])
+def test_series_formula_moves_both_moduli_with_the_prestress(mech):
+    """The lumped terms as a series network: the elastic terms (P enters there) in series with the law's others, the
+    cytoplasm in parallel; exact Jacobian; P now moves G'' too (in the parallel network it moves G' only)."""
+    par = lumped_formula(MECHANISMS[mech])
+    ser = series_formula(par)
+    assert ser is not None and set(ser.terms) == set(par.terms) and "aP" in ser.series[0]
+    assert ("newtonian" in ser.series[1]) == (mech.startswith("voigt"))  # Voigt: the lumped element is Maxwell's
+    p = ser.problem([bundled("stamenovic2002"), _law_data(sd=0.05)])
+    theta = np.random.default_rng(3).uniform(*p.bounds)
+    J = p.jacobian(theta)
+    np.testing.assert_allclose(J, p.jacobian_fd(theta), rtol=1e-6, atol=1e-8 * np.abs(J).max())
+    vals = dict(zip(p.names, p.values(theta)))
+    w = np.array([0.6])
+    for f in (par, ser):
+        lo, hi = (f.complex_modulus(vals, w, P)[0] for P in (300.0, 3000.0))
+        assert hi.real > lo.real
+        assert (hi.imag != lo.imag) == (f is ser)
+
+
+def test_a_spring_in_series_with_a_dashpot_is_a_maxwell_element():
+    w = np.logspace(-3, 3, 30)
+    ser = Formula("s", ("aP", "newtonian"), series=(("aP",), ("newtonian",)))
+    E, eta = 0.2 * 500.0, 3.0
+    G = ser.complex_modulus({"a": 0.2, "eta": eta}, w, 500.0)
+    M = Formula("m", ("maxwell",)).complex_modulus({"E_M": E, "tau": eta / E}, w, 1.0)
+    np.testing.assert_allclose(G, M, rtol=1e-13)
+    with pytest.raises(ValueError, match="two disjoint"):
+        Formula("bad", ("aP", "newtonian"), series=(("aP",), ("aP",)))
+
+
+def test_modified_power_law_relaxes_from_its_instant_modulus_to_its_constant():
+    """E0 + E_1·(iωτ)^α/(1 + (iωτ)^α): G* → E0 + E_1 at high frequency (the instant modulus), → E0 at low frequency
+    (the constant it relaxes to), a power law of exponent α in between; passive."""
+    f = FORMULAS["modified-power-law+constant"]
+    vals = {"E0": 20.0, "E_1": 500.0, "tau_1": 1.0, "alpha_1": 0.3}
+    G = f.complex_modulus(vals, np.array([1e-30, 1e30]), 1.0)
+    np.testing.assert_allclose(G.real, [20.0, 520.0], rtol=1e-6)
+    w = np.logspace(-10, 4, 141)
+    G = f.complex_modulus(vals, w, 1.0)
+    assert np.all(G.imag > 0)
+    mid = (w > 1e-8) & (w < 1e-7)  # far below 1/τ: G* − E0 ≈ E_1 (iωτ)^α
+    slope = np.gradient(np.log(np.abs(G - 20.0)), np.log(w))[mid]
+    np.testing.assert_allclose(slope, 0.3, atol=0.02)
 
 
 def test_formula_terms_are_passive_and_structural_damping_is_a_springpot():

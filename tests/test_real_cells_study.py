@@ -227,16 +227,21 @@ def test_time_series_are_checked():
 
 
 # ---- populations (G4) on synthetic numbers --------------------------------------------------------
-def _pop_scores(pop_bic, pop_cells, spearman_model, spearman_measured=-0.72):
+def _pop_scores(pop_bic, pop_cells, spearman_noisy, spearman_measured=-0.72, slope_noisy=-0.10,
+                slope_measured=-0.09):
     from types import SimpleNamespace
 
-    from tenscell.fitting.population_scores import Correlation, ScoreRow
+    from tenscell.fitting.population_scores import Correlation, ExponentStiffness, ScoreRow
 
     rows = (ScoreRow("pop", "population", 60, 0.1, pop_bic, (0.1, 0.1), pop_cells),
             ScoreRow("structural-damping", "independent per cell", 118, 0.13, -70.0, (0.2, 0.2), 0.175),
             ScoreRow("structural-damping+newtonian", "independent per cell", 177, 0.08, -400.0, (0.2, 0.2), 0.124))
-    corr = (Correlation("exponent", "stiffness", spearman_measured, spearman_model, spearman_model, 59),)
-    return SimpleNamespace(rows=rows, correlations=corr)
+    corr = (Correlation("exponent", "stiffness", spearman_measured, -1.0, -0.9, 59),)
+    relation = ExponentStiffness(n_cells=59, slope_measured=slope_measured, spearman_measured=spearman_measured,
+                                 slope_model=-0.12, spearman_model=-1.0, slope_noisy=(-0.2, slope_noisy, 0.0),
+                                 spearman_noisy=(-0.9, spearman_noisy, -0.5), draws=100, se_alpha_median=0.02,
+                                 se_log10_k_median=0.05)
+    return SimpleNamespace(rows=rows, correlations=corr, relation=relation)
 
 
 def test_g4_is_met_only_when_every_condition_holds():
@@ -247,8 +252,10 @@ def test_g4_is_met_only_when_every_condition_holds():
     assert not r.met and "BIC -300.0 not below structural-damping+newtonian's -400.0" in r.why_not()
     r = g4_row("A", _pop_scores(-800.0, 0.13, -0.80))  # worse on held-out cells
     assert not r.met and "held-out cells 0.130" in r.why_not() and "BIC" not in r.why_not()
-    r = g4_row("A", _pop_scores(-800.0, 0.12, -0.99))  # one parameter per cell: Spearman -1 by construction
+    r = g4_row("A", _pop_scores(-800.0, 0.12, -0.99))  # after the scatter, still too tight a relation
     assert not r.met and "off by 0.27 > 0.15" in r.why_not()
+    r = g4_row("A", _pop_scores(-800.0, 0.12, -0.80, slope_noisy=-0.13))  # 44 % steeper than measured
+    assert not r.met and "slope" in r.why_not() and "Spearman" not in r.why_not()
 
 
 def test_population_cells_need_four_frequencies_in_each_window():

@@ -11,22 +11,22 @@ from tenscell.io.data import bundled
 
 def test_the_estimate_counts_every_fit_of_the_study():
     from tenscell.fitting.validation import splits
-    from tenscell.studies.mechanisms import REFIT
+    from tenscell.studies.falsification import UNLIKE_KINDS
 
     data = (bundled("stamenovic2002"), bundled("fabry2001"))
     rate = study_cli.EVALUATIONS_PER_START_HOP
-    refit = REFIT["starts"] * (REFIT["hops"] + 1)
-    # alone: the main fit, then the anchored refit and the structure-free formula's fit (maxwell is a mechanism)
+    main = 3 * 5  # starts × (hops + 1); every refit runs to the main fit's budget
+    # alone: the main fit, then the anchored refit (maxwell is a mechanism)
     one = study_cli.mechanisms_cost(data, ("maxwell",), starts=3, hops=4, jobs=2, validate=False, falsify=False)
-    assert one.count == round(rate["mechanism"] * (3 * 5 + 2 * refit)) and one.parallel == 1  # one model: one worker
-    # with the held-out splits (the model and its formula on each) and the two unlike versions of the sweep
+    assert one.count == round(rate["mechanism"] * 2 * main) and one.parallel == 1  # one model: one worker
+    # with the held-out splits, the unlike versions of the sweep and the flat-loss-tangent lines
     n_split = len(splits(data))
     assert n_split >= 2
     full = study_cli.mechanisms_cost(data, ("maxwell",), starts=3, hops=4, jobs=2)
-    assert full.count == round(rate["mechanism"] * (3 * 5 + (2 + 2 * n_split + 2) * refit))
+    assert full.count == round(rate["mechanism"] * (2 + n_split + len(UNLIKE_KINDS) + 1) * main)
     both = study_cli.mechanisms_cost(data, ("maxwell", PER_TENDON_VOIGT), starts=3, hops=4, jobs=2)
     # the per-tendon fit searches at least 30 hops; its 37 parameters are too many for the refits
-    assert both.count == full.count + round(rate["voigt-per-tendon"] * (3 * 31 + 2 * refit))
+    assert both.count == full.count + round(rate["voigt-per-tendon"] * 3 * 31)
     assert both.parallel == 2 and both.seconds_per_unit > 0
     assert "2 model(s)" in both.line() and "2 workers" in both.line()
 

@@ -1,7 +1,11 @@
-"""The two studies of ``tenscell study`` not yet on the study protocol: ``mechanisms`` and ``real-cells``.
+"""The two studies of ``tenscell study`` whose flags the table of :mod:`tenscell.cli.study` does not yet map:
+``mechanisms`` and ``real-cells``.
 
-Their writers and cost estimates as they were before :mod:`tenscell.cli.study` became a table of studies with one
-writer; the ``referee`` branch moves both onto :mod:`tenscell.studies.protocol`, and this module goes with it.
+Both studies are on the study protocol (:class:`tenscell.studies.mechanisms.MechanismsStudy`,
+:class:`tenscell.studies.real_cells_study.RealCellsStudy`: their plans, tasks, assembly, tables, figures, pages and
+checks); what stays here is the command line's side of them — their flags translated into the studies' options
+(budgets, the ensemble's K), their estimates (a model evaluation timed per model) and the refusal of a run beyond a
+day — until the studies declare those themselves.
 """
 from __future__ import annotations
 
@@ -22,34 +26,39 @@ LEGACY_OPTIONS: dict[str, dict] = {
 
 
 def _study_mechanisms(out: Path, log, args=None) -> None:
-    from .. import plotting
-    from .._parallel import jobs_for
-    from ..io.outputs import write_csv_rows, write_text
-    from ..plotting.mechanisms import mechanisms_figure
-    from ..reports.mechanisms import STUDY_COLUMNS, mechanisms_markdown, study_table_rows
-    from ..studies.mechanisms import mechanisms_study
+    """Run the mechanisms study (:class:`~tenscell.studies.mechanisms.MechanismsStudy`: its plan, tasks and
+    assembly) and write its tables, figures and page, with the ensemble when one was evaluated."""
+    import dataclasses
 
-    datasets = args.datasets  # read and checked before the study began (run)
+    from .._parallel import jobs_for
+    from ..studies.mechanisms import MechanismsStudy, assemble_study
+    from ..studies.protocol import execute
+    from ._study_output import write_study_result
+
+    datasets = args.datasets  # read and checked before the study began (run_legacy)
     names = _study_models(args)
     K = STUDY_ENSEMBLE_K if args.ensemble is None else args.ensemble
-    s = mechanisms_study(datasets, mechanisms=names, starts=args.starts, hops=args.hops, seed=args.seed,
-                         tolerance=args.tolerance, jobs=jobs_for(len(names), args.jobs), ensemble=K or None,
-                         workers=args.workers, scheduler=args.scheduler, notify=lambda line: log(f"ensemble: {line}"))
-    write_csv_rows(out / "mechanisms.csv", list(STUDY_COLUMNS), study_table_rows(s))
-    plotting.save(mechanisms_figure(s, datasets), out / "mechanisms.png")
-    report = mechanisms_markdown(s)
-    write_text(out / "mechanisms.md", report)
-    print(report.split("## The goals")[0].split("\n\n", 2)[-1], flush=True)
-    written = "mechanisms.csv, mechanisms.png, mechanisms.md"
+    study = MechanismsStudy()
+    plan = study.plan({"datasets": datasets, "mechanisms": names, "starts": args.starts, "hops": args.hops,
+                       "seed": args.seed, "tolerance": args.tolerance, "ensemble": K or None,
+                       "workers": args.workers, "scheduler": args.scheduler})
+    jobs = jobs_for(len(plan.tasks), args.jobs)
+    plan.options["jobs"] = jobs
+    t0 = time.monotonic()
+    results, records = execute(plan, jobs=jobs, rates=study.rates, notify=lambda line: log(line))
+    s = assemble_study(plan, results, elapsed_s=time.monotonic() - t0)
+    result = dataclasses.replace(study.result(s), tasks=records, elapsed_s=s.elapsed_s)
+    written = write_study_result(out, result)
+    print(result.summary, flush=True)
     if s.ensemble is not None:
         from .fit import ENSEMBLE_FILES, write_ensemble
 
         write_ensemble(out, s.ensemble, f"Ensemble of `{s.ensemble.mechanism}`, the distributed mechanism with the "
                                         "lowest BIC")
-        written += ", " + ", ".join(ENSEMBLE_FILES)
+        written += list(ENSEMBLE_FILES)
     elif K:
         log("no ensemble: none of the mechanisms fitted draws a tendon property from a distribution")
-    log(written)
+    log(", ".join(written) + f" ({result.cpu_s:.0f} s of CPU in {len(records)} tasks)")
 
 
 #: model evaluations per start and basin-hopping move, shared with `tenscell fit`'s estimate (defined in _cost)
@@ -81,10 +90,10 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate
                     falsify: bool = True):
     """The mechanisms study's cost (:class:`tenscell.cli._cost.Cost`): the CPU time of one model evaluation of each
     model, timed here at a start of its fit with the BLAS threads the search uses, × the evaluations its fits are
-    expected to take (:data:`EVALUATIONS_PER_START_HOP` × starts × hops for the main fit; the same at the refits'
-    budget, :data:`tenscell.studies.mechanisms.REFIT`, for each of the others that
-    :func:`~tenscell.studies.mechanisms.fits_per_model` counts), over ``jobs`` workers at the CPU share the
-    machine's load leaves them (:func:`cpu_share`)."""
+    expected to take (:data:`EVALUATIONS_PER_START_HOP` × starts × hops for the main fit, and the same for each
+    referee's refit that :func:`~tenscell.studies.mechanisms.fits_per_model` counts: refits run to the main fit's
+    standard), over ``jobs`` workers at the CPU share the machine's load leaves them (:func:`cpu_share`). An upper
+    bound: a model that misses the data in sample is not refereed, and a warm refit often stops sooner."""
     import numpy as np
 
     from .._threads import limited
@@ -92,11 +101,11 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate
     from ..fitting.entry import prepare
     from ..fitting.models.catalog import PER_TENDON_VOIGT
     from ..fitting.models.voigt import VoigtModel
-    from ..studies.mechanisms import PER_TENDON_HOPS, REFIT, fits_per_model
+    from ..studies.mechanisms import PER_TENDON_HOPS, fits_per_model
     from ._cost import Cost
 
     cpu, evaluations, fits = 0.0, 0, 0
-    refit = REFIT["starts"] * (REFIT["hops"] + 1)
+    refit = starts * (hops + 1)
     with limited():
         for name in names:
             per_tendon = name == PER_TENDON_VOIGT
@@ -115,8 +124,8 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate
     per = cpu / max(evaluations, 1)
     return Cost("model evaluation", max(evaluations, 1), per / share, workers,
                 detail=f"({len(names)} model(s), {fits} fits: each model × {starts} start(s) × up to {hops} hop(s),"
-                       f" its anchored, structure-free, held-out and unlike refits × {REFIT['starts']} × "
-                       f"{REFIT['hops']}; {per * 1e3:.2g} ms of CPU each, at {share:.0%} of a CPU per worker: load "
+                       f" its held-out, anchored and unlike refits to the same budget; {per * 1e3:.2g} ms of CPU each,"
+                       f" at {share:.0%} of a CPU per worker: load "
                        f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs)")
 
 

@@ -9,7 +9,7 @@ import os
 from pathlib import Path
 
 __all__ = ["check_inputs", "budgets", "real_cells_cost", "write_real_cells", "EVALUATIONS_PER_START_HOP", "FILES",
-           "TIME_FILES", "TIME_FIT_CPU_S", "POPULATION_CPU_S"]
+           "TIME_FILES", "POPULATION_FILES", "TIME_FIT_CPU_S", "POPULATION_CPU_S"]
 
 #: CPU seconds one mechanism's time-domain fit takes, about the mean over the two series (measured, load 5 on
 #: 2 cores: springpot-lognormal-kappa+visc 75 s on the HL60 creep with 2 starts; on the oocyte shape with 4 starts
@@ -30,6 +30,8 @@ FILES = ("real_cells.md", "real_cells_medians.csv", "real_cells_g3.csv", "real_c
          "validation_slopes.png")
 #: what ``--time-domain`` adds
 TIME_FILES = ("real_cells_time.csv", "real_cells_time.png")
+#: what ``--populations`` adds
+POPULATION_FILES = ("real_cells_populations.csv", "real_cells_exponent_stiffness.csv", "validation_population.png")
 
 
 def check_inputs(args) -> None:
@@ -122,41 +124,23 @@ def real_cells_cost(args, jobs: int, cpu_per_call, cpu_share):
 
 
 def write_real_cells(out: Path, log, args, jobs: int) -> None:
-    """Run the study and write :data:`FILES` into ``out``."""
-    from .. import plotting
-    from ..io.outputs import write_csv_rows, write_text
-    from ..plotting.real_cells import real_cells_medians_figure, real_cells_slopes_figure
-    from ..reports.real_cells import (CELL_COLUMNS, G3_COLUMNS, MEDIAN_COLUMNS, POPULATION_COLUMNS, TIME_COLUMNS,
-                                      cell_rows, g3_rows, median_rows, population_rows, real_cells_markdown, time_rows,
-                                      validation_tables)
-    from ..studies.real_cells_study import real_cells_study
+    """Run the study (:class:`~tenscell.studies.real_cells_study.RealCellsStudy`) and write its tables, figures and
+    pages into ``out``."""
+    import dataclasses
+    import time
+
+    from ..studies.protocol import execute
+    from ..studies.real_cells_study import RealCellsStudy, assemble_real_cells, load_average
+    from ._study_output import write_study_result
 
     names, med, cell, max_cells = budgets(args)
-    s = real_cells_study(args.data_dir, mechanisms=names, budget=med, cell_budget=cell, max_cells=max_cells,
-                         time_domain=args.time_domain, populations=args.populations, jobs=jobs,
-                         notify=lambda line: log(line))
-    write_csv_rows(out / "real_cells_medians.csv", list(MEDIAN_COLUMNS), median_rows(s))
-    write_csv_rows(out / "real_cells_g3.csv", list(G3_COLUMNS), g3_rows(s))
-    write_csv_rows(out / "real_cells_cells.csv", list(CELL_COLUMNS), cell_rows(s))
-    written = list(FILES)
-    if s.time_domain:
-        from ..plotting.real_cells import real_cells_time_figure
-
-        write_csv_rows(out / "real_cells_time.csv", list(TIME_COLUMNS), time_rows(s))
-        plotting.save(real_cells_time_figure(s), out / "real_cells_time.png")
-        written += list(TIME_FILES)
-    if s.populations:
-        write_csv_rows(out / "real_cells_populations.csv", list(POPULATION_COLUMNS), population_rows(s))
-        written.append("real_cells_populations.csv")
-    plotting.save(real_cells_medians_figure(s), out / "real_cells_medians.png")
-    plotting.save(real_cells_slopes_figure(s), out / "real_cells_slopes.png")
-    from ..plotting.validation import validation_figures
-
-    for name, figure in validation_figures(s).items():  # the validation page's (docs/update_validation.py)
-        plotting.save(figure, out / f"{name}.png")
-        if f"{name}.png" not in written:
-            written.append(f"{name}.png")
-    write_text(out / "validation_tables.md", validation_tables(s))
-    write_text(out / "real_cells.md", real_cells_markdown(s))
+    w0, load0 = time.perf_counter(), load_average()
+    study = RealCellsStudy()
+    plan = study.plan({"directory": args.data_dir, "mechanisms": names, "budget": med, "cell_budget": cell,
+                       "max_cells": max_cells, "time_domain": args.time_domain, "populations": args.populations})
+    results, records = execute(plan, jobs=jobs, rates=study.rates, notify=lambda line: log(line))
+    s = assemble_real_cells(plan, results, wall_s=time.perf_counter() - w0, load=(load0, load_average()))
+    result = dataclasses.replace(study.result(s), tasks=records, elapsed_s=s.wall_s)
+    written = write_study_result(out, result)
     print(s.g3.text(), flush=True)
     log(f"{', '.join(written)} ({s.cpu_s:.0f} s CPU, {s.wall_s:.0f} s wall, load {s.load[0]:.1f} -> {s.load[1]:.1f})")

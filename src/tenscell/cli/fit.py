@@ -30,7 +30,8 @@ MODEL_GROUPS = {
     "mechanisms: fractional tendons": ("springpot", "springpot+visc", "springpot-tension+visc",
                                        "springpot-alpha-family+visc", "springpot-lognormal-kappa+visc"),
     "structure-free formulas (baselines)": ("structural-damping", "structural-damping+newtonian",
-                                            "structural-damping-prestress", "structural-damping-prestress+newtonian"),
+                                            "structural-damping-prestress", "structural-damping-prestress+newtonian",
+                                            "modified-power-law+constant"),
 }
 RECOMMENDED_MODEL = "springpot-alpha-family+visc"
 MODEL_NAMES = tuple(n for names in MODEL_GROUPS.values() for n in names)
@@ -603,7 +604,7 @@ def run(args) -> int:
         from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
-        validation = _validation(args, spec, datasets, space, fit_cpu)
+        validation = _validation(args, spec, datasets, space, result, fit_cpu)
         outputs = fit_outputs(result, baseline, title=title, comparison=comparison, timing=timing, figure=figure,
                               validation=validation)
     ensemble = _ensemble(args, result, datasets)
@@ -634,10 +635,11 @@ def _cpu_s() -> float:
     return time.process_time() + r.ru_utime + r.ru_stime
 
 
-def _validation(args, spec, datasets, space, fit_cpu: float):
-    """The model and its structure-free baselines out of sample (``--validate``), or None. ``fit_cpu``: the fit's
-    own CPU seconds, against which auto weighs the refits (each split: the model refitted with half the fit's
-    starts, each baseline formula for about a tenth of that)."""
+def _validation(args, spec, datasets, space, result, fit_cpu: float):
+    """The model and its structure-free baselines out of sample (``--validate``), or None: the model's refits start
+    warm at its fit (``result``) and are checked against it, each baseline's at its own fit to all the data.
+    ``fit_cpu``: the fit's own CPU seconds, against which auto weighs the refits (each split: the model refitted
+    with half the fit's starts, each baseline formula for about a tenth of that)."""
     from .._progress import stage
     from ..fitting.validation import compare_out_of_sample, splits, standard_baselines
 
@@ -654,8 +656,8 @@ def _validation(args, spec, datasets, space, fit_cpu: float):
               f"{fit_cpu:.1f} s for the fit; --validate yes runs them)")
         return None
     validation = compare_out_of_sample(spec, datasets, standard_baselines(datasets), model_options=space,
-                                       notify=stage, starts=2, seed=args.seed, hops=8, patience=3,
-                                       tolerance=args.tolerance, max_points=None)
+                                       full={spec.name: result}, notify=stage, starts=2, seed=args.seed, hops=8,
+                                       patience=3, tolerance=args.tolerance, max_points=None)
     return validation if validation.splits else None  # no split leaves enough points to fit every model
 
 

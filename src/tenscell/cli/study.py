@@ -145,19 +145,10 @@ def _read_data(args) -> tuple:
 
 
 def write_result(result, out: Path, log=None) -> None:
-    """Every table of a study's result as ``{name}.csv`` (its named columns), every figure drawn through its
-    plotter and saved, every page written, into ``out``; ``log`` (if given) hears of each figure as it is drawn."""
-    from .. import plotting
-    from ..io.outputs import write_csv_rows, write_text
+    """Every table, figure and page of a study's result into ``out`` (:func:`._study_output.write_study_result`)."""
+    from ._study_output import write_study_result
 
-    for table in result.tables:
-        write_csv_rows(out / f"{table.name}.csv", list(table.columns), table.rows)
-    for figure in result.figures:
-        if log is not None:
-            log(f"drawing {figure.name}")
-        plotting.save(figure.draw(), out / figure.name)
-    for name, text in result.pages:
-        write_text(out / name, text)
+    write_study_result(out, result, log)
 
 
 def run(args) -> int:

@@ -17,6 +17,14 @@ compares it with **independent per-cell structure-free formulas** (by default th
   the population model's fitted cells. The exponent is the one Xie et al. report, a springpot fitted to G′ and G″
   over 1–100 Hz (:func:`springpot_exponent`), computed the same way on data and model.
 
+**The exponent–stiffness relation as a measurement would show it** (:func:`exponent_stiffness`): a population with
+one parameter per cell puts every fitted cell on one curve, so its exponent–stiffness Spearman is ±1 by
+construction, while a measured cell's exponent and stiffness carry measurement error. Each measured cell's error
+is estimated from its own spectrum (:func:`measurement_errors`: the springpot fit's standard error of α, and the
+scatter of log10 G′ about it for the stiffness); that scatter is added to the model's fitted cells, cell by cell, in
+many seeded draws, and the slope dα/dlog10 k (least squares) and the Spearman correlation are computed after it,
+against the measured ones (which carry the same error).
+
 What these numbers do not show is listed in :attr:`PopulationScores.notes` (computed from the run: parameters at a
 bound, the per-cell parameter's role in the correlations).
 """
@@ -41,7 +49,8 @@ if TYPE_CHECKING:
     from .result import FitResult
 
 __all__ = ["PopulationScores", "ScoreRow", "Correlation", "score_population", "population_cells", "springpot_exponent",
-           "comment_values", "EXPONENT_BAND_HZ", "DEFAULT_SPLITS", "DEFAULT_BASELINES"]
+           "comment_values", "EXPONENT_BAND_HZ", "DEFAULT_SPLITS", "DEFAULT_BASELINES", "ExponentStiffness",
+           "exponent_stiffness", "measurement_errors", "springpot_exponent_error", "RELATION_DRAWS"]
 
 #: frequencies (Hz) over which a cell's exponent is measured (Xie et al.'s springpot fits: 1–100 Hz)
 EXPONENT_BAND_HZ = (1.0, 100.0)
@@ -49,6 +58,8 @@ EXPONENT_BAND_HZ = (1.0, 100.0)
 DEFAULT_SPLITS = ((0.0, 30.0), (3.0, 100.0))
 #: the independent per-cell formulas every population model is scored against
 DEFAULT_BASELINES = ("structural-damping", "structural-damping+newtonian")
+#: seeded draws of the measurement's scatter added to the model population (:func:`exponent_stiffness`)
+RELATION_DRAWS = 1000
 
 
 def springpot_exponent(f_hz, G_storage, G_loss, band_hz=EXPONENT_BAND_HZ) -> float:
@@ -76,6 +87,131 @@ def springpot_exponent(f_hz, G_storage, G_loss, band_hz=EXPONENT_BAND_HZ) -> flo
 
     return float(scipy.optimize.minimize_scalar(rss, bounds=(1e-4, 1 - 1e-4), method="bounded",
                                                 options={"xatol": 1e-7}).x)
+
+
+def _springpot_columns(f_hz, alpha: float) -> tuple[np.ndarray, np.ndarray]:
+    """d log10 G′/dα and d log10 G″/dα of the springpot ``A (iω)^α`` at frequencies ``f_hz`` (Hz)."""
+    lw = np.log10(2 * np.pi * np.asarray(f_hz, dtype=float))
+    half = math.pi / 2
+    return (lw - half * math.tan(half * alpha) / math.log(10), lw + half / math.tan(half * alpha) / math.log(10))
+
+
+def springpot_exponent_error(f_hz, G_storage, G_loss, band_hz=EXPONENT_BAND_HZ) -> tuple[float, float, float]:
+    """``(α, standard error of α, σ)`` of the springpot fit of :func:`springpot_exponent` (least squares in log10):
+    σ is the RMS of its residuals over the 2n − 2 degrees of freedom (decades), the standard error of α the linear
+    one, ``σ·√((JᵀJ)⁻¹)_αα`` with the columns ∂/∂log10 A = 1 and ∂/∂α of log10 G′, log10 G″. NaNs with fewer than
+    two frequencies in the band (or no degree of freedom left)."""
+    alpha = springpot_exponent(f_hz, G_storage, G_loss, band_hz)
+    f = np.asarray(f_hz, dtype=float)
+    sel = (f >= band_hz[0] * (1 - 1e-9)) & (f <= band_hz[1] * (1 + 1e-9))
+    n = int(sel.sum())
+    if not math.isfinite(alpha) or 2 * n <= 2:
+        return alpha, math.nan, math.nan
+    ds, dl = _springpot_columns(f[sel], alpha)
+    a_col = np.concatenate([ds, dl])
+    y = np.concatenate([np.log10(np.asarray(G_storage, float)[sel]), np.log10(np.asarray(G_loss, float)[sel])])
+    base = alpha * np.log10(2 * np.pi * np.concatenate([f[sel], f[sel]])) + np.concatenate(
+        [np.full(n, math.log10(math.cos(math.pi * alpha / 2))), np.full(n, math.log10(math.sin(math.pi * alpha / 2)))])
+    r = y - base
+    r = r - r.mean()  # log10 A at its least-squares value
+    sigma = float(np.sqrt(np.sum(r**2) / (2 * n - 2)))
+    # (JᵀJ)⁻¹_αα for J = [1, a]: the variance of α about the intercept's own fit
+    s_aa = float(np.sum((a_col - a_col.mean()) ** 2))
+    return alpha, (sigma / math.sqrt(s_aa) if s_aa > 0 else math.nan), sigma
+
+
+def measurement_errors(cells, band_hz=EXPONENT_BAND_HZ) -> tuple[np.ndarray, np.ndarray]:
+    """Per measured cell: the standard error of its exponent (:func:`springpot_exponent_error`) and of its log10
+    stiffness (the scatter σ of its spectrum about that springpot, decades): the measurement's own error, estimated
+    from each cell's data."""
+    out = np.array([springpot_exponent_error(d.frequency_hz, d.G_storage, d.G_loss, band_hz)[1:] for d in cells],
+                   dtype=float).reshape(-1, 2)
+    return out[:, 0], out[:, 1]
+
+
+def _slope(x: np.ndarray, y: np.ndarray) -> float:
+    """The least-squares slope of y on x (NaN with fewer than 3 points or no spread in x)."""
+    if x.size < 3 or np.ptp(x) == 0:
+        return math.nan
+    xc = x - x.mean()
+    return float(np.sum(xc * (y - y.mean())) / np.sum(xc**2))
+
+
+@dataclass(frozen=True)
+class ExponentStiffness:
+    """The exponent–stiffness relation across cells: measured, of the model's fitted cells, and of those cells with
+    the measurement's scatter added (:func:`exponent_stiffness`).
+
+    Attributes
+    ----------
+    n_cells : int
+        Cells with a finite exponent, stiffness and errors.
+    slope_measured, spearman_measured : float
+        dα/dlog10 k (least squares) and the Spearman correlation of the measured cells.
+    slope_model, spearman_model : float
+        The same of the model's fitted cells (no scatter).
+    slope_noisy, spearman_noisy : (float, float, float)
+        The model's cells with the measured scatter added: 5th percentile, median, 95th percentile over the draws.
+    draws : int
+    se_alpha_median, se_log10_k_median : float
+        The median measurement errors added (dimensionless; decades).
+    """
+
+    n_cells: int
+    slope_measured: float
+    spearman_measured: float
+    slope_model: float
+    spearman_model: float
+    slope_noisy: tuple
+    spearman_noisy: tuple
+    draws: int
+    se_alpha_median: float
+    se_log10_k_median: float
+
+    def slope_within(self, fraction: float) -> bool:
+        """The noise-added slope's median within ±``fraction`` of the measured slope."""
+        return abs(self.slope_noisy[1] - self.slope_measured) <= fraction * abs(self.slope_measured)
+
+    def spearman_within(self, tol: float) -> bool:
+        """The noise-added Spearman's median within ±``tol`` of the measured one."""
+        return abs(self.spearman_noisy[1] - self.spearman_measured) <= tol
+
+    def to_dict(self) -> dict:
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+
+
+def exponent_stiffness(alpha_measured, k_measured, alpha_model, k_model, se_alpha, se_log10_k, *,
+                       draws: int = RELATION_DRAWS, seed: int = 0) -> ExponentStiffness:
+    """The exponent–stiffness relation (module docstring): per cell the measured and the model's exponent α and
+    stiffness k (Pa), and the measurement's standard errors of α and of log10 k; ``draws`` seeded draws of normal
+    scatter with those errors, cell by cell, are added to the model's cells."""
+    import scipy.stats
+
+    a_m, k_m, a_p, k_p, se_a, se_k = (np.asarray(x, dtype=float) for x in
+                                       (alpha_measured, k_measured, alpha_model, k_model, se_alpha, se_log10_k))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lk_m, lk_p = np.log10(k_m), np.log10(k_p)
+    ok = np.isfinite(a_m) & np.isfinite(lk_m) & np.isfinite(a_p) & np.isfinite(lk_p) & np.isfinite(se_a) \
+        & np.isfinite(se_k)
+    a_m, lk_m, a_p, lk_p, se_a, se_k = (x[ok] for x in (a_m, lk_m, a_p, lk_p, se_a, se_k))
+    rng = np.random.default_rng(seed)
+    slopes, rhos = np.full(draws, np.nan), np.full(draws, np.nan)
+    if ok.sum() >= 3:
+        for i in range(draws):
+            a = a_p + rng.normal(0.0, se_a)
+            lk = lk_p + rng.normal(0.0, se_k)
+            slopes[i] = _slope(lk, a)
+            rhos[i] = scipy.stats.spearmanr(lk, a)[0]
+
+    def q(x):
+        return tuple(float(v) for v in np.nanpercentile(x, [5, 50, 95])) if np.isfinite(x).any() else \
+            (math.nan,) * 3
+
+    return ExponentStiffness(
+        n_cells=int(ok.sum()), slope_measured=_slope(lk_m, a_m), spearman_measured=_spearman(a_m, lk_m)[0],
+        slope_model=_slope(lk_p, a_p), spearman_model=_spearman(a_p, lk_p)[0], slope_noisy=q(slopes),
+        spearman_noisy=q(rhos), draws=int(draws), se_alpha_median=float(np.median(se_a)) if se_a.size else math.nan,
+        se_log10_k_median=float(np.median(se_k)) if se_k.size else math.nan)
 
 
 def comment_values(data: RheologyData) -> dict:
@@ -183,6 +319,8 @@ class PopulationScores:
     correlations : tuple of Correlation
     notes : tuple of str
         What the numbers do not show.
+    relation : ExponentStiffness or None
+        The exponent–stiffness relation with the measurement's scatter added to the model's cells.
     """
 
     label: str
@@ -195,6 +333,7 @@ class PopulationScores:
     cells: dict
     correlations: tuple
     notes: tuple
+    relation: ExponentStiffness | None = None
 
     @property
     def n_cells(self) -> int:
@@ -239,7 +378,8 @@ class PopulationScores:
         return {"label": self.label, "population": self.population.to_dict(), "n_cells": self.n_cells,
                 "rows": [r.to_dict() for r in self.rows], "splits_Hz": [list(s) for s in self.splits],
                 "folds": self.folds, "anchor_Hz": self.anchor_hz,
-                "correlations": [c.to_dict() for c in self.correlations], "notes": list(self.notes)}
+                "correlations": [c.to_dict() for c in self.correlations], "notes": list(self.notes),
+                "exponent_stiffness": None if self.relation is None else self.relation.to_dict()}
 
 
 # ---------------------------------------------------------------------------------------
@@ -376,10 +516,13 @@ def score_population(cells, population, *, baselines=DEFAULT_BASELINES, splits=D
     rows += [_row(b.name, "independent per cell", fits, joint.sigma_known, [h[1 + i] for h in held_f], held_c[1 + i])
              for i, (b, fits) in enumerate(zip(forms, independent))]
     table, correlations = _correlations(cells, joint, anchor_hz, covariates)
+    se_alpha, se_k = measurement_errors(cells)
+    relation = exponent_stiffness(table["exponent_measured"], table["stiffness_measured_Pa"], table["exponent_model"],
+                                  table["stiffness_model_Pa"], se_alpha, se_k, seed=seed)
     return PopulationScores(label=label, population=population, fit=joint, rows=tuple(rows),
                             splits=tuple((float(a), float(b)) for a, b in splits), folds=int(folds),
                             anchor_hz=float(anchor_hz), cells=table, correlations=correlations,
-                            notes=_notes(joint, correlations))
+                            notes=_notes(joint, correlations), relation=relation)
 
 
 def _row(name, kind, fits, sigma_known: bool, held_f, held_c) -> ScoreRow:

@@ -55,9 +55,11 @@ __all__ = [
 def _register() -> None:
     """Every drawing function of the topic modules, for the results' ``plot()`` (:func:`tenscell._results.plotter`)."""
     from .._results import register_plotters
+    from . import mechanisms, real_cells, validation  # the studies' figures (studies.protocol.Figure names them)
 
     register_plotters({name: getattr(module, name) for module in (dynamics, fits, interactive, paper, population,
-                                                                  spectra, structures, variants)
+                                                                  spectra, structures, variants, mechanisms,
+                                                                  real_cells, validation)
                        for name in module.__all__ if callable(getattr(module, name))})
     register_plotters({"save": save, "png_bytes": png_bytes, "calibration_figure": calibration_figure})
 

@@ -21,7 +21,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from ._style import figure_of, legend_below, new_axes, new_panels, styled, wrap
 
-__all__ = ["heldout_bands", "heldout_bands_figure", "population_cells", "population_cells_figure", "slope_scatter",
+__all__ = ["validation_figure", "heldout_bands", "heldout_bands_figure", "population_cells", "population_cells_figure", "slope_scatter",
            "cell_slopes_figure", "validation_figures", "LINE_COLORS"]
 
 #: one colour per cell line, the same in every figure (colour-blind safe: blue, orange, then the rest of tab10)
@@ -310,36 +310,60 @@ def cell_slopes_figure(lines: Mapping[str, tuple], title: str | None = None,
     return ax
 
 
-def validation_figures(study) -> dict:
-    """The validation page's figures from a :class:`~tenscell.studies.real_cells_study.RealCellsStudy`, by file
-    stem: ``"validation_heldout"`` (every model on the medians, the first split, per line, with G3's limit),
-    ``"validation_slopes"`` (the per-cell slopes; a panel saying so when the run fitted no cell) and, when the run
-    scored populations, ``"validation_population"`` (each line's first population model: the mechanism's)."""
-    out: dict = {}
+def _heldout_figure(study):
     lines = list(study.medians)
     split = study.g3.split
     models = list(dict.fromkeys(s.model for s in study.scores))
-    if models:
-        held = np.full((len(models), len(lines)), np.nan)
-        for s in study.scores:
-            held[models.index(s.model), lines.index(s.line)] = s.held(split)
-        order = np.argsort(np.nanmax(held, axis=1), kind="stable")
-        out["validation_heldout"] = heldout_bands_figure(
-            [models[i] for i in order], held[order], held[order], held[order], columns=lines, limit=study.g3.limit,
-            reference="structural-damping+newtonian", title=f"Every model on the medians, held out ({split})")
+    if not models:
+        return None
+    held = np.full((len(models), len(lines)), np.nan)
+    low, high = held.copy(), held.copy()
+    for s in study.scores:
+        i, j = models.index(s.model), lines.index(s.line)
+        held[i, j] = s.held(split)
+        low[i, j], high[i, j] = s.band(split)  # over the fits the training data cannot tell apart
+    order = np.argsort(np.nanmax(high, axis=1), kind="stable")
+    return heldout_bands_figure(
+        [models[i] for i in order], low[order], high[order], held[order], columns=lines, limit=study.g3.limit,
+        reference="structural-damping+newtonian", title=f"Every model on the medians, held out ({split})")
+
+
+def _population_figure(study):
     populations: dict = {}
     for line, scores, _ in study.populations:
         populations.setdefault(line, scores)
-    if populations:
-        name = next(iter(populations.values())).population.name
-        out["validation_population"] = population_cells_figure(
-            {line: sc.cells for line, sc in populations.items()},
-            title=f"Each cell's exponent against its stiffness: measured, and fitted by {name}")
+    if not populations:
+        return None
+    name = next(iter(populations.values())).population.name
+    return population_cells_figure({line: sc.cells for line, sc in populations.items()},
+                                   title=f"Each cell's exponent against its stiffness: measured, and fitted by {name}")
+
+
+def _slopes_figure(study):
     per_line: dict = {}
     for c in study.cells:
         meas, mod = per_line.setdefault(c.line, ({}, {}))
         meas[c.model] = c.measured
         mod[c.model] = c.modelled
-    out["validation_slopes"] = cell_slopes_figure(
-        per_line, title="Per cell: the fitted model's G′ slope (3–30 Hz) against the measured one")
-    return out
+    return cell_slopes_figure(per_line, title="Per cell: the fitted model's G′ slope (3–30 Hz) against the measured one")
+
+
+#: the validation page's figures by file stem
+_FIGURES = {"validation_heldout": _heldout_figure, "validation_population": _population_figure,
+            "validation_slopes": _slopes_figure}
+
+
+def validation_figure(study, name: str):
+    """One of :func:`validation_figures` by its file stem (None when the run has nothing to draw there): what a
+    study's :class:`~tenscell.studies.protocol.Figure` names."""
+    return _FIGURES[name](study)
+
+
+def validation_figures(study) -> dict:
+    """The validation page's figures from a :class:`~tenscell.studies.real_cells_study.RealCellsResult`, by file
+    stem: ``"validation_heldout"`` (every model on the medians, the first split, per line, with G3's limit and the
+    held-out bands), ``"validation_slopes"`` (the per-cell slopes; a panel saying so when the run fitted no cell)
+    and, when the run scored populations, ``"validation_population"`` (each line's first population model: the
+    mechanism's)."""
+    out = {name: draw(study) for name, draw in _FIGURES.items()}
+    return {name: fig for name, fig in out.items() if fig is not None}

@@ -8,6 +8,8 @@ from .ensemble import ensemble_markdown
 from .fit import fit_markdown
 from .fit_text import fit_text
 from .leading import leading_markdown
+from .mechanisms import mechanisms_markdown, mechanisms_summary
+from .real_cells import real_cells_markdown, real_cells_tables, validation_tables
 from .html import (comparison_html, data_html, ensemble_html, fit_html, fitted_model_html, frequency_response_html,
                    population_html, structure_html)
 from .html_page import fit_report_html, markdown_report_html
@@ -22,7 +24,8 @@ __all__ = [
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
     "ensemble_markdown", "population_fit_markdown", "leading_markdown", "fit_html", "data_html", "frequency_response_html",
     "fitted_model_html", "comparison_html", "population_html", "ensemble_html", "structures_markdown",
-    "structure_html", "fit_report_html", "markdown_report_html",
+    "structure_html", "fit_report_html", "markdown_report_html", "mechanisms_markdown", "mechanisms_summary",
+    "real_cells_markdown", "real_cells_tables", "validation_tables",
 ]
 
 

@@ -23,6 +23,22 @@ ones, keeping everything but the trend under test:
     (default :data:`DEFAULT_EXPONENT_RISE`): data whose exponent falls by 0.03 (the
     bundled Stamenović lines, read through their loss tangent) become data whose
     exponent rises by 0.03.
+``"loss-independent-of-prestress"``
+    G″ independent of prestress while G′ keeps its trend: at each frequency the
+    trend of log G″ against log P is replaced by its value at the median prestress
+    (as ``"prestress-independent"`` does for both). A structure whose prestress acts
+    through the geometric stiffness P·Kp alone turns that one elastic term into the
+    trends of G′ *and* G″ (its modes couple them); data with only G′'s trend ask
+    whether it can part them.
+``"flat-loss-tangent"``
+    the loss tangent G″/G′ independent of prestress, G′ unchanged: at each
+    frequency the trend of log(G″/G′) against log P is replaced by its value at
+    the median prestress (G″ follows G′). Cells' loss tangent falls as the
+    prestress rises (the bundled Stamenović lines: 0.33 → 0.27), and so does a
+    power-law exponent read from it; on these lines it does not. Not one of
+    :data:`UNLIKE_KINDS` but training lines for the exponent test: a model trained
+    on them whose G′ exponent still falls with prestress gets the fall from its
+    structure, not from the lines.
 
 Both are smooth multiplicative factors, so each point keeps its own deviation
 from the data's trend (the data's noise, if any), its standard deviations
@@ -40,10 +56,15 @@ import numpy as np
 from .._checks import finite_scalar
 from ..io.data import DataError, RheologyData
 
-__all__ = ["UNLIKE_KINDS", "DEFAULT_EXPONENT_RISE", "unlike_data", "unlike_sets", "varies_with_prestress"]
+__all__ = ["UNLIKE_KINDS", "FLAT_LOSS_TANGENT", "DATA_KINDS", "DEFAULT_EXPONENT_RISE", "unlike_data", "unlike_sets",
+           "varies_with_prestress"]
 
-#: the kinds of unlike data sets (module docstring)
-UNLIKE_KINDS = ("prestress-independent", "exponent-rising")
+#: the kinds of unlike data sets a model is judged on (module docstring)
+UNLIKE_KINDS = ("prestress-independent", "exponent-rising", "loss-independent-of-prestress")
+#: lines with a flat loss tangent: training lines of the exponent test (module docstring)
+FLAT_LOSS_TANGENT = "flat-loss-tangent"
+#: every kind :func:`unlike_data` builds
+DATA_KINDS = (*UNLIKE_KINDS, FLAT_LOSS_TANGENT)
 #: Δ of ``"exponent-rising"``: what is added to the exponent's change over the data's prestress range
 #: (dimensionless): twice the fall of the bundled Stamenović lines (loss tangent 0.33 -> 0.27: exponent 0.20 -> 0.17),
 #: so that their unlike set rises by as much as they fall
@@ -62,20 +83,25 @@ def _trend(logp: np.ndarray, logg: np.ndarray, at: np.ndarray) -> np.ndarray:
     return np.polyval(coef, at)
 
 
-def _flatten(data: RheologyData) -> tuple[np.ndarray, np.ndarray]:
-    """``"prestress-independent"``: factors (G', G'') that move each frequency's trend to the median prestress."""
+def _flat_factor(data: RheologyData, values: np.ndarray) -> np.ndarray:
+    """Per point, the factor that moves each frequency's trend of log ``values`` against log P to its value at the
+    median prestress (1 at a frequency with one prestress: nothing to flatten)."""
     assert data.prestress is not None
     logp = np.log(data.prestress)
     p_med = math.log(float(np.median(np.unique(data.prestress))))
-    fs, fl = np.ones(data.n), np.ones(data.n)
+    out = np.ones(data.n)
     for f in np.unique(data.frequency_hz):
         sel = data.frequency_hz == f
         if np.unique(logp[sel]).size < 2:
-            continue  # one prestress at this frequency: nothing to flatten
-        for G, out in ((data.G_storage, fs), (data.G_loss, fl)):
-            lg = np.log(G[sel])
-            out[sel] = np.exp(_trend(logp[sel], lg, np.array([p_med]))[0] - _trend(logp[sel], lg, logp[sel]))
-    return fs, fl
+            continue
+        lg = np.log(values[sel])
+        out[sel] = np.exp(_trend(logp[sel], lg, np.array([p_med]))[0] - _trend(logp[sel], lg, logp[sel]))
+    return out
+
+
+def _flatten(data: RheologyData) -> tuple[np.ndarray, np.ndarray]:
+    """``"prestress-independent"``: factors (G', G'') that move each frequency's trend to the median prestress."""
+    return _flat_factor(data, data.G_storage), _flat_factor(data, data.G_loss)
 
 
 def _exponent_rise(data: RheologyData, rise: float) -> tuple[np.ndarray, np.ndarray]:
@@ -98,7 +124,7 @@ def unlike_data(data: RheologyData, kind: str, *, exponent_rise: float = DEFAULT
     Parameters
     ----------
     data : RheologyData
-    kind : {"prestress-independent", "exponent-rising"}
+    kind : one of :data:`DATA_KINDS`
     exponent_rise : float
         ``Δ`` of ``"exponent-rising"``: added to the exponent's change from the lowest to the highest
         prestress (dimensionless, > 0).
@@ -116,8 +142,8 @@ def unlike_data(data: RheologyData, kind: str, *, exponent_rise: float = DEFAULT
     DataError
         A rise that turns a modulus negative.
     """
-    if kind not in UNLIKE_KINDS:
-        raise ValueError(f"kind must be one of {', '.join(UNLIKE_KINDS)}, got {kind!r}")
+    if kind not in DATA_KINDS:
+        raise ValueError(f"kind must be one of {', '.join(DATA_KINDS)}, got {kind!r}")
     rise = finite_scalar("exponent_rise", exponent_rise, "a finite number > 0 (dimensionless)")
     if rise <= 0:
         raise ValueError(f"exponent_rise must be > 0 (dimensionless), got {exponent_rise!r}")
@@ -127,6 +153,14 @@ def unlike_data(data: RheologyData, kind: str, *, exponent_rise: float = DEFAULT
         fs, fl = _flatten(data)
         how = ("the trend of log G', log G'' against log P (quadratic fit per frequency) replaced by its value at "
                "the median prestress; each point keeps its deviation from the trend")
+    elif kind == "loss-independent-of-prestress":
+        fs, fl = np.ones(data.n), _flat_factor(data, data.G_loss)
+        how = ("the trend of log G'' against log P (quadratic fit per frequency) replaced by its value at the median "
+               "prestress, G' unchanged; each point keeps its deviation from the trend")
+    elif kind == FLAT_LOSS_TANGENT:
+        fs, fl = np.ones(data.n), _flat_factor(data, data.G_loss / data.G_storage)
+        how = ("the trend of the log loss tangent log(G''/G') against log P (quadratic fit per frequency) replaced by "
+               "its value at the median prestress, G' unchanged; each point keeps its deviation from the trend")
     else:
         fs, fl = _exponent_rise(data, rise)
         how = (f"every point multiplied by (i f/f_c)^d(P), d rising linearly in log P from {-rise / 2:+g} to "

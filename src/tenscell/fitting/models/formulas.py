@@ -14,8 +14,19 @@ term               G*(ω, P)                                         parameters
 ``springpot_2``    A_2·(iω)^α_2: a second springpot                 A_2 (Pa at 1 rad/s), alpha_2
 ``springpot_P``    B·P·(iω)^α_T                                     B (Pa/Pa at 1 rad/s), alpha_T
 ``maxwell``        E_M·iωτ/(1 + iωτ)                                E_M (Pa), tau (s)
+``mpl``            E_1·(iωτ_1)^α_1/(1 + (iωτ_1)^α_1)                E_1 (Pa), tau_1 (s), alpha_1
 ``newtonian``      iωη                                              eta (Pa·s)
 =================  ===============================================  ==========================================
+
+``mpl`` is a modified power law: a spring in series with a springpot (the fractional Maxwell element), whose
+relaxation ``E_1·E_α(−(t/τ_1)^α)`` (Mittag-Leffler) starts at a finite modulus E_1 and decays as a power law
+``t^−α`` after τ_1 (as ``(1 + t/τ_1)^−α`` does); beside ``E0`` (the formula ``modified-power-law+constant``) it
+relaxes to a constant: the 4-parameter law creep and relaxation data are judged against.
+
+**Networks.** A formula sums its terms (a parallel network), unless ``series`` names two groups of its terms whose
+sums are put in series, ``G_A·G_B/(G_A + G_B)``, the other terms in parallel to them: :func:`series_formula` puts a
+mechanism's lumped elastic terms (``aP``, ``E0``) in series with its law's other terms (the cytoplasm's Newtonian
+term stays in parallel), so that P, entering an elastic term, moves G′ and G″ alike.
 
 ``structural`` is the structural-damping law of Fabry et al. (Phys Rev Lett 87:148102, 2001):
 ``G0 (ω/Φ0)^α (1 + iη) Γ(1−α) cos(πα/2)`` with ``η = tan(πα/2)`` is exactly ``G0 Γ(1−α) (iω/Φ0)^α``.
@@ -46,7 +57,8 @@ from ..time_series import (TimeLayout, data_layout, modulus_scales, relative_val
 from ..._results import format_repr
 from .base import Capabilities, FitFileError, FitModel, FittedModel, field_of, frequencies_of, model_from_dict, positive_values, prestress_from
 
-__all__ = ["Formula", "FormulaProblem", "FittedFormula", "FORMULA_FORMAT", "FORMULAS", "TERMS", "lumped_formula", "structural_damping_moduli", "PHI0"]
+__all__ = ["Formula", "FormulaProblem", "FittedFormula", "FORMULA_FORMAT", "FORMULAS", "TERMS", "lumped_formula",
+           "series_formula", "structural_damping_moduli", "PHI0"]
 
 #: the fixed frequency scale Φ0 of the structural-damping law (rad/s)
 PHI0 = 1.0
@@ -60,6 +72,7 @@ TERMS: dict[str, tuple[tuple[str, str, str], ...]] = {
     "springpot_2": (("A_2", "Pa (at 1 rad/s)", "coefficient"), ("alpha_2", "", "exponent")),
     "springpot_P": (("B", "Pa/Pa (at 1 rad/s)", "ratio"), ("alpha_T", "", "exponent")),
     "maxwell": (("E_M", "Pa", "stiffness"), ("tau", "s", "time")),
+    "mpl": (("E_1", "Pa", "stiffness"), ("tau_1", "s", "time"), ("alpha_1", "", "exponent")),
     "newtonian": (("eta", "Pa·s", "viscosity"),),
 }
 #: terms in which the prestress appears
@@ -108,8 +121,28 @@ def _term(term: str, p: dict, z: np.ndarray, P: np.ndarray) -> tuple[np.ndarray,
         x = z * p["tau"]
         G = p["E_M"] * x / (1 + x)
         return G, {"E_M": G, "tau": p["E_M"] * x / (1 + x) ** 2}
+    if term == "mpl":
+        a = p["alpha_1"]
+        log_zt = np.log(z * p["tau_1"])
+        x = np.exp(a * log_zt)
+        G = p["E_1"] * x / (1 + x)
+        dx = p["E_1"] * a * x / (1 + x) ** 2  # dG/d ln x times d ln x / d ln τ_1 (= α)
+        return G, {"E_1": G, "tau_1": dx, "alpha_1": dx * log_zt}
     G = z * p["eta"]  # newtonian
     return G, {"eta": G}
+
+
+def _sum_terms(terms, values: dict, z: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, dict]:
+    """The sum of ``terms``' G* at Laplace variables ``z`` (a parallel network) and its derivatives by the ln of
+    each parameter."""
+    G = np.zeros(z.shape, dtype=complex)
+    dG: dict[str, np.ndarray] = {}
+    for t in terms:
+        g, d = _term(t, values, z, P)
+        G = G + g
+        for k, v in d.items():
+            dG[k] = dG.get(k, 0.0) + v
+    return G, dG
 
 
 @dataclass(frozen=True)
@@ -126,6 +159,7 @@ class Formula(FitModel):
     name: str
     terms: tuple
     description: str = ""
+    series: tuple = ()
     family = "formula"
 
     def __post_init__(self):
@@ -133,6 +167,12 @@ class Formula(FitModel):
         bad = [t for t in self.terms if t not in TERMS]
         if bad or not self.terms:
             raise ValueError(f"formula {self.name!r}: terms must be some of {', '.join(TERMS)}, got {self.terms!r}")
+        groups = tuple(tuple(g) for g in self.series)
+        if groups and (len(groups) != 2 or not all(groups) or set(groups[0]) & set(groups[1])
+                       or not set(groups[0]) | set(groups[1]) <= set(self.terms)):
+            raise ValueError(f"formula {self.name!r}: series must be two disjoint, non-empty groups of its terms, "
+                             f"got {self.series!r}")
+        object.__setattr__(self, "series", groups)
 
     @property
     def group(self) -> str:
@@ -166,13 +206,15 @@ class Formula(FitModel):
         """G*(s) (Pa) continued to complex Laplace variables ``s`` (1/s; ``iω`` gives :meth:`complex_modulus`) at
         prestresses ``P`` (Pa), broadcast; with ``derivatives`` also ``{name: dG*/d ln value}``."""
         z, P = np.broadcast_arrays(np.asarray(s, dtype=complex), np.asarray(P, dtype=float))
-        G = np.zeros(z.shape, dtype=complex)
-        dG: dict[str, np.ndarray] = {}
-        for t in self.terms:
-            g, d = _term(t, values, z, P)
-            G = G + g
-            for k, v in d.items():
-                dG[k] = dG.get(k, 0.0) + v
+        in_series = {t for g in self.series for t in g}
+        G, dG = _sum_terms([t for t in self.terms if t not in in_series], values, z, P)
+        if self.series:
+            Ga, dA = _sum_terms(self.series[0], values, z, P)
+            Gb, dB = _sum_terms(self.series[1], values, z, P)
+            # G_A·G_B/(G_A + G_B): d = (G_B² dG_A + G_A² dG_B)/(G_A + G_B)²
+            G = G + Ga * Gb / (Ga + Gb)
+            for k in {*dA, *dB}:
+                dG[k] = dG.get(k, 0.0) + (Gb**2 * dA.get(k, 0.0) + Ga**2 * dB.get(k, 0.0)) / (Ga + Gb) ** 2
         return (G, dG) if derivatives else G
 
     def problem(self, data, cell=None, *, bounds=None, fixed=None) -> FormulaProblem:
@@ -191,6 +233,9 @@ def _builtin() -> dict[str, Formula]:
                 "the structural-damping law with a modulus linear in the prestress: (G0 + g·P)·Γ(1−α)·(iω)^α"),
         Formula("structural-damping-prestress+newtonian", ("structural_P", "newtonian"),
                 "the structural-damping law with a modulus linear in the prestress and a Newtonian term"),
+        Formula("modified-power-law+constant", ("E0", "mpl"),
+                "a modified power law with a constant: E0 + E_1·(iωτ_1)^α_1/(1 + (iωτ_1)^α_1), relaxing from "
+                "E0 + E_1 as a power law to E0"),
     ]
     return {f.name: f for f in out}
 
@@ -215,6 +260,27 @@ def lumped_formula(mechanism) -> Formula:
         terms = (*terms, "newtonian")
     return Formula(f"{mechanism.name} (lumped)", terms,
                    f"the structure-free formula of {mechanism.name}: " + " + ".join(terms))
+
+
+#: the lumped terms a mechanism's series network puts on the elastic side (the prestress enters here)
+_ELASTIC_TERMS = ("aP", "E0")
+
+
+def series_formula(parallel: Formula) -> Formula | None:
+    """The same lumped terms as a series network: ``parallel``'s elastic terms (``aP``, ``E0``) in series with its
+    other terms (the law's dissipative ones; a Newtonian term stays in parallel, as the cytoplasm, unless it is the
+    only one: a Voigt element's lumped terms become a Maxwell element). None when a side is empty. Module
+    docstring."""
+    elastic = tuple(t for t in parallel.terms if t in _ELASTIC_TERMS)
+    rest = tuple(t for t in parallel.terms if t not in _ELASTIC_TERMS)
+    other = tuple(t for t in rest if t != "newtonian") or rest
+    if not elastic or not other:
+        return None
+    base = parallel.name[: -len(" (lumped)")] if parallel.name.endswith(" (lumped)") else parallel.name
+    return Formula(f"{base} (lumped in series)", parallel.terms,
+                   f"the structure-free formula of {base} as a series network: (" + " + ".join(elastic)
+                   + ") in series with (" + " + ".join(other) + ")"
+                   + "".join(f" + {t}" for t in rest if t not in other), series=(elastic, other))
 
 
 # ---------------------------------------------------------------------------------------
