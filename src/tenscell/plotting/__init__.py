@@ -13,7 +13,8 @@ Topics: :mod:`~tenscell.plotting.paper` (Figs. 2–3),
 :mod:`~tenscell.plotting.fits` (data against fits),
 :mod:`~tenscell.plotting.dynamics` (time domain),
 :mod:`~tenscell.plotting.spectra` (modes, creep and relaxation curves),
-:mod:`~tenscell.plotting.structures` (3D views).
+:mod:`~tenscell.plotting.structures` (3D views),
+:mod:`~tenscell.plotting.powerlaw` (the power-law study).
 """
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ from .fits import compactness_front, data_points, fit_figure, fit_panels, measur
 from .spectra import loglog_curve, rates_bar, spectrum_stems
 from .paper import fig2_prestress, fig3_frequency, moduli_vs_frequency, moduli_vs_prestress
 from .structures import MEMBER_STYLE, relaxation_modes_3d, structure_3d
-from . import dynamics, fits, paper, population, spectra, structures, variants
+from . import dynamics, fits, paper, population, powerlaw, spectra, structures, variants
 from .variants import (
     elasticities_figure, monte_carlo_figure, no_if_figure, no_if_peaks_figure, reference_map_figure,
     references_figure, semiflexible_figure, stiffening_figure,
@@ -52,8 +53,8 @@ def _register() -> None:
     """Every drawing function of the topic modules, for the results' ``plot()`` (:func:`tenscell._results.plotter`)."""
     from .._results import register_plotters
 
-    register_plotters({name: getattr(module, name) for module in (dynamics, fits, paper, population, spectra,
-                                                                  structures, variants)
+    register_plotters({name: getattr(module, name) for module in (dynamics, fits, paper, population, powerlaw,
+                                                                  spectra, structures, variants)
                        for name in module.__all__ if callable(getattr(module, name))})
     register_plotters({"save": save})
 

@@ -11,13 +11,14 @@ from .html import (comparison_html, data_html, ensemble_html, fit_html, fitted_m
                    population_html)
 from .population import population_markdown, study_markdown
 from .population_fit import population_fit_markdown
+from .powerlaw import powerlaw_markdown
 from .sensitivity import sensitivity_markdown
 from .studies import no_if_markdown, references_markdown, semiflexible_markdown, stiffening_markdown
 
 __all__ = [
     "fit_markdown", "fit_text", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
-    "ensemble_markdown", "population_fit_markdown", "fit_html", "data_html", "frequency_response_html",
+    "ensemble_markdown", "population_fit_markdown", "powerlaw_markdown", "fit_html", "data_html", "frequency_response_html",
     "fitted_model_html", "comparison_html", "population_html", "ensemble_html",
 ]
 

@@ -1,0 +1,205 @@
+"""Figures of the power-law study (:mod:`tenscell.studies.powerlaw`): moduli, the exponent map, the loss tangent,
+convergence with size, the prestress.
+
+Each function takes the study's result (a :class:`~tenscell.studies.powerlaw.PowerLawStudy`), draws on the axes
+given (``ax=`` or ``axes=``) or on a new figure's, and returns them. Nothing here computes physics: the local
+exponent and the loss tangent are the result's own (``PointResult.alpha``, ``.tan_delta``).
+"""
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+from matplotlib.axes import Axes
+
+from ._style import colors, legend_outside, new_axes, new_panels, styled
+
+__all__ = ["powerlaw_moduli_figure", "powerlaw_map_figure", "powerlaw_loss_tangent_figure",
+           "powerlaw_convergence_figure", "powerlaw_prestress_figure"]
+
+_BAND = (0.1, 0.3)
+_MAP_HZ = (1e-3, 1e4)
+_FAMILY_COLOR = {"diluted": "#1f77b4", "hierarchical": "#d62728", "structural": "#2ca02c"}
+
+
+def _shade(ax: Axes) -> None:
+    ax.axvspan(1e-2, 10.0, color="0.92", zorder=0)
+
+
+@styled
+def powerlaw_moduli_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """G' (left) and G'' (right) of each family's best structure at every prestrain (one row per family; the band
+    0.01–10 Hz of goal G6 shaded)."""
+    fams = study.families
+    title = "Moduli of each family's best structure"
+    ax = _grid(len(fams), title) if axes is None else new_panels(axes, 2 * len(fams), (9.6, 2.9 * len(fams)))
+    for row, fam in enumerate(fams):
+        r = study.best(fam)
+        a1, a2 = ax[2 * row], ax[2 * row + 1]
+        cols = colors(r.prestrain.size)
+        for i, e in enumerate(r.prestrain):
+            a1.loglog(r.frequency_hz, r.G_storage[i], color=cols[i], label=f"ε = {e:g}")
+            a2.loglog(r.frequency_hz, r.G_loss[i], color=cols[i])
+        for a, name in ((a1, "G′"), (a2, "G″")):
+            _shade(a)
+            a.set_xlim(*_MAP_HZ)
+            a.set_ylabel(f"{name} (Pa)")
+            a.set_xlabel("frequency f (Hz)")
+        a1.set_title(f"{fam}: {r.point.label}", fontsize=8, loc="left")
+        legend_outside(a2, handles=a1.get_legend_handles_labels()[0], labels=a1.get_legend_handles_labels()[1],
+                       title="prestrain", fontsize=7)
+    return ax
+
+
+def _grid(rows: int, title: str) -> np.ndarray:
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(rows, 2, figsize=(9.6, 2.9 * rows), layout="constrained", squeeze=False)
+    fig.suptitle(title)
+    return ax.ravel()
+
+
+def _rows_of(study, fam: str):
+    """The family's structures as map rows: (label, curve index nearest ε = 0.1, result), sorted by their knobs."""
+    pts = list(study.family(fam))
+    main = {"diluted": lambda r: r.point.law == "voigt" and r.point.knob("size") == max(
+        p.point.knob("size") for p in pts if p.point.law == "voigt")}.get(fam, lambda r: True)
+    pts = [r for r in pts if main(r)]
+
+    def key(r):
+        return tuple(float(v) for _, v in r.point.knobs) + (r.point.damping, r.point.damping_value)
+
+    pts.sort(key=key)
+    out = []
+    for r in pts:
+        i = int(np.argmin(np.abs(np.log(r.prestrain / 0.1))))
+        out.append((_short(fam, r), i, r))
+    return out
+
+
+def _short(fam: str, r) -> str:
+    if fam == "diluted":
+        return f"z = {r.point.knob('connectivity'):g}"
+    if fam == "hierarchical":
+        return f"k = {r.point.knob('module_nodes')}, depth {r.point.knob('depth')}"
+    return r.point.label
+
+
+@styled
+def powerlaw_map_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """The local exponent α = d ln G'/d ln f over frequency (x) and each family's structures (y), at the prestrain
+    nearest ε = 0.1; contours at α = 0.1 and 0.3."""
+    fams = study.families
+    heights = [max(2.0, 0.28 * len(_rows_of(study, f)) + 1.0) for f in fams]
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(len(fams), 1, figsize=(8.4, sum(heights)), layout="constrained", squeeze=False,
+                               gridspec_kw={"height_ratios": heights})
+        fig.suptitle("Local exponent α = d ln G′/d ln f (prestrain ε ≈ 0.1)")
+        ax = ax.ravel()
+    else:
+        ax = new_panels(axes, len(fams), (8.4, sum(heights)))
+    mesh = None
+    for a, fam in zip(ax, fams):
+        rows = _rows_of(study, fam)
+        f = rows[0][2].frequency_hz
+        keep = (f >= _MAP_HZ[0] * 0.999) & (f <= _MAP_HZ[1] * 1.001)
+        Z = np.array([r.alpha[i][keep] for _, i, r in rows])
+        y = np.arange(len(rows))
+        mesh = a.pcolormesh(f[keep], y, Z, cmap="magma", vmin=0.0, vmax=1.0, shading="nearest")
+        if len(rows) > 1:
+            a.contour(f[keep], y, Z, levels=list(_BAND), colors=["#8ecae6", "#219ebc"], linewidths=1.0)
+        a.set_xscale("log")
+        a.set_yticks(y)
+        a.set_yticklabels([s for s, _, _ in rows], fontsize=6)
+        a.set_title(fam, fontsize=9, loc="left")
+        a.set_xlabel("frequency f (Hz)")
+        a.grid(False)
+    if mesh is not None:
+        ax[0].figure.colorbar(mesh, ax=list(ax), label="α (contours: 0.1, 0.3)", shrink=0.8)
+    return ax
+
+
+@styled
+def powerlaw_loss_tangent_figure(study, ax: Axes | None = None) -> Axes:
+    """The loss tangent G''/G' against tan(απ/2) of the local exponent, every structure, prestrain and frequency of
+    the map with 0.05 ≤ α ≤ 0.95 (a pure power law lies on the diagonal; dashed: ±20 %)."""
+    ax = new_axes(ax, (5.6, 5.0))
+    for fam in study.families:
+        xs, ys = [], []
+        for r in study.family(fam):
+            f = r.frequency_hz
+            keep = (f >= _MAP_HZ[0] * 0.999) & (f <= _MAP_HZ[1] * 1.001)
+            a, t = r.alpha[:, keep], r.tan_delta[:, keep]
+            sel = (a >= 0.05) & (a <= 0.95)
+            xs.append(np.tan(a[sel] * math.pi / 2))
+            ys.append(t[sel])
+        if xs:
+            ax.loglog(np.concatenate(xs), np.concatenate(ys), ".", ms=2, alpha=0.5, color=_FAMILY_COLOR.get(fam),
+                      label=fam)
+    x = np.logspace(-1.3, 1.3, 10)
+    ax.loglog(x, x, "k-", lw=0.8, label="tan δ = tan(απ/2)")
+    ax.loglog(x, 1.2 * x, "k--", lw=0.6, label="±20 %")
+    ax.loglog(x, 0.8 * x, "k--", lw=0.6)
+    for lo in _BAND:
+        ax.axvline(math.tan(lo * math.pi / 2), color="0.6", ls=":", lw=0.8)
+    ax.set_xlabel("tan(απ/2), α the local exponent of G′")
+    ax.set_ylabel("loss tangent G″/G′")
+    ax.set_title("Loss tangent against the power law's")
+    legend_outside(ax, markerscale=4)
+    return ax
+
+
+@styled
+def powerlaw_convergence_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """Left: decades over which α stays in 0.1–0.3 (±0.05) against the structure's coordinates, every structure at
+    its best prestrain. Right: the hierarchical nets' α (longest ±0.05 stretch) against depth, with the infinite
+    net's 1 − ln k/ln(k + 2)."""
+    a1, a2 = ax = new_panels(axes, 2, (10.0, 3.8), title="Convergence with size")
+    marks = study.assessments
+    for fam in study.families:
+        pts = study.family(fam)
+        n = [r.coordinates for r in pts]
+        d = [max(m.band.decades for m in marks[r.point.key]) for r in pts]
+        a1.semilogx(n, d, "o", ms=4, color=_FAMILY_COLOR.get(fam), label=fam)
+    a1.axhline(3.0, color="k", ls=":", lw=0.8, label="3 decades")
+    a1.set_xlabel("generalized coordinates")
+    a1.set_ylabel("decades with α in 0.1–0.3 (±0.05)")
+    legend_outside(a1, fontsize=7)
+    hier = study.family("hierarchical")
+    ks = sorted({int(r.point.knob("module_nodes")) for r in hier})
+    cols = colors(max(len(ks), 1))
+    for c, k in zip(cols, ks):
+        rs = sorted((r for r in hier if int(r.point.knob("module_nodes")) == k), key=lambda r: r.point.knob("depth"))
+        depth = [int(r.point.knob("depth")) for r in rs]
+        alpha = [max(marks[r.point.key], key=lambda m: m.power_law.decades).power_law.alpha for r in rs]
+        a2.plot(depth, alpha, "o-", color=c, label=f"k = {k}")
+        a2.axhline(1.0 - math.log(k) / math.log(k + 2), color=c, ls="--", lw=0.8)
+    a2.axhspan(*_BAND, color="0.93", zorder=0)
+    a2.set_xlabel("depth (levels of modules)")
+    a2.set_ylabel("α (longest ±0.05 stretch)")
+    if ks:
+        legend_outside(a2, fontsize=7, title="module nodes\n(dashed: 1 − ln k/ln(k+2))")
+    return ax
+
+
+@styled
+def powerlaw_prestress_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """α(f) of each family's best structure at every prestrain: how the prestress moves the power law."""
+    fams = study.families
+    ax = new_panels(axes, len(fams), (4.0 * len(fams) + 1.6, 3.4), title="Local exponent against prestress")
+    for a, fam in zip(ax, fams):
+        r = study.best(fam)
+        cols = colors(r.prestrain.size)
+        for i, e in enumerate(r.prestrain):
+            a.semilogx(r.frequency_hz, r.alpha[i], color=cols[i], label=f"ε = {e:g}")
+        a.axhspan(*_BAND, color="0.92", zorder=0)
+        a.set_xlim(*_MAP_HZ)
+        a.set_ylim(-0.05, 1.05)
+        a.set_xlabel("frequency f (Hz)")
+        a.set_ylabel("α = d ln G′/d ln f")
+        a.set_title(f"{fam}: {r.point.label}", fontsize=7, loc="left")
+    legend_outside(ax[-1], fontsize=7, title="prestrain")
+    return ax
