@@ -9,8 +9,7 @@ Three families of structures, each a pure function of a frozen specification, ea
   its cables), bonds removed at random (never below three cables at a free node) until the network has
   ``connectivity`` = 2·(cables)/(free nodes) — 6 is the isostatic point of central-force networks in three
   dimensions (Maxwell's count: as many cables as free coordinates), 12 the full lattice. Its shape is
-  form-found by the force-density method (:func:`tenscell.model.formfinding.find_form`, force density 1 on
-  every cable), so every cable is in tension and ``A·T0 = 0`` by construction. Below 6 the cables alone leave
+  form-found by the force-density method (:func:`force_density_shape`, force density 1 on every cable), so every cable is in tension and ``A·T0 = 0`` by construction. Below 6 the cables alone leave
   floppy modes, which only the prestress holds (``P·Kp`` is the force-density Laplacian, positive definite
   with the anchors).
 * :class:`SimplexNet` → :func:`simplex_net`: a **hierarchical (self-similar) planar cable net**, modules made
@@ -48,7 +47,7 @@ from scipy.sparse.csgraph import connected_components
 
 from .._checks import positive_scalar
 from .equilibrium import Cell, equilibrate
-from .formfinding import find_form
+from .formfinding import FormFindingError, _lm_step
 from .structure import ACTIN, Point, Structure, cable_mask
 
 __all__ = [
@@ -62,6 +61,7 @@ __all__ = [
     "simplex_net_structure",
     "simplex_exponent",
     "free_connectivity",
+    "force_density_shape",
     "damping_by_length",
     "damping_by_tension",
 ]
@@ -72,6 +72,41 @@ TETHER = "tether"
 ISOSTATIC_CONNECTIVITY = 6.0
 #: the fewest cables a free node of a diluted net keeps (fewer would let the form-finding fold it onto a line)
 MIN_CABLES_PER_NODE = 3
+
+
+def force_density_shape(nodes: np.ndarray, cables: np.ndarray, fixed: np.ndarray) -> np.ndarray:
+    """The force-density method for a cable net (Schek 1974), force density 1 on every cable: the free nodes sit
+    where ``Σ_j (x_other − x_node) = 0`` with the ``fixed`` nodes held, a linear solve of the net's graph Laplacian
+    (m). Every cable then carries ``T = l`` (N) and ``A·T = 0``: the net is prestressable by construction, the
+    minimum of ``½ Σ l²`` that :func:`tenscell.model.formfinding.find_form` would reach by Newton steps.
+
+    Parameters
+    ----------
+    nodes : ndarray, shape (n, 3)
+        Positions (m); only the fixed nodes' are used.
+    cables : ndarray of int, shape (m, 2)
+    fixed : ndarray of bool, shape (n,)
+
+    Raises
+    ------
+    FormFindingError
+        If a cable comes out of zero length (two joined nodes with the same other neighbours).
+    """
+    n = len(nodes)
+    a, b = cables[:, 0], cables[:, 1]
+    one = np.ones(len(cables))
+    L = sp.coo_matrix((np.r_[one, one, -one, -one], (np.r_[a, b, a, b], np.r_[a, b, b, a])), shape=(n, n)).tocsr()
+    free = np.flatnonzero(~fixed)
+    held = np.flatnonzero(fixed)
+    x = np.array(nodes, dtype=float)
+    # the Newton step of form-finding's own solver from x = 0: exact, the energy being quadratic
+    x[free] = _lm_step(L[free][:, free].tocsc(), np.ones(free.size), L[free][:, held] @ x[held], 0.0)
+    l = np.linalg.norm(x[a] - x[b], axis=1)
+    if not l.min() > 1e-9 * l.max():
+        j = int(np.argmin(l))
+        raise FormFindingError(f"the force-density shape puts cable {j} ({a[j]}-{b[j]}) at zero length: its two "
+                               "nodes have the same other neighbours")
+    return x
 
 
 def _whole(name: str, value, low: int, high: int) -> int:
@@ -181,7 +216,7 @@ def diluted_net_structure(spec: DilutedNet) -> tuple[Structure, np.ndarray]:
     Raises
     ------
     tenscell.model.FormFindingError
-        If form-finding finds no configuration (it always does for these nets: their energy is quadratic).
+        If a cable comes out of zero length (the dilution keeps twins apart, so it does not for these nets).
     """
     sites, bonds = _fcc(spec.size)
     surface = ((sites == 0) | (sites == 2 * spec.size)).any(axis=1)
@@ -200,11 +235,11 @@ def diluted_net_structure(spec: DilutedNet) -> tuple[Structure, np.ndarray]:
     free = np.flatnonzero(~anchored)
     probe_node = int(free[np.argmin(np.linalg.norm(nodes[free] - centre, axis=1))])
     probe = Point(nodes=(probe_node,), weights=(1.0,), direction=(0.0, 0.0, 1.0))
-    rough = Structure(nodes=nodes, struts=(), tendons=bonds, families=(ACTIN,) * len(bonds),
-                      fixed=tuple(np.flatnonzero(anchored).tolist()), load=probe, probe=probe,
-                      name=f"diluted FCC net {spec.size}³")
-    found = find_form(rough, force_density=1.0)
-    return found.structure, np.asarray(found.tensions)
+    x = force_density_shape(nodes, bonds, anchored)
+    st = Structure(nodes=x, struts=(), tendons=bonds, families=(ACTIN,) * len(bonds),
+                   fixed=tuple(np.flatnonzero(anchored).tolist()), load=probe, probe=probe,
+                   name=f"diluted FCC net {spec.size}³")
+    return st, np.linalg.norm(x[bonds[:, 0]] - x[bonds[:, 1]], axis=1)
 
 
 def diluted_net(spec: DilutedNet) -> Cell:
@@ -291,16 +326,15 @@ def simplex_net_structure(spec: SimplexNet) -> tuple[Structure, np.ndarray]:
     corner_of = {int(np.argmax(b)): i for i, b in enumerate(bary) if b.max() == S}
     angle = 2 * np.pi * np.arange(k) / k
     ring = R * np.c_[np.cos(angle), np.sin(angle), np.zeros(k)]
-    rough = (bary / S) @ ring  # the barycentric map onto the corner polygon: form-finding moves it to equilibrium
+    rough = (bary / S) @ ring  # the barycentric map onto the corner polygon (only the corners' positions are kept)
     corners = [corner_of[i] for i in range(k)]
     middle = np.zeros(k, dtype=np.int64)
     middle[:2] = S // 2  # the probe: the node midway between corners 0 and 1 (a node of the coarsest level)
     probe_node = int(np.flatnonzero((bary == middle).all(axis=1))[0])
     probe = Point(nodes=(probe_node,), weights=(1.0,), direction=(0.0, 0.0, 1.0))
-    net = Structure(nodes=rough, struts=(), tendons=cast(Any, cables), families=(ACTIN,) * len(cables), fixed=tuple(corners),
-                    load=probe, probe=probe, name=f"simplex net of {k}-node modules, depth {depth}")
-    found = find_form(net, force_density=1.0)
-    x = found.structure.nodes
+    anchored = np.zeros(len(rough), dtype=bool)
+    anchored[corners] = True
+    x = force_density_shape(rough, cables, anchored)
     free = np.setdiff1d(np.arange(len(x)), corners)
     h = float(spec.tether_length) * R
     n, nf = len(x), len(free)
@@ -308,8 +342,10 @@ def simplex_net_structure(spec: SimplexNet) -> tuple[Structure, np.ndarray]:
     tethers = np.vstack([np.c_[free, n + np.arange(nf)], np.c_[free, n + nf + np.arange(nf)]])
     st = Structure(nodes=nodes, struts=(), tendons=cast(Any, np.vstack([cables, tethers])),
                    families=(ACTIN,) * len(cables) + (TETHER,) * (2 * nf),
-                   fixed=tuple(corners) + tuple(range(n, n + 2 * nf)), load=probe, probe=probe, name=net.name)
-    T0 = np.r_[np.asarray(found.tensions), np.full(2 * nf, float(spec.tether_tension) * h)]
+                   fixed=tuple(corners) + tuple(range(n, n + 2 * nf)), load=probe, probe=probe,
+                   name=f"simplex net of {k}-node modules, depth {depth}")
+    T0 = np.r_[np.linalg.norm(x[cables[:, 0]] - x[cables[:, 1]], axis=1),
+               np.full(2 * nf, float(spec.tether_tension) * h)]
     return st, T0
 
 
