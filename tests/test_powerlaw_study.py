@@ -147,3 +147,31 @@ def test_scaled_fit_recovers_the_scales_of_a_scaled_copy():
     assert fit.stiffness_scale == pytest.approx(3.0, rel=1e-3)
     assert fit.time_scale == pytest.approx(0.5, rel=1e-3)
     assert fit.prestrain == pytest.approx(e0, rel=1e-3)
+
+
+def _synthetic_study():
+    power = _synthetic("hierarchical", "simplex net", (("module_nodes", 4), ("depth", 3)),
+                       lambda f, e: 10 * e * (2j * math.pi * f) ** 0.2)
+    voigt = _synthetic("diluted", "diluted net", (("size", 3), ("connectivity", 6.0), ("seed", 0)),
+                       lambda f, e: e * (1 + 2j * math.pi * f))
+    zener = pl.PointResult(**{**_synthetic("structural", "lattice", (("modules", 2),),
+                                           lambda f, e: e * (1 + 10j * f / (1 + 1j * f))).__dict__,
+                              "point": pl.MapPoint("structural", "lattice", (("modules", 2),), damping="length",
+                                                   damping_value=2.0)})
+    return pl.PowerLawStudy(scale="tiny", points=(voigt, power, zener))
+
+
+@pytest.mark.parametrize("name, plotter", pl.FIGURES)
+def test_figures_keep_everything_inside_the_canvas(name, plotter):
+    """Publication quality as the other studies' figures are held to it (tests/test_figures_inside.py)."""
+    import matplotlib.pyplot as plt
+    from test_figures_inside import problems
+
+    from tenscell._results import plotter as draw
+    from tenscell.plotting import figure_of
+
+    fig = figure_of(draw(plotter)(_synthetic_study()))
+    try:
+        assert problems(fig) == [], name
+    finally:
+        plt.close(fig)

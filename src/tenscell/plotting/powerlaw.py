@@ -12,6 +12,7 @@ from typing import Sequence
 
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.ticker import MaxNLocator
 
 from ._style import colors, legend_outside, new_axes, new_panels, styled
 
@@ -21,6 +22,10 @@ __all__ = ["powerlaw_moduli_figure", "powerlaw_map_figure", "powerlaw_loss_tange
 _BAND = (0.1, 0.3)
 _MAP_HZ = (1e-3, 1e4)
 _FAMILY_COLOR = {"diluted": "#1f77b4", "hierarchical": "#d62728", "structural": "#2ca02c"}
+
+
+def _in_map(f: np.ndarray) -> np.ndarray:
+    return (f >= _MAP_HZ[0] * 0.999) & (f <= _MAP_HZ[1] * 1.001)
 
 
 def _shade(ax: Axes) -> None:
@@ -38,9 +43,10 @@ def powerlaw_moduli_figure(study, axes: Sequence[Axes] | None = None) -> np.ndar
         r = study.best(fam)
         a1, a2 = ax[2 * row], ax[2 * row + 1]
         cols = colors(r.prestrain.size)
+        m = _in_map(r.frequency_hz)
         for i, e in enumerate(r.prestrain):
-            a1.loglog(r.frequency_hz, r.G_storage[i], color=cols[i], label=f"ε = {e:g}")
-            a2.loglog(r.frequency_hz, r.G_loss[i], color=cols[i])
+            a1.loglog(r.frequency_hz[m], r.G_storage[i][m], color=cols[i], label=f"ε = {e:g}")
+            a2.loglog(r.frequency_hz[m], r.G_loss[i][m], color=cols[i])
         for a, name in ((a1, "G′"), (a2, "G″")):
             _shade(a)
             a.set_xlim(*_MAP_HZ)
@@ -79,11 +85,15 @@ def _rows_of(study, fam: str):
 
 
 def _short(fam: str, r) -> str:
+    p = r.point
     if fam == "diluted":
-        return f"z = {r.point.knob('connectivity'):g}"
+        return f"z = {p.knob('connectivity'):g}"
     if fam == "hierarchical":
-        return f"k = {r.point.knob('module_nodes')}, depth {r.point.knob('depth')}"
-    return r.point.label
+        return f"k = {p.knob('module_nodes')}, depth {p.knob('depth')}"
+    where = "lattice" if p.structure == "lattice" else f"net z = {p.knob('connectivity'):g}"
+    rule = {"uniform": "one c", "length": f"c ∝ l^{p.damping_value:g}",
+            "tension": f"Bell, F = {p.damping_value:g}·T̄"}[p.damping]
+    return f"{where}: {rule}"
 
 
 @styled
@@ -105,7 +115,7 @@ def powerlaw_map_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray
     for a, fam in zip(ax, fams):
         rows = _rows_of(study, fam)
         f = rows[0][2].frequency_hz
-        keep = (f >= _MAP_HZ[0] * 0.999) & (f <= _MAP_HZ[1] * 1.001)
+        keep = _in_map(f)
         Z = np.array([r.alpha[i][keep] for _, i, r in rows])
         y = np.arange(len(rows))
         mesh = a.pcolormesh(f[keep], y, Z, cmap="magma", vmin=0.0, vmax=1.0, shading="nearest")
@@ -130,8 +140,7 @@ def powerlaw_loss_tangent_figure(study, ax: Axes | None = None) -> Axes:
     for fam in study.families:
         xs, ys = [], []
         for r in study.family(fam):
-            f = r.frequency_hz
-            keep = (f >= _MAP_HZ[0] * 0.999) & (f <= _MAP_HZ[1] * 1.001)
+            keep = _in_map(r.frequency_hz)
             a, t = r.alpha[:, keep], r.tan_delta[:, keep]
             sel = (a >= 0.05) & (a <= 0.95)
             xs.append(np.tan(a[sel] * math.pi / 2))
@@ -144,7 +153,8 @@ def powerlaw_loss_tangent_figure(study, ax: Axes | None = None) -> Axes:
     ax.loglog(x, 1.2 * x, "k--", lw=0.6, label="±20 %")
     ax.loglog(x, 0.8 * x, "k--", lw=0.6)
     for lo in _BAND:
-        ax.axvline(math.tan(lo * math.pi / 2), color="0.6", ls=":", lw=0.8)
+        ax.axvline(math.tan(lo * math.pi / 2), color="0.6", ls=":", lw=0.8,
+                   label="α = 0.1, 0.3" if lo == _BAND[0] else None)
     ax.set_xlabel("tan(απ/2), α the local exponent of G′")
     ax.set_ylabel("loss tangent G″/G′")
     ax.set_title("Loss tangent against the power law's")
@@ -178,6 +188,7 @@ def powerlaw_convergence_figure(study, axes: Sequence[Axes] | None = None) -> np
         a2.plot(depth, alpha, "o-", color=c, label=f"k = {k}")
         a2.axhline(1.0 - math.log(k) / math.log(k + 2), color=c, ls="--", lw=0.8)
     a2.axhspan(*_BAND, color="0.93", zorder=0)
+    a2.xaxis.set_major_locator(MaxNLocator(integer=True))
     a2.set_xlabel("depth (levels of modules)")
     a2.set_ylabel("α (longest ±0.05 stretch)")
     if ks:
@@ -193,8 +204,9 @@ def powerlaw_prestress_figure(study, axes: Sequence[Axes] | None = None) -> np.n
     for a, fam in zip(ax, fams):
         r = study.best(fam)
         cols = colors(r.prestrain.size)
+        m = _in_map(r.frequency_hz)
         for i, e in enumerate(r.prestrain):
-            a.semilogx(r.frequency_hz, r.alpha[i], color=cols[i], label=f"ε = {e:g}")
+            a.semilogx(r.frequency_hz[m], r.alpha[i][m], color=cols[i], label=f"ε = {e:g}")
         a.axhspan(*_BAND, color="0.92", zorder=0)
         a.set_xlim(*_MAP_HZ)
         a.set_ylim(-0.05, 1.05)

@@ -471,8 +471,8 @@ def trend(result: PointResult) -> dict[str, float]:
 
 
 # ---- fits of a family's best structure to the bundled data, under its exact scalings ----------------------
-#: prestrains of the fit's grid (the map's four are too coarse to interpolate between)
-FIT_PRESTRAINS = tuple(float(x) for x in np.logspace(-2.5, 0.0, 11))
+#: prestrains of the fit's grid: the map's range, finer (its four are too coarse to interpolate between)
+FIT_PRESTRAINS = tuple(float(x) for x in np.logspace(-2.0, math.log10(0.3), 9))
 #: the bundled data sets the fits use: the Fabry frequency sweep and the Stamenović prestress series at 0.1 Hz
 FIT_DATA = ("fabry2001", "stamenovic2002")
 
