@@ -17,7 +17,7 @@ from matplotlib.ticker import MaxNLocator
 from ._style import colors, legend_outside, new_axes, new_panels, styled
 
 __all__ = ["powerlaw_moduli_figure", "powerlaw_map_figure", "powerlaw_loss_tangent_figure",
-           "powerlaw_convergence_figure", "powerlaw_prestress_figure"]
+           "powerlaw_convergence_figure", "powerlaw_prestress_figure", "powerlaw_fits_figure"]
 
 _BAND = (0.1, 0.3)
 _MAP_HZ = (1e-3, 1e4)
@@ -69,9 +69,10 @@ def _grid(rows: int, title: str) -> np.ndarray:
 def _rows_of(study, fam: str):
     """The family's structures as map rows: (label, curve index nearest ε = 0.1, result), sorted by their knobs."""
     pts = list(study.family(fam))
-    main = {"diluted": lambda r: r.point.law == "voigt" and r.point.knob("size") == max(
-        p.point.knob("size") for p in pts if p.point.law == "voigt")}.get(fam, lambda r: True)
-    pts = [r for r in pts if main(r)]
+    if fam == "diluted":  # the connectivity scan: the Voigt nets of the size most of them have
+        sizes = [r.point.knob("size") for r in pts if r.point.law == "voigt"]
+        main = max(set(sizes), key=sizes.count)
+        pts = [r for r in pts if r.point.law == "voigt" and r.point.knob("size") == main]
 
     def key(r):
         return tuple(float(v) for _, v in r.point.knobs) + (r.point.damping, r.point.damping_value)
@@ -87,7 +88,8 @@ def _rows_of(study, fam: str):
 def _short(fam: str, r) -> str:
     p = r.point
     if fam == "diluted":
-        return f"z = {p.knob('connectivity'):g}"
+        seed = p.knob("seed", 0)
+        return f"z = {p.knob('connectivity'):g}" + (f" (seed {seed})" if seed else "")
     if fam == "hierarchical":
         return f"k = {p.knob('module_nodes')}, depth {p.knob('depth')}"
     where = "lattice" if p.structure == "lattice" else f"net z = {p.knob('connectivity'):g}"
@@ -99,7 +101,7 @@ def _short(fam: str, r) -> str:
 @styled
 def powerlaw_map_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray:
     """The local exponent α = d ln G'/d ln f over frequency (x) and each family's structures (y), at the prestrain
-    nearest ε = 0.1; contours at α = 0.1 and 0.3."""
+    nearest ε = 0.1; the band 0.1–0.3 in greens."""
     fams = study.families
     heights = [max(2.0, 0.28 * len(_rows_of(study, f)) + 1.0) for f in fams]
     if axes is None:
@@ -111,6 +113,7 @@ def powerlaw_map_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray
         ax = ax.ravel()
     else:
         ax = new_panels(axes, len(fams), (8.4, sum(heights)))
+    cmap, norm = _alpha_colors()
     mesh = None
     for a, fam in zip(ax, fams):
         rows = _rows_of(study, fam)
@@ -118,9 +121,7 @@ def powerlaw_map_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray
         keep = _in_map(f)
         Z = np.array([r.alpha[i][keep] for _, i, r in rows])
         y = np.arange(len(rows))
-        mesh = a.pcolormesh(f[keep], y, Z, cmap="magma", vmin=0.0, vmax=1.0, shading="nearest")
-        if len(rows) > 1:
-            a.contour(f[keep], y, Z, levels=list(_BAND), colors=["#8ecae6", "#219ebc"], linewidths=1.0)
+        mesh = a.pcolormesh(f[keep], y, Z, cmap=cmap, norm=norm, shading="nearest")
         a.set_xscale("log")
         a.set_yticks(y)
         a.set_yticklabels([s for s, _, _ in rows], fontsize=6)
@@ -128,8 +129,29 @@ def powerlaw_map_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray
         a.set_xlabel("frequency f (Hz)")
         a.grid(False)
     if mesh is not None:
-        ax[0].figure.colorbar(mesh, ax=list(ax), label="α (contours: 0.1, 0.3)", shrink=0.8)
+        bar = ax[0].figure.colorbar(mesh, ax=list(ax), shrink=0.8, ticks=_LEVELS)
+        bar.set_label("α (greens: 0.1–0.3)")
     return ax
+
+
+#: the colour levels of the exponent map: four greens for the band 0.1–0.3
+_LEVELS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5, 0.7, 1.0)
+
+
+def _alpha_colors():
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    greens = plt_cm("Greens")(np.linspace(0.35, 0.9, 4))
+    low = plt_cm("Greys")(np.array([0.95, 0.6]))
+    high = plt_cm("Oranges")(np.linspace(0.35, 0.9, 4))
+    cmap = ListedColormap(np.vstack([low, greens, high]))
+    return cmap, BoundaryNorm(_LEVELS, cmap.N)
+
+
+def plt_cm(name: str):
+    import matplotlib
+
+    return matplotlib.colormaps[name]
 
 
 @styled
@@ -214,4 +236,27 @@ def powerlaw_prestress_figure(study, axes: Sequence[Axes] | None = None) -> np.n
         a.set_ylabel("α = d ln G′/d ln f")
         a.set_title(f"{fam}: {r.point.label}", fontsize=7, loc="left")
     legend_outside(ax[-1], fontsize=7, title="prestrain")
+    return ax
+
+
+@styled
+def powerlaw_fits_figure(study, axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """Each family's best structure fitted jointly to the Fabry sweep (left: G', G'' against f) and the Stamenović
+    series (right: against the prestress), through its exact scalings; markers the data, lines the structure."""
+    fits = [x for x in study.fits if len(x.fits) > 1]
+    n = max(len(fits), 1)
+    ax = _grid(n, "Best structures fitted to the bundled data") if axes is None else new_panels(axes, 2 * n, (9.6, 3.0 * n))
+    for row, ff in enumerate(fits):
+        joint = ff.fits[1]
+        for col, c in enumerate(joint.curves[:2]):
+            a = ax[2 * row + col]
+            plot = a.semilogy if c.is_prestress else a.loglog
+            plot(c.x, c.G_storage, "o", ms=3, color="C0", label="G′ data")
+            plot(c.x, c.G_loss, "s", ms=3, color="C1", label="G″ data")
+            plot(c.x, c.model_storage, "-", color="C0", label="G′ structure")
+            plot(c.x, c.model_loss, "-", color="C1", label="G″ structure")
+            a.set_xlabel("prestress (Pa)" if c.is_prestress else "frequency f (Hz)")
+            a.set_ylabel("modulus (Pa)")
+            a.set_title(f"{ff.family}: {c.name}, RMS {joint.rms_log10[col]:.3f} decades", fontsize=8, loc="left")
+        legend_outside(ax[2 * row + 1], fontsize=7)
     return ax

@@ -119,6 +119,12 @@ def powerlaw_markdown(study, tables, checks) -> str:
           f"{num(r['g6_decades'], 3)} ({num(r['g6_alpha'], 3)}, {num(r['g6_tan_error'], 2)})",
           num(r["best_tan_error"], 2), f"{num(r['longest_power_law_decades'], 3)} ({num(r['longest_power_law_alpha'], 3)})",
           num(r["dalpha_dlnP_common_band"], 3)) for r in fams]))
+    lines += ["The prestress trend at 1 Hz over every structure of each family (dα/d ln P, by least squares over the four "
+              "prestrains):", "",
+              table(["family", "its best structure", "median of the family", "lowest (structure)", "highest (structure)"],
+                    [(r["family"], num(r["dalpha_dlnP_1Hz"], 3), num(r["dalpha_dlnP_1Hz_median_family"], 3),
+                      f"{num(r['dalpha_dlnP_1Hz_lowest'], 3)} ({r['dalpha_dlnP_1Hz_lowest_where']})",
+                      f"{num(r['dalpha_dlnP_1Hz_highest'], 3)} ({r['dalpha_dlnP_1Hz_highest_where']})") for r in fams])]
     for r in fams:
         lines += [f"**{r['family']}.** {_WHY.get(r['family'], '')}", ""]
     if fits:

@@ -301,8 +301,8 @@ def evaluate_point(point: MapPoint, prestrains, f_hz) -> PointResult:
 
 
 # ---- the plan --------------------------------------------------------------------------------------------
-def _diluted(size, z, **kw) -> MapPoint:
-    return MapPoint("diluted", "diluted net", (("size", size), ("connectivity", float(z)), ("seed", 0)), **kw)
+def _diluted(size, z, seed=0, **kw) -> MapPoint:
+    return MapPoint("diluted", "diluted net", (("size", size), ("connectivity", float(z)), ("seed", seed)), **kw)
 
 
 def _simplex(k, depth) -> MapPoint:
@@ -322,6 +322,8 @@ class _Grid:
     z: tuple  # their connectivities
     sizes: tuple  # other sizes, for the size series ...
     size_z: tuple  # ... at these connectivities
+    seeds: tuple  # other realizations of the main size ...
+    seed_z: tuple  # ... at these connectivities
     maxwell_size: int  # Maxwell nets: size ...
     maxwell_z: tuple  # ... and connectivities
     simplex: tuple  # (module nodes, depths) pairs
@@ -331,12 +333,13 @@ class _Grid:
 
 _GRID = {
     "full": _Grid(size=10, z=(4.0, 4.5, 5.0, 5.5, 6.0, 6.5, 7.0, 8.0, 10.0, 12.0), sizes=(4, 6, 8, 12),
-                  size_z=(5.0, 6.0), maxwell_size=8, maxwell_z=(4.5, 5.0, 6.0, 8.0),
-                  simplex=((3, range(2, 9)), (4, range(2, 7)), (5, range(2, 6)), (6, range(2, 5))), lattice=8, net=10),
-    "quick": _Grid(size=6, z=(4.5, 5.0, 6.0, 8.0, 12.0), sizes=(4, 8), size_z=(6.0,), maxwell_size=6,
+                  size_z=(5.0, 6.0), seeds=(1, 2), seed_z=(5.5, 6.0), maxwell_size=8, maxwell_z=(4.5, 5.0, 6.0, 8.0),
+                  simplex=((3, range(2, 9)), (4, range(2, 8)), (5, range(2, 6)), (6, range(2, 5))), lattice=8, net=10),
+    "quick": _Grid(size=6, z=(4.5, 5.0, 6.0, 8.0, 12.0), sizes=(4, 8), size_z=(6.0,), seeds=(1,), seed_z=(6.0,),
+                   maxwell_size=6,
                    maxwell_z=(5.0, 6.0), simplex=((3, range(2, 7)), (4, range(2, 6)), (5, range(2, 5))), lattice=5,
                    net=6),
-    "tiny": _Grid(size=3, z=(5.0, 8.0), sizes=(), size_z=(), maxwell_size=3, maxwell_z=(6.0,),
+    "tiny": _Grid(size=3, z=(5.0, 8.0), sizes=(), size_z=(), seeds=(), seed_z=(), maxwell_size=3, maxwell_z=(6.0,),
                   simplex=((3, range(2, 4)), (4, range(2, 3))), lattice=2, net=3),
 }
 #: the structural family's damping rules: (rule, value) — c ∝ l^k, Bell's law with F = value × the mean cable force
@@ -350,6 +353,7 @@ def map_points(scale: str = "full") -> tuple[MapPoint, ...]:
     g = _GRID[scale]
     pts = [_diluted(g.size, z) for z in g.z]
     pts += [_diluted(n, z) for z in g.size_z for n in g.sizes if n != g.size]
+    pts += [_diluted(g.size, z, seed=k) for z in g.seed_z for k in g.seeds]
     pts += [_diluted(g.maxwell_size, z, law="maxwell") for z in g.maxwell_z]
     pts += [_simplex(k, d) for k, depths in g.simplex for d in depths]
     structures = (("lattice", (("modules", g.lattice),)),
@@ -496,6 +500,8 @@ class ScaledFit:
         ε per pascal of the prestress series (1/Pa; NaN if none).
     success : bool
         Whether the least-squares search converged.
+    curves : tuple of FitCurve
+        Each data set beside the fitted structure.
     """
 
     data: tuple
@@ -505,6 +511,21 @@ class ScaledFit:
     prestrain: float
     prestrain_per_Pa: float
     success: bool
+    curves: tuple = ()
+
+
+@dataclass(frozen=True, eq=False)
+class FitCurve:
+    """One data set beside the fitted structure: ``x`` its frequencies (Hz) or prestresses (Pa), the measured and
+    the fitted G', G'' (Pa)."""
+
+    name: str
+    x: np.ndarray
+    is_prestress: bool
+    G_storage: np.ndarray
+    G_loss: np.ndarray
+    model_storage: np.ndarray
+    model_loss: np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -584,11 +605,17 @@ def scaled_fit(f_hz, prestrains, G, datasets: Mapping[str, Any]) -> ScaledFit:
         rms.append(float(np.sqrt(np.mean(r[at:at + n] ** 2))))
         at += n
     th = res.x
+    curves = []
+    for name, d in zip(names, sets):
+        a, b = model(th, d)
+        curves.append(FitCurve(name, np.asarray(d.frequency_hz if d.prestress is None else d.prestress),
+                               d.prestress is not None, np.asarray(d.G_storage), np.asarray(d.G_loss), np.exp(a),
+                               np.exp(b)))
     return ScaledFit(data=names, rms_log10=tuple(rms), stiffness_scale=float(np.exp(th[0])),
                      time_scale=float(np.exp(th[1])),
                      prestrain=float(np.exp(th[2])) if sweep is not None else math.nan,
                      prestrain_per_Pa=float(np.exp(th[-1])) if series is not None else math.nan,
-                     success=bool(res.success))
+                     success=bool(res.success), curves=tuple(curves))
 
 
 def fit_family(family: str, *results: PointResult) -> FamilyFit:
@@ -746,6 +773,8 @@ def family_records(study: PowerLawStudy) -> list[dict]:
         tan_err, tan_where = _best_tan(study, pts)
         longest = max(pts, key=lambda r: max(x.power_law.decades for x in study.assessments[r.point.key]))
         j, pl = max(enumerate(study.assessments[longest.point.key]), key=lambda t: t[1].power_law.decades)
+        slopes = [(trend(r)["dalpha_dlnP_1Hz"], r.point.label) for r in pts]
+        lowest, highest = min(slopes), max(slopes)
         ff = study.fit(fam)
         fabry = ff.fits[0] if ff else None
         pair = ff.fits[1] if ff else None
@@ -757,6 +786,9 @@ def family_records(study: PowerLawStudy) -> list[dict]:
                      "longest_power_law_decades": pl.power_law.decades, "longest_power_law_alpha": pl.power_law.alpha,
                      "dalpha_dlnP_common_band": tr["dalpha_dlnP_common_band"],
                      "dalpha_dlnP_0p1Hz": tr["dalpha_dlnP_0p1Hz"], "dalpha_dlnP_1Hz": tr["dalpha_dlnP_1Hz"],
+                     "dalpha_dlnP_1Hz_median_family": float(np.median([v for v, _ in slopes])),
+                     "dalpha_dlnP_1Hz_lowest": lowest[0], "dalpha_dlnP_1Hz_lowest_where": lowest[1],
+                     "dalpha_dlnP_1Hz_highest": highest[0], "dalpha_dlnP_1Hz_highest_where": highest[1],
                      "fit_structure": ff.point.label if ff else "",
                      "rms_fabry_alone_log10": fabry.rms_log10[0] if fabry else math.nan,
                      "rms_pair_fabry_log10": pair.rms_log10[0] if pair else math.nan,
@@ -811,7 +843,7 @@ def checks(study: PowerLawStudy) -> tuple[Check, ...]:
 FIGURES = (("powerlaw_moduli.png", "powerlaw_moduli_figure"), ("powerlaw_map.png", "powerlaw_map_figure"),
            ("powerlaw_loss_tangent.png", "powerlaw_loss_tangent_figure"),
            ("powerlaw_convergence.png", "powerlaw_convergence_figure"),
-           ("powerlaw_prestress.png", "powerlaw_prestress_figure"))
+           ("powerlaw_prestress.png", "powerlaw_prestress_figure"), ("powerlaw_fits.png", "powerlaw_fits_figure"))
 
 
 def assemble(plan: Plan, results: Mapping[str, Any]) -> StudyResult:
