@@ -12,13 +12,15 @@ __all__ = ["powerlaw_markdown"]
 
 _WHY = {
     "diluted": (
-        "One member time constant (τ = c·l/EA, one c and one EA) and member damping: the spread of relaxation rates "
-        "comes only from the ratio of the prestress stiffness to the cables' own on each mode. Near the rigidity "
-        "threshold the cables' soft modes, held by the prestress, relax between 1/τ and P·q/(τ·κ*) (κ* the softest "
-        "cable stiffness): a window that opens above the members' rate and widens as P rises, with α towards 1/2 and "
-        "beyond (the isostatic density of states), not 0.1–0.3. Below z = 6 the floppy modes stretch no cable, so "
-        "no member damps them: they answer at once, G' levels off and G'' falls at high frequency. The window moves "
-        "up with P, so at a fixed frequency α rises with P."
+        "One member time constant (τ = c·l/EA: one c, one EA) and member damping: the spread of relaxation rates comes "
+        "only from the ratio of the prestress stiffness to the cables' own, mode by mode. Far above the rigidity "
+        "threshold every mode stretches cables: one rate, a solid beside a dashpot. Near it, the cables' soft modes, "
+        "held by the prestress, relax from the members' rate upwards, and above a crossover that the prestress "
+        "raises (the prestress plateau, ∝ P) G' follows a power law; its exponent is set by how many nearly floppy "
+        "modes the particular network has near the probe, which changes from one random network to the next at the "
+        "same connectivity and does not settle as the network grows (the realizations' table). Below z = 6 the "
+        "floppy modes stretch no cable, so no member damps them: they answer at once, G' levels off and G'' falls "
+        "at high frequency. The prestress moves the crossover, not the exponent."
     ),
     "hierarchical": (
         "The prestress is the restoring spring of the out-of-plane motion (P·q times the graph Laplacian of the net) "
@@ -70,9 +72,12 @@ def _smallest(map_rows) -> list[str]:
     ok = [r for r in map_rows if r["g6_decades"] >= 3.0]
     out = ["**(c) The smallest such structure and the convergence of α with size:** "]
     if ok:
-        r = min(ok, key=lambda r: r["coordinates"])
-        out[0] += (f"{r['label']} at prestrain {num(r['prestrain'])}: {r['coordinates']} coordinates, α = "
-                   f"{num(r['g6_alpha'], 3)} over {num(r['g6_decades'], 3)} decades.")
+        per = []
+        for fam in sorted({r["family"] for r in ok}):
+            r = min((r for r in ok if r["family"] == fam), key=lambda r: r["coordinates"])
+            per.append(f"{fam}: {r['label']} at prestrain {num(r['prestrain'])}, {r['coordinates']} coordinates, "
+                       f"α = {num(r['g6_alpha'], 3)} over {num(r['g6_decades'], 3)} decades")
+        out[0] += "; ".join(per) + "."
     else:
         out[0] += "none of the map's structures reaches 3 decades."
     hier = [r for r in map_rows if r["family"] == "hierarchical"]
@@ -90,6 +95,29 @@ def _smallest(map_rows) -> list[str]:
                 table(["module nodes k", "depth", "coordinates", "α", "decades (±0.05)", "decades in 0.1–0.3",
                        "decades with tan δ", "1 − ln k/ln(k+2)"], rows)]
     return out
+
+
+def _realizations(map_rows) -> list[str]:
+    """The diluted Voigt nets at the connectivities mapped in more than one network (sizes, seeds)."""
+    rows = [r for r in map_rows if r["family"] == "diluted" and r["law"] == "voigt"]
+    zs = sorted({r["connectivity_target"] for r in rows})
+    out = []
+    for z in zs:
+        nets = sorted({(int(r["size_cells"]), r["label"]) for r in rows if r["connectivity_target"] == z})
+        if len(nets) < 2:
+            continue
+        for _, label in nets:
+            rs = [r for r in rows if r["label"] == label]
+            g = max(rs, key=lambda r: (r["g6_decades"], r["band_decades"]))
+            p = max(rs, key=lambda r: r["power_law_decades"])
+            out.append((num(z), label, rs[0]["coordinates"], f"{num(g['g6_decades'], 3)} ({num(g['g6_alpha'], 3)})",
+                        f"{num(p['power_law_decades'], 3)} ({num(p['power_law_alpha'], 3)})"))
+    if not out:
+        return []
+    return ["The diluted networks mapped more than once at one connectivity (other sizes, other random networks), "
+            "each at its best prestrain:", "",
+            table(["z", "network", "coordinates", "decades in 0.1–0.3 with tan δ (α)",
+                   "longest ±0.05 stretch, α ≥ 0.05 (α)"], out), ""]
 
 
 def powerlaw_markdown(study, tables, checks) -> str:
@@ -127,16 +155,20 @@ def powerlaw_markdown(study, tables, checks) -> str:
                       f"{num(r['dalpha_dlnP_1Hz_highest'], 3)} ({r['dalpha_dlnP_1Hz_highest_where']})") for r in fams])]
     for r in fams:
         lines += [f"**{r['family']}.** {_WHY.get(r['family'], '')}", ""]
+    lines += _realizations(map_rows)
     if fits:
         lines += ["## Fits to the bundled data", "",
                   "Each family's best structure on a finer prestrain grid, fitted through its exact scalings only "
                   "(stiffness ×λ: EA, c and P together; time ×μ: c alone), the Fabry cells' prestrain and, jointly "
-                  "with the Stamenović series, a prestrain per pascal. RMS of the log10 errors of G' and G''.", "",
+                  "with the Stamenović series, a prestrain per pascal. RMS of the log10 errors of G' and G''. A fit on the "
+                  "grid's edge wanted a scale beyond the computed frequencies or prestrains: its RMS is an upper "
+                  "bound of what the structure can do.", "",
                   table(["family", "structure", "data", "RMS Fabry", "RMS Stamenović", "λ", "μ", "ε (Fabry)",
-                         "ε per Pa", "converged"],
+                         "ε per Pa", "converged", "on the grid's edge"],
                         [(r["family"], r["structure"], r["data"], num(r["rms_fabry2001_log10"], 3),
                           num(r["rms_stamenovic2002_log10"], 3), num(r["stiffness_scale"], 3), num(r["time_scale"], 3),
-                          num(r["prestrain_fabry"], 3), num(r["prestrain_per_Pa"], 3), r["converged"]) for r in fits]),
+                          num(r["prestrain_fabry"], 3), num(r["prestrain_per_Pa"], 3), r["converged"],
+                          r["at_grid_edge"]) for r in fits]),
                   ""]
     lines += ["## Goals", ""] + [f"- {'met' if c.met else 'NOT met'}: {c.label} — {c.closest + ': ' if c.closest else ''}"
                                   f"{c.detail}" for c in checks] + [""]

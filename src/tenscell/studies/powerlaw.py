@@ -502,6 +502,9 @@ class ScaledFit:
         Whether the least-squares search converged.
     curves : tuple of FitCurve
         Each data set beside the fitted structure.
+    at_bound : bool
+        Whether a scale ended on the edge of what the computed grid allows (the frequency band, the prestrain
+        range): the fit then wants a wider grid than the map computed.
     """
 
     data: tuple
@@ -512,6 +515,7 @@ class ScaledFit:
     prestrain_per_Pa: float
     success: bool
     curves: tuple = ()
+    at_bound: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -615,7 +619,8 @@ def scaled_fit(f_hz, prestrains, G, datasets: Mapping[str, Any]) -> ScaledFit:
                      time_scale=float(np.exp(th[1])),
                      prestrain=float(np.exp(th[2])) if sweep is not None else math.nan,
                      prestrain_per_Pa=float(np.exp(th[-1])) if series is not None else math.nan,
-                     success=bool(res.success), curves=tuple(curves))
+                     success=bool(res.success), curves=tuple(curves),
+                     at_bound=bool(np.any(np.minimum(th[1:] - lo_a[1:], hi_a[1:] - th[1:]) < 1e-6)))
 
 
 def fit_family(family: str, *results: PointResult) -> FamilyFit:
@@ -806,7 +811,7 @@ def fit_records(study: PowerLawStudy) -> list[dict]:
                          "rms_stamenovic2002_log10": x.rms_log10[1] if len(x.rms_log10) > 1 else math.nan,
                          "stiffness_scale": x.stiffness_scale, "time_scale": x.time_scale,
                          "prestrain_fabry": x.prestrain, "prestrain_per_Pa": x.prestrain_per_Pa,
-                         "converged": x.success})
+                         "converged": x.success, "at_grid_edge": x.at_bound})
     return rows
 
 
