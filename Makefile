@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: reproduce test bench install clean docs typecheck lint validate
+.PHONY: reproduce test bench install clean docs typecheck lint validate release-check
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -60,5 +60,10 @@ typecheck: $(DEV_STAMP)
 lint: $(DEV_STAMP)
 	$(VENV)/bin/ruff check .
 
+# before a release: the sdist and wheel built (dist/), twine's check, what the sdist must hold, and the wheel installed
+# in a fresh virtual environment (`tenscell --version`, every public name of 0.2.0 imported); .ci/release-check says how
+release-check: $(DEV_STAMP)
+	PYTHON=$(PY) .ci/release-check
+
 clean:
-	rm -rf $(VENV) out build src/*.egg-info .pytest_cache docs/_build docs/api/generated docs/auto_examples docs/jupyter_execute
+	rm -rf $(VENV) out build dist src/*.egg-info .pytest_cache docs/_build docs/api/generated docs/auto_examples docs/jupyter_execute

@@ -9,6 +9,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")     # the examples and the notebook d
 os.environ.setdefault("TENSCELL_PROGRESS", "0")  # no progress bars in the built pages
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(ROOT / "docs" / "_ext"))  # tenscell_views: plotly.js served by the site for the 3D views
 
 import tenscell  # noqa: E402
 
@@ -25,6 +26,7 @@ extensions = [
     "numpydoc",
     "myst_nb",
     "sphinx_gallery.gen_gallery",
+    "tenscell_views",
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}

@@ -31,7 +31,8 @@ SRC = Path(__file__).resolve().parent.parent / "src" / "tenscell"
 #: the pipeline, earliest stage first (docs/architecture.md); a module may import from its own stage or earlier ones
 STAGES: tuple[tuple[str, ...], ...] = (
     # shared plumbing: leaf modules
-    ("_checks", "_errors", "_progress", "_results", "_threads", "_parallel", "_version", "_ranges", "_optional"),
+    ("_checks", "_errors", "_progress", "_results", "_threads", "_parallel", "_version", "_ranges", "_optional",
+     "_deprecated"),
     ("model",),
     ("laws",),
     ("linear",),

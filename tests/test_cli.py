@@ -126,5 +126,6 @@ def test_reproduce_fit_stage_runs_and_writes_every_file(tmp_path, monkeypatch):
     for stem in ("fig4_prestress_fit", "fig5_frequency_fit", "fig5_frequency_fit_active_prestress",
                  "fig5_frequency_fit_active_prestress_uniform_damping", "joint_fit"):
         assert (tmp_path / f"{stem}.json").is_file() and (tmp_path / f"{stem}.png").is_file(), stem
+        assert "<!DOCTYPE html>" in (tmp_path / f"{stem}.html").read_text(encoding="utf-8"), stem
     table = (tmp_path / "mechanisms_vs_per_tendon.md").read_text()
     assert all(f"| {m} |" in table for m in reproduce.REPRODUCE_MECHANISMS)

@@ -37,31 +37,34 @@ def problems(fig) -> list[str]:
     for leg in fig.legends:
         check("figure legend", leg.get_window_extent(r))
     for ax in fig.axes:
-        if not ax.get_visible():
-            continue
-        labels = [("title", ax.title), ("xlabel", ax.xaxis.label), ("ylabel", ax.yaxis.label)]
-        if hasattr(ax, "zaxis"):
-            labels.append(("zlabel", ax.zaxis.label))
-        for name, t in labels:
-            if t.get_visible() and t.get_text().strip():
-                check(f"{name} {t.get_text()[:40]!r}", t.get_window_extent(r))
-        check(f"axes {ax.get_title()[:30]!r} (tick labels)", ax.get_tightbbox(r))
-        leg = ax.get_legend()
-        if leg is None:
-            continue
-        check("legend", leg.get_window_extent(r))
-        if ax.name == "3d":
-            continue
-        box = leg.get_window_extent(r)
-        covered = 0
-        for line in ax.get_lines():
-            xy = line.get_xydata()
-            if xy.size:
-                p = ax.transData.transform(xy)
-                covered += int(np.sum((p[:, 0] > box.x0) & (p[:, 0] < box.x1) & (p[:, 1] > box.y0) & (p[:, 1] < box.y1)))
-        if covered:
-            out.append(f"legend of {ax.get_title()[:30]!r} covers {covered} data points")
+        if ax.get_visible():
+            out += _axes_problems(ax, r, check)
     return out
+
+
+def _axes_problems(ax, r, check) -> list[str]:
+    """An axes' labels, tick labels and legend inside the canvas (``check``), and its legend over no data point."""
+    labels = [("title", ax.title), ("xlabel", ax.xaxis.label), ("ylabel", ax.yaxis.label)]
+    if hasattr(ax, "zaxis"):
+        labels.append(("zlabel", ax.zaxis.label))
+    for name, t in labels:
+        if t.get_visible() and t.get_text().strip():
+            check(f"{name} {t.get_text()[:40]!r}", t.get_window_extent(r))
+    check(f"axes {ax.get_title()[:30]!r} (tick labels)", ax.get_tightbbox(r))
+    leg = ax.get_legend()
+    if leg is None:
+        return []
+    check("legend", leg.get_window_extent(r))
+    if ax.name == "3d":
+        return []
+    box = leg.get_window_extent(r)
+    covered = 0
+    for line in ax.get_lines():
+        xy = line.get_xydata()
+        if xy.size:
+            p = ax.transData.transform(xy)
+            covered += int(np.sum((p[:, 0] > box.x0) & (p[:, 0] < box.x1) & (p[:, 1] > box.y0) & (p[:, 1] < box.y1)))
+    return [f"legend of {ax.get_title()[:30]!r} covers {covered} data points"] if covered else []
 
 
 @pytest.fixture(autouse=True)

@@ -188,29 +188,62 @@ def test_fit_uses_one_process_per_cpu_by_default_and_timing_is_ordered(tmp_path,
     assert (out / "fit.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"  # drawn in the worker, written here
 
 
-def test_anchored_holds_the_prestress_scale_in_the_papers_range(tmp_path, monkeypatch):
-    """`--anchored` = `--bound s=0.01:100`: springpot-tension+visc, whose free fit shrinks s to about 2e-3 m², ends
-    with s inside [0.01, 100] m² (the strut length L = s^-1/2 within 0.1-10 m), and fit.json records the bounds."""
-    from tenscell.fitting.shares import ANCHORED_L, ANCHORED_S
+def test_gauge_window_holds_the_prestress_scale_in_the_papers_range(tmp_path, monkeypatch):
+    """`--gauge-window` = `--bound s=0.01:100` (the old `--anchored`): springpot-tension+visc, whose free fit shrinks s
+    to about 2e-3 m², ends with s inside [0.01, 100] m² (L = s^-1/2 within 0.1-10 m), and fit.json records the bounds."""
+    from tenscell.fitting.shares import GAUGE_WINDOW_L, GAUGE_WINDOW_S
 
-    assert ANCHORED_S == pytest.approx((1 / ANCHORED_L[1] ** 2, 1 / ANCHORED_L[0] ** 2))
+    assert GAUGE_WINDOW_S == pytest.approx((1 / GAUGE_WINDOW_L[1] ** 2, 1 / GAUGE_WINDOW_L[0] ** 2))
     monkeypatch.setenv("TENSCELL_PROGRESS", "0")
     out = tmp_path / "anch"
     status = cli_main(["fit", "bundled:stamenovic2002", "bundled:fabry2001", "--model", "springpot-tension+visc",
-                       "--anchored", "--starts", "1", "--validate", "no", "--profile", "no", "--jobs", "1",
+                       "--gauge-window", "--starts", "1", "--validate", "no", "--profile", "no", "--jobs", "1",
                        "--out", str(out)])
     assert status in (0, 1)
     s = next(p for p in json.loads((out / "fit.json").read_text())["parameters"] if p["name"] == "s")
-    assert ANCHORED_S[0] * (1 - 1e-9) <= s["value"] <= ANCHORED_S[1] * (1 + 1e-9)
-    assert (s["lower"], s["upper"]) == pytest.approx(ANCHORED_S)
+    assert GAUGE_WINDOW_S[0] * (1 - 1e-9) <= s["value"] <= GAUGE_WINDOW_S[1] * (1 + 1e-9)
+    assert (s["lower"], s["upper"]) == pytest.approx(GAUGE_WINDOW_S)
+
+
+@pytest.mark.parametrize("flag, factor", [(["--anchored"], 1.5), (["--anchored=exact"], 1.0), (["--anchored", "2"], 2.0)])
+def test_anchored_holds_sigma_to_the_measured_prestress(tmp_path, monkeypatch, flag, factor):
+    """`--anchored [FACTOR|exact]`: σ (the tendons' virial stress) within ×/÷FACTOR of the measured prestress; fit.json
+    and the report give σ / measured and the anchor."""
+    from tenscell.model import paper_cell
+    from tenscell.model.prestress import virial_prestress
+
+    monkeypatch.setenv("TENSCELL_PROGRESS", "0")
+    out = tmp_path / "anch"
+    status = cli_main(["fit", "bundled:stamenovic2002", "bundled:fabry2001", "--model", "springpot+visc", *flag,
+                       "--starts", "1", "--validate", "no", "--profile", "no", "--jobs", "1", "--out", str(out)])
+    assert status in (0, 1)
+    doc = json.loads((out / "fit.json").read_text())
+    s = next(p for p in doc["parameters"] if p["name"] == "s")
+    s_sigma = virial_prestress(paper_cell()).scale_m2
+    pre = doc["structure"]["prestress"]
+    assert pre["sigma_over_measured"] == pytest.approx(s["value"] / s_sigma, rel=1e-9)
+    assert 1 / factor * (1 - 1e-9) <= pre["sigma_over_measured"] <= factor * (1 + 1e-9)
+    assert pre["anchor"]["factor"] == pytest.approx(factor)
+    if factor == 1.0:
+        assert not s["vary"] and s["value"] == pytest.approx(s_sigma, rel=1e-12)
+    else:
+        assert (s["lower"], s["upper"]) == pytest.approx((s_sigma / factor, s_sigma * factor), rel=1e-12)
+    assert "σ / measured =" in (out / "report.md").read_text()
 
 
 @pytest.mark.parametrize("extra, match", [
-    (["bundled:fabry2001"], "--anchored: this fit has no prestress scale s"),
-    (["bundled:stamenovic2002", "--bound", "s=1:2"], "give it or --bound s=LO:HI, not both"),
+    (["bundled:fabry2001", "--anchored"], "--anchored: this fit has no prestress scale s"),
+    (["bundled:stamenovic2002", "--anchored", "--bound", "s=1:2"], "give it or --bound s=LO:HI, not both"),
+    (["bundled:stamenovic2002", "--anchored", "--fix", "s=1"], "give it or --fix s=VALUE, not both"),
+    (["bundled:stamenovic2002", "--anchored", "--gauge-window"], "give one of them"),
+    (["bundled:stamenovic2002", "--anchored=0.5"], "--anchored 0.5: the factor must lie in (1, 100]"),
+    (["bundled:stamenovic2002", "--anchored", "0.5"], "--anchored [FACTOR|exact]"),
+    (["bundled:stamenovic2002", "--anchored=1"], "--anchored [FACTOR|exact]"),
+    (["bundled:stamenovic2002", "--anchored=tight"], "--anchored tight: not a factor"),
+    (["bundled:fabry2001", "--gauge-window"], "--gauge-window: this fit has no prestress scale s"),
 ])
 def test_anchored_refusals(tmp_path, capsys, extra, match):
     out = tmp_path / "x"
-    assert cli_main(["fit", *extra, "--model", "springpot+visc", "--anchored", "--out", str(out)]) == 2
+    assert cli_main(["fit", *extra, "--model", "springpot+visc", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert match in err and err.count("\n") == 1 and not out.exists()

@@ -37,7 +37,9 @@ def test_a_fit_shows_verdict_quality_provenance_and_parameters_with_errors(fitte
     cells = _cells(out)
     assert fitted.verdict in cells
     aic, bic = fitted.information_criteria()
-    assert f"{aic:.1f} / {bic:.1f}" in cells
+    aic_l, bic_l = fitted.information_criteria_lmfit()
+    criteria = next(c for c in cells if c.startswith(f"{aic:.1f} / {bic:.1f} ("))
+    assert "lmfit's convention" in criteria and criteria.endswith(f"{aic_l:.1f} / {bic_l:.1f}")  # both, side by side
     assert f"{fitted.rms_log10_error:.4g}" in " ".join(cells)
     # provenance: the line the reader recorded, escaped (the file name holds markup)
     assert fitted.data.provenance.line() in cells

@@ -318,7 +318,9 @@ def test_cli_synth_fit_resume_and_outputs(tmp_path, monkeypatch):
     assert not work.exists()
     names = set(os.listdir(fits))
     assert {"population.csv", "population.parquet", "summary.csv", "cells.jsonl", "report.md", "parameters.png",
-            "moduli.png", "recovery.csv", "manifest.json"} <= names
+            "moduli.png", "recovery.csv", "manifest.json", "report.html"} <= names
+    page = (fits / "report.html").read_text(encoding="utf-8")  # the report's text with both figures, inline
+    assert page.count('src="data:image/png;base64,') == 2 and "interrupted run" in page
     csv, pq = read_table(fits / "population.csv"), read_table(fits / "population.parquet")
     pd.testing.assert_frame_equal(csv, pq, check_dtype=False)
     assert len(pq) == 6 and f"{n_done} cell record(s) came from an interrupted run" in (fits / "report.md").read_text()

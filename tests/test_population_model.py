@@ -315,7 +315,8 @@ def test_command_joint_fit_writes_its_output_set(tmp_path, capsys):
     code = main(["fit-population", str(pop), "--out", str(out), "--joint", "--model", FORMULA, "--starts", "1",
                  "--hops", "0", "--workers", "1", "--tolerance", "0.05"])
     assert code == 0, capsys.readouterr().err
-    assert {p.name for p in out.iterdir()} >= {"fit.json", "fit.csv", "cells.csv", "report.md", "fit.png"}
+    assert {p.name for p in out.iterdir()} >= {"fit.json", "fit.csv", "cells.csv", "report.md", "fit.png", "report.html"}
+    assert "Shared parameters" in (out / "report.html").read_text(encoding="utf-8")
     m = load_fit(out / "fit.json")
     assert isinstance(m, FittedPopulation) and m.population.per_cell == ("G0",)
     import pandas as pd

@@ -235,7 +235,7 @@ def test_what_the_structure_carries_in_the_report_and_fit_json(tension_fit, tmp_
     np.testing.assert_allclose(st.quantities.values["geometric_storage"] + st.quantities.values["constitutive_storage"],
                                1.0, atol=1e-12)
     assert st.scale.L_paper == pytest.approx(1.0 / math.sqrt(r.value("s")))
-    assert st.scale.anchored == (0.1 <= st.scale.L_paper <= 10.0)
+    assert st.scale.in_gauge_window == (0.1 <= st.scale.L_paper <= 10.0)
     md = fit_markdown(r)
     order = [md.index(h) for h in ("## What the data determine", "## What the structure carries", "## Parameters")]
     assert order == sorted(order)

@@ -99,6 +99,8 @@ SEMANTIC = [
     (["show", "paper", "--save", "SAVEDIR/"], "--save"),
     (["study", "nonsense"], "name"),
     (["fit", "DATA", "--tendons", "all"], "--tendons"),
+    (["fit", "DATA", "--anchored=0.5", "--out", "OUT"], "--anchored 0.5"),
+    (["fit", "DATA", "--anchored=loose", "--out", "OUT"], "--anchored [FACTOR|exact]"),
     (["fit", "MISSING", "--out", "OUT"], "missing.csv"),
     (["fit", "DATA", "--out", "FILE"], "--out"),
     (["moduli", "--no-such-flag"], "--no-such-flag"),

@@ -287,6 +287,27 @@ def test_a_run_stopped_before_its_first_record_leaves_no_work_directory(capsys, 
     assert "--resume" not in capsys.readouterr().err  # nothing to resume
 
 
+def test_a_run_stopped_after_its_last_record_says_how_to_resume_and_resumes(capsys, here, population, monkeypatch):
+    """Ctrl-C while the results are written (every cell fitted): the --resume line, the records kept; --resume then
+    writes the set without fitting a cell again."""
+    from tenscell.population.table import PopulationResult
+
+    write = PopulationResult.write
+
+    def interrupted(self, *a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(PopulationResult, "write", interrupted)
+    assert main(["fit-population", str(population), "--out", "o", *FAST]) == 130
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "interrupted" in err and "--resume" in err and "o.partial" in err, err
+    assert not (here / "o").exists() and len(list((here / "o.partial" / "cells").glob("*.json"))) == 3
+    monkeypatch.setattr(PopulationResult, "write", write)
+    assert main(["fit-population", str(population), "--out", "o", *FAST, "--resume"]) == 0
+    assert "3 cell record(s) came from an interrupted run" in (here / "o" / "report.md").read_text()
+    assert not (here / "o.partial").exists()
+
+
 def test_a_population_in_which_nothing_was_fitted_fails_and_keeps_the_previous_set(capsys, here, population):
     assert main(["fit-population", str(population), "--out", "o", *FAST]) == 0
     before = {p.name: p.read_bytes() for p in (here / "o").iterdir()}

@@ -99,14 +99,14 @@ def test_every_subpackage_states_its_public_names():
         assert not missing, f"tenscell.{info.name}.__all__ names what it does not have: {missing}"
 
 
-def test_old_top_level_names_warn_and_name_their_new_home():
+def test_old_top_level_names_are_gone_in_0_3_and_name_their_home():
+    """Deprecated in 0.2.0 'until 0.3.0': now an AttributeError that names where the name lives."""
     import importlib
 
-    assert not set(tenscell._MOVED) & set(tenscell._WHERE)
+    assert not set(tenscell._REMOVED) & set(tenscell._WHERE)
     # every name of 0.1.0, TenscellError, and read_data (the one reader of any file, issue 20)
-    assert len(tenscell._MOVED) + len(tenscell._WHERE) == 103 + 2
-    for name, home in tenscell._MOVED.items():
-        with pytest.warns(DeprecationWarning, match=rf"tenscell\.{name} is deprecated .* tenscell\.{home}\.{name}"):
-            old = getattr(tenscell, name)
-        assert old is getattr(importlib.import_module(f"tenscell.{home}"), name), name
+    assert len(tenscell._REMOVED) + len(tenscell._WHERE) == 103 + 2
+    for name, home in tenscell._REMOVED.items():
+        with pytest.raises(AttributeError, match=rf"tenscell\.{name} was removed in 0\.3\.0 .* tenscell\.{home}\.{name}"):
+            getattr(tenscell, name)
         assert name in importlib.import_module(f"tenscell.{home}").__all__, (home, name)

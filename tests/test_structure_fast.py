@@ -22,44 +22,52 @@ from tenscell.model.structure import ACTIN, INTERMEDIATE_FILAMENT, STRUT, Point,
 def reference_error(nodes, struts, tendons, families, fixed) -> str | None:
     """The first error a member-by-member loop finds (the rules as stated in Structure's docstring)."""
     n = len(nodes)
-
-    def unknown(i, what):
-        return None if 0 <= i < n else f"{what} refers to unknown node {i} (there are {n} nodes)"
-
-    def member(what, a, b):
-        for i in (a, b):
-            if unknown(i, what):
-                return unknown(i, what)
-        if a == b:
-            return f"{what} joins node {a} to itself"
-        if np.linalg.norm(nodes[a] - nodes[b]) <= 0:
-            return f"{what} has zero length"
-        return None
-
     fixed = sorted(set(fixed))
     for i in fixed:
-        if unknown(i, "fixed list"):
-            return unknown(i, "fixed list")
+        if _unknown(i, "fixed list", n):
+            return _unknown(i, "fixed list", n)
+    found = _strut_error(nodes, struts, fixed)
+    if found:
+        return found
+    if len(families) != len(tendons):
+        return f"{len(families)} families for {len(tendons)} tendons"
+    seen: dict = {}
+    for j, (a, b) in enumerate(tendons):
+        if _member(nodes, f"tendon {j}", a, b):
+            return _member(nodes, f"tendon {j}", a, b)
+        key = frozenset((a, b))
+        if key in seen:
+            return f"tendon {j} duplicates tendon {seen[key]} (nodes {a}-{b})"
+        seen[key] = j  # a tendon between two fixed nodes is left out with a note, not refused
+    return None
+
+
+def _unknown(i, what, n) -> str | None:
+    return None if 0 <= i < n else f"{what} refers to unknown node {i} (there are {n} nodes)"
+
+
+def _member(nodes, what, a, b) -> str | None:
+    for i in (a, b):
+        if _unknown(i, what, len(nodes)):
+            return _unknown(i, what, len(nodes))
+    if a == b:
+        return f"{what} joins node {a} to itself"
+    if np.linalg.norm(nodes[a] - nodes[b]) <= 0:
+        return f"{what} has zero length"
+    return None
+
+
+def _strut_error(nodes, struts, fixed) -> str | None:
     owner: dict = {}
     for k, (a, b) in enumerate(struts):
-        if member(f"strut {k}", a, b):
-            return member(f"strut {k}", a, b)
+        if _member(nodes, f"strut {k}", a, b):
+            return _member(nodes, f"strut {k}", a, b)
         if b in fixed and a not in fixed:  # a strut between two fixed nodes is left out with a note
             return f"strut {k}: its head node {b} is fixed; put the anchored (fixed) node first"
         for end in (a, b):
             if end in owner and end not in fixed:
                 return f"node {end} belongs to struts {owner[end]} and {k}"
             owner[end] = k
-    if len(families) != len(tendons):
-        return f"{len(families)} families for {len(tendons)} tendons"
-    seen: dict = {}
-    for j, (a, b) in enumerate(tendons):
-        if member(f"tendon {j}", a, b):
-            return member(f"tendon {j}", a, b)
-        key = frozenset((a, b))
-        if key in seen:
-            return f"tendon {j} duplicates tendon {seen[key]} (nodes {a}-{b})"
-        seen[key] = j  # a tendon between two fixed nodes is left out with a note, not refused
     return None
 
 

@@ -59,8 +59,9 @@ _WHERE = {name: module for module, names in _EXPORTS.items() for name in names}
 
 __all__ = list(_WHERE)
 
-# Names that were top-level before 0.2.0: name -> the public subpackage or module that has it now. They keep
-# working, with a DeprecationWarning naming the new place, until 0.3.0.
+# Names that were top-level before 0.2.0: name -> the public subpackage or module that has it now. They warned
+# through 0.2 (a DeprecationWarning naming the new place) and are gone in 0.3.0, as announced: using one is an
+# AttributeError that names its home. (The names of 0.2.0's own __all__s that moved: tenscell._deprecated.)
 _MOVED_FROM = {
     "model": ("Point", "StructureError", "NotPrestressableError", "equilibrate", "FormFindingError",
               "FormFindingResult", "find_form", "pin_jointed", "rigid_body_modes", "DEFAULT_DELTA", "REGULAR_DELTA",
@@ -83,7 +84,7 @@ _MOVED_FROM = {
     "studies": ("sensitivity_study", "loss_peak", "no_if_study", "prestress_map", "references_study", "linearize_semiflexible",
                 "semiflexible_study", "linearize_stiffening", "stiffening_study"),
 }
-_MOVED = {name: home for home, names in _MOVED_FROM.items() for name in names}
+_REMOVED = {name: home for home, names in _MOVED_FROM.items() for name in names}
 
 
 def __getattr__(name: str) -> object:
@@ -91,13 +92,10 @@ def __getattr__(name: str) -> object:
     module = _WHERE.get(name)
     if module is not None:
         value = getattr(import_module(f".{module}", __name__), name)
-    elif name in _MOVED:
-        import warnings
-
-        home = _MOVED[name]
-        warnings.warn(f"tenscell.{name} is deprecated since 0.2.0 and will be removed in 0.3.0: use "
-                      f"tenscell.{home}.{name} (from tenscell.{home} import {name})", DeprecationWarning, stacklevel=2)
-        return getattr(import_module(f".{home}", __name__), name)  # not cached: every use warns
+    elif name in _REMOVED:
+        home = _REMOVED[name]
+        raise AttributeError(f"tenscell.{name} was removed in 0.3.0 (deprecated since 0.2.0): use "
+                             f"tenscell.{home}.{name} (from tenscell.{home} import {name})")
     elif not name.startswith("_"):
         try:
             value = import_module(f".{name}", __name__)

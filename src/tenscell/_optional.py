@@ -2,7 +2,8 @@
 
 Fitting a sweep needs numpy, scipy, pandas and matplotlib only. Populations (Dask, Parquet) and structures above
 1500 coordinates (sparse Cholesky through cvxopt) need the extras ``tenscell[populations]`` and
-``tenscell[large]``, xarray datasets and netCDF files ``tenscell[exchange]``, Excel workbooks ``tenscell[excel]``;
+``tenscell[large]``, xarray datasets and netCDF files ``tenscell[exchange]``, Excel workbooks ``tenscell[excel]``,
+the interactive 3D view of a structure ``tenscell[view]`` (plotly);
 rheojax is installed by itself (``pip install rheojax``, Python >= 3.12). ``make test`` and ``make reproduce``
 install every extra.
 """
@@ -28,6 +29,7 @@ EXTRAS = {
     "xarray": ("pip install 'tenscell[exchange]'", "an xarray Dataset (and netCDF files)"),
     "openpyxl": ("pip install 'tenscell[excel]'", "reading Excel workbooks"),
     "rheojax": ("pip install rheojax", "rheojax's RheoData (rheojax needs Python >= 3.12)"),
+    "plotly": ("pip install 'tenscell[view]'", "the interactive 3D view of a structure"),
 }
 
 #: xarray's netCDF writers, best first: h5netcdf and netCDF4 write netCDF-4 (HDF5), scipy (a core dependency of

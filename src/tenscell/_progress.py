@@ -12,7 +12,10 @@ Every long computation in tenscell takes ``progress: bool | None``:
 
 The environment variable ``TENSCELL_PROGRESS=0`` silences every bar and
 stage line (for batch jobs and test suites); ``TENSCELL_PROGRESS=1`` forces
-them on.
+on the bars left to decide (``None``) — never one a caller turned off: the
+searches inside a profile or a held-out refit run without a bar of their own
+(each would close as a blank line in a log), under the one bar that says what
+is being done.
 """
 from __future__ import annotations
 
@@ -38,10 +41,10 @@ def in_notebook() -> bool:
 def wants_progress(progress: bool | None) -> bool:
     """Resolve a ``progress`` argument to show-or-not (see the module docstring)."""
     env = os.environ.get("TENSCELL_PROGRESS", "").strip()
-    if env in ("0", "1"):
-        return env == "1"
-    if progress is not None:
-        return bool(progress)
+    if env == "0" or progress is False:
+        return False
+    if env == "1" or progress:
+        return True
     return in_notebook() or sys.stderr.isatty()
 
 

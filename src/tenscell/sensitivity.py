@@ -758,3 +758,7 @@ def monte_carlo_draws(factors, *, parameters: str = "all", alpha: float = 0.0, d
         cl[i] = np.max(np.abs(G1.imag / G0.imag - 1))
         reasons.append("")
     return cs, cl, reasons
+
+from ._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

@@ -220,9 +220,15 @@ class CreepSpectrum:
         return float(self.instantaneous + self.weights.sum())
 
     def significant(self, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
-        """``(times, weights)`` of the modes with ``|ρ_k| > rtol·Σ|ρ|`` (the ones the load excites)."""
-        keep = np.abs(self.weights) > rtol * max(np.abs(self.weights).sum(), 1e-300)
-        return self.times[keep], self.weights[keep]
+        """``(times, weights)`` of the distinct retardation times the load excites, ``|ρ| > rtol·Σ|ρ|``.
+
+        Modes of one repeated time (a degenerate eigenspace: the paper cell's threefold symmetry gives pairs) are
+        merged first, their weights added: how a degenerate eigenspace's weight splits between the eigenvectors
+        LAPACK returns is arbitrary (it changes with the CPU's kernels), its sum is not.
+        """
+        rates, weights = _merge_modes(1.0 / self.times, self.weights)
+        keep = np.abs(weights) > rtol * max(np.abs(weights).sum(), 1e-300)
+        return 1.0 / rates[keep][::-1], weights[keep][::-1]  # shortest time first
 
     def compliance(self, t) -> np.ndarray:
         """Creep compliance ``J(t)`` (m/N) at times ``t`` (s, ≥ 0); ``J(0) = J_inst``."""

@@ -491,7 +491,8 @@ def _assignment(keys, flag: str, example: str):
 
 #: the reader's checks --accept can skip (tenscell.io.checks.CHECKS, written out for a quick parser; a test checks
 #: they agree)
-ACCEPT_CHECKS = ("one-frequency", "outliers", "decreasing", "point-count")
+ACCEPT_CHECKS = ("one-frequency", "outliers", "decreasing", "point-count", "truncated", "one-time", "repeated-times",
+                 "collapse")
 
 
 def add_data_options(p: argparse.ArgumentParser) -> None:

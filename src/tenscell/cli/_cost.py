@@ -21,7 +21,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["Cost", "BUDGET_S", "measure", "check", "announce", "duration", "size", "total_memory"]
+__all__ = ["Cost", "BUDGET_S", "EVALUATIONS_PER_START_HOP", "measure", "check", "announce", "duration", "size",
+           "total_memory"]
+
+#: model evaluations a fit takes per start and basin-hopping move allowed (--hops + 1 least-squares runs at most): the
+#: median over the built-in mechanisms, and the per-tendon fit's (30 hops at least, polished 4x as long), both counted
+#: on the bundled data (bench/calibrate_study_cost.py prints them; 2 cores, load about 9). `tenscell fit`'s and the
+#: studies' estimates multiply them by a measured model evaluation
+EVALUATIONS_PER_START_HOP = {"mechanism": 20.0, "voigt-per-tendon": 34.0}
 
 #: longest run a command starts (s): a day. Beyond it the command is refused with its estimate; split the
 #: run (fewer draws, cells, amplitudes) or, where the command takes one, give a --scheduler with more workers

@@ -26,7 +26,8 @@ POPULATION_CPU_S = 30.0
 EVALUATIONS_PER_START_HOP = 12.0
 #: what the command writes
 FILES = ("real_cells.md", "real_cells_medians.csv", "real_cells_g3.csv", "real_cells_cells.csv",
-         "real_cells_medians.png", "real_cells_slopes.png", "validation_tables.md")
+         "real_cells_medians.png", "real_cells_slopes.png", "validation_tables.md", "validation_heldout.png",
+         "validation_slopes.png")
 #: what ``--time-domain`` adds
 TIME_FILES = ("real_cells_time.csv", "real_cells_time.png")
 
@@ -149,6 +150,12 @@ def write_real_cells(out: Path, log, args, jobs: int) -> None:
         written.append("real_cells_populations.csv")
     plotting.save(real_cells_medians_figure(s), out / "real_cells_medians.png")
     plotting.save(real_cells_slopes_figure(s), out / "real_cells_slopes.png")
+    from ..plotting.validation import validation_figures
+
+    for name, figure in validation_figures(s).items():  # the validation page's (docs/update_validation.py)
+        plotting.save(figure, out / f"{name}.png")
+        if f"{name}.png" not in written:
+            written.append(f"{name}.png")
     write_text(out / "validation_tables.md", validation_tables(s))
     write_text(out / "real_cells.md", real_cells_markdown(s))
     print(s.g3.text(), flush=True)

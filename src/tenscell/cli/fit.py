@@ -13,6 +13,7 @@ from pathlib import Path
 
 from ._args import (RANGES, add_cluster_options, add_data_options, add_out, data_options_from_args, ensemble_size,
                     integer, number)
+from ._cost import Cost
 
 #: the fit's parametrizations (the same tuples as tenscell.fitting.TENDON_MODES / DAMPING_MODES,
 #: written out so that building the parser does not import the fitting code; a test checks they agree)
@@ -36,8 +37,11 @@ MODEL_NAMES = tuple(n for names in MODEL_GROUPS.values() for n in names)
 #: the name of tenscell 0.2 (every name --model takes)
 MECHANISM_NAMES = MODEL_NAMES
 
-#: the files of one fit: extension -> name in `tenscell fit --out`
-FIT_FILES = {"json": "fit.json", "csv": "fit.csv", "md": "report.md", "png": "fit.png"}
+#: the files of one fit: extension -> name in `tenscell fit --out` (report.html: report.md with its figures, one
+#: self-contained page)
+FIT_FILES = {"json": "fit.json", "csv": "fit.csv", "md": "report.md", "png": "fit.png", "html": "report.html"}
+#: the profile-likelihood figure, written beside them when the fit profiled a parameter (`--profile`)
+PROFILE_FILE = "profile.png"
 #: the files an ensemble adds to an output set (`fit --model ... --ensemble K`, `study mechanisms`)
 ENSEMBLE_FILES = ("ensemble.csv", "ensemble.png", "ensemble.md")
 
@@ -66,7 +70,9 @@ def register(sub) -> None:
                     "that states its prestress (a prestress_Pa column, or --prestress FILE=PA) is linked to the "
                     "others by one prestress scale; otherwise its prestress is a fitted, reported parameter. "
                     "bundled:NAME reads a data set shipped with tenscell (fabry2001, stamenovic2002). "
-                    "Writes fit.json, fit.csv, fit.png and report.md into --out. Exit status 0 if every data "
+                    "Writes fit.json, fit.csv, fit.png, report.md and report.html (the report with its figures: the "
+                    "fit, the residuals, the profiles) into --out, and profile.png when a parameter was profiled. "
+                    "Exit status 0 if every data "
                     "set's RMS of the log10 errors reached --tolerance or lies inside the data's own noise (their "
                     "sd columns), 1 if not, 2 for bad input.")
     p.add_argument("data", nargs="+", help="file(s) of measured moduli or creep compliance, or bundled:NAME")
@@ -89,10 +95,15 @@ def register(sub) -> None:
     p.add_argument("--bound", action="append", type=_bound, metavar="KIND=LO:HI", default=None,
                    help="bounds of every parameter of a kind, in SI units (repeatable): EA (N), c (N·s/m), P (N), "
                         "s (m²), P_data (Pa), L (m); e.g. --bound EA=1e-3:1e3")
-    p.add_argument("--anchored", action="store_true",
-                   help="hold the prestress gauge to the paper's convention: the prestress scale s in [0.01, 100] m², "
-                        "i.e. the strut length L = s^-1/2 in 0.1-10 m (the same as --bound s=0.01:100; needs a data "
-                        "set that states its prestress in Pa)")
+    p.add_argument("--anchored", nargs="?", const="", default=None, metavar="FACTOR|exact",
+                   help="hold the model's physical prestress σ (the tendons' virial stress, Σ T·l/(3V) over the hull "
+                        "of the nodes; docs/conventions.md) within ×/÷FACTOR of the measured prestress (default 1.5), "
+                        "or equal to it (exact); needs a data set that states its prestress in Pa. Written "
+                        "--anchored=exact or --anchored 2 before another flag")
+    p.add_argument("--gauge-window", action="store_true",
+                   help="hold the prestress scale s in [0.01, 100] m² (strut lengths 0.1-10 m in the paper's "
+                        "convention; the same as --bound s=0.01:100): a window on the gauge, not an anchor (it never "
+                        "binds on the bundled data; --anchored is the physical anchor)")
     p.add_argument("--fix", action="append", type=_fixed, metavar="NAME=VALUE", default=None,
                    help="hold a parameter fixed, by its name in fit.json, in SI units (repeatable): e.g. --fix L=1, "
                         "--fix c=0.5, --fix P=20, --fix c_actin=2, --fix EA_intermediate_filament=0.3")
@@ -217,17 +228,50 @@ def spec_from_args(args):
     return spec
 
 
-def _anchored(bounds: dict, plain) -> dict:
-    """``bounds`` with the prestress scale held to the anchored range (``--anchored``)."""
-    from ..fitting.shares import ANCHORED_S
+def anchor_from_args(args):
+    """The anchor of ``--anchored [FACTOR|exact]`` (None without the flag); ValueError in one line naming the flag
+    and its syntax, before any file is read."""
+    text = getattr(args, "anchored", None)
+    if text is None:
+        return None
+    if getattr(args, "gauge_window", False):
+        raise ValueError("--anchored holds σ to the measured prestress and --gauge-window holds s in 0.01-100 m²: "
+                         "give one of them")
+    from ..fitting.anchor import parse_anchor
+
+    return parse_anchor(text)
+
+
+def _no_scale(flag: str, plain) -> None:
+    if "s" not in plain.names:
+        raise ValueError(f"{flag}: this fit has no prestress scale s (no data set states its prestress in Pa: "
+                         "give a prestress sweep, or --prestress FILE=PA)")
+
+
+def _anchored(bounds: dict, fixed: dict, plain, anchor, cell) -> tuple[dict, dict]:
+    """``bounds`` and ``fixed`` with σ held to the measured prestress (``--anchored``)."""
+    flag = f"--anchored{'=exact' if anchor.is_exact else ''}"
+    if "s" in bounds or "s" in fixed:
+        how = "--bound s=LO:HI" if "s" in bounds else "--fix s=VALUE"
+        raise ValueError(f"{flag} sets the prestress scale s itself (σ held {anchor.label} of the measured "
+                         f"prestress); give it or {how}, not both")
+    if cell is None:
+        raise ValueError(f"{flag}: model {plain.spec.name} is a structure-free formula: it has no structure, so no "
+                         "σ to hold to the measured prestress")
+    _no_scale("--anchored", plain)
+    opts = anchor.fit_options(cell, plain.names, fixed)
+    return {**bounds, **opts["bounds"]}, opts["fixed"]
+
+
+def _gauge_window(bounds: dict, plain) -> dict:
+    """``bounds`` with the prestress scale in the gauge window (``--gauge-window``)."""
+    from ..fitting.shares import GAUGE_WINDOW_S
 
     if "s" in bounds:
-        raise ValueError("--anchored sets the prestress scale's bounds itself (s in 0.01-100 m²); give it or "
+        raise ValueError("--gauge-window sets the prestress scale's bounds itself (s in 0.01-100 m²); give it or "
                          "--bound s=LO:HI, not both")
-    if "s" not in plain.names:
-        raise ValueError("--anchored: this fit has no prestress scale s (no data set states its prestress in Pa: "
-                         "give a prestress sweep, or --prestress FILE=PA)")
-    return {**bounds, "s": ANCHORED_S}
+    _no_scale("--gauge-window", plain)
+    return {**bounds, "s": GAUGE_WINDOW_S}
 
 
 def search_space(args, datasets, spec) -> dict:
@@ -238,8 +282,12 @@ def search_space(args, datasets, spec) -> dict:
 
     plain = spec.problem(datasets)
     bounds = dict(args.bound or ())
-    if getattr(args, "anchored", False):
-        bounds = _anchored(bounds, plain)
+    user_fixed = dict(args.fix or ())
+    anchor = anchor_from_args(args)
+    if getattr(args, "gauge_window", False):
+        bounds = _gauge_window(bounds, plain)
+    if anchor is not None:
+        bounds, user_fixed = _anchored(bounds, user_fixed, plain, anchor, plain.cell)
     for key, (lo, hi) in bounds.items():
         if key not in plain.kinds and key not in plain.names:
             raise ValueError(f"--bound {key}={lo:g}:{hi:g}: no parameter or parameter kind {key!r} in this fit "
@@ -249,7 +297,7 @@ def search_space(args, datasets, spec) -> dict:
         bounded = spec.problem(datasets, bounds=bounds)
     except ValueError as err:
         raise ValueError(f"--bound: {err}") from None
-    fixed = dict(args.fix or ())
+    fixed = user_fixed
     lower, upper = [math.exp(x) for x in bounded.lower], [math.exp(x) for x in bounded.upper]
     for name, v in fixed.items():
         if name not in plain.names:
@@ -378,12 +426,16 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=No
     (:func:`tenscell.fitting.validation.compare_out_of_sample`), in fit.json and the report.
 
     ``timing`` (optional): the command's own clock, stored in fit.json as is.
-    ``figure`` (optional): a future of the figure's PNG bytes (:func:`fit_png`,
-    drawn in a worker process meanwhile); without it the figure is drawn here.
+    ``figure`` (optional): a future of the figures' PNG bytes (:func:`fit_figures`,
+    drawn in a worker process meanwhile); without it the figures are drawn here.
+
+    The keys are those of :data:`FIT_FILES`, and ``"profile"`` (:data:`PROFILE_FILE`) when the result holds
+    profiles (:meth:`~tenscell.fitting.FitResult.compute_profile`).
     """
     from ..io.outputs import write_bytes, write_csv_rows, write_json, write_text
     from ..io.tables import fit_table
     from ..reports.fit import fit_markdown
+    from ..reports.html_page import fit_report_html
 
     doc = result.to_dict()
     own = baseline is result  # a fit that is its own baseline (a homogeneous Voigt cell, a formula)
@@ -399,31 +451,37 @@ def fit_outputs(result, baseline, title, comparison=None, timing=None, figure=No
     if timing is not None:
         doc["timing"] = timing
     header, rows = fit_table(result, baseline)
-    markdown = fit_markdown(result, None if own else baseline, title=title, comparison=comparison,
-                            validation=validation)
-    if figure is None:  # drawn here: only then does this process import the plotting stack (0.35 s)
-        from .. import plotting
-        from ..plotting.fits import fit_panels
-
-        fig = fit_panels(result, baseline=baseline, title=title)
-        png = lambda path: plotting.save(fig, path)  # noqa: E731
-    else:
-        data = figure.result()
-        png = lambda path: write_bytes(path, data)  # noqa: E731
-    return {
+    report_baseline = None if own else baseline
+    markdown = fit_markdown(result, report_baseline, title=title, comparison=comparison, validation=validation)
+    # drawn here without a worker's: only then does this process import the plotting stack (0.35 s)
+    pngs = fit_figures(result, baseline, title, result.profile) if figure is None else figure.result()
+    html = fit_report_html(result, report_baseline, title=title, comparison=comparison, validation=validation,
+                           figures=pngs)
+    outputs = {
         "json": lambda path: write_json(path, doc),
         "csv": lambda path: write_csv_rows(path, header, rows),
         "md": lambda path: write_text(path, markdown),
-        "png": png,
+        "png": lambda path: write_bytes(path, pngs["fit"]),
+        "html": lambda path: write_text(path, html),
     }
+    if pngs.get("profile"):
+        outputs["profile"] = lambda path: write_bytes(path, pngs["profile"])
+    return outputs
 
 
-def fit_png(result, baseline, title) -> bytes:
-    """The fit's figure as PNG bytes (for a worker process: the image is the same as :func:`fit_outputs` draws)."""
+def fit_figures(result, baseline, title, profile=None) -> dict:
+    """The fit's figures as PNG bytes: ``"fit"`` (data and model, fit.png), ``"residuals"`` and, for a
+    :class:`~tenscell.fitting.profile.ProfileSet` that profiled something, ``"profile"`` (profile.png). For a
+    worker process (a pickled result carries no profile: it is passed beside it); the images are those
+    :func:`fit_outputs` draws."""
     from .. import plotting
-    from ..plotting.fits import fit_panels
+    from ..plotting.fits import fit_panels, profile_panels, residual_panels
 
-    return plotting.png_bytes(fit_panels(result, baseline=baseline, title=title))
+    pngs = {"fit": plotting.png_bytes(fit_panels(result, baseline=baseline, title=title)),
+            "residuals": plotting.png_bytes(residual_panels(result, baseline=baseline))}
+    if profile is not None and len(profile.profiles):
+        pngs["profile"] = plotting.png_bytes(profile_panels(profile, title=f"Profile likelihood: {title}"))
+    return pngs
 
 
 def _warm_plotting() -> None:
@@ -504,9 +562,11 @@ def run(args) -> int:
     from .._parallel import background, jobs_for
     from .._progress import stage
     from ..io.outputs import OutputSet
+    from ._cost import announce
 
     spec = spec_from_args(args)
     check_contradictions(args)
+    anchor_from_args(args)  # a bad --anchored: one line before any file is read
     _check_ensemble(args, spec)
     out = OutputSet(args.out, command=args.command_line, flag="--out")
     datasets, read_lines = read_inputs(args, _min_points(spec))
@@ -517,6 +577,9 @@ def run(args) -> int:
     for line in read_lines:  # what was read, now that every check has passed
         stage(line)
     args.jobs = jobs_for(args.starts, args.jobs)
+    cost = fit_cost(spec, datasets, args)
+    if cost.seconds > ANNOUNCE_S:
+        announce(cost)
     stage(f"fitting {sum(d.n for d in datasets)} points with {spec.name}: {args.starts} start(s), "
           f"{args.jobs} process(es)")
     clock = _Clock(getattr(args, "started", None))
@@ -532,7 +595,7 @@ def run(args) -> int:
         timing["outputs_started_s"] = clock.now()
         # the report's ± need one model evaluation per parameter: half of them in the worker, before the figure
         result.compute_derived(worker)
-        figure = worker.submit(fit_png, result, baseline, title)
+        figure = worker.submit(fit_figures, result, baseline, title, result.profile)
         from ..fitting.scores import compare_models
 
         comparison = compare_models(result, homogeneous=baseline, held_out=held, holdout=args.holdout)
@@ -541,8 +604,9 @@ def run(args) -> int:
                               validation=validation)
     ensemble = _ensemble(args, result, datasets)
     with out as d:
-        for ext, name in FIT_FILES.items():
-            outputs[ext](d / name)
+        files = {**FIT_FILES, "profile": PROFILE_FILE}
+        for key, write in outputs.items():
+            write(d / files[key])
         if ensemble is not None:
             write_ensemble(d, ensemble, f"Ensemble of the fitted `{spec.name}`")
     each = "; ".join(f"{Path(f.data.source).name} {f.rms_log10_error:.5f}" for f in result.fits)
@@ -573,14 +637,78 @@ def _validation(args, spec, datasets, space):
     return validation if validation.splits else None  # no split leaves enough points to fit every model
 
 
+#: an estimated run longer than this (s) is announced before it starts (`tenscell fit`, its profile)
+ANNOUNCE_S = 10.0
+#: basin-hopping moves of a fit (fitting.fit's default; the command line does not change it)
+FIT_HOPS = 30
+
+
+def _evaluation_time(problem, theta) -> float:
+    """Seconds of one model evaluation (residuals and Jacobian) of ``problem`` at ``theta``, measured now (under the
+    machine's present load) with the BLAS threads the search uses."""
+    from .._threads import limited
+    from ._cost import measure
+
+    with limited():
+        return measure(lambda: problem.jacobian(theta), max_calls=5)
+
+
+def fit_cost(spec, datasets, args) -> Cost:
+    """The fit's estimated cost (:class:`tenscell.cli._cost.Cost`): one model evaluation timed here, × the
+    evaluations its search is expected to take (:data:`tenscell.cli._cost.EVALUATIONS_PER_START_HOP` × starts ×
+    (hops + 1)), over its processes; the baseline runs beside it, the profile is estimated when its parameters are
+    known."""
+    import numpy as np
+
+    from ..fitting.entry import prepare
+    from ..fitting.models.catalog import PER_TENDON_VOIGT
+    from ._cost import EVALUATIONS_PER_START_HOP
+
+    problem = spec.problem(*prepare(datasets, None, args.max_points, spec))
+    per = _evaluation_time(problem, problem.initial_guess(np.random.default_rng(args.seed)))
+    rate = EVALUATIONS_PER_START_HOP["voigt-per-tendon" if spec.name == PER_TENDON_VOIGT else "mechanism"]
+    runs = args.starts * (FIT_HOPS + 1)
+    return Cost("model evaluation", int(round(rate * runs)), per, max(1, min(args.jobs, args.starts)),
+                detail=f"of {problem.n_free} free parameters: {args.starts} start(s) × up to {FIT_HOPS + 1} "
+                       f"least-squares runs × about {rate:g} evaluations; fewer when the tolerance is met early")
+
+
+def profile_cost(result, names) -> Cost:
+    """The profile's estimated cost: per parameter, at most the refits its bar counts (the grid, the thresholds,
+    the refinements), each a search of ``REFIT_HOPS + 1`` runs warm-started at the fit, one model evaluation timed
+    here at the fit's parameters."""
+    from ..fitting.models.catalog import PER_TENDON_VOIGT
+    from ..fitting.profile import DEFAULT_POINTS, DEFAULT_REFINE, REFIT_HOPS, REFIT_NFEV
+    from ._cost import EVALUATIONS_PER_START_HOP
+
+    per = _evaluation_time(result.problem, result.theta)
+    rate = EVALUATIONS_PER_START_HOP["voigt-per-tendon" if result.spec.name == PER_TENDON_VOIGT else "mechanism"]
+    refits = len(names) * (DEFAULT_POINTS + 4 + 4 * DEFAULT_REFINE)
+    evaluations = (REFIT_HOPS + 1) * min(rate, REFIT_NFEV)
+    return Cost("refit", refits, per * evaluations, 1,
+                detail=f"at most: {len(names)} parameter(s) × {DEFAULT_POINTS + 4 + 4 * DEFAULT_REFINE} refits, each "
+                       f"{REFIT_HOPS + 1} least-squares runs of about {min(rate, REFIT_NFEV):g} evaluations of "
+                       f"{result.n_free - 1} free parameters")
+
+
 def _profile(args, result) -> None:
-    """``--profile``: the profile intervals of the parameters that need them, kept on the result (or none)."""
+    """``--profile``: the profile intervals of the parameters that need them, kept on the result (or none); the
+    estimate first when it is long."""
     if args.profile == "no":
         return
     from .._progress import stage
+    from ..fitting.profile import profile_plan
+    from ._cost import announce
 
-    profile = result.compute_profile("needed" if args.profile == "yes" else "auto",
-                                     notify=lambda line: stage(line))
+    mode = "needed" if args.profile == "yes" else "auto"
+    todo, _ = profile_plan(result, mode)
+    if todo:
+        cost = profile_cost(result, [n for n, _ in todo])
+        if cost.seconds > ANNOUNCE_S:
+            stage(f"profile of {len(todo)} parameter(s) the local analysis cannot bound: "
+                  f"{', '.join(n for n, _ in todo[:8])}{', ...' if len(todo) > 8 else ''}")
+            announce(cost)
+    profile = result.compute_profile(mode, notify=lambda line: stage(line))
     stage(f"profile: {profile.not_run}" if profile.not_run else
           f"profile: {len(profile)} parameter(s), {profile.refits} refits, {profile.cpu_s:.1f} s CPU")
 

@@ -1,7 +1,9 @@
 """``tenscell synth-population``, ``fit-population`` and ``large-study``: populations and large studies on Dask."""
 from __future__ import annotations
 
+import os
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 from ._args import (add_cluster_options, add_data_options, add_out, data_options_from_args, frequencies, integer, number,
@@ -48,7 +50,7 @@ def _register_fit(sub) -> None:
                     "a glob, or one long table with a 'cell' column and optionally 'condition') on a Dask "
                     "cluster: a local one by default, an existing one with --scheduler. Each cell's record is "
                     "written as it completes into OUT.partial/; an interrupted run continues with --resume. "
-                    "The output set (population.csv/.parquet, summary.csv, cells.jsonl, report.md, figures) "
+                    "The output set (population.csv/.parquet, summary.csv, cells.jsonl, report.md, report.html, figures) "
                     "appears in --out only when every cell has a record. See docs/populations.md.")
     p.add_argument("input", help="directory, glob (quote it) or long table (.csv/.parquet)")
     add_out(p)
@@ -77,7 +79,7 @@ def _register_fit(sub) -> None:
 #: length is one)
 JOINT_MODELS = tuple(n for group, names in MODEL_GROUPS.items() if not group.startswith("the paper") for n in names)
 #: the files of a joint fit's output set
-JOINT_FILES = ("fit.json", "fit.csv", "cells.csv", "report.md", "fit.png")
+JOINT_FILES = ("fit.json", "fit.csv", "cells.csv", "report.md", "fit.png", "report.html")
 
 
 def _add_joint_options(p) -> None:
@@ -85,7 +87,7 @@ def _add_joint_options(p) -> None:
     g.add_argument("--joint", action="store_true",
                    help="fit one model to every cell at once: each cell has its own value of the --per-cell "
                         "parameter(s), every other parameter is shared by the population (writes fit.json, fit.csv, "
-                        "cells.csv, report.md, fit.png; see docs/populations.md)")
+                        "cells.csv, report.md, fit.png, report.html; see docs/populations.md)")
     g.add_argument("--model", choices=JOINT_MODELS, default=None, metavar="NAME",
                    help=f"the model of one cell in a joint fit (default {RECOMMENDED_MODEL}): a mechanism or a "
                         f"structure-free formula of `tenscell fit --model` ({', '.join(JOINT_MODELS)})")
@@ -339,15 +341,26 @@ def _run_in(work: Path, what: str, run):
     """
     created = not work.exists()
     try:
-        return run()
-    except BaseException as err:
+        with _resume_hint(work, what):
+            return run()
+    except BaseException:
         if created and discard_empty_work(work, remove_dir=True):
             raise
-        if isinstance(err, KeyboardInterrupt) and _finished(work):
-            # the one line the command prints for it (tenscell.cli.main prints a KeyboardInterrupt's message)
-            raise KeyboardInterrupt(f"{what}: interrupted; finished results are kept in {work}/; run the same "
-                                    "command with --resume to continue") from None
         raise
+
+
+@contextmanager
+def _resume_hint(work: Path, what: str):
+    """An interrupt inside, while the work directory holds finished records (during the run, or after its last
+    record while the results are written), ends with the one line that says how to continue: --resume."""
+    try:
+        yield
+    except KeyboardInterrupt as err:
+        if not _finished(work) or "--resume" in str(err):
+            raise
+        # the one line the command prints for it (tenscell.cli.main prints a KeyboardInterrupt's message)
+        raise KeyboardInterrupt(f"{what}: interrupted; finished results are kept in {work}/; run the same "
+                                "command with --resume to continue") from None
 
 
 def _failed_line(table, out_target) -> str:
@@ -401,7 +414,7 @@ def run_fit(args) -> int:
             shutil.rmtree(work, ignore_errors=True)
         print(f"tenscell fit-population: {_failed_line(t, out.target)}", file=sys.stderr)
         return 1
-    with out as d:
+    with _resume_hint(work, "tenscell fit-population"), out as d:  # every record is kept until the set is written
         result.write(d, truth=truth)
     shutil.rmtree(work, ignore_errors=True)
     print(f"tenscell fit-population: {len(t)} cells, {n_ok} fitted ({int(t['converged'].sum())} converged), "
@@ -530,6 +543,7 @@ def run_joint(args) -> int:
     result = fitting.fit(datasets, model=population, starts=args.starts, hops=args.hops, seed=args.seed, jobs=jobs,
                          tolerance=args.tolerance, max_points=None)
     from ..fitting.population_scores import population_cells
+    from ..reports.html_page import markdown_report_html
     from ..reports.population_fit import population_fit_markdown
     from .. import plotting
     from ..plotting.population import population_fit_figure
@@ -541,12 +555,14 @@ def run_joint(args) -> int:
     header, rows = fit_table(result, result)
     report = population_fit_markdown(result, cells, title=title)
     png = plotting.png_bytes(population_fit_figure(result, cells, title=title))
+    page = markdown_report_html(report, [("Every cell's data and the joint fit (fit.png).", png)])
     with out as d:
         write_json(d / "fit.json", doc)
         write_csv_rows(d / "fit.csv", header, rows)
         write_text(d / "cells.csv", cells.to_csv(index=False))
         write_text(d / "report.md", report)
         write_bytes(d / "fit.png", png)
+        write_text(d / "report.html", page)
     shared = ", ".join(f"{p.name} = {p.value:.4g}" for p in result.parameters[: problem.n_shared])
     print(f"tenscell fit-population --joint: {population.name}, {problem.n_cells} cells: rms log10 error "
           f"{result.rms_log10_error:.4f} (worst cell {float(np.max(result.dataset_rms)):.4f}; tolerance "
@@ -688,8 +704,8 @@ def run_study(args) -> int:
     # everything read from the parts is read before they move into the output set
     medians = result.medians() if result.kind == "sweep" else None
     report = study_markdown(result)
-    with out as d:
-        (work / PARTS).rename(d / PARTS)
+    with _resume_hint(work, "tenscell large-study"), out as d:
+        _link_tree(work / PARTS, d / PARTS)  # linked, not moved: an interrupt here leaves the parts to --resume
         shutil.copy2(work / "study.json", d / "study.json")
         write_json(d / "summary.json", result.summary)
         if medians is not None:
@@ -699,6 +715,19 @@ def run_study(args) -> int:
     print(f"tenscell large-study {args.study}: {result.n_rows} rows in {result.n_parts} parts; "
           f"{result.elapsed_s:.1f} s; wrote {out.target}/", file=sys.stderr)
     return 0
+
+
+def _link_tree(source: Path, target: Path) -> None:
+    """``target`` a copy of the directory ``source`` made of hard links (copies where the file system has none)."""
+    import shutil
+
+    def link(src, dst):
+        try:
+            os.link(src, dst)
+        except OSError:
+            shutil.copy2(src, dst)
+
+    shutil.copytree(source, target, copy_function=link)
 
 
 def _notifier(command: str):

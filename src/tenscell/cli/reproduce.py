@@ -37,11 +37,11 @@ def _write_fit(out: Path, stem: str, result, baseline, title: str, log) -> None:
     from .fit import fit_outputs
 
     outputs = fit_outputs(result, baseline, title=title)
-    for ext in ("png", "csv", "json", "md"):
+    for ext in ("png", "csv", "json", "md", "html"):
         outputs[ext](out / f"{stem}.{ext}")
     pa = result.prestress
     each = ", ".join(f"{f.rms_log10_error:.4f}" for f in result.fits)
-    log(f"{stem}.png, .csv, .json, .md (rms {each}, homogeneous {baseline.rms_log10_error:.3f}; "
+    log(f"{stem}.png, .csv, .json, .md, .html (rms {each}, homogeneous {baseline.rms_log10_error:.3f}; "
         f"dlnG'/dlnP at {pa.reference_frequency_hz:g} Hz {pa.reference_storage.min():.3g} to "
         f"{pa.reference_storage.max():.3g})")
 
@@ -231,11 +231,35 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+#: CPU seconds of a whole `tenscell reproduce` (this process and its workers: /usr/bin/time's user time), calibrated
+#: on 2 cores (load 21: 861 s of wall time); the estimate scales it by the CPUs the present load leaves
+REPRODUCE_CPU_S = 134.0
+
+
+def reproduce_cost():
+    """The run's estimate: :data:`REPRODUCE_CPU_S` of CPU over the share of the machine's CPUs the present load leaves
+    (:func:`tenscell.cli.study.cpu_share`, for the two processes its fits use)."""
+    import os
+
+    from ._cost import Cost
+    from .study import cpu_share
+
+    workers = 2
+    share = cpu_share(workers)
+    load = os.getloadavg()[0]
+    return Cost("stage", len(REPRODUCE_STAGES), REPRODUCE_CPU_S / len(REPRODUCE_STAGES) / share, workers,
+                basis="calibrated",
+                detail=f"({REPRODUCE_CPU_S:g} s of CPU on 2 cores, at {share:.0%} of a CPU per process: load "
+                       f"{load:.1f} on {os.cpu_count()} CPUs; the fits' stage is most of it)")
+
+
 def run(args) -> int:
     from .._progress import stage
     from ..io.outputs import OutputSet
+    from ._cost import announce
 
     out = OutputSet(args.out, command=args.command_line, flag="--out")
+    announce(reproduce_cost())
     t0 = time.perf_counter()
     with out as d:
         for k, (title, run_stage) in enumerate(REPRODUCE_STAGES, 1):

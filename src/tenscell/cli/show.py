@@ -107,32 +107,17 @@ def run(args) -> int:
     out = OutputSet(args.out or default_out, command=args.command_line, flag="--out")
     save = check_output_file(args.save, "--save") if args.save else None
 
-    import numpy as np
-
     from .. import plotting
     from .._progress import stage
     from ..io.outputs import write_text
     from ..io.structure_files import member_values as expand, save_structure
-    from ..model.equilibrium import NotPrestressableError, equilibrate
-    from ..summary import relaxation_modes, summarize
+    from ..summary import summarize
 
     fitted = fitted_from_args(args, _SHOW_MODEL_DEFAULTS)
     no_modes = ""
     if fitted is not None:
         (model, P), stem = fitted, "fit"
-        if not model.structural:
-            raise ValueError(f"--from-fit {args.from_fit}: {model.describe()} has no structure to show: it is a "
-                             "structure-free formula")
-        obj = model.cell
-        EA, c = model.voigt_tendons(P)  # a law with internal dynamics: its tangents at rest
-        if not (c > 0).all():
-            # tendons with internal dynamics (a springpot's continuous spectrum) have no dashpot of their own: the
-            # summary's verdict (rank, self-stress, stability) depends on K0 only, and no modes are computed from a
-            # damping that is not the model's
-            c = np.ones_like(EA)
-            args.modes = 0
-            no_modes = (f"slowest modes  not computed: {model.describe()} has tendons with internal dynamics, not a "
-                        "dashpot per tendon\n")
+        obj, EA, c, no_modes = _fitted_tendons(args, model, P)
     else:
         stem, obj, EA, c = show_target(args)
         P = prestress_from_args(args)
@@ -140,40 +125,15 @@ def run(args) -> int:
         EA = _arrayish(args.EA)
     if args.c is not None:
         c = _arrayish(args.c)
-    if isinstance(obj, tuple):  # a file: use its self-stress when it has one
-        structure, T0 = obj
-        target = structure
-        if T0 is not None:
-            try:
-                target = equilibrate(structure, "local", T0=T0)
-            except NotPrestressableError as err:
-                # the file states a self-stress: searching for another one would answer a different question
-                raise ValueError(f"{args.target}: {str(err).replace('the given T0', 'its T0')}; correct it or omit "
-                                 "T0 to let tenscell find a self-stress") from None
-    else:
-        target, structure = obj, obj.structure
+    target, structure = _target_structure(args, obj)
     EA = expand(structure, EA, "--EA", "N")
     c = expand(structure, c, "--c", "N·s/m")
     big = structure.n_tendons > 2000
     if big:
         stage(f"{stem}: {structure.n_tendons:,} members; summary and linearization")
     summary, cell, lin = summarize(target, P=P, EA=EA, c=c)
-    text = summary.text() + no_modes
-    modes = None
-    if lin is not None and args.modes > 0:
-        if big:
-            stage(f"{stem}: the {args.modes} slowest relaxation modes")
-        try:
-            modes = relaxation_modes(lin, args.modes, tol=MODES_TOL)
-            text += "slowest modes  " + modes.rates_text() + " 1/s"
-            if modes.residuals is not None:
-                # a single-vector Lanczos run finds the members of a cluster narrower than the tolerance late: on
-                # the 10^4-node block tol 5e-4 gives 1.66, 1.66, 1.74 and tol 1e-6 (109 steps) three at 1.6619
-                text += (f" (Lanczos from the load; each within {modes.residuals.max():.1g} (relative) of a rate of the "
-                         "model, by its Ritz residual; more rates of a tight cluster may lie below the last)")
-            text += "\n"
-        except RuntimeError as err:  # an eigensolver that did not converge: still draw the structure
-            text += f"slowest modes  not computed: {err}\n"
+    modes, modes_text = _slowest_modes(args, lin, stem, big)
+    text = summary.text() + no_modes + modes_text
     if big:
         stage(f"{stem}: drawing")
     written = [f"{stem}_summary.txt", f"{stem}_structure.png"] + ([f"{stem}_modes.png"] if modes is not None else [])
@@ -192,6 +152,65 @@ def run(args) -> int:
     where = f" and {args.save}" if args.save else ""
     print(f"tenscell: wrote {', '.join(written)} in {out.target}/{where}", file=sys.stderr)
     return 0
+
+
+def _fitted_tendons(args, model, P):
+    """``(cell, EA, c, note)`` of a fitted model at model prestress ``P`` (N): its Voigt tendons at rest, or for
+    tendons with internal dynamics unit dashpots and no modes (``args.modes`` set to 0, ``note`` says why)."""
+    import numpy as np
+
+    if not model.structural:
+        raise ValueError(f"--from-fit {args.from_fit}: {model.describe()} has no structure to show: it is a "
+                         "structure-free formula")
+    EA, c = model.voigt_tendons(P)  # a law with internal dynamics: its tangents at rest
+    if (c > 0).all():
+        return model.cell, EA, c, ""
+    # tendons with internal dynamics (a springpot's continuous spectrum) have no dashpot of their own: the
+    # summary's verdict (rank, self-stress, stability) depends on K0 only, and no modes are computed from a
+    # damping that is not the model's
+    args.modes = 0
+    return model.cell, EA, np.ones_like(EA), (f"slowest modes  not computed: {model.describe()} has tendons with "
+                                              "internal dynamics, not a dashpot per tendon\n")
+
+
+def _target_structure(args, obj):
+    """``(what to summarize, its Structure)``: a cell as it is; a file's structure equilibrated at its own
+    self-stress when it states one."""
+    from ..model.equilibrium import NotPrestressableError, equilibrate
+
+    if not isinstance(obj, tuple):
+        return obj, obj.structure
+    structure, T0 = obj  # a file: use its self-stress when it has one
+    if T0 is None:
+        return structure, structure
+    try:
+        return equilibrate(structure, "local", T0=T0), structure
+    except NotPrestressableError as err:
+        # the file states a self-stress: searching for another one would answer a different question
+        raise ValueError(f"{args.target}: {str(err).replace('the given T0', 'its T0')}; correct it or omit "
+                         "T0 to let tenscell find a self-stress") from None
+
+
+def _slowest_modes(args, lin, stem: str, big: bool):
+    """``(modes or None, the summary's lines on them)``: the ``args.modes`` slowest relaxation modes of ``lin``."""
+    from .._progress import stage
+    from ..summary import relaxation_modes
+
+    if lin is None or args.modes <= 0:
+        return None, ""
+    if big:
+        stage(f"{stem}: the {args.modes} slowest relaxation modes")
+    try:
+        modes = relaxation_modes(lin, args.modes, tol=MODES_TOL)
+    except RuntimeError as err:  # an eigensolver that did not converge: still draw the structure
+        return None, f"slowest modes  not computed: {err}\n"
+    text = "slowest modes  " + modes.rates_text() + " 1/s"
+    if modes.residuals is not None:
+        # a single-vector Lanczos run finds the members of a cluster narrower than the tolerance late: on
+        # the 10^4-node block tol 5e-4 gives 1.66, 1.66, 1.74 and tol 1e-6 (109 steps) three at 1.6619
+        text += (f" (Lanczos from the load; each within {modes.residuals.max():.1g} (relative) of a rate of the "
+                 "model, by its Ritz residual; more rates of a tight cluster may lie below the last)")
+    return modes, text + "\n"
 
 
 def _relative_to(path: Path, directory: Path):

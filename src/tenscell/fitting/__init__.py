@@ -20,6 +20,8 @@ In the manner of lmfit, every fit has the same layers:
 - :mod:`~tenscell.fitting.shares`: what the structure carries, the geometric prestress stiffness's share of dG′/dP
   and dG″/dP against the law's tension terms (:func:`structure_shares`; with ± and the fitted prestress against the
   measured one, :func:`structure_summary`);
+- :mod:`~tenscell.fitting.anchor`: the prestress anchor, the model's physical prestress σ held to the measured one
+  within a factor (:class:`Anchor`; σ/measured of any fit, :func:`prestress_ratio`);
 - :mod:`~tenscell.fitting.profile`: profile-likelihood intervals of the parameters the local analysis cannot bound
   (:func:`profile_intervals`, :meth:`FitResult.compute_profile`).
 
@@ -39,6 +41,7 @@ from .records import DatasetFit, FitAlternative, FitCurve, FitParameter, data_ax
 from .curves import frequency_slopes, model_curve, prestress_slopes
 from .result import FitResult
 from .shares import PrestressScale, StructureShares, StructureSummary, structure_shares, structure_summary
+from .anchor import Anchor, prestress_ratio
 from .profile import ParameterProfile, ProfileInterval, ProfileSet, profile_intervals, profile_parameter
 
 #: one result type for every model: a mechanism's fit is a FitResult (the name of tenscell 0.2)
@@ -91,9 +94,15 @@ __all__ = [
     "StructureSummary",
     "structure_summary",
     "PrestressScale",
+    "Anchor",
+    "prestress_ratio",
     "ProfileSet",
     "ParameterProfile",
     "ProfileInterval",
     "profile_intervals",
     "profile_parameter",
 ]
+
+from .._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

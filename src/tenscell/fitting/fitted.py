@@ -26,6 +26,7 @@ import numpy as np
 from .._checks import positive_scalar
 from .._results import format_repr
 from ..linear.linearize import LinearModel
+from .fit_labels import check_cell_parameters, check_document_labels, check_model_labels
 from .models.base import FITTED_KINDS, FitFileError, FittedModel, cell_from_dict, cell_to_dict
 from .models.formulas import FORMULA_FORMAT, FittedFormula
 from .models.mechanism import MECHANISM_FORMAT, FittedMechanism
@@ -48,12 +49,15 @@ def fitted_from_dict(obj: dict) -> FittedModel:
     if kind is None:
         raise FitFileError(f"model.format: {obj.get('format')!r} is not a tenscell fitted model (expected one of "
                            f"{', '.join(FITTED_KINDS)})")
+    check_model_labels(obj)
     try:
-        return kind.from_dict(obj)
+        fitted = kind.from_dict(obj)
     except FitFileError:
         raise
     except (KeyError, TypeError, ValueError, AttributeError) as err:
         raise FitFileError(f"model: the fitted model cannot be rebuilt: {err}") from None
+    check_cell_parameters(obj.get("cell_parameters"), obj.get("structure"))
+    return fitted
 
 
 def load_fit(path) -> FittedModel:
@@ -82,9 +86,19 @@ def load_fit(path) -> FittedModel:
         raise FitFileError(f"--from-fit {path}: no fitted model in the file (a fit.json written by `tenscell fit` "
                            "has a \"model\" entry)")
     try:
-        return fitted_from_dict(obj["model"])
+        fitted = fitted_from_dict(obj["model"])
+        check_document_labels(obj, _model_name(obj["model"]))
     except FitFileError as err:
         raise FitFileError(f"--from-fit {path}: {err}") from None
+    return fitted
+
+
+def _model_name(model: dict) -> str | None:
+    """The name of the mechanism or formula a fit.json's model holds (None for a fitted Voigt cell)."""
+    for kind in ("mechanism", "formula"):
+        if isinstance(model.get(kind), dict):
+            return model[kind].get("name")
+    return None
 
 
 # ---------------------------------------------------------------------------------------

@@ -383,3 +383,7 @@ def jitter(problem: Problem, theta, rng: np.random.Generator) -> np.ndarray:
     lo, hi = problem.bounds
     step = np.minimum(0.5 * LN10, 0.25 * (hi - lo))
     return np.clip(np.asarray(theta) + rng.normal(0.0, 1.0, theta.size) * step, lo, hi)
+
+from .._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

@@ -40,7 +40,7 @@ from .identifiability import simple_exponent
 from .records import information_criteria
 
 __all__ = ["ProfileInterval", "ParameterProfile", "ProfileSet", "profile_intervals", "profile_parameter",
-           "needs_profile", "LEVELS", "DEFAULT_POINTS", "MAX_FREE", "UNDETERMINED_LN"]
+           "needs_profile", "profile_plan", "LEVELS", "DEFAULT_POINTS", "MAX_FREE", "UNDETERMINED_LN"]
 
 #: (confidence level, rise of −2 ln L): χ² with one degree of freedom at 68.27 % and 95 %
 LEVELS = ((0.6827, 1.0), (0.95, 3.841458820694124))
@@ -718,6 +718,27 @@ def _shares_along(problem, free, phis) -> np.ndarray | None:
     return out
 
 
+def profile_plan(result, parameters="auto", *, max_free: int = MAX_FREE) -> tuple[list, str]:
+    """What :func:`profile_intervals` will profile: ``([(name, reason), ...], "")``, or ``([], why not)`` (options as
+    there). The command line estimates a profile's cost from it before it starts."""
+    pr = result.problem
+    needed = needs_profile(result) if not getattr(pr, "sparse_jacobian", False) else ()
+    why = _not_supported(pr)
+    if why:
+        return [], f"not computed: {why}"
+    if result.identifiability().sigma is None:
+        return [], "not computed: as many seen parameter combinations as residuals, so −2 ln L cannot be estimated"
+    if isinstance(parameters, str):
+        if parameters not in ("auto", "needed"):
+            raise ValueError(f"parameters must be 'auto', 'needed' or a list of names, got {parameters!r}")
+        if parameters == "auto" and pr.n_free > max_free:
+            return [], (f"not computed: {pr.n_free} free parameters, more than {max_free} (each profile point refits "
+                        "all the others); name the parameters to profile them")
+        return list(needed), ""
+    reasons = dict(needed)
+    return [(n, reasons.get(n, "asked for")) for n in parameters], ""
+
+
 def profile_intervals(result, parameters="auto", *, points: int = DEFAULT_POINTS, refine: int = DEFAULT_REFINE,
                       max_free: int = MAX_FREE, hops: int = REFIT_HOPS, max_nfev: int = REFIT_NFEV,
                       progress: bool | None = None, notify=None) -> ProfileSet:
@@ -743,29 +764,14 @@ def profile_intervals(result, parameters="auto", *, points: int = DEFAULT_POINTS
     """
     pr = result.problem
     needed = needs_profile(result) if not getattr(pr, "sparse_jacobian", False) else ()
-    sigma_known = result.sigma_known
-    empty = dict(needed=needed, sigma_known=sigma_known, n_residuals=pr.n_residuals)
-    why = _not_supported(pr)
-    if why:
-        return ProfileSet(profiles=(), not_run=f"not computed: {why}", **empty)
-    if result.identifiability().sigma is None:
-        return ProfileSet(profiles=(), not_run="not computed: as many seen parameter combinations as residuals, so "
-                                               "−2 ln L cannot be estimated", **empty)
-    if isinstance(parameters, str):
-        if parameters not in ("auto", "needed"):
-            raise ValueError(f"parameters must be 'auto', 'needed' or a list of names, got {parameters!r}")
-        if parameters == "auto" and pr.n_free > max_free:
-            return ProfileSet(profiles=(), not_run=f"not computed: {pr.n_free} free parameters, more than {max_free} "
-                                                   "(each profile point refits all the others); name the parameters "
-                                                   "to profile them", **empty)
-        todo = list(needed)
-    else:
-        reasons = dict(needed)
-        todo = [(n, reasons.get(n, "asked for")) for n in parameters]
+    empty = dict(needed=needed, sigma_known=result.sigma_known, n_residuals=pr.n_residuals)
+    todo, not_run = profile_plan(result, parameters, max_free=max_free)
+    if not_run:
+        return ProfileSet(profiles=(), not_run=not_run, **empty)
     out = []
-    for name, reason in todo:
+    for k, (name, reason) in enumerate(todo, start=1):
         if notify is not None:
-            notify(f"profile of {name}: {reason}; {points} values and up to {4 * refine} refinements")
+            notify(f"profile {k} of {len(todo)}, {name}: {reason}; {points} values and up to {4 * refine} refinements")
         out.append(profile_parameter(result, name, points=points, refine=refine, reason=reason, hops=hops,
                                      max_nfev=max_nfev, progress=progress))
     return ProfileSet(profiles=tuple(out), not_run="" if out else "nothing to profile: every parameter is bounded by "

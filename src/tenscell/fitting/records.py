@@ -14,7 +14,8 @@ if TYPE_CHECKING:
     from ..io.creep_data import CreepData
 
 __all__ = ["FitParameter", "FitAlternative", "FitCurve", "DatasetFit", "CreepFit", "data_axis", "noise_rms",
-           "inside_noise", "accepted", "verdict_text", "noise_note", "error_fields", "information_criteria"]
+           "inside_noise", "accepted", "verdict_text", "noise_note", "error_fields", "information_criteria",
+           "lmfit_criteria", "CRITERIA_CONVENTION", "STATUSES"]
 
 
 def noise_rms(datasets) -> list[float | None]:
@@ -48,11 +49,28 @@ def accepted(rms_per_set, noise, tolerance: float) -> bool:
     return all(r <= tolerance or inside_noise(r, n) for r, n in zip(rms_per_set, noise))
 
 
-def verdict_text(converged: bool, tolerance_met: bool) -> str:
-    """``"converged"``, ``"inside the data's noise (tolerance not met)"`` or ``"NOT converged"``."""
+#: what a fit's ``status`` says (:attr:`tenscell.fitting.FitResult.status`), and what each means
+STATUSES = {
+    "tolerance met": "every data set's RMS is within the tolerance, or within its stated noise where that is larger "
+                     "(converged)",
+    "optimum, tolerance not met": "the search stopped at an optimum it could not improve (its starts agree, the best "
+                                  "RMS is on a plateau, or every start spent its patience of moves without a 5 % "
+                                  "gain): the model does not fit these data to the tolerance (where lmfit, stopping "
+                                  "at an optimum, reports success)",
+    "stopped by budget": "the search used its budget (every start ran its hops while still improving) before it met "
+                         "the tolerance or found an optimum it could not improve: a longer search (--hops, --starts) "
+                         "may fit better",
+}
+
+
+def verdict_text(converged: bool, tolerance_met: bool, status: str = "") -> str:
+    """``"converged"``, ``"inside the data's noise (tolerance not met)"``, ``"tolerance not met at an optimum"`` or
+    ``"NOT converged: stopped by its budget"`` (``status``: one of :data:`STATUSES`)."""
     if tolerance_met:
         return "converged"
-    return "inside the data's noise (tolerance not met)" if converged else "NOT converged"
+    if converged:
+        return "inside the data's noise (tolerance not met)"
+    return "NOT converged: stopped by its budget" if status == "stopped by budget" else "tolerance not met at an optimum"
 
 
 def noise_note(rms_per_set, noise, tolerance: float) -> str:
@@ -333,8 +351,31 @@ class CreepFit:
 # ---------------------------------------------------------------------------------
 
 
+#: how tenscell's AIC and BIC count, in words (reports, the HTML view, fit.json's ``information_criteria``)
+CRITERIA_CONVENTION = (
+    "AIC = −2 ln L + 2k and BIC = −2 ln L + k ln n of Gaussian residuals in log10 G (or log10 J), n residuals, with "
+    "the full log-likelihood: with the data's standard deviations, −2 ln L = χ² + Σ ln(2π s²) and k counts the "
+    "model's parameters; without them the noise σ is estimated from the residuals, −2 ln L = n ln(2π RSS/n) + n, "
+    "and σ is counted as one more parameter (k + 1). lmfit reports n ln(χ²/n) + 2k and n ln(χ²/n) + k ln n (χ² the "
+    "sum of squared weighted residuals, σ not counted): without standard deviations tenscell's values are lmfit's "
+    "plus n(1 + ln 2π) + 2 (AIC) and n(1 + ln 2π) + ln n (BIC), the same for every model fitted to the same data, so "
+    "differences between models agree; with standard deviations the two can rank models differently.")
+
+
+def lmfit_criteria(weighted_residuals, k: int) -> tuple[float, float]:
+    """``(AIC, BIC)`` as lmfit reports them (``MinimizerResult.aic``, ``.bic``): ``n ln(χ²/n) + 2k`` and
+    ``n ln(χ²/n) + k ln n``, χ² the sum of the squared weighted residuals, ``k`` the varied parameters (σ is not
+    one). Beside tenscell's own (:func:`information_criteria`, :data:`CRITERIA_CONVENTION`)."""
+    r = np.asarray(weighted_residuals, dtype=float)
+    n = r.size
+    chi2 = max(float(r @ r), 1e-250 * n)  # lmfit's floor: a perfect fit gives a finite value
+    m2 = n * math.log(chi2 / n)
+    return m2 + 2 * int(k), m2 + math.log(n) * int(k)
+
+
 def information_criteria(weighted_residuals, k: int, *, sigma_known: bool, weights=None) -> tuple[float, float, float]:
-    """``(AIC, BIC, −2 ln L)`` of Gaussian residuals in log10 G (see the module docstring for the convention).
+    """``(AIC, BIC, −2 ln L)`` of Gaussian residuals in log10 G (the convention: :data:`CRITERIA_CONVENTION`;
+    lmfit's: :func:`lmfit_criteria`).
 
     Parameters
     ----------

@@ -22,8 +22,8 @@ import numpy as np
 from .._results import CORRELATION_THRESHOLD, dataframe, format_repr, reporter
 from ..io.data import RheologyData
 from .problem import Problem
-from .records import (CreepFit, DatasetFit, data_axis, error_fields, information_criteria, noise_rms,
-                      verdict_text)
+from .records import (CRITERIA_CONVENTION, STATUSES, CreepFit, DatasetFit, data_axis, error_fields,
+                      information_criteria, lmfit_criteria, noise_rms, verdict_text)
 
 __all__ = ["FitResult", "FIT_NULL_MEANS", "report_quantities", "AS_WELL"]
 
@@ -169,9 +169,22 @@ class FitResult:
         return bool(max(self.dataset_rms) <= self.tolerance)
 
     @property
+    def status(self) -> str:
+        """How the fit ended, one of three (:data:`~tenscell.fitting.records.STATUSES`): ``"tolerance met"``
+        (:attr:`converged`), ``"optimum, tolerance not met"`` (the search stopped at an optimum it could not improve:
+        the model does not fit the data to the tolerance) or ``"stopped by budget"`` (it ran out of hops before
+        either). The command line's exit status is 0 for the first and 1 for the other two."""
+        from .search import stopped_by_budget
+
+        if self.converged:
+            return "tolerance met"
+        return "stopped by budget" if stopped_by_budget(self.stop_reason) else "optimum, tolerance not met"
+
+    @property
     def verdict(self) -> str:
-        """``"converged"``, ``"inside the data's noise (tolerance not met)"`` or ``"NOT converged"``."""
-        return verdict_text(self.converged, self.tolerance_met)
+        """``"converged"``, ``"inside the data's noise (tolerance not met)"``, ``"tolerance not met at an optimum"``
+        or ``"NOT converged: stopped by its budget"`` (:func:`~tenscell.fitting.records.verdict_text`)."""
+        return verdict_text(self.converged, self.tolerance_met, self.status)
 
     @cached_property
     def time_to_tolerance_s(self) -> float | None:
@@ -421,10 +434,16 @@ class FitResult:
         return self.identifiability().strong_correlations(threshold)
 
     def information_criteria(self) -> tuple[float, float]:
-        """(AIC, BIC) of the log10 residuals; ``k`` counts the model's parameters (free, less an exact gauge)."""
+        """(AIC, BIC) of the log10 residuals; ``k`` counts the model's parameters (free, less an exact gauge), and the
+        noise σ when it is estimated (:data:`~tenscell.fitting.records.CRITERIA_CONVENTION`)."""
         aic, bic, _ = information_criteria(self.problem.residuals(self.theta), self.problem.n_model_parameters,
                                            sigma_known=self.sigma_known, weights=self.problem.weights)
         return aic, bic
+
+    def information_criteria_lmfit(self) -> tuple[float, float]:
+        """(AIC, BIC) of the same residuals as lmfit reports them: ``n ln(χ²/n) + 2k``, ``n ln(χ²/n) + k ln n``
+        (:func:`~tenscell.fitting.records.lmfit_criteria`; σ not counted)."""
+        return lmfit_criteria(self.problem.residuals(self.theta), self.problem.n_model_parameters)
 
     def alternative_spread(self) -> dict:
         """Per free parameter, the spread ``log10(max/min)`` (decades) over the best fit and the alternatives."""
@@ -535,6 +554,8 @@ class FitResult:
             "n_residuals": self.problem.n_residuals,
             "AIC": aic,
             "BIC": bic,
+            "information_criteria": _criteria_entry(self),
+            "status": self.status,
             "parameters": [{**p.to_dict(), "stderr": e, "stderr_percent": None if e is None or not p.value
                             else 100.0 * e / abs(p.value), "stderr_note": note}
                            for p, (e, note) in zip(self.parameters, self.standard_errors)],
@@ -569,6 +590,17 @@ def report_quantities(result: FitResult) -> dict:
     return result.problem.report_quantities(result)
 
 
+def _criteria_entry(result) -> dict:
+    """fit.json's ``information_criteria``: tenscell's AIC/BIC, lmfit's beside them, the convention, what the status
+    means."""
+    aic, bic = result.information_criteria()
+    aic_l, bic_l = result.information_criteria_lmfit()
+    return {"AIC": aic, "BIC": bic, "k": result.problem.n_model_parameters + (0 if result.sigma_known else 1),
+            "n": result.problem.n_residuals, "sigma_counted": not result.sigma_known,
+            "lmfit": {"AIC": aic_l, "BIC": bic_l, "k": result.problem.n_model_parameters},
+            "convention": CRITERIA_CONVENTION, "status_means": STATUSES[result.status]}
+
+
 def _provenance(d) -> dict:
     """What was read for data set ``d``: its source and, where the reader recorded it, the step, temperature and
     unit conversions (:attr:`tenscell.io.data.RheologyData.provenance`)."""
@@ -582,3 +614,7 @@ def _rms(r) -> float | None:
 
 def _short(source: str) -> str:
     return source.replace("\\", "/").rsplit("/", 1)[-1]
+
+from .._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

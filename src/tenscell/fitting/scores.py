@@ -267,7 +267,9 @@ def compare_models(result, *, homogeneous=None, structural=True, baselines=(), h
     fits += [(None, b) for b in baselines]
     rows = tuple(score(r, held_out=held_out, name=n) for n, r in fits)
     convention = CONVENTION[sigma_known] + ("; AIC = −2 ln L + 2k, BIC = −2 ln L + k ln n; tensegrity parameters "
-                                            "exclude the exact strut-length gauge")
+                                            "exclude the exact strut-length gauge; lmfit's n ln(χ²/n) + 2k (σ not "
+                                            "counted) differs " + ("by a constant, so ΔAIC and ΔBIC are the same"
+                                                                   if not sigma_known else "in form"))
     return ModelComparison(scores=rows, n_residuals=int(result.problem.weights.size), sigma_known=sigma_known,
                            holdout=None if holdout is None else (float(holdout[0]), float(holdout[1])),
                            n_holdout=0 if held_out is None else held_out.n, convention=convention,

@@ -76,8 +76,8 @@ from .._progress import progress_bar
 from .._threads import limited
 from .problem import Problem
 
-__all__ = ["run_search", "best_chain", "merged_history", "count", "local_fit", "AGREE_RMS", "AGREE_LOG",
-           "PLATEAU_GAIN"]
+__all__ = ["run_search", "best_chain", "merged_history", "count", "local_fit", "stopped_by_budget", "BUDGET",
+           "AGREE_RMS", "AGREE_LOG", "PLATEAU_GAIN"]
 
 #: two starts hold the same optimum when their RMS agree within this fraction and every free log-parameter within
 #: :data:`AGREE_LOG` (the stopping rule of the module docstring)
@@ -260,7 +260,7 @@ def _rounds(problem, chains, settings, jobs, polish_effort, bar):
         while True:
             active = [k for k, ch in enumerate(chains) if not ch.finished]
             if not active:
-                return "every start finished"
+                return _finished(chains, settings)
             cap = settings.max_nfev if budget is None else max(1, min(settings.max_nfev, budget // len(active)))
             # in start order; reading stops at a stopping rule (Workers.imap: in this process, later steps
             # never run; on workers, their results are dropped), so the result depends on the seed alone
@@ -276,6 +276,25 @@ def _rounds(problem, chains, settings, jobs, polish_effort, bar):
             bar.update(1)
             best = best_chain(chains)
             bar.set_postfix(rms=f"{min(best.met_score, best.score):.4g}")
+
+
+#: the stop reason's mark of a search that ran out of budget (:func:`stopped_by_budget`)
+BUDGET = "the budget"
+
+
+def _finished(chains, settings: _Settings) -> str:
+    """The stop reason when every start has finished: by its patience (an optimum it could not improve) or by its
+    hops while still improving (the budget, :data:`BUDGET`)."""
+    by_hops = sum(ch.hops >= settings.hops and ch.stale < settings.patience and ch.met_ratio > settings.polish
+                  for ch in chains)
+    if by_hops:
+        return f"every start finished, {by_hops} of {len(chains)} by running all their hops ({BUDGET})"
+    return "every start finished: each made its patience of moves without a 5 % gain"
+
+
+def stopped_by_budget(stop_reason: str) -> bool:
+    """Whether a search with this stop reason ran out of its budget rather than stopping at an optimum."""
+    return BUDGET in stop_reason
 
 
 def _answer_rule(chains, settings: _Settings, best_rms: list) -> str:
@@ -396,3 +415,7 @@ def _chains(problem: Problem, starts: int, seed, initial) -> list[_Chain]:
     chains = [_Chain(start=k, rng=rngs[k]) for k in range(starts)]
     chains[0].initial = _warm_start(problem, initial)
     return chains
+
+from .._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

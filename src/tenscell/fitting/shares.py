@@ -44,12 +44,15 @@ from .._checks import positive_array, positive_scalar
 from .._results import format_repr
 from .. import laws as _laws
 from ..linear.assembly import modulus
+from ..model.prestress import PRESTRESS_CONVENTION
+from .anchor import Anchor, anchor_of, sigma_per_model_prestress
 
 if TYPE_CHECKING:
     from .derived import DerivedQuantities
 
 __all__ = ["StructureShares", "structure_shares", "prestress_parts", "StructureSummary", "structure_summary",
-           "PrestressScale", "prestress_scale", "share_quantities", "ANCHORED_L", "PASSENGER_SHARE", "CARRIES_SHARE"]
+           "PrestressScale", "prestress_scale", "share_quantities", "GAUGE_WINDOW_L", "GAUGE_WINDOW_S",
+           "PASSENGER_SHARE", "CARRIES_SHARE"]
 
 #: prestresses (odd: Simpson's rule) on which the parts are integrated over the range
 DEFAULT_POINTS = 17
@@ -318,12 +321,27 @@ def structure_shares(model, theta=None, *, prestress_pa=None, frequency_hz=None,
 
 
 # ---- what a fit report shows: the shares with their standard errors, the prestress against the measured one ----
-#: the strut lengths (m, on the paper's convention: the model prestress in N equal to the measured prestress in Pa)
-#: the anchored gauge accepts: s ∈ [0.01, 100] m² on a cell of strut length 1 m
-ANCHORED_L = (0.1, 10.0)
-#: the same range as the prestress scale s = (L_cell/L)² (m², L_cell = 1 m): what `tenscell fit --anchored`, the
-#: mechanisms study's anchored refits and the reports use
-ANCHORED_S = (1.0 / ANCHORED_L[1] ** 2, 1.0 / ANCHORED_L[0] ** 2)
+#: the gauge window: strut lengths (m, on the paper's convention: the model prestress in N equal to the measured
+#: prestress in Pa) of 0.1–10, i.e. s ∈ [0.01, 100] m² on a cell of strut length 1 m. A window on the gauge, not an
+#: anchor: it spans 10⁴ in P/L² and never binds on the bundled data; the physical anchor is
+#: :class:`tenscell.fitting.anchor.Anchor` (σ held to the measured prestress)
+GAUGE_WINDOW_L = (0.1, 10.0)
+#: the same window as the prestress scale s = (L_cell/L)² (m², L_cell = 1 m): `tenscell fit --gauge-window`
+GAUGE_WINDOW_S = (1.0 / GAUGE_WINDOW_L[1] ** 2, 1.0 / GAUGE_WINDOW_L[0] ** 2)
+#: names of tenscell 0.x kept for one release: {old name: new name}
+_RENAMED = {"ANCHORED_L": "GAUGE_WINDOW_L", "ANCHORED_S": "GAUGE_WINDOW_S"}
+
+
+def __getattr__(name: str):
+    if name in _RENAMED:
+        import warnings
+
+        new = _RENAMED[name]
+        warnings.warn(f"tenscell.fitting.shares.{name} is deprecated: it is the gauge window, "
+                      f"tenscell.fitting.shares.{new}; the prestress anchor is tenscell.fitting.anchor.Anchor",
+                      DeprecationWarning, stacklevel=2)
+        return globals()[new]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 #: a geometric share of ΔG' below this: the structure is a passenger (the tendon law's tension terms do the work)
 PASSENGER_SHARE = 0.1
 #: ... at or above this: the structure carries the prestress dependence (goal G1 of issue 26)
@@ -353,7 +371,12 @@ class PrestressScale:
     With a prestress scale ``s`` the model prestress on the fit's cell (strut length ``L_cell``) is ``P = s·p`` (N)
     for a measured prestress p (Pa). Moved along the exact gauge ``(P, EA, c, L) → (λ²P, λ²EA, λc, λL)`` to the
     cell whose prestress in N equals the measured one in Pa (the paper's convention), the strut length is
-    ``L = L_cell/√s`` (s in m²); the anchored gauge asks for L in :data:`ANCHORED_L`.
+    ``L = L_cell/√s`` (s in m²); the gauge window is L in :data:`GAUGE_WINDOW_L`.
+
+    The physical comparison is σ/measured (:attr:`sigma_ratio`): the model's prestress as a stress
+    (:mod:`tenscell.model.prestress`, the mean normal stress of the tendons' virial stress) over the measured one,
+    ``σ_P·s`` with ``σ_P`` the stress per unit P of the fit's cell; an anchored fit (:mod:`tenscell.fitting.anchor`)
+    holds it within a factor (``anchor``).
 
     Attributes
     ----------
@@ -376,6 +399,10 @@ class PrestressScale:
         ``(lower, upper)`` of s at 95 % from its profile likelihood (None: no profile; an end None: open).
     s_at_bound : str or None
         ``"lower"`` or ``"upper"`` when s sits at a bound of the fit (then L_paper is a limit, not an estimate).
+    sigma_per_P : float or None
+        σ per unit model prestress (Pa/N) on the fit's cell (strut length ``L_cell``).
+    anchor : Anchor or None
+        The anchor the fit was made under (read from its bounds of s), None for a free fit.
     """
 
     s: float | None
@@ -387,6 +414,14 @@ class PrestressScale:
     P_N: float | None = None
     profile_s: tuple | None = None
     s_at_bound: str | None = None
+    sigma_per_P: float | None = None
+    anchor: Anchor | None = None
+
+    @property
+    def sigma_ratio(self) -> float | None:
+        """σ/measured: the model's physical prestress over the measured one (the same at every stated prestress:
+        one scale s links them); None without a scale."""
+        return None if self.s is None or self.sigma_per_P is None else self.sigma_per_P * self.s
 
     @property
     def L_paper(self) -> float | None:
@@ -405,10 +440,20 @@ class PrestressScale:
         return None if self.s is None else self.s / self.L_cell**2
 
     @property
-    def anchored(self) -> bool | None:
-        """L_paper within :data:`ANCHORED_L` (None without a scale)."""
+    def in_gauge_window(self) -> bool | None:
+        """L_paper within :data:`GAUGE_WINDOW_L` (None without a scale)."""
         L = self.L_paper
-        return None if L is None else bool(ANCHORED_L[0] <= L <= ANCHORED_L[1])
+        return None if L is None else bool(GAUGE_WINDOW_L[0] <= L <= GAUGE_WINDOW_L[1])
+
+    @property
+    def anchored(self) -> bool | None:
+        """Deprecated: :attr:`in_gauge_window` (the window is not an anchor; see :attr:`anchor`)."""
+        import warnings
+
+        warnings.warn("tenscell.fitting.shares.PrestressScale.anchored is deprecated: it is "
+                      "PrestressScale.in_gauge_window; the prestress anchor is PrestressScale.anchor",
+                      DeprecationWarning, stacklevel=2)
+        return self.in_gauge_window
 
     @property
     def profile_L(self) -> tuple | None:
@@ -422,8 +467,11 @@ class PrestressScale:
         """JSON-ready dict."""
         return {"s_m2": self.s, "s_stderr_ln": self.s_error_ln, "s_note": self.s_note, "L_cell_m": self.L_cell,
                 "model_over_measured": self.ratio, "L_paper_convention_m": self.L_paper,
-                "L_paper_convention_stderr_ln": self.L_paper_error_ln, "anchored_range_m": list(ANCHORED_L),
-                "anchored": self.anchored, "measured_prestress_Pa": list(self.measured_pa),
+                "L_paper_convention_stderr_ln": self.L_paper_error_ln, "gauge_window_m": list(GAUGE_WINDOW_L),
+                "in_gauge_window": self.in_gauge_window, "sigma_per_P_Pa_per_N": self.sigma_per_P,
+                "sigma_over_measured": self.sigma_ratio, "prestress_convention": PRESTRESS_CONVENTION,
+                "anchor": None if self.anchor is None else self.anchor.to_dict(),
+                "measured_prestress_Pa": list(self.measured_pa),
                 "fitted_prestress_Pa": [{"dataset": k, "value": v, "stderr": e} for k, v, e in self.fitted_pa],
                 "fitted_model_prestress_N": self.P_N,
                 "s_at_bound": self.s_at_bound,
@@ -455,7 +503,16 @@ def prestress_scale(result) -> PrestressScale | None:
         except KeyError:
             span = None
     return PrestressScale(s=named["s"].value, s_error_ln=rel, s_note=note, L_cell=L_cell, measured_pa=measured,
-                          fitted_pa=fitted, profile_s=span, s_at_bound=named["s"].at_bound)
+                          fitted_pa=fitted, profile_s=span, s_at_bound=named["s"].at_bound,
+                          sigma_per_P=_sigma_per_P(result), anchor=anchor_of(result))
+
+
+def _sigma_per_P(result) -> float | None:
+    """σ per unit P of the fit's cell (Pa/N); None where the cell's nodes span no volume (a planar structure)."""
+    try:
+        return sigma_per_model_prestress(result)
+    except ValueError:
+        return None
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -527,10 +584,13 @@ class StructureSummary:
         sc = self.scale
         if sc.s is None or sc.ratio is None or sc.L_paper is None:
             return ""
-        where = "inside" if sc.anchored else "outside"
-        return (f"The fitted prestress (P/L_cell²) is {100 * sc.ratio:.3g} % of the measured one (s = {sc.s:.3g} m²); in the "
-                f"paper's convention the cell's strut length is L = {sc.L_paper:.3g} m, {where} the anchored range "
-                f"{ANCHORED_L[0]:g}–{ANCHORED_L[1]:g} m.")
+        where = "inside" if sc.in_gauge_window else "outside"
+        held = "" if sc.anchor is None else f" (the fit held {sc.anchor.words})"
+        sigma = "" if sc.sigma_ratio is None else (f"The model's physical prestress σ (the tendons' virial stress) is "
+                                                   f"{sc.sigma_ratio:.3g} × the measured one{held}. ")
+        return (f"{sigma}The model prestress P/L_cell² is {100 * sc.ratio:.3g} % of the measured one (s = {sc.s:.3g} "
+                f"m²): a strut length L = {sc.L_paper:.3g} m in the paper's convention, {where} the gauge window "
+                f"{GAUGE_WINDOW_L[0]:g}–{GAUGE_WINDOW_L[1]:g} m.")
 
     def verdict(self) -> str:
         """The finding in words: who carries dG'/dP, and whether the prestress is anchored."""

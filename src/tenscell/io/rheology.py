@@ -163,36 +163,8 @@ class RheologyData:
         # object.__setattr__ because the dataclass is frozen; normalising
         # here means every instance, however built, satisfies the invariants.
         object.__setattr__(self, "source", source)
-
-        def as_array(name: str, value, *, optional: bool) -> np.ndarray | None:
-            if value is None:
-                if optional:
-                    return None
-                raise _error(source, f"{name} is required")
-            try:
-                arr = np.array(value, dtype=np.float64)
-            except (TypeError, ValueError) as exc:
-                raise _error(source, f"{name} is not numeric: {exc}") from exc
-            if arr.ndim != 1:
-                raise _error(source, f"{name} must be 1-D, got shape {arr.shape}")
-            if not np.all(np.isfinite(arr)):
-                bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-                raise _error(source, f"{name}[{bad}] = {arr[bad]} is not finite")
-            if np.any(arr <= 0):
-                bad = int(np.flatnonzero(arr <= 0)[0])
-                raise _error(source, f"{name}[{bad}] = {arr[bad]} must be > 0")
-            arr.flags.writeable = False
-            return arr
-
-        arrays = {
-            "frequency_hz": as_array("frequency_hz", self.frequency_hz, optional=False),
-            "G_storage": as_array("G_storage", self.G_storage, optional=False),
-            "G_loss": as_array("G_loss", self.G_loss, optional=False),
-            "prestress": as_array("prestress", self.prestress, optional=True),
-            "G_storage_sd": as_array("G_storage_sd", self.G_storage_sd, optional=True),
-            "G_loss_sd": as_array("G_loss_sd", self.G_loss_sd, optional=True),
-            "counts": as_array("counts", self.counts, optional=True),
-        }
+        arrays = {name: _column(source, name, getattr(self, name), optional=name not in _REQUIRED)
+                  for name in _ARRAY_FIELDS}
         lengths = {k: len(v) for k, v in arrays.items() if v is not None}
         if len(set(lengths.values())) != 1:
             raise _error(source, f"arrays have different lengths: {lengths}")
@@ -202,45 +174,13 @@ class RheologyData:
         check_ranges(source, {col: (a, _COLUMN_QUANTITY[col], "Pa" if col == _PRESTRESS else None)
                               for k, a in arrays.items() if a is not None and k in _FIELD_COLUMN
                               for col in (_FIELD_COLUMN[k],)}, locations)
-        # canonical row order (prestress, then frequency, then the values): the same data set gives
-        # the same object, and the same fit, whatever the order of the rows in its file
-        keys = [a for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
-                if (a := arrays[k]) is not None]
-        order = np.lexsort(keys)
-        if np.any(order != np.arange(order.size)):
-            for name, arr in arrays.items():
-                if arr is not None:
-                    arr = arr[order]
-                    arr.flags.writeable = False
-                    arrays[name] = arr
-            locations = None if locations is None else tuple(locations[i] for i in order)
+        locations = _canonical_order(arrays, locations)
         for name, arr in arrays.items():
             object.__setattr__(self, name, arr)
         object.__setattr__(self, "locations", locations)
         object.__setattr__(self, "provenance", _provenance(self.provenance, source, lengths["frequency_hz"]))
-
-        if isinstance(self.comments, str):
-            raise _error(source, "comments must be a sequence of strings, not a str")
-        comments = tuple(self.comments)
-        for c in comments:
-            if not isinstance(c, str):
-                raise _error(source, f"comment {c!r} is not a str")
-            # A line break would turn the rest of the comment into a data
-            # line when written by write_csv.
-            if "\n" in c or "\r" in c:
-                raise _error(source, f"comment {c!r} contains a line break")
-        object.__setattr__(self, "comments", comments)
-
-        expected_kind = "frequency" if arrays["prestress"] is None else "prestress"
-        if self.kind is None:
-            object.__setattr__(self, "kind", expected_kind)
-        elif self.kind != expected_kind:
-            raise _error(
-                source,
-                f"kind={self.kind!r} is inconsistent with prestress "
-                f"{'absent' if arrays['prestress'] is None else 'present'} "
-                f"(expected {expected_kind!r})",
-            )
+        object.__setattr__(self, "comments", _comments(source, self.comments))
+        object.__setattr__(self, "kind", _kind(source, self.kind, arrays["prestress"]))
 
     @property
     def n(self) -> int:
@@ -361,6 +301,75 @@ class RheologyData:
         measured = plotter("measured")
 
         return measured(self, ax=ax, **kw)
+
+
+#: the array fields of RheologyData, in the order they are checked; the first three are required
+_ARRAY_FIELDS = ("frequency_hz", "G_storage", "G_loss", "prestress", "G_storage_sd", "G_loss_sd", "counts")
+_REQUIRED = _ARRAY_FIELDS[:3]
+
+
+def _column(source: str, name: str, value, *, optional: bool) -> np.ndarray | None:
+    """``value`` as a read-only 1-D array of finite numbers > 0 (None when optional and absent); DataError naming
+    the field and the first bad entry."""
+    if value is None:
+        if optional:
+            return None
+        raise _error(source, f"{name} is required")
+    try:
+        arr = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise _error(source, f"{name} is not numeric: {exc}") from exc
+    if arr.ndim != 1:
+        raise _error(source, f"{name} must be 1-D, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.flatnonzero(~np.isfinite(arr))[0])
+        raise _error(source, f"{name}[{bad}] = {arr[bad]} is not finite")
+    if np.any(arr <= 0):
+        bad = int(np.flatnonzero(arr <= 0)[0])
+        raise _error(source, f"{name}[{bad}] = {arr[bad]} must be > 0")
+    arr.flags.writeable = False
+    return arr
+
+
+def _canonical_order(arrays: dict, locations):
+    """Sort ``arrays`` in place into the canonical row order (prestress, then frequency, then the values) and return
+    ``locations`` in that order: the same data set gives the same object, and the same fit, whatever the order of
+    the rows in its file."""
+    keys = [a for k in ("G_loss_sd", "G_storage_sd", "G_loss", "G_storage", "frequency_hz", "prestress")
+            if (a := arrays[k]) is not None]
+    order = np.lexsort(keys)
+    if not np.any(order != np.arange(order.size)):
+        return locations
+    for name, arr in arrays.items():
+        if arr is not None:
+            arr = arr[order]
+            arr.flags.writeable = False
+            arrays[name] = arr
+    return None if locations is None else tuple(locations[i] for i in order)
+
+
+def _comments(source: str, comments) -> tuple[str, ...]:
+    """The comments as a tuple of one-line strings (DataError otherwise)."""
+    if isinstance(comments, str):
+        raise _error(source, "comments must be a sequence of strings, not a str")
+    comments = tuple(comments)
+    for c in comments:
+        if not isinstance(c, str):
+            raise _error(source, f"comment {c!r} is not a str")
+        # A line break would turn the rest of the comment into a data
+        # line when written by write_csv.
+        if "\n" in c or "\r" in c:
+            raise _error(source, f"comment {c!r} contains a line break")
+    return comments
+
+
+def _kind(source: str, kind: str | None, prestress) -> str:
+    """``"frequency"`` without a prestress column, ``"prestress"`` with one (DataError if ``kind`` says otherwise)."""
+    expected = "frequency" if prestress is None else "prestress"
+    if kind is not None and kind != expected:
+        raise _error(source, f"kind={kind!r} is inconsistent with prestress "
+                             f"{'absent' if prestress is None else 'present'} (expected {expected!r})")
+    return expected
 
 
 def _stated_prestress(data, prestress_pa) -> float:

@@ -649,6 +649,18 @@ class Cell:
         df.attrs["cell"] = self.describe()
         return df
 
+    def _repr_html_(self) -> str:
+        from .._results import reporter
+
+        return reporter("structure_html")(self)  # the repr's lines and the interactive 3D view (reports/html.py)
+
+    def view(self, **kw):
+        """The interactive 3D view (plotly, ``pip install 'tenscell[view]'``):
+        :func:`tenscell.plotting.structure_view`; returns the plotly Figure (``.show()``, ``.write_html(path)``)."""
+        from .._results import plotter
+
+        return plotter("structure_view")(self, **kw)
+
     def plot(self, ax=None, **kw):
         """The cell's structure in 3D (:func:`tenscell.plotting.structure_3d`)."""
         from .._results import plotter

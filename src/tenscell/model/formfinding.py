@@ -270,43 +270,15 @@ def find_form(
         For bad force densities, rest lengths or options.
     """
     s = structure
-    w = _force_density(s, force_density)
-    cable = np.array([f != STRUT for f in s.families], dtype=bool)
-    if not np.any(cable):
-        raise ValueError("form-finding needs at least one cable (a member whose family is not 'strut')")
-    r = _rest_lengths(s, rest_length, cable)
+    w, r, cable, target = _member_springs(s, force_density, rest_length, strut_stiffness)
     if not (isinstance(max_iter, (int, np.integer)) and max_iter >= 1):
         raise ValueError(f"max_iter must be a whole number >= 1, got {max_iter!r}")
     if not (tol > 0):
         raise ValueError(f"tol must be > 0, got {tol!r}")
-    t_idx = np.asarray(s.tendons, dtype=int).reshape(-1, 2)
-    target = np.linalg.norm(s.nodes[t_idx[:, 0]] - s.nodes[t_idx[:, 1]], axis=1)
-    if np.any(~cable):
-        k = float(strut_stiffness) if strut_stiffness is not None else 1e3 * float(np.max(w[cable]))
-        if not (np.isfinite(k) and k > 0):
-            raise ValueError(f"strut_stiffness must be a finite number > 0 (N/m), got {strut_stiffness!r}")
-        w = np.where(cable, w, k)
-        r = np.where(cable, r, target)
     size0 = _size(s.nodes)
     if size0 <= 0:
         raise FormFindingError(f"{s.name}: all nodes coincide; give a rough initial shape")
-    nodes = np.array(s.nodes, dtype=float)
-    it, corrections, mu = 0, 0, 1e-3
-    while True:
-        nodes, it, mu, resid = _minimize(s, nodes, w, r, cable, it, max_iter, tol, mu, size0)
-        if np.all(cable):
-            break
-        l = np.linalg.norm(nodes[t_idx[:, 0]] - nodes[t_idx[:, 1]], axis=1)
-        err = np.max(np.abs(l[~cable] - target[~cable]) / target[~cable])
-        if err < 1e-11:
-            break
-        corrections += 1
-        if corrections > 60:
-            raise FormFindingError(
-                f"{s.name}: no prestressable configuration found: the elastic struts did not return to their "
-                f"lengths (relative error {err:.3g}); try a larger strut_stiffness"
-            )
-        r = r + np.where(cable, 0.0, target - l)
+    nodes, r, it, resid = _relax(s, w, r, cable, target, max_iter, tol, size0)
     found = dataclasses.replace(s, nodes=nodes)
     coords = make_coordinates(found, "local")
     geom = member_geometry(coords, coords.q0)
@@ -336,6 +308,49 @@ def find_form(
         structure=found, cell=cell, force_density=np.where(cable, w, np.nan), tensions=T, iterations=it,
         residual=resid, stable=stable, rigid_body_dof=R.shape[1],
     )
+
+
+def _member_springs(s: Structure, force_density, rest_length, strut_stiffness):
+    """``(w, r, cable, target)``: every member's force density (N/m) and rest length (m) — the cables' as given,
+    the struts' a stiff spring at their initial length —, which members are cables, and every member's initial
+    length (m). ValueError for bad values."""
+    w = _force_density(s, force_density)
+    cable = np.array([f != STRUT for f in s.families], dtype=bool)
+    if not np.any(cable):
+        raise ValueError("form-finding needs at least one cable (a member whose family is not 'strut')")
+    r = _rest_lengths(s, rest_length, cable)
+    t_idx = np.asarray(s.tendons, dtype=int).reshape(-1, 2)
+    target = np.linalg.norm(s.nodes[t_idx[:, 0]] - s.nodes[t_idx[:, 1]], axis=1)
+    if np.any(~cable):
+        k = float(strut_stiffness) if strut_stiffness is not None else 1e3 * float(np.max(w[cable]))
+        if not (np.isfinite(k) and k > 0):
+            raise ValueError(f"strut_stiffness must be a finite number > 0 (N/m), got {strut_stiffness!r}")
+        w = np.where(cable, w, k)
+        r = np.where(cable, r, target)
+    return w, r, cable, target
+
+
+def _relax(s: Structure, w, r, cable, target, max_iter: int, tol: float, size0: float):
+    """Minimize the energy, then move the struts' rest lengths until the elastic struts are back at their lengths:
+    ``(nodes, rest lengths, Newton steps, relative residual)``."""
+    t_idx = np.asarray(s.tendons, dtype=int).reshape(-1, 2)
+    nodes = np.array(s.nodes, dtype=float)
+    it, corrections, mu = 0, 0, 1e-3
+    while True:
+        nodes, it, mu, resid = _minimize(s, nodes, w, r, cable, it, max_iter, tol, mu, size0)
+        if np.all(cable):
+            return nodes, r, it, resid
+        l = np.linalg.norm(nodes[t_idx[:, 0]] - nodes[t_idx[:, 1]], axis=1)
+        err = np.max(np.abs(l[~cable] - target[~cable]) / target[~cable])
+        if err < 1e-11:
+            return nodes, r, it, resid
+        corrections += 1
+        if corrections > 60:
+            raise FormFindingError(
+                f"{s.name}: no prestressable configuration found: the elastic struts did not return to their "
+                f"lengths (relative error {err:.3g}); try a larger strut_stiffness"
+            )
+        r = r + np.where(cable, 0.0, target - l)
 
 
 def _rest_lengths(s: Structure, rest_length, cable) -> np.ndarray:
@@ -389,36 +404,8 @@ def _minimize(s, nodes, w, r, cable, it, max_iter, tol, mu, size0):
             return nodes, it, mu, resid
         if it >= max_iter:
             raise _not_converged(s, max_iter, resid, tol)
-        H = tangent_stiffness(geom, T, w)
-        E0 = _energy(l, w, r)
-        D = np.abs(H.diagonal())
-        D = np.maximum(D, 1e-12 * max(D.max(), 1e-300))
-        while True:
-            it += 1
-            dq = _lm_step(H, D, g, mu)
-            pred = -(g @ dq + 0.5 * dq @ (H @ dq))
-            gn = member_geometry(coords, q + dq)
-            En = _energy(gn.lengths, w, r)
-            if pred <= 1e-13 * E0 and resid < 1e-6:
-                # the energy change is lost in rounding near the minimum: judge the step by the residual
-                ok = _residual(equilibrium_matrix(gn), w * (gn.lengths - r)) < resid
-            else:
-                rho = (E0 - En) / pred
-                ok = rho > 1e-4 and np.isfinite(En)
-                if ok:
-                    mu = mu / 3.0 if rho > 0.75 else (mu * 2.0 if rho < 0.25 else mu)
-            if ok:
-                mu = max(mu, 1e-12)
-                nodes = positions(coords, q + dq)
-                break
-            mu *= 4.0
-            if it >= max_iter:
-                raise _not_converged(s, max_iter, resid, tol)
-            if mu > 1e12:
-                raise FormFindingError(
-                    f"{s.name}: no prestressable configuration found: the energy stopped decreasing "
-                    f"(relative equilibrium residual {resid:.3g} after {it} steps)"
-                )
+        dq, gn, mu, it = _lm_accepted(s, coords, geom, w, r, g, resid, mu, it, max_iter, tol)
+        nodes = positions(coords, q + dq)
         lc = gn.lengths[cable]
         if np.min(lc) < collapse:
             j = int(np.flatnonzero(cable)[int(np.argmin(lc))])
@@ -428,6 +415,39 @@ def _minimize(s, nodes, w, r, cable, it, max_iter, tol, mu, size0):
             )
         if _size(nodes) < 1e-6 * size0:
             raise FormFindingError(f"{s.name}: no prestressable configuration found: the structure collapsed to a point")
+
+
+def _lm_accepted(s, coords, geom, w, r, g, resid: float, mu: float, it: int, max_iter: int, tol: float):
+    """One accepted Levenberg–Marquardt step from ``geom`` (damping ``mu`` raised until the energy decreases):
+    ``(dq, geometry after it, next mu, steps taken)``. FormFindingError when the budget or the damping runs out."""
+    H = tangent_stiffness(geom, w * (geom.lengths - r), w)
+    E0 = _energy(geom.lengths, w, r)
+    D = np.abs(H.diagonal())
+    D = np.maximum(D, 1e-12 * max(D.max(), 1e-300))
+    while True:
+        it += 1
+        dq = _lm_step(H, D, g, mu)
+        pred = -(g @ dq + 0.5 * dq @ (H @ dq))
+        gn = member_geometry(coords, coords.q0 + dq)
+        En = _energy(gn.lengths, w, r)
+        if pred <= 1e-13 * E0 and resid < 1e-6:
+            # the energy change is lost in rounding near the minimum: judge the step by the residual
+            ok = _residual(equilibrium_matrix(gn), w * (gn.lengths - r)) < resid
+        else:
+            rho = (E0 - En) / pred
+            ok = rho > 1e-4 and np.isfinite(En)
+            if ok:
+                mu = mu / 3.0 if rho > 0.75 else (mu * 2.0 if rho < 0.25 else mu)
+        if ok:
+            return dq, gn, max(mu, 1e-12), it
+        mu *= 4.0
+        if it >= max_iter:
+            raise _not_converged(s, max_iter, resid, tol)
+        if mu > 1e12:
+            raise FormFindingError(
+                f"{s.name}: no prestressable configuration found: the energy stopped decreasing "
+                f"(relative equilibrium residual {resid:.3g} after {it} steps)"
+            )
 
 
 def _not_converged(s, max_iter, resid, tol) -> FormFindingError:

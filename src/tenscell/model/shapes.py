@@ -530,3 +530,7 @@ def nucleated_cell(alpha: float = 0.0, delta: float | None = None, L: float = 1.
 def _reference_geometry(structure: Structure, parametrization: str):
     co = make_coordinates(structure, parametrization)
     return co, co.q0, kinematics(co, co.q0)
+
+from .._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

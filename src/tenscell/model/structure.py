@@ -221,6 +221,34 @@ class Point:
             raise StructureError(f"point direction must be a unit 3-vector, got {self.direction!r}")
 
 
+
+def _checked_nodes(nodes) -> np.ndarray:
+    """The node coordinates as a read-only (n, 3) array of finite numbers (StructureError otherwise)."""
+    nodes = np.array(nodes, dtype=float)
+    if nodes.ndim != 2 or nodes.shape[1] != 3 or nodes.shape[0] == 0:
+        raise StructureError(f"nodes must have shape (n, 3), got {nodes.shape}")
+    if not np.all(np.isfinite(nodes)):
+        bad = int(np.argwhere(~np.isfinite(nodes))[0, 0])
+        raise StructureError(f"node {bad} has a non-finite coordinate")
+    nodes.setflags(write=False)
+    return nodes
+
+
+def _check_node(i, what: str, n: int) -> None:
+    if not 0 <= i < n:
+        raise StructureError(_unknown_node(what, i, n))
+
+
+def _check_point(what: str, p, n: int, fixed: set) -> None:
+    """StructureError unless ``p`` (the load or the probe) is a Point on known nodes, not all of them fixed."""
+    if not isinstance(p, Point):
+        raise StructureError(f"{what} must be a Point")
+    for i in p.nodes:
+        _check_node(i, what, n)
+    if all(i in fixed for i in p.nodes):
+        raise StructureError(f"the {what} acts on fixed node(s) {list(p.nodes)}; it must move")
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class Structure:
     """A tensegrity structure in its reference configuration.
@@ -273,13 +301,7 @@ class Structure:
     supports: tuple[tuple[int, str], ...] = field(default=())
 
     def __post_init__(self):
-        nodes = np.array(self.nodes, dtype=float)
-        if nodes.ndim != 2 or nodes.shape[1] != 3 or nodes.shape[0] == 0:
-            raise StructureError(f"nodes must have shape (n, 3), got {nodes.shape}")
-        if not np.all(np.isfinite(nodes)):
-            bad = int(np.argwhere(~np.isfinite(nodes))[0, 0])
-            raise StructureError(f"node {bad} has a non-finite coordinate")
-        nodes.setflags(write=False)
+        nodes = _checked_nodes(self.nodes)
         object.__setattr__(self, "nodes", nodes)
         n = nodes.shape[0]
         S, Tn = _pairs(self.struts), _pairs(self.tendons)
@@ -296,12 +318,8 @@ class Structure:
             raise StructureError(f"{len(self.node_names)} node names for {n} nodes")
         object.__setattr__(self, "node_names", tuple(str(s) for s in self.node_names))
 
-        def check_node(i, what):
-            if not 0 <= i < n:
-                raise StructureError(_unknown_node(what, i, n))
-
         for i in fixed:
-            check_node(i, "fixed list")
+            _check_node(i, "fixed list", n)
         fixed_set = set(fixed)
         _check_struts(nodes, S, fixed)
         if len(families) != len(Tn):
@@ -312,12 +330,7 @@ class Structure:
                 if not 0 <= j < len(Tn):
                     raise StructureError(f"equal-tension group refers to unknown tendon {j}")
         for what, p in (("load", self.load), ("probe", self.probe)):
-            if not isinstance(p, Point):
-                raise StructureError(f"{what} must be a Point")
-            for i in p.nodes:
-                check_node(i, what)
-            if all(i in fixed_set for i in p.nodes):
-                raise StructureError(f"the {what} acts on fixed node(s) {list(p.nodes)}; it must move")
+            _check_point(what, p, n, fixed_set)
         self._leave_out_immovable(*_immovable(n, S, Tn, fixed))
         object.__setattr__(self, "supports", _check_supports(self.supports, n, fixed_set, S))
 
@@ -439,6 +452,18 @@ class Structure:
         else:
             raise ValueError(f"members: expected 'tendons', 'struts' or 'nodes', got {members!r}")
         return dataframe({**cols, **columns}, {"structure": self.name})
+
+    def _repr_html_(self) -> str:
+        from .._results import reporter
+
+        return reporter("structure_html")(self)  # the repr's lines and the interactive 3D view (reports/html.py)
+
+    def view(self, **kw):
+        """The interactive 3D view (plotly, ``pip install 'tenscell[view]'``):
+        :func:`tenscell.plotting.structure_view`; returns the plotly Figure (``.show()``, ``.write_html(path)``)."""
+        from .._results import plotter
+
+        return plotter("structure_view")(self, **kw)
 
     def plot(self, ax=None, **kw):
         """The structure in 3D, coloured as the paper's Fig. 1 (:func:`tenscell.plotting.structure_3d`)."""

@@ -14,17 +14,20 @@ Topics: :mod:`~tenscell.plotting.paper` (Figs. 2–3),
 :mod:`~tenscell.plotting.dynamics` (time domain),
 :mod:`~tenscell.plotting.spectra` (modes, creep and relaxation curves),
 :mod:`~tenscell.plotting.structures` (3D views),
+:mod:`~tenscell.plotting.interactive` (the interactive 3D view, with plotly: ``tenscell[view]``),
 :mod:`~tenscell.plotting.powerlaw` (the power-law study).
 """
 from __future__ import annotations
 
 from ._style import STYLE, colors, figure_of, moduli_panels, png_bytes, save, style
 from .dynamics import creep_loglog, force_displacement_loop, harmonic_spectrum, time_traces
-from .fits import compactness_front, data_points, fit_figure, fit_panels, measured, plot_fit, stiffness_histogram
+from .fits import (compactness_front, data_points, fit_figure, fit_panels, measured, plot_fit, plot_profile,
+                   plot_residuals, profile_panels, residual_panels, stiffness_histogram)
 from .spectra import loglog_curve, rates_bar, spectrum_stems
 from .paper import fig2_prestress, fig3_frequency, moduli_vs_frequency, moduli_vs_prestress
 from .structures import MEMBER_STYLE, relaxation_modes_3d, structure_3d
-from . import dynamics, fits, paper, population, powerlaw, spectra, structures, variants
+from .interactive import structure_view, structure_view_html
+from . import dynamics, fits, interactive, paper, population, powerlaw, spectra, structures, variants
 from .variants import (
     elasticities_figure, monte_carlo_figure, no_if_figure, no_if_peaks_figure, reference_map_figure,
     references_figure, semiflexible_figure, stiffening_figure,
@@ -40,12 +43,13 @@ __all__ = [
     "references_figure", "semiflexible_figure", "stiffening_figure",
     # fits
     "fit_figure", "data_points", "measured", "plot_fit", "fit_panels", "compactness_front", "stiffness_histogram",
+    "residual_panels", "plot_residuals", "profile_panels", "plot_profile",
     # time domain
     "time_traces", "force_displacement_loop", "harmonic_spectrum", "creep_loglog",
     # spectra and time curves of the linear model
     "spectrum_stems", "loglog_curve", "rates_bar",
     # structures
-    "structure_3d", "relaxation_modes_3d", "MEMBER_STYLE",
+    "structure_3d", "relaxation_modes_3d", "MEMBER_STYLE", "structure_view", "structure_view_html",
 ]
 
 
@@ -53,10 +57,10 @@ def _register() -> None:
     """Every drawing function of the topic modules, for the results' ``plot()`` (:func:`tenscell._results.plotter`)."""
     from .._results import register_plotters
 
-    register_plotters({name: getattr(module, name) for module in (dynamics, fits, paper, population, powerlaw,
-                                                                  spectra, structures, variants)
+    register_plotters({name: getattr(module, name) for module in (dynamics, fits, interactive, paper, population,
+                                                                  powerlaw, spectra, structures, variants)
                        for name in module.__all__ if callable(getattr(module, name))})
-    register_plotters({"save": save})
+    register_plotters({"save": save, "png_bytes": png_bytes})
 
 
 _register()

@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 from ..io.outputs import atomic_path
 
 __all__ = ["STYLE", "style", "styled", "colors", "new_axes", "new_panels", "moduli_panels", "figure_of", "save",
-           "png_bytes", "label_moduli", "wrap", "legend_outside"]
+           "png_bytes", "label_moduli", "wrap", "legend_outside", "legend_below"]
 
 #: rcParams applied (as a context, never globally) to figures tenscell creates
 STYLE: dict[str, Any] = {
@@ -70,6 +70,24 @@ def legend_outside(ax: Axes, *args: Any, **kw: Any):
     """A legend to the right of ``ax``, outside the data area (constrained layout makes room for it); ``args``
     and ``kw`` as for :meth:`~matplotlib.axes.Axes.legend`."""
     return ax.legend(*args, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, **kw)
+
+
+def legend_below(axes: Any, ncols: int | None = None):
+    """One legend for a figure's panels, below them (constrained layout makes room): every label once, in the order
+    the panels first draw it (``axes``: a sequence or array of Axes)."""
+    entries: dict[str, Any] = {}
+    for a in np.asarray(axes, dtype=object).ravel():
+        for handle, label in zip(*a.get_legend_handles_labels()):
+            entries.setdefault(label, handle)
+    fig = figure_of(axes)
+    if ncols is None:  # as many columns as labels of about the mean length fit across the figure
+        size = plt.rcParams["legend.fontsize"]
+        points = size if isinstance(size, (int, float)) else 8.0
+        per = (np.mean([len(k) for k in entries]) if entries else 1.0) * 0.55 * points / 72.0 + 0.6
+        ncols = int(min(len(entries), 4, max(1, fig.get_figwidth() // per)))
+    cols = max(1, ncols)
+    return fig.legend(list(entries.values()), list(entries), loc="outside lower center", ncols=cols,
+                      frameon=False)
 
 
 def colors(n: int) -> np.ndarray:

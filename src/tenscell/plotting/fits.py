@@ -10,13 +10,13 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from matplotlib.axes import Axes
 
-from ._style import figure_of, legend_outside, new_axes, new_panels, styled, wrap
+from ._style import figure_of, legend_below, legend_outside, new_axes, new_panels, styled, wrap
 
 if TYPE_CHECKING:
     from ..io.data import RheologyData
 
 __all__ = ["fit_figure", "data_points", "plot_fit", "fit_panels", "compactness_front", "stiffness_histogram",
-           "measured", "plot_profile"]
+           "measured", "plot_profile", "plot_residuals", "residual_panels", "profile_panels"]
 
 
 def _x_axis(data: RheologyData) -> str:
@@ -165,13 +165,20 @@ def _plot_creep_fit(result, fit, ax, baseline=None):
 @styled
 def fit_panels(result, baseline=None, title: str | None = None, n: int = 200,
                axes: Sequence[Axes] | None = None) -> np.ndarray:
-    """One panel per data set of ``result`` (the combined figure of a joint fit); returns the axes."""
-    ax = new_panels(axes, len(result.datasets), (4.4 * len(result.datasets) + 2.0, 3.8), title=title)
+    """One panel per data set of ``result`` (the combined figure of a joint fit); returns the axes.
+
+    On a new figure one legend below the panels names every line once (the panels keep their full width); on
+    axes you pass, the legend goes beside the last panel."""
+    k = len(result.datasets)
+    ax = new_panels(axes, k, (4.0 * k + 1.2, 4.4), title=title)
     for i, a in enumerate(ax):
         plot_fit(result, ax=a, dataset=i, baseline=baseline, n=n)
-    for a in ax if len({f.axis for f in result.fits}) > 1 else ax[-1:]:  # creep panels have their own entries
-        legend_outside(a)
+    if axes is None:
+        legend_below(ax)
+    else:
+        legend_outside(ax[-1])
     return ax
+
 
 
 @styled
@@ -216,9 +223,10 @@ def stiffness_histogram(EA, ax: Axes | None = None, title: str | None = None, fa
 
 
 @styled
-def plot_profile(profile, ax: Axes | None = None, title: str | None = None) -> Axes:
+def plot_profile(profile, ax: Axes | None = None, title: str | None = None, legend: bool = True) -> Axes:
     """The profile likelihood of one parameter (:class:`tenscell.fitting.profile.ParameterProfile`): Δ(−2 ln L)
-    against the held value (log axis), the 68 % and 95 % thresholds, the fit's own value and the intervals' ends."""
+    against the held value (log axis), the 68 % and 95 % thresholds, the fit's own value and the intervals' ends
+    (``legend=False``: no legend on the axes, for a figure that has one for all its panels)."""
     ax = new_axes(ax, (6.4, 3.8))
     d = np.clip(profile.delta, 1e-3, None)  # the minimum (0) on a log axis
     ax.semilogx(profile.values, d, "o-", color="C0", ms=4, label="refit at each value")
@@ -232,7 +240,104 @@ def plot_profile(profile, ax: Axes | None = None, title: str | None = None) -> A
     unit = f" ({profile.unit})" if profile.unit else ""
     ax.set_xlabel(f"{profile.name}{unit}, held")
     ax.set_ylabel("Δ(−2 ln L), others refitted")
-    legend_outside(ax)
+    if legend:
+        legend_outside(ax)
     ax.set_title(wrap(title or f"Profile likelihood of {profile.name}: {profile.interval(0.95).text(profile.unit)}",
                       _width_in(ax)))
+    return ax
+
+
+def _residual_axis(fit) -> tuple[np.ndarray, str, bool]:
+    """(x of each point, x label, log axis) of a data set's residuals."""
+    d = fit.data
+    if fit.axis == "time":
+        return np.asarray(d.time_s, float), "time after the step (s)", True
+    if fit.axis == "prestress":
+        return np.asarray(fit.x, float), "prestress (Pa)", False
+    return np.asarray(fit.x, float), "frequency f (Hz)", True
+
+
+@styled
+def plot_residuals(result, ax: Axes | None = None, *, dataset: int = 0, baseline=None) -> Axes:
+    """The log10 errors (``log10 model − log10 data``, decades) of one data set of a fit, point by point.
+
+    G' filled circles, G'' open circles (creep: J), against f, prestress or time as the data vary; the shaded band is
+    ± the fit's tolerance, the dashed lines ± the RMS of the data's stated standard deviations (where they state
+    them); a ``baseline`` fit of the same data sets (e.g. the structure-free formula) as small grey crosses.
+    """
+    ax = new_axes(ax, (4.4, 3.2))
+    fit = result.fits[int(dataset)]
+    x, xlabel, log = _residual_axis(fit)
+    ax.axhspan(-result.tolerance, result.tolerance, color="0.88", zorder=0,
+               label=f"± tolerance {result.tolerance:g}")
+    ax.axhline(0.0, color="0.3", lw=0.8, zorder=1)
+    noise = result.noise[fit.index]
+    if noise is not None:
+        for sign in (-1.0, 1.0):
+            ax.axhline(sign * noise, color="0.4", ls="--", lw=0.9, label="± stated noise (RMS of sd)" if sign > 0
+                       else None)
+    r = np.asarray(fit.residuals, float)
+    if fit.axis == "time":
+        ax.plot(x, r, "o", color="C2", ms=4, label="J", zorder=3)
+    else:
+        n = x.size
+        ax.plot(x, r[:n], "o", color="C0", ms=4, label="G′", zorder=3)
+        ax.plot(x, r[n:], "o", mfc="none", color="C3", ms=4, label="G″", zorder=3)
+    if baseline is not None and baseline is not result and len(baseline.fits) == len(result.fits):
+        rb = np.asarray(baseline.fits[fit.index].residuals, float)
+        ax.plot(np.tile(x, rb.size // max(x.size, 1)), rb, "x", color="0.55", ms=3.5, zorder=2,
+                label=f"{baseline.label} (baseline)")
+    if log:
+        ax.set_xscale("log")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("log10 model − log10 data")
+    ax.set_title(wrap(f"{_short(fit.data.source)}: RMS {fit.rms_log10_error:.3g} decades", _width_in(ax)))
+    return ax
+
+
+@styled
+def residual_panels(result, baseline=None, title: str | None = None,
+                    axes: Sequence[Axes] | None = None) -> np.ndarray:
+    """The residuals of every data set of a fit (:func:`plot_residuals`), one panel each, one legend below them;
+    returns the axes."""
+    k = len(result.datasets)
+    ax = new_panels(axes, k, (4.0 * k + 1.2, 3.6), title=title)
+    for i, a in enumerate(ax):
+        plot_residuals(result, ax=a, dataset=i, baseline=baseline)
+    if axes is None:
+        legend_below(ax)
+    else:
+        legend_outside(ax[-1])
+    return ax
+
+
+@styled
+def profile_panels(profiles, title: str | None = None, axes: Sequence[Axes] | None = None,
+                   ncols: int = 3) -> np.ndarray:
+    """Every profile of a :class:`~tenscell.fitting.profile.ProfileSet` (or a sequence of
+    :class:`~tenscell.fitting.profile.ParameterProfile`), one panel each (:func:`plot_profile`), ``ncols`` to a row,
+    one legend below them; returns the axes."""
+    items = list(getattr(profiles, "profiles", profiles))
+    if not items:
+        raise ValueError("profiles: nothing was profiled (ProfileSet.not_run says why)")
+    cols = min(ncols, len(items))
+    rows = -(-len(items) // cols)
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        fig, grid = plt.subplots(rows, cols, figsize=(3.9 * cols + 0.6, 3.2 * rows + 0.9), layout="constrained",
+                                 squeeze=False)
+        if title:
+            fig.suptitle(wrap(title, 3.7 * cols))
+        for extra in grid.ravel()[len(items):]:
+            extra.set_visible(False)
+        ax = grid.ravel()[: len(items)]
+    else:
+        ax = new_panels(axes, len(items), (1.0, 1.0))
+    for a, p in zip(ax, items):
+        plot_profile(p, ax=a, legend=False)
+    if axes is None:
+        legend_below(ax)
+    else:
+        legend_outside(ax[-1])
     return ax

@@ -196,17 +196,19 @@ class PopulationResult:
 
         ``population.csv`` and ``population.parquet`` (the table), ``summary.csv``
         (per condition), ``cells.jsonl`` (every record, with the curves),
-        ``report.md``, ``parameters.png``, ``moduli.png``, and with ``truth``
+        ``report.md``, ``parameters.png``, ``moduli.png``, ``report.html`` (the
+        report with both figures, one self-contained page), and with ``truth``
         (generating parameters of a synthetic population) ``recovery.csv``.
         """
         from pathlib import Path
 
         from .._results import plotter, reporter
-        from ..io.outputs import atomic_path, json_text, write_csv_rows, write_text
+        from ..io.outputs import atomic_path, json_text, write_bytes, write_csv_rows, write_text
 
         # drawn and rendered by tenscell.plotting and tenscell.reports, later stages (tenscell._results)
-        save = plotter("save")
         population_markdown = reporter("population_markdown")
+        page = reporter("markdown_report_html")
+        png_bytes = plotter("png_bytes")
 
         d = Path(directory)
         _write_frame(d / "population.csv", self.table, write_csv_rows)
@@ -220,9 +222,14 @@ class PopulationResult:
         if truth is not None:
             rec = recovery(self.table, truth)
             _write_frame(d / "recovery.csv", rec, write_csv_rows)
-        save(self.plot(), d / "parameters.png")
-        save(self.plot_moduli(), d / "moduli.png")
-        write_text(d / "report.md", population_markdown(self, recovery_table=rec))
+        figures = [("The fitted parameters per condition (parameters.png).", png_bytes(self.plot())),
+                   ("G′, G″ of the population: median and interquartile band, fitted against data (moduli.png).",
+                    png_bytes(self.plot_moduli()))]
+        for (_, png), name in zip(figures, ("parameters.png", "moduli.png")):
+            write_bytes(d / name, png)
+        report = population_markdown(self, recovery_table=rec)
+        write_text(d / "report.md", report)
+        write_text(d / "report.html", page(report, figures))
         return sorted(p.name for p in d.iterdir())
 
 

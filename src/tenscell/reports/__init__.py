@@ -8,18 +8,21 @@ from .ensemble import ensemble_markdown
 from .fit import fit_markdown
 from .fit_text import fit_text
 from .html import (comparison_html, data_html, ensemble_html, fit_html, fitted_model_html, frequency_response_html,
-                   population_html)
+                   population_html, structure_html)
+from .html_page import fit_report_html, markdown_report_html
 from .population import population_markdown, study_markdown
 from .population_fit import population_fit_markdown
 from .powerlaw import powerlaw_markdown
 from .sensitivity import sensitivity_markdown
+from .structures import structures_markdown
 from .studies import no_if_markdown, references_markdown, semiflexible_markdown, stiffening_markdown
 
 __all__ = [
     "fit_markdown", "fit_text", "sensitivity_markdown", "compactness_markdown", "no_if_markdown", "references_markdown",
     "semiflexible_markdown", "stiffening_markdown", "population_markdown", "study_markdown",
-    "ensemble_markdown", "population_fit_markdown", "powerlaw_markdown", "fit_html", "data_html", "frequency_response_html",
-    "fitted_model_html", "comparison_html", "population_html", "ensemble_html",
+    "ensemble_markdown", "population_fit_markdown", "fit_html", "data_html", "frequency_response_html",
+    "fitted_model_html", "comparison_html", "population_html", "ensemble_html", "structures_markdown",
+    "structure_html", "fit_report_html", "markdown_report_html", "powerlaw_markdown",
 ]
 
 

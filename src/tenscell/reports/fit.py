@@ -17,7 +17,7 @@ import numpy as np
 
 from ..fitting.prestress import CELL_ELASTICITY
 from ..fitting.models.voigt import FitProblem
-from ..fitting.records import noise_rms
+from ..fitting.records import STATUSES, noise_rms
 from ..fitting.result import FitResult
 from ..io.data import RheologyData
 from ..io.thinning import binning_notes
@@ -26,7 +26,7 @@ from ._format import num, table
 from .fit_analysis import section_comparison, section_creep, section_identifiability, section_provenance
 from .fit_structure import section_combinations, section_profile, section_structure
 
-__all__ = ["fit_markdown", "SECTIONS", "MODEL_SECTIONS", "section_summary", "section_datasets", "section_baseline",
+__all__ = ["fit_markdown", "fit_sections", "report_title", "SECTIONS", "MODEL_SECTIONS", "section_summary", "section_datasets", "section_baseline",
            "section_shape", "section_prestress", "section_stiffness", "section_parameters", "section_errors",
            "section_alternatives", "section_held", "section_assignments", "parameter_error"]
 
@@ -67,7 +67,7 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
     """What was fitted to what, the verdict, the search."""
     pr = result.problem
     noise = noise_rms(result.datasets)
-    verdict = "**converged**" if result.tolerance_met else "**NOT converged**"
+    verdict = f"**{result.verdict}** ({STATUSES[result.status]})"
     if result.converged and not result.tolerance_met:
         # the data say how well they can be fitted: a fit inside their noise has nothing left to explain
         verdict = ("**inside the data's noise** (the optimizer's tolerance is not met, but every data set that misses "
@@ -83,10 +83,10 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
               f", prestress not stated: fitted {_parameter(result, f'P_data[{f.index}]', 'Pa')}"
               if f.prestress_fitted_pa is not None else "")
         what = "creep compliance J(t)" if f.axis == "time" else f"{f.axis} sweep"
-        lines.append(f"  {f.index}. `{f.data.source}`: {f.data.n} points, {what}{at}.")
+        lines.append(f"  - data set {f.index}: `{f.data.source}`: {f.data.n} points, {what}{at}.")
         if f.data.provenance is not None:
-            lines.append(f"     Read: {f.data.provenance.line()}.")
-        lines += [f"     Thinned: {note}." for note in binning_notes(f.data)]
+            lines.append(f"    - Read: {f.data.provenance.line()}.")
+        lines += [f"    - Thinned: {note}." for note in binning_notes(f.data)]
     lines += [
         f"- Model `{result.spec.name}`: {pr.describe()}; {pr.n_free} free parameters against {pr.n_residuals} "
         "residuals.",
@@ -97,9 +97,24 @@ def section_summary(result: FitResult, baseline=None) -> list[str]:
         + (f" (the tolerance was first met after {result.time_to_tolerance_s:.2f} s)"
            if result.time_to_tolerance_s is not None else " (the tolerance was never met)")
         + f"; {result.n_evaluations} model evaluations.",
+        criteria_line(result),
         "",
     ]
     return lines
+
+
+def criteria_line(result: FitResult) -> str:
+    """The fit's AIC and BIC, how they count σ, and lmfit's values of the same residuals beside them."""
+    aic, bic = result.information_criteria()
+    aic_l, bic_l = result.information_criteria_lmfit()
+    k = result.problem.n_model_parameters
+    counted = (f"k = {k} parameters and the noise σ, estimated from the residuals (−2 ln L = n ln(2π RSS/n) + n)"
+               if not result.sigma_known else f"k = {k} parameters; σ from the data's standard deviations")
+    return (f"- AIC {num(aic, 5)}, BIC {num(bic, 5)} ({counted}; n = {result.problem.n_residuals} residuals). "
+            f"In lmfit's convention (n ln(χ²/n) + 2k, + k ln n; σ not counted): AIC {num(aic_l, 5)}, BIC "
+            f"{num(bic_l, 5)}. Differences between models fitted to the same data are what matters; "
+            + ("they agree in both conventions." if not result.sigma_known else
+               "with stated standard deviations the two conventions can rank models differently."))
 
 
 def section_datasets(result: FitResult, baseline=None) -> list[str]:
@@ -424,16 +439,34 @@ def fit_markdown(result: FitResult, baseline: FitResult | None = None, title: st
         The model and its baselines out of sample (:func:`tenscell.fitting.validation.compare_out_of_sample`).
     """
     if title is None:
-        title = (f"Fit of `{result.spec.name}` to " + " and ".join(f"`{_name(d.source)}`" for d in result.datasets))
-    own = set(result.problem.report_sections)
+        title = report_title(result)
     out = [f"# {title}", ""]
+    for _, lines in fit_sections(result, baseline, comparison=comparison, validation=validation):
+        out += lines
+    return "\n".join(out)
+
+
+def report_title(result: FitResult) -> str:
+    """The report's default title: the model and the data files."""
+    return f"Fit of `{result.spec.name}` to " + " and ".join(f"`{_name(d.source)}`" for d in result.datasets)
+
+
+def fit_sections(result: FitResult, baseline: FitResult | None = None, comparison=None,
+                 validation=None) -> list[tuple[str, list[str]]]:
+    """The report's sections in order, ``(name, Markdown lines)``, as :func:`fit_markdown` joins them (the HTML
+    report, :func:`tenscell.reports.html_page.fit_report_html`, renders the same sections with the figures between
+    them); arguments as there. The out-of-sample comparison is the section ``"out_of_sample"``, after
+    ``"comparison"``."""
+    own = set(result.problem.report_sections)
+    out: list[tuple[str, list[str]]] = []
     for name, section in SECTIONS:
         if name in MODEL_SECTIONS and name not in own:
             continue
         if name == "stiffness" and result.stiffness_spread is None:
             continue
-        out += section_comparison(result, baseline, comparison=comparison) if name == "comparison" \
-            else section(result, baseline)
         if name == "comparison":
-            out += section_out_of_sample(validation)
-    return "\n".join(out)
+            out += [(name, section_comparison(result, baseline, comparison=comparison)),
+                    ("out_of_sample", section_out_of_sample(validation))]
+        else:
+            out.append((name, section(result, baseline)))
+    return out

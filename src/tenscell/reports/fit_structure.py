@@ -17,7 +17,8 @@ import math
 import numpy as np
 
 from .._results import ln_error, plus_minus
-from ..fitting.shares import ANCHORED_L, SHARE_PARTS, TENSION_TERMS
+from ..fitting.shares import GAUGE_WINDOW_L, SHARE_PARTS, TENSION_TERMS
+from ..model.prestress import PRESTRESS_CONVENTION
 from ._format import num, table
 
 __all__ = ["section_combinations", "section_structure", "section_profile", "combination_lines", "structure_lines",
@@ -99,16 +100,18 @@ def _scale_lines(sc) -> list[str]:
                 "(give the prestress of a data set, `--prestress FILE=PA`, to compare them).", ""]
     err = plus_minus(sc.s, None if sc.s_error_ln is None else sc.s * sc.s_error_ln, "m²", sc.s_note, 4, ln=True)
     L_err = ln_error(sc.L_paper_error_ln)
-    inside = "inside" if sc.anchored else "**outside**"
+    inside = "inside" if sc.in_gauge_window else "**outside**"
     lo, hi = min(sc.measured_pa), max(sc.measured_pa)
-    s_range = (f"s ∈ [{ANCHORED_L[1] ** -2:g}, {ANCHORED_L[0] ** -2:g}] m²" if sc.L_cell == 1.0 else
-               f"s/L_cell² ∈ [{ANCHORED_L[1] ** -2:g}, {ANCHORED_L[0] ** -2:g}]")
+    s_range = (f"s ∈ [{GAUGE_WINDOW_L[1] ** -2:g}, {GAUGE_WINDOW_L[0] ** -2:g}] m²" if sc.L_cell == 1.0 else
+               f"s/L_cell² ∈ [{GAUGE_WINDOW_L[1] ** -2:g}, {GAUGE_WINDOW_L[0] ** -2:g}]")
     out = [f"**The fitted prestress against the measured one.** The data state {num(lo)}–{num(hi)} Pa; the model "
            f"prestress P (N) on the fit's cell (strut length {num(sc.L_cell, 4)} m) is s × the measured one with "
-           f"s = {err}: P/L_cell² is {_pct(sc.ratio)} of the measured prestress. In the paper's convention (the model "
+           f"s = {err}.", "", _sigma_line(sc), "",
+           f"P/L_cell² is {_pct(sc.ratio)} of the measured prestress: in the paper's convention (the model "
            f"prestress in N equal to the measured prestress in Pa, moved along the exact gauge) the cell's strut "
-           f"length is L = L_cell/√s = **{num(sc.L_paper, 3)} m**{' ' + L_err if L_err else ''}, {inside} the "
-           f"anchored range {ANCHORED_L[0]:g}–{ANCHORED_L[1]:g} m ({s_range})."
+           f"length is L = L_cell/√s = {num(sc.L_paper, 3)} m{' ' + L_err if L_err else ''}, {inside} the "
+           f"gauge window {GAUGE_WINDOW_L[0]:g}–{GAUGE_WINDOW_L[1]:g} m ({s_range}; a window on the gauge, not an "
+           "anchor)."
            + (f" s sits at its {sc.s_at_bound} bound: this L is a limit, not an estimate." if sc.s_at_bound else "")]
     if sc.profile_L is not None:
         short, long_ = sc.profile_L
@@ -125,6 +128,19 @@ def _scale_lines(sc) -> list[str]:
         out.append(f"Data set {k} states no prestress; the fit places it at {plus_minus(v, e, 'Pa', '', 4)} (a fitted "
                    "parameter, not a measurement).")
     return out + [""]
+
+
+def _sigma_line(sc) -> str:
+    """σ / measured in words: the physical comparison, and the anchor the fit was held to."""
+    if sc.sigma_ratio is None:
+        return ("σ / measured: not defined (the cell's nodes span no volume, so its tendons' virial stress per unit "
+                "volume is not).")
+    held = ("a free fit: nothing held σ" if sc.anchor is None else
+            f"the fit held {sc.anchor.words} (anchored)")
+    err = ln_error(sc.s_error_ln) if sc.anchor is None or not sc.anchor.is_exact else ""
+    return (f"**σ / measured = {num(sc.sigma_ratio, 3)}**{' ' + err if err else ''}: the model's physical prestress "
+            f"({PRESTRESS_CONVENTION}; {num(sc.sigma_per_P, 4)} Pa per N of P on this cell) over the measured one, "
+            f"at every prestress the data state; {held}.")
 
 
 def structure_lines(st, profile=None) -> list[str]:
@@ -158,8 +174,9 @@ def structure_lines(st, profile=None) -> list[str]:
     out += _scale_lines(st.scale)
     out += ["*What this does not show*: the shares say how the fitted model responds to the prestress, not that the "
             "data determine that response; a tendon law that writes G ∝ P in fits the same data with the structure "
-            "as a passenger. The anchored range is a convention of the paper's cell (strut lengths of 0.1–10 in its "
-            "units), not a measurement.", ""]
+            "as a passenger. σ is a continuum reading of the structure's member forces (docs/conventions.md, "
+            "\"Physical prestress\"), compared with a traction-based measurement that sees only the stress the "
+            "substrate balances; the gauge window is a convention of the paper's cell, not a measurement.", ""]
     return out
 
 

@@ -16,10 +16,11 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from .._results import CORRELATION_THRESHOLD, correlation_text, ln_error, span
+from ..fitting.records import STATUSES
 from ._format import num
 
 __all__ = ["fit_html", "data_html", "frequency_response_html", "fitted_model_html", "comparison_html",
-           "population_html", "ensemble_html", "html_table"]
+           "population_html", "ensemble_html", "structure_html", "html_table"]
 
 #: the one inline style of every table (notebook themes style the rest)
 _TABLE = 'style="border-collapse: collapse; margin: 0.3em 0"'
@@ -62,19 +63,30 @@ def _short(source: str) -> str:
 # ------------------------------------------------------------------------------------------------
 def _fit_quality(result) -> list[tuple[str, Any]]:
     aic, bic = result.information_criteria()
+    aic_l, bic_l = result.information_criteria_lmfit()
     rows: list[tuple[str, Any]] = [
         ("model", f"{result.spec.name}: {result.problem.describe()}"),
         ("verdict", result.verdict),
         ("RMS log10 error", f"{result.rms_log10_error:.4g} decades (tolerance {result.tolerance:g} on every data "
                             "set)"),
         ("free parameters", f"{result.n_free} against {result.problem.n_residuals} residuals"),
-        ("AIC / BIC", f"{aic:.1f} / {bic:.1f}"),
+        ("status", f"{result.status}: {STATUSES[result.status]}"),
+        ("AIC / BIC", f"{aic:.1f} / {bic:.1f} ({_criteria_count(result)}); lmfit's convention (n ln(χ²/n) + 2k, + k ln "
+                      f"n; σ not counted): {aic_l:.1f} / {bic_l:.1f}"),
         ("search", f"{result.starts} start(s), seed {result.seed}, {result.n_evaluations} model evaluations, "
                    f"{result.elapsed_s:.1f} s"),
     ]
     if result.n_at_bound:
         rows.append(("at a bound", f"{result.n_at_bound} parameter(s): limits, not estimates"))
     return rows
+
+
+def _criteria_count(result) -> str:
+    """How tenscell's AIC and BIC count (:data:`tenscell.fitting.records.CRITERIA_CONVENTION`), in a few words."""
+    k = result.problem.n_model_parameters
+    if result.sigma_known:
+        return f"k = {k}; −2 ln L from the data's standard deviations"
+    return f"k = {k} + 1: the noise σ, estimated from the residuals, counts as a parameter"
 
 
 def _datasets(result) -> str:
@@ -261,3 +273,17 @@ def ensemble_html(result) -> str:
     return _div(f"EnsembleResult: {result.mechanism}", _pairs(rows),
                 _p("One cell of this mechanism differs from the mean by about the spread; every point's mean, sd and "
                    "5–95 % band: .to_dataframe()."))
+
+
+# ------------------------------------------------------------------------------------------------
+# structures
+# ------------------------------------------------------------------------------------------------
+def structure_html(structure) -> str:
+    """A :class:`~tenscell.model.Structure` or a :class:`~tenscell.model.Cell`: what its ``repr`` says, then the
+    interactive 3D view (:func:`tenscell.plotting.interactive.view_html`: plotly, or the static view with the
+    command that installs it)."""
+    from ..plotting.interactive import view_html
+
+    head, *lines = repr(structure).splitlines()
+    facts = "<ul>" + "".join(f"<li>{escape(line.strip())}</li>" for line in lines) + "</ul>"
+    return _div(head.strip("<>"), facts, view_html(structure))

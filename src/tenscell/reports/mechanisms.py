@@ -173,3 +173,7 @@ def mechanisms_markdown(study) -> str:
                        "in the prestress, Fabry 2001's structural-damping law), not raw measurements: a model that "
                        "fits them reproduces those laws, and a held-out error measures how well it extrapolates them.")
     return "\n".join(out)
+
+from .._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

@@ -151,8 +151,9 @@ def _fit_column(study) -> str:
             noise.append(f"{line} {float(np.sqrt(np.mean(rel ** 2))):.3f}")
     return ("The fit column compares each fit with a tolerance of 0.01 decades or, where it is larger, the data's "
             "stated noise: here the medians' bootstrap standard errors, in decades (RMS over the six frequencies): "
-            + ", ".join(noise) + ". A fit whose misfit exceeds both says \"NOT converged\": every start ran to its "
-            "budget and none came closer; it is not a failed search.")
+            + ", ".join(noise) + ". A fit whose misfit exceeds both says \"tolerance not met at an optimum\" when the "
+            "search stopped at an optimum it could not improve (the model does not fit to that tolerance; not a failed "
+            "search), or \"NOT converged: stopped by its budget\" when its starts ran all their hops still improving.")
 
 
 def _nanmedian(x) -> float:

@@ -6,7 +6,9 @@ One module per study (:mod:`~tenscell.studies.claims`, :mod:`~tenscell.studies.n
 :mod:`~tenscell.studies.sensitivity`); their
 entry points and results are importable from here, with the pieces the studies of measured
 cells use: :mod:`~tenscell.studies.falsification` (data cells do not show) and
-:mod:`~tenscell.studies.real_cells` (the measured cells, read from ``../shared/data/real-cells``).
+:mod:`~tenscell.studies.real_cells` (the measured cells, read from ``../shared/data/real-cells``); the structure
+with no fitted parameter and at the prestress anchor: :mod:`~tenscell.studies.a_priori` (parameter-free slopes),
+:mod:`~tenscell.studies.structures` (each mechanism on each structure, σ anchored).
 """
 from .claims import homogeneous_study, paper_claims
 from .compactness import CompactnessStudy, compactness_study
@@ -18,6 +20,8 @@ from .references import ReferencesStudy, prestress_map, references_study
 from .sensitivity import SensitivityStudy, sensitivity_study
 from .semiflexible import BucklingError, SemiflexibleStudy, linearize_semiflexible, semiflexible_study
 from .stiffening import StiffeningStudy, linearize_stiffening, stiffening_study
+from .a_priori import a_priori_table
+from .structures import StructuresStudy, structures_study
 
 __all__ = [
     "homogeneous_study", "paper_claims",
@@ -28,5 +32,6 @@ __all__ = [
     "compactness_study", "CompactnessStudy",
     "sensitivity_study", "SensitivityStudy",
     "unlike_data", "unlike_sets", "UNLIKE_KINDS",
+    "a_priori_table", "structures_study", "StructuresStudy",
     "xie_cells", "xie_median", "hl60_creep", "oocyte_relaxation", "real_cells_directory", "XieCell", "RealCellsMissing",
 ]

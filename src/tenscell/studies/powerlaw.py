@@ -879,11 +879,10 @@ def assemble(plan: Plan, results: Mapping[str, Any]) -> StudyResult:
                        pages=(("powerlaw.md", page),), checks=ch, data=study, summary=summary)
 
 
-@dataclass(frozen=True)
 class _PowerLaw:
     """The study, as the command line's registry of studies holds it (:class:`tenscell.studies.protocol.Study`)."""
 
-    name: str = NAME
+    name = NAME
 
     def plan(self, options: Mapping[str, Any] | None = None) -> Plan:
         return plan(options)

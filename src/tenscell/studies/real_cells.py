@@ -36,13 +36,18 @@ from .._errors import TenscellError
 if TYPE_CHECKING:
     from ..io.data import RheologyData
 
-__all__ = ["DEFAULT_DIRECTORY", "XIE_LINES", "FACTS", "RealCellsMissing", "XieCell", "OocyteRelaxation",
+__all__ = ["DEFAULT_DIRECTORY", "XIE_LINES", "XIE_FREQUENCIES_HZ", "HL60_POINTS", "FACTS", "RealCellsMissing", "XieCell", "OocyteRelaxation",
            "real_cells_directory", "xie_cells", "xie_median", "hl60_creep", "oocyte_relaxation"]
 
 #: where the real-cell data are looked for by default, relative to the working directory
 DEFAULT_DIRECTORY = Path("..") / "shared" / "data" / "real-cells"
 #: the cell lines of the Xie et al. 2024 data
 XIE_LINES = ("MCF-10A", "MDA-MB-436")
+#: the frequencies (Hz) at which every cell of both lines was measured (PROVENANCE.md: 1, 3, 10, 30, 100, 200 Hz);
+#: a cell's file holds them all but the points its header says were dropped (G' or G'' <= 0)
+XIE_FREQUENCIES_HZ = (1.0, 3.0, 10.0, 30.0, 100.0, 200.0)
+#: the points of the HL60 creep file (PROVENANCE.md: 48 points, t = 0.15-4 s)
+HL60_POINTS = 48
 
 _POPULATION = "xie2024_population"
 _MEDIAN = "xie2024_median_{line}.csv"
@@ -138,19 +143,53 @@ class XieCell:
 
 
 _HEADER = re.compile(r"cell_line=(?P<line>\S+)\s+cell_index=(?P<index>\d+)\s+aspect_ratio=(?P<ar>[-+.\deE]+)\s+"
-                     r"area=(?P<area>[-+.\deE]+)\s+hertz_E_Pa=(?P<ym>[-+.\deE]+)")
+                     r"area=(?P<area>[-+.\deE]+)\s+hertz_E_Pa=(?P<ym>[-+.\deE]+)(?:.*?(?P<dropped>\d+) point\(s\) "
+                     r"with G<=0 dropped)?")
+
+
+def _reference(path: Path, reader):
+    """``reader(path)``, a file of the reference data: a refusal says to restore the file (these data are read as
+    they are, never "anyway")."""
+    from ..io.checks import ACCEPT_HINT
+    from ..io.data import DataError
+
+    try:
+        return reader(path)
+    except DataError as err:
+        problem = str(err).split(ACCEPT_HINT, 1)[0]
+        raise DataError(f"{problem}; the reference data must be as their PROVENANCE.md says: restore the file") from None
 
 
 def _xie_cell(path: Path) -> XieCell:
     from ..io.data import DataError, read_csv
 
-    data = read_csv(path)
+    data = _reference(path, read_csv)
     for c in data.comments:
         m = _HEADER.search(c)
         if m:
+            _check_frequencies(path, data, int(m["dropped"] or 0))
             return XieCell(line=m["line"], index=int(m["index"]), data=data, aspect_ratio=float(m["ar"]),
                            area=float(m["area"]), hertz_modulus_pa=float(m["ym"]))
     raise DataError(f"{path}: no header comment with cell_line, cell_index, aspect_ratio, area and hertz_E_Pa")
+
+
+def _check_frequencies(path, data, dropped: int = 0) -> None:
+    """DataError unless ``data`` holds the line's frequencies (:data:`XIE_FREQUENCIES_HZ`), each once, but the
+    ``dropped`` ones (a file cut short, a row lost or doubled would otherwise be read as a cell's spectrum)."""
+    from ..io.data import DataError
+
+    f = [float(x) for x in data.frequency_hz]
+    known = [x for x in f if any(abs(x - g) <= 1e-9 * g for g in XIE_FREQUENCIES_HZ)]
+    missing = [g for g in XIE_FREQUENCIES_HZ if not any(abs(x - g) <= 1e-9 * g for x in f)]
+    if len(known) == len(f) == len(set(f)) and len(missing) == dropped:
+        return
+    extra = sorted(set(f) - set(known))
+    said = f"its header says {dropped} point(s) dropped" if dropped else "its header says none was dropped"
+    raise DataError(f"{path}: holds {len(f)} points at {', '.join(f'{x:g}' for x in f)} Hz; the line was measured at "
+                    f"{', '.join(f'{g:g}' for g in XIE_FREQUENCIES_HZ)} Hz and {said}"
+                    + (f" (missing: {', '.join(f'{g:g}' for g in missing)} Hz)" if missing else "")
+                    + (f" (not the line's: {', '.join(f'{x:g}' for x in extra)} Hz)" if extra else "")
+                    + ": a file cut short or edited?")
 
 
 def _line(line: str) -> str:
@@ -181,14 +220,24 @@ def xie_median(line: str, directory=None):
     """The median spectrum of one line (RheologyData with the bootstrap standard errors of the median as sd)."""
     from ..io.data import read_csv
 
-    return read_csv(_file(directory, _MEDIAN.format(line=_line(line))))
+    path = _file(directory, _MEDIAN.format(line=_line(line)))
+    data = _reference(path, read_csv)
+    _check_frequencies(path, data)  # the medians are over cells measured at all six frequencies
+    return data
 
 
 def hl60_creep(directory=None):
     """The HL60 optical-stretcher creep curve, 0.15-4 s after the step (CreepData, J in 1/Pa)."""
     from ..io.creep_data import read_creep_csv
 
-    return read_creep_csv(_file(directory, _HL60))
+    from ..io.data import DataError
+
+    path = _file(directory, _HL60)
+    data = _reference(path, read_creep_csv)
+    if data.n != HL60_POINTS:
+        raise DataError(f"{path}: holds {data.n} points; the file of PROVENANCE.md has {HL60_POINTS} (t = 0.15-4 s): "
+                        "a file cut short or edited?")
+    return data
 
 
 @dataclass(frozen=True, eq=False, repr=False)

@@ -64,3 +64,7 @@ def get_model(spec) -> FitModel:
     if isinstance(spec, str) and spec in MODELS:
         return MODELS[spec]
     raise ValueError(f"model must be a FitModel or one of {', '.join(MODELS)}, got {spec!r}")
+
+from ..._deprecated import moved_away  # noqa: E402
+
+__getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

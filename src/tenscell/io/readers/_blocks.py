@@ -20,7 +20,7 @@ from ..columns import ColumnMap, DataError, _as_map, _read_text, _Table, guess_c
 from ..importers import build
 from ..provenance import Provenance
 
-__all__ = ["Probe", "Request", "Block", "choose", "read_block", "temperature_of", "decimal_mark",
+__all__ = ["Probe", "Request", "Block", "choose", "check_declared", "read_block", "temperature_of", "decimal_mark",
            "TEMPERATURE_TOLERANCE_C"]
 
 #: a block is "at" a requested temperature when its own is within this many °C
@@ -85,7 +85,8 @@ class Request:
 @dataclass(frozen=True)
 class Block:
     """One table of a file with several: its number (as the reader numbers them), name, table and temperature (°C),
-    and the number of points the file says it holds (with where it says so), if it does."""
+    and the number of points the file says it holds (with where it says so), if it does, and the rows that number
+    counts (``declared_rows``: the table before a ``Step`` column split it into steps; None: this block's rows)."""
 
     number: int
     name: str
@@ -93,6 +94,12 @@ class Block:
     temperature_c: float | None
     declared_points: int | None = None
     declared_where: str = ""
+    declared_rows: int | None = None
+
+    @property
+    def counted_rows(self) -> int:
+        """The rows the declared number of points counts."""
+        return len(self.table.rows) if self.declared_rows is None else self.declared_rows
 
 
 def decimal_mark(rows: list[list[str]]) -> str:
@@ -154,7 +161,9 @@ def choose(source: str, blocks: list[Block], request: Request, what: str = "step
         near = [b for b in blocks if b.temperature_c is not None
                 and abs(b.temperature_c - float(temperature)) <= TEMPERATURE_TOLERANCE_C and _readable(b, columns)]
         if len(near) != 1:
-            raise DataError(f"{source}: {len(near)} {what}s at {temperature:g} ± {TEMPERATURE_TOLERANCE_C:g} °C "
+            said = int(temperature) if float(temperature).is_integer() else temperature  # 99, as it was typed
+            raise DataError(f"{source}: {option('temperature', said)}: {len(near)} {what}s at {temperature:g} ± "
+                            f"{TEMPERATURE_TOLERANCE_C:g} °C "
                             f"(the {what}s: {_listing(blocks)})" + ("; choose one by its number with "
                                                                      f"{option('step')}" if near else ""))
         return near[0]
@@ -167,7 +176,8 @@ def choose(source: str, blocks: list[Block], request: Request, what: str = "step
         else:
             hit = [b for b in blocks if b.number == int(pick)]
         if len(hit) != 1:
-            raise DataError(f"{source}: no {what} {pick!r}; the file has {len(blocks)} ({_listing(blocks)})")
+            raise DataError(f"{source}: {option('step', pick)}: no {what} {pick!r}; the file has {len(blocks)} "
+                            f"({_listing(blocks)})")
         return hit[0]
     readable = [b for b in blocks if _readable(b, columns)]
     if len(blocks) == 1 or len(readable) == 1:
@@ -176,15 +186,29 @@ def choose(source: str, blocks: list[Block], request: Request, what: str = "step
                     f"{option('step')} or {option('temperature')} ({_listing(blocks)})")
 
 
-def read_block(block: Block, request: Request, base: Provenance, what: str = "step"):
-    """The data a chosen block holds (RheologyData or CreepData), through the shared parse, checks and provenance."""
-    table = block.table
-    if block.declared_points is not None and block.declared_points != len(table.rows):
+def check_declared(blocks: list[Block], request: Request, what: str = "step") -> tuple[str, ...]:
+    """Every block's declared number of points against the rows it counts, before one is chosen (a cut row must
+    not pass for a step of its own): DataError for the first that differs (``point-count``), unless accepted; then
+    the problems, for the provenance."""
+    found = []
+    for block in blocks:
+        n, table = block.counted_rows, block.table
+        if block.declared_points is None or block.declared_points == n:
+            continue
         where = f"{table.where[0]} to {table.where[-1]}" if table.rows else "none"
-        refuse(table.source, "point-count",
-               f"{what} {block.number} {block.name!r}: {block.declared_where} says {block.declared_points} points "
-               f"but the {what} holds {len(table.rows)} data rows ({where}): a truncated or edited export",
-               request.accept)
+        split = "" if block.declared_rows is None else " (with the steps its Step column splits it into)"
+        found.append(refuse(table.source, "point-count",
+                            f"{what} {block.number} {block.name!r}: {block.declared_where} says {block.declared_points} "
+                            f"points but the table holds {n} data rows{split} ({where}): a truncated or edited export",
+                            request.accept))
+    return tuple(found)
+
+
+def read_block(block: Block, request: Request, base: Provenance, what: str = "step"):
+    """The data a chosen block holds (RheologyData or CreepData), through the shared parse, checks and provenance
+    (its declared number of points is checked first, :func:`check_declared`)."""
+    table = block.table
+    check_declared([block], request, what)
     cmap = request.map_for(table.names)
     if cmap is None:
         raise DataError(f"{table.source}: {what} {block.number} {block.name!r} has no columns tenscell recognises "

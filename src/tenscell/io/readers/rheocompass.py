@@ -17,7 +17,7 @@ from typing import Any, Mapping
 
 from ..columns import ColumnMap, DataError, _Table, _trimmed
 from ..provenance import Provenance
-from ._blocks import Block, Probe, Request, choose, decimal_mark, read_block, temperature_of
+from ._blocks import Block, Probe, Request, check_declared, choose, decimal_mark, read_block, temperature_of
 
 __all__ = ["LAYOUT", "EXPECTED", "detect", "read", "read_rheocompass"]
 
@@ -76,7 +76,7 @@ def blocks_of(probe: Probe) -> list[Block]:
             raise DataError(f"{source}, line {k0 + 2}: the units line of the interval is missing")
         unit_fields = _split(lines[k0 + 1], sep)
         units = [s.strip() for s in (unit_fields[1:] if not unit_fields[0].strip() else unit_fields)]
-        rows, where = _rows(lines, k0 + 2, sep)
+        rows, where = _rows(source, lines, k0 + 2, sep, len(names))
         text = " ".join(preamble)
         decimal = decimal_mark(rows) if sep != "," else "."
         table = _Table(source, names, rows, where, units, decimal,
@@ -86,8 +86,9 @@ def blocks_of(probe: Probe) -> list[Block]:
     return blocks
 
 
-def _rows(lines: list[str], k: int, sep: str) -> tuple[list[list[str]], list[str]]:
-    """The data rows from line index ``k``: with or without a leading empty field, up to a blank or metadata line."""
+def _rows(source: str, lines: list[str], k: int, sep: str, width: int) -> tuple[list[list[str]], list[str]]:
+    """The data rows from line index ``k``: with or without a leading empty field, up to a blank or metadata line;
+    DataError for a row with fewer fields than the ``width`` columns named (a row cut short)."""
     rows, where = [], []
     while k < len(lines) and lines[k].strip():
         f = _split(lines[k], sep)
@@ -95,6 +96,9 @@ def _rows(lines: list[str], k: int, sep: str) -> tuple[list[list[str]], list[str
             break
         if not f[0].strip() and len(_trimmed(f)) > 0:
             f = f[1:]  # the leading empty field of the long layout
+        if len(f) < width:
+            raise DataError(f"{source}, line {k + 1}: expected {width} fields, found {len(f)}: a row cut short, a "
+                            "truncated export?")
         rows.append([s.strip() for s in f])
         where.append(f"line {k + 1}")
         k += 1
@@ -104,6 +108,7 @@ def _rows(lines: list[str], k: int, sep: str) -> tuple[list[list[str]], list[str
 def read(probe: Probe, request: Request):
     """The interval the request chooses, as RheologyData or CreepData."""
     blocks = blocks_of(probe)
+    check_declared(blocks, request, "interval")
     block = choose(probe.source, blocks, request, "interval")
     return read_block(block, request, Provenance(file=probe.source, layout=LAYOUT, steps=len(blocks)), "interval")
 

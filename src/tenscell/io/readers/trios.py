@@ -25,7 +25,7 @@ from typing import Any, Mapping
 
 from ..columns import ColumnMap, DataError, _Table, _trimmed
 from ..provenance import Provenance
-from ._blocks import Block, Probe, Request, choose, decimal_mark, read_block, temperature_of
+from ._blocks import Block, Probe, Request, check_declared, choose, decimal_mark, read_block, temperature_of
 
 __all__ = ["LAYOUT", "EXPECTED", "detect", "read", "read_trios"]
 
@@ -96,19 +96,29 @@ def _labelled_blocks(source: str, lines: list[str]) -> list[Block]:
                 label == "Units" or (not label and len(_trimmed(f)) > 1)):
             current["units"] = [s.strip() for s in f[1:]]
         elif label == "Data point":
-            if current is None:
-                raise DataError(f"{source}, line {k}: a 'Data point' row before any 'Variables' row (column names)")
-            if len(_trimmed(f[1:])) > len(_trimmed(current["names"])):
-                raise DataError(f"{source}, line {k}: expected {len(_trimmed(current['names']))} fields after "
-                                f"'Data point', found {len(_trimmed(f[1:]))}")
-            current["rows"].append([s.strip() for s in f[1:]])
-            current["where"].append(f"line {k}")
+            _data_point(source, k, f, current)
         elif current is None and raw.strip() and not raw.startswith("["):
             meta.append(raw.strip().replace("\t", " "))
     out: list[Block] = []
     for b in blocks:
         out.extend(_split_by_step_column(source, b, tuple(meta), len(out)))
     return out
+
+
+def _data_point(source: str, k: int, f: list[str], current: dict | None) -> None:
+    """Add the ``Data point`` row ``f`` (line ``k``) to the block ``current`` (DataError before any block, or with
+    more or fewer fields than the block has columns)."""
+    if current is None:
+        raise DataError(f"{source}, line {k}: a 'Data point' row before any 'Variables' row (column names)")
+    width = len(_trimmed(current["names"]))
+    if len(_trimmed(f[1:])) > width:
+        raise DataError(f"{source}, line {k}: expected {width} fields after 'Data point', found {len(_trimmed(f[1:]))}")
+    if len(f) - 1 < width:
+        raise DataError(f"{source}, line {k}: a 'Data point' row with {len(f) - 1} of the {width} fields its "
+                        f"'Variables' row names (column {current['names'][len(f) - 1].strip()!r} missing): a row cut "
+                        "short, a truncated export?")
+    current["rows"].append([s.strip() for s in f[1:]])
+    current["where"].append(f"line {k}")
 
 
 def _declared(source: str, b: dict) -> tuple[int | None, str]:
@@ -129,6 +139,9 @@ def _split_by_step_column(source: str, b: dict, meta: tuple[str, ...], before: i
         j = bare.index("step")
         for i, r in enumerate(rows):
             groups.setdefault(r[j] if j < len(r) else "", []).append(i)
+        if "" in groups and len(groups) > 1:  # a row cut in its Step field is not a step of its own
+            raise DataError(f"{source}, {where[groups[''][0]]}: column {names[j].strip()!r} is empty where the other "
+                            "rows name their step: a row cut short, a truncated export?")
     if len(groups) <= 1:
         groups = {"": list(range(len(rows)))}
     out = []
@@ -137,8 +150,8 @@ def _split_by_step_column(source: str, b: dict, meta: tuple[str, ...], before: i
         sub = [rows[i] for i in idx]
         table = _Table(source, names, sub, [where[i] for i in idx], b["units"], decimal_mark(sub),
                        meta + ((f"step {n}: {name}",) if name else ()))
-        out.append(Block(n, name, table, temperature_of(name, names, sub, " ".join(meta)),
-                         declared if len(groups) == 1 else None, declared_where))
+        out.append(Block(n, name, table, temperature_of(name, names, sub, " ".join(meta)), declared, declared_where,
+                         None if len(groups) == 1 else len(rows)))  # the declared count is the whole table's
     return out
 
 
@@ -167,8 +180,9 @@ def _text_step(source: str, lines: list[str], body: list[int], k0: int):
     rows, where, k = [], [], filled[2] + 1
     while k <= body[-1] and lines[k].strip():
         f = [s.strip() for s in lines[k].rstrip("\r\n").split("\t")]
-        if len(_trimmed(f)) > len(names):
-            raise DataError(f"{source}, line {k + 1}: expected {len(_trimmed(names))} fields, found {len(_trimmed(f))}")
+        if len(_trimmed(f)) > len(names) or len(f) < len(_trimmed(names)):
+            raise DataError(f"{source}, line {k + 1}: expected {len(_trimmed(names))} fields, found {len(_trimmed(f))}"
+                            + (": a row cut short, a truncated export?" if len(f) < len(_trimmed(names)) else ""))
         rows.append(f)
         where.append(f"line {k + 1}")
         k += 1
@@ -197,6 +211,7 @@ def blocks_of(probe: Probe) -> tuple[list[Block], str]:
 def read(probe: Probe, request: Request):
     """The step the request chooses, as RheologyData or CreepData."""
     blocks, layout = blocks_of(probe)
+    check_declared(blocks, request)
     block = choose(probe.source, blocks, request)
     return read_block(block, request, Provenance(file=probe.source, layout=layout, steps=len(blocks)))
 
