@@ -130,17 +130,20 @@ def announce(cost: Cost) -> None:
     stage(cost.line())
 
 
-def estimate_plan(plan) -> tuple[dict, float]:
+def estimate_plan(plan, declared=None) -> tuple[dict, float]:
     """A study plan's estimate (:mod:`tenscell.studies.protocol`): its calibration run here (and one figure, when
     the plan has figures), the wall time at the share of a CPU the machine gives now, announced in one line; a
-    plan beyond :data:`BUDGET_S` is refused naming the options that size it. Returns ``(rates, wall seconds)``
-    (NaN when a kind of task has no calibration: the line says the estimate comes with the first tasks)."""
+    plan beyond :data:`BUDGET_S` is refused naming the options that size it. ``declared``: CPU seconds per unit of
+    each kind the study states (a study's ``rates``, measured once), for the kinds its plan brings no probe of.
+    Returns ``(rates, wall seconds)`` (NaN when a kind of task has neither: the line says the estimate comes with
+    the first tasks)."""
     import math
 
     from ..studies.protocol import FIGURE, Task, calibrate, figure_probe
 
     extra = (Task("one figure", FIGURE, figure_probe),) if plan.figures else ()
-    rates, machine = calibrate(plan, extra)
+    measured, machine = calibrate(plan, extra)
+    rates = {**(declared or {}), **measured}
     missing = sorted(k for k in plan.kinds() if k not in rates)
     if missing:
         from .._progress import stage

@@ -29,6 +29,7 @@ STUDIES = {
     "semiflexible": "tenscell.studies.semiflexible:STUDY",
     "stiffening": "tenscell.studies.stiffening:STUDY",
     "compactness": "tenscell.studies.compactness:STUDY",
+    "powerlaw": "tenscell.studies.powerlaw:STUDY",
 }
 #: the paper's variant studies, which `tenscell reproduce` runs (the others fit data)
 VARIANTS = ("no-if", "sensitivity", "references", "semiflexible", "stiffening")
@@ -36,7 +37,8 @@ VARIANTS = ("no-if", "sensitivity", "references", "semiflexible", "stiffening")
 _DECADES = tuple(float(d) for d in range(1, 15))
 #: the flags of the studies (dests): what `run` passes to a study when typed (their defaults filled by register())
 STUDY_FLAGS = ("draws", "seed", "from_fit", "decades", "damping", "starts", "jobs", "tolerance", "mechanisms", "hops",
-               "ensemble", "workers", "scheduler", "data_dir", "cells", "time_domain", "populations", "prestress")
+               "ensemble", "workers", "scheduler", "data_dir", "cells", "time_domain", "populations", "prestress",
+               "scale")
 _DEFAULTS: dict[str, object] = {}
 
 
@@ -59,7 +61,10 @@ def register(sub) -> None:
                                    "error; it prints its estimated time first and refuses a run beyond a day); "
                                    "real-cells (the mechanisms and their structure-free baselines on measured cells "
                                    "— the Xie et al. 2024 AFM spectra, read from --data — in sample and held out, "
-                                   "with goal G3 and the per-cell G' slopes).")
+                                   "with goal G3 and the per-cell G' slopes); powerlaw (whether structures of plain "
+                                   "members — diluted networks near their rigidity threshold, hierarchical nets, "
+                                   "damping set by length or force — make a weak power law: the map of "
+                                   "d ln G'/d ln f, several minutes).")
     p.add_argument("name", choices=sorted((*STUDIES, *LEGACY_OPTIONS)), help="which study")
     p.add_argument("data", nargs="*", help="compactness, mechanisms: file(s) of measured moduli (as for `tenscell "
                                            "fit`), or bundled:NAME")
@@ -105,6 +110,10 @@ def register(sub) -> None:
                    help="also score population models on each line (springpot-alpha-family+visc with its prestress "
                         "per cell, the power law + Newtonian with its modulus per cell) against independent per-cell "
                         "power laws, with goal G4 (a few minutes of CPU)")
+    w = p.add_argument_group("powerlaw (the map of structures of plain members)")
+    w.add_argument("--scale", choices=("full", "quick", "tiny"), default="full",
+                   help="how much of the map: full (the docs' map, several minutes), quick (a coarser map, about a "
+                        "minute), tiny (a few structures, seconds)")
     add_data_options(p)
     p.set_defaults(func=run)
     _DEFAULTS.update({dest: p.get_default(dest) for dest in STUDY_FLAGS})
@@ -168,7 +177,7 @@ def run(args) -> int:
     study = load_study(args.name)
     plan = study.plan({**given, "data": data} if data else given)  # the study checks its options: no work yet
     out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")
-    rates, estimate = estimate_plan(plan)
+    rates, estimate = estimate_plan(plan, getattr(study, "rates", None))
     t = time.perf_counter()
     stage(f"study {args.name} ...")
     with out as d:

@@ -14,7 +14,8 @@ Topics: :mod:`~tenscell.plotting.paper` (Figs. 2–3),
 :mod:`~tenscell.plotting.dynamics` (time domain),
 :mod:`~tenscell.plotting.spectra` (modes, creep and relaxation curves),
 :mod:`~tenscell.plotting.structures` (3D views),
-:mod:`~tenscell.plotting.interactive` (the interactive 3D view, with plotly: ``tenscell[view]``).
+:mod:`~tenscell.plotting.interactive` (the interactive 3D view, with plotly: ``tenscell[view]``),
+:mod:`~tenscell.plotting.powerlaw` (the power-law study).
 """
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ from .spectra import loglog_curve, rates_bar, spectrum_stems
 from .paper import fig2_prestress, fig3_frequency, moduli_vs_frequency, moduli_vs_prestress
 from .structures import MEMBER_STYLE, relaxation_modes_3d, structure_3d
 from .interactive import structure_view, structure_view_html
-from . import dynamics, fits, interactive, paper, population, spectra, structures, variants
+from . import dynamics, fits, interactive, paper, population, powerlaw, spectra, structures, variants
 from .variants import (
     elasticities_figure, monte_carlo_figure, no_if_figure, no_if_peaks_figure, reference_map_figure,
     references_figure, semiflexible_figure, stiffening_figure,
@@ -58,7 +59,7 @@ def _register() -> None:
     from . import mechanisms, real_cells, validation  # the studies' figures (studies.protocol.Figure names them)
 
     register_plotters({name: getattr(module, name) for module in (dynamics, fits, interactive, paper, population,
-                                                                  spectra, structures, variants, mechanisms,
+                                                                  powerlaw, spectra, structures, variants, mechanisms,
                                                                   real_cells, validation)
                        for name in module.__all__ if callable(getattr(module, name))})
     register_plotters({"save": save, "png_bytes": png_bytes, "calibration_figure": calibration_figure})

@@ -15,6 +15,7 @@ from .html import (comparison_html, data_html, ensemble_html, fit_html, fitted_m
 from .html_page import fit_report_html, markdown_report_html
 from .population import population_markdown, study_markdown
 from .population_fit import population_fit_markdown
+from .powerlaw import powerlaw_markdown
 from .sensitivity import sensitivity_markdown
 from .structures import structures_markdown
 from .studies import no_if_markdown, references_markdown, semiflexible_markdown, stiffening_markdown
@@ -25,7 +26,7 @@ __all__ = [
     "ensemble_markdown", "population_fit_markdown", "leading_markdown", "fit_html", "data_html", "frequency_response_html",
     "fitted_model_html", "comparison_html", "population_html", "ensemble_html", "structures_markdown",
     "structure_html", "fit_report_html", "markdown_report_html", "mechanisms_markdown", "mechanisms_summary",
-    "real_cells_markdown", "real_cells_tables", "validation_tables",
+    "real_cells_markdown", "real_cells_tables", "validation_tables", "powerlaw_markdown",
 ]
 
 
