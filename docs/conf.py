@@ -73,6 +73,9 @@ viewcode_follow_imported_members = False
 html_theme = "pydata_sphinx_theme"
 html_title = f"tenscell {release}"
 html_theme_options = {"navigation_with_keys": False, "show_toc_level": 2}
+# the theme's light/dark mode on a reader's first visit: without it the theme reads an empty mode and logs a console
+# error ("Got invalid theme mode"; tests/test_browser.py fails on console errors)
+html_context = {"default_mode": "auto"}
 html_static_path: list[str] = []
 
 

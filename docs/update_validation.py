@@ -59,10 +59,10 @@ def splice(page: str, tables: str, stamp: str, begin: str = BEGIN, end: str = EN
 
 
 def figures_markdown(names: list[str]) -> str:
-    """The Markdown of the figures ``names`` (stems of :data:`FIGURES`, in its order), each image with its
-    caption."""
-    return "\n\n".join(f"![{FIGURES[n]}]({(IMAGE_DIR / f'{n}.png').as_posix()})\n\n*{FIGURES[n]}*"
-                       for n in FIGURES if n in names) or "*This run drew no figure.*"
+    """The MyST of the figures ``names`` (stems of :data:`FIGURES`, in its order): each a ``figure`` directive with
+    its caption, as wide as the text and linked to the full-size image."""
+    return "\n\n".join(f"```{{figure}} {(IMAGE_DIR / f'{n}.png').as_posix()}\n:width: 100%\n:alt: {n}\n\n"
+                       f"{FIGURES[n]}\n```" for n in FIGURES if n in names) or "*This run drew no figure.*"
 
 
 def copy_figures(out: Path, page_dir: Path) -> list[str]:

@@ -183,13 +183,15 @@ def _docs_site(tmp_path: Path) -> Path:
         shutil.copy(DOCS / name, src / name)
     shutil.copytree(DOCS / "img", src / "img")
     (src / "index.md").write_text("# tenscell\n\n```{toctree}\nvalidation\nview\n```\n")
+    # the site's settings that shape these pages (docs/conf.py builds the whole site: API, gallery, tutorial)
+    (src / "conf.py").write_text(
+        'project = "tenscell"\nextensions = ["myst_nb", "tenscell_views"]\nhtml_theme = "pydata_sphinx_theme"\n'
+        'html_context = {"default_mode": "auto"}\nmyst_heading_anchors = 3\nnb_execution_mode = "force"\n')
     out = tmp_path / "html"
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT / "src"), str(DOCS / "_ext"),
                                                         os.environ.get("PYTHONPATH", "")]),
            "TENSCELL_PROGRESS": "0", "MPLBACKEND": "Agg"}
-    cmd = [sys.executable, "-m", "sphinx", "-b", "html", "-q", "-C", "-D", "extensions=myst_nb,tenscell_views",
-           "-D", "html_theme=pydata_sphinx_theme", "-D", "nb_execution_mode=force", "-D", "project=tenscell",
-           "-D", "myst_heading_anchors=3", str(src), str(out)]
+    cmd = [sys.executable, "-m", "sphinx", "-b", "html", "-q", str(src), str(out)]
     done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr[-2000:]
     return out

@@ -47,7 +47,7 @@ def test_heldout_bands_draw_each_band_where_it_lies():
     drawn = sorted((round(s[0][0], 6), round(s[1][0], 6)) for s in segments)
     ok = np.isfinite(low)
     assert drawn == sorted(zip(np.round(low[ok], 6), np.round(high[ok], 6)))  # NaN: no band
-    assert [t.get_text() for t in ax.get_yticklabels()] == models
+    assert [t.get_text().replace("\n", " ") for t in ax.get_yticklabels()] == models
     assert any(np.allclose(line.get_xdata(), 0.08) for line in ax.get_lines())  # the limit
     with pytest.raises(ValueError, match="models × columns"):
         heldout_bands(models, low[:2], high[:2], columns=["MCF-10A", "MDA-MB-436"])
@@ -115,7 +115,7 @@ def test_the_page_shows_the_runs_figures_between_its_markers(update, tmp_path):
     assert (docs / update.IMAGE_DIR / f"{names[0]}.png").read_bytes() == b"\x89PNG " + names[0].encode()
     page = (f"# v\n\n{update.FIGURES_BEGIN}\n\nold\n\n{update.FIGURES_END}\n\n{update.BEGIN}\n\nt\n\n{update.END}\n")
     new = update.splice(page, update.figures_markdown(copied), "*stamp*", update.FIGURES_BEGIN, update.FIGURES_END)
-    shown = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", new)
+    shown = re.findall(r"```\{figure\} (\S+)", new)
     assert shown == [f"img/validation/{n}.png" for n in names[:2]] and "old" not in new
     assert new.split(update.FIGURES_END)[1] == page.split(update.FIGURES_END)[1]  # the tables' part untouched
     assert update.figures_markdown([]) == "*This run drew no figure.*"
@@ -125,5 +125,7 @@ def test_every_figure_the_page_shows_is_committed(update):
     page = (DOCS / "validation.md").read_text(encoding="utf-8")
     assert page.count(update.FIGURES_BEGIN) == 1 and page.count(update.FIGURES_END) == 1
     assert page.count(update.BEGIN) == 1 and page.count(update.END) == 1
-    for target in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", page):
+    shown = re.findall(r"```\{figure\} (\S+)", page) + re.findall(r"!\[[^\]]*\]\(([^)]+)\)", page)
+    assert len(shown) >= 3  # the held-out bands, the population's cells, the per-cell slopes
+    for target in shown:
         assert (DOCS / target).is_file(), target

@@ -13,6 +13,7 @@ Each function takes plain arrays (what a study computed; nothing is fitted here)
 """
 from __future__ import annotations
 
+import textwrap
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -62,7 +63,7 @@ def heldout_bands(models: Sequence[str], low, high, best=None, *, columns: Seque
         raise ValueError(f"low and high: expected shape ({len(models)}, {len(columns)}) (models × columns), got "
                          f"{lo.shape} and {hi.shape}")
     mid = None if best is None else np.atleast_2d(np.asarray(best, dtype=float))
-    ax = new_axes(ax, (7.2, 0.42 * len(models) + 1.4))
+    ax = new_axes(ax, (6.2, 0.5 * len(models) + 1.4))
     n = len(columns)
     offsets = (np.arange(n) - (n - 1) / 2) * min(0.28, 0.8 / max(n, 1))
     y = np.arange(len(models))[::-1].astype(float)
@@ -83,7 +84,7 @@ def heldout_bands(models: Sequence[str], low, high, best=None, *, columns: Seque
         ax.axhspan(y[k] - 0.45, y[k] + 0.45, color="0.92", zorder=0)
     if limit is not None:
         ax.axvline(limit, color="0.25", ls="--", lw=1.0, label=f"limit {limit:g}")
-    ax.set_yticks(y, [str(m) for m in models])
+    ax.set_yticks(y, [textwrap.fill(str(m), 30, break_on_hyphens=False) for m in models])
     ax.set_ylim(-0.6, len(models) - 0.4)
     ax.set_xlabel(xlabel)
     ax.grid(axis="y", visible=False)
