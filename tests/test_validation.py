@@ -71,6 +71,18 @@ def test_the_verdict_compares_the_mean_with_a_ten_percent_margin():
     assert "no stable cell" in out_of_sample_verdict(row("m", True, [0.05, np.inf]), formula)
 
 
+def test_a_model_not_scored_out_of_sample_is_absent_from_the_comparison_not_an_error():
+    """A baseline that misses the data in sample is not refereed: the comparison has no row of it (get: None),
+    while row() still names what is there."""
+    from tenscell.fitting.validation import OutOfSampleComparison
+
+    m = OutOfSample(model="m", structural=True, n_params=3, splits=("a",), rms=np.array([0.05]))
+    comparison = OutOfSampleComparison(rows=(m,), model="m", verdict="", splits=("a",))
+    assert comparison.get("m") is m and comparison.get("formula: aP + E0 + springpot") is None
+    with pytest.raises(ValueError, match="no model named 'x' here; models: m"):
+        comparison.row("x")
+
+
 def test_a_warm_refit_fits_its_training_points_at_least_as_well_as_the_full_fit():
     data = _law(noise=0.02)
     full = fit(data, model="structural-damping+newtonian", starts=2, progress=False)

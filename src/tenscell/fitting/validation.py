@@ -388,6 +388,11 @@ class OutOfSampleComparison:
                 return r
         raise ValueError(f"no model named {name!r} here; models: {', '.join(r.model for r in self.rows)}")
 
+    def get(self, name: str) -> OutOfSample | None:
+        """The row of model ``name``, or None where it was not scored out of sample (e.g. a baseline that misses
+        the data in sample is not refereed)."""
+        return next((r for r in self.rows if r.model == name), None)
+
     @property
     def structure_adds_nothing(self) -> bool:
         """The tensegrity's mean held-out RMS is not at least 10 % below its own structure-free formula's across

@@ -60,7 +60,7 @@ def _referee_rows(study):
         if o is None:
             yield (r.name, _not_refereed(r), "", "", "", "", "")
             continue
-        own = r.out_of_sample.row(r.formula[0]) if r.formula is not None else None
+        own = r.out_of_sample.get(r.formula[0]) if r.formula is not None else None
         b = r.baselines
         adds = "n/a" if own is None else ("**nothing measurable**" if r.out_of_sample.structure_adds_nothing
                                           else "better out of sample")

@@ -980,7 +980,7 @@ def _referee_fields(r: MechanismRow) -> dict:
     from .falsification import UNLIKE_KINDS
 
     o, b, a, e = r.held_out_row, r.baselines, r.anchored, r.exponent
-    own = None if r.out_of_sample is None or r.formula is None else r.out_of_sample.row(r.formula[0])
+    own = None if r.out_of_sample is None or r.formula is None else r.out_of_sample.get(r.formula[0])
     out = {
         "held_out_rms_mean_decades": "" if o is None else o.mean,
         "held_out_rms_worst_decades": "" if o is None else o.worst,
