@@ -161,6 +161,12 @@ def _modules(root: Path) -> dict[str, Path]:
     return out
 
 
+@functools.cache
+def _walk(text: str) -> tuple:
+    """:func:`_runtime_nodes` of a module's source, once per distinct text."""
+    return tuple(_runtime_nodes(_parse(text)))
+
+
 def _runtime_nodes(tree: ast.AST):
     """Every node of ``tree`` except those under ``if TYPE_CHECKING:``, with the chain of enclosing functions."""
     stack: list[tuple[ast.AST, tuple[str, ...]]] = [(tree, ())]
@@ -214,8 +220,7 @@ def import_graph(root: Path = SRC) -> dict[str, dict[str, int]]:
     graph: dict[str, dict[str, int]] = {}
     for module, path in mods.items():
         edges: dict[str, int] = {}
-        tree = _parse(path.read_text(encoding="utf-8"))
-        for node, _ in _runtime_nodes(tree):
+        for node, _ in _walk(path.read_text(encoding="utf-8")):
             for target in _import_targets(module, path.name == "__init__.py", node, known):
                 # importing a.b.c runs a/__init__ and a/b/__init__ first (the top-level package is lazy: not an edge)
                 parts = target.split(".")
@@ -355,16 +360,25 @@ def decompositions(root: Path = SRC) -> list[tuple[str, str, int, str]]:
     for module, path in _modules(root).items():
         if module == "linear" or module.startswith("linear."):
             continue
-        tree = _parse(path.read_text(encoding="utf-8"))
-        aliases = _aliases(tree)
-        parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
-        for node, funcs in _runtime_nodes(tree):
-            if not isinstance(node, (ast.Attribute, ast.Name)) or not isinstance(node.ctx, ast.Load):
-                continue
-            full = _reference(node, parents.get(node), aliases)
-            if full is not None:
-                found.append((module, ".".join(funcs) or "<module>", node.lineno, full))
+        found += _decompositions_in(module, path.read_text(encoding="utf-8"))
     return found
+
+
+@functools.cache
+def _decompositions_in(module: str, text: str) -> tuple:
+    """:func:`decompositions` of one module's source (cached by its text: a planted copy of the tree re-reads only
+    the file it changed)."""
+    tree = _parse(text)
+    aliases = _aliases(tree)
+    parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+    found = []
+    for node, funcs in _runtime_nodes(tree):
+        if not isinstance(node, (ast.Attribute, ast.Name)) or not isinstance(node.ctx, ast.Load):
+            continue
+        full = _reference(node, parents.get(node), aliases)
+        if full is not None:
+            found.append((module, ".".join(funcs) or "<module>", node.lineno, full))
+    return tuple(found)
 
 
 def unexplained(found) -> list[str]:
@@ -415,22 +429,30 @@ def _tainted(func: ast.AST) -> set[str]:
 def eigen_thresholds(root: Path = SRC) -> list[tuple[str, str, int, str]]:
     """Every comparison of an eigenvalue (or of what is computed from one) outside linear/: (module, enclosing
     functions, line, the eigenvalue routine or name compared)."""
-    found = set()
+    found: set = set()
     for module, path in _modules(root).items():
         if module == "linear" or module.startswith("linear."):
             continue
-        tree = _parse(path.read_text(encoding="utf-8"))
-        chain = {id(node): ".".join(funcs) or "<module>" for node, funcs in _runtime_nodes(tree)
-                 if isinstance(node, ast.Compare)}
-        for func in [tree] + [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))]:
-            tainted = _tainted(func) if func is not tree else set()
-            for node in ast.walk(func):
-                if not isinstance(node, ast.Compare) or id(node) not in chain:
-                    continue
-                bad = set(_eigen_calls(node)) | (_names(node) & tainted)
-                if bad:
-                    found.add((module, chain[id(node)], node.lineno, sorted(bad)[0]))
+        found |= _eigen_thresholds_in(module, path.read_text(encoding="utf-8"))
     return sorted(found)
+
+
+@functools.cache
+def _eigen_thresholds_in(module: str, text: str) -> frozenset:
+    """:func:`eigen_thresholds` of one module's source (cached by its text)."""
+    tree = _parse(text)
+    chain = {id(node): ".".join(funcs) or "<module>" for node, funcs in _runtime_nodes(tree)
+             if isinstance(node, ast.Compare)}
+    found = set()
+    for func in [tree] + [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))]:
+        tainted = _tainted(func) if func is not tree else set()
+        for node in ast.walk(func):
+            if not isinstance(node, ast.Compare) or id(node) not in chain:
+                continue
+            bad = set(_eigen_calls(node)) | (_names(node) & tainted)
+            if bad:
+                found.add((module, chain[id(node)], node.lineno, sorted(bad)[0]))
+    return frozenset(found)
 
 
 def unexplained_criteria(found) -> list[str]:
@@ -465,7 +487,7 @@ def private_imports(root: Path = SRC) -> list[str]:
     for module, path in mods.items():
         is_package = path.name == "__init__.py"
         mine = _subpackage(module, is_package)
-        for node, _ in _runtime_nodes(_parse(path.read_text(encoding="utf-8"))):
+        for node, _ in _walk(path.read_text(encoding="utf-8")):
             if not isinstance(node, ast.ImportFrom):
                 continue
             source = _from_module(module, is_package, node)
@@ -491,7 +513,7 @@ def dynamic_imports(root: Path = SRC) -> list[tuple[str, str, int]]:
     but a string naming another package): (module, enclosing functions, line)."""
     found = []
     for module, path in _modules(root).items():
-        for node, funcs in _runtime_nodes(_parse(path.read_text(encoding="utf-8"))):
+        for node, funcs in _walk(path.read_text(encoding="utf-8")):
             if not isinstance(node, ast.Call) or _call_name(node) not in ("import_module", "__import__"):
                 continue
             first = node.args[0] if node.args else None
