@@ -45,7 +45,7 @@ COMMAND_MODULES = (
 #: the end of `tenscell --help`: the question a lab asks first and what to type, then the exit statuses (kept as
 #: written: the commands must not be broken across lines)
 _EPILOG = """\
-Which mechanism explains my cells? Fit every mechanism to your own files
+Which mechanism fits my cells, and does its structure explain them? Fit every mechanism to your own files
 (CSV/TSV/Excel tables, TA TRIOS or Anton Paar RheoCompass exports, creep
 tables; several files are fitted jointly) and compare them on one table
 (it prints its estimated time before it starts):

@@ -214,7 +214,7 @@ def mechanisms_markdown(study) -> str:
     not show."""
     srcs = ", ".join(f"`{s}`" for s in study.sources)
     o = study.options
-    out = ["# Which mechanism explains the cells?", "",
+    out = ["# Which mechanism fits the cells, and does its structure explain them?", "",
            f"Data: {srcs}, fitted jointly by every model ({o['starts']} starts, up to {o['hops']} hops each, seed "
            f"{o['seed']}, tolerance {num(o['tolerance'])} decades on every data set; every refit below with the same "
            "search, warm at the main fit). RMS values are of the log10 errors (decades), per data set in the order "
