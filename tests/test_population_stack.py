@@ -43,7 +43,8 @@ def test_stacked_cells_equal_each_cell_alone(name, per_cell, other):
     stacked = pb.cells[0]._evaluate_cells(pb.cells, phis, True)
     alone = Problem._evaluate_cells(pb.cells[0], pb.cells, phis, True)  # the generic one-by-one evaluation
     assert len(stacked) == len(alone) == 5
-    for a, b in zip(stacked, alone):
+    for (a, a_times), (b, b_times) in zip(stacked, alone):  # (moduli, time data) pairs: no time data here
+        assert a_times is None and b_times is None
         assert (a is None) == (b is None)
         if a is None:
             continue

@@ -249,6 +249,35 @@ def mechanisms_markdown(study) -> str:
                        "fits them reproduces those laws, and a held-out error measures how well it extrapolates them.")
     return "\n".join(out)
 
+#: the columns of ``mechanisms.csv`` in 0.2.0 (:func:`study_table_rows`; deprecated: the study's tables now carry their
+#: own named columns, ``tenscell.studies.mechanisms.study_tables``)
+STUDY_COLUMNS = ("model", "kind", "free_parameters", "stiffness_spread_decades", "rms_per_dataset_decades", "AIC",
+                 "BIC", "determined_within_10pct", "at_bound", "converged", "ripple_Gstorage_slope",
+                 "Gstorage_slope_min", "Gstorage_slope_max", "alternatives_spread_decades",
+                 "formula", "formula_parameters", "formula_rms_per_dataset_decades", "formula_BIC",
+                 "held_out_rms_mean_decades", "held_out_rms_worst_decades", "formula_held_out_rms_mean_decades",
+                 "out_of_sample_verdict", "prestress_scale_s_m2", "geometric_share_dGstorage_dP",
+                 "geometric_share_dGloss_dP", "anchored_rms_per_dataset_decades", "anchored_BIC", "anchored_s_m2",
+                 "anchored_L", "anchored_geometric_share_dGstorage_dP", "unlike_prestress_independent_ratio",
+                 "unlike_exponent_rising_ratio", "discriminates", "elapsed_s", "cpu_s", "cpu_main_fit_s", "notes")
+
+
+def study_table_rows(study):
+    """Deprecated (0.3.0, removed in 0.4.0): the study's main table as rows of :data:`STUDY_COLUMNS` (blank where a
+    0.2.0 column has no value in this version); use ``tenscell.studies.mechanisms.study_tables(study)[0]``, a
+    table with its own named columns (``.columns``, ``.rows``, ``.records()``)."""
+    import warnings
+
+    from .._deprecated import REMOVED_IN, SINCE
+    from ..studies.mechanisms import study_tables
+
+    warnings.warn(f"tenscell.reports.mechanisms.study_table_rows is deprecated (since {SINCE}, removed in "
+                  f"{REMOVED_IN}): use tenscell.studies.mechanisms.study_tables(study)[0]", DeprecationWarning,
+                  stacklevel=2)
+    for record in study_tables(study)[0].records():
+        yield tuple(record.get(c, "") for c in STUDY_COLUMNS)
+
+
 from .._deprecated import moved_away  # noqa: E402
 
 __getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

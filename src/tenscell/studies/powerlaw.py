@@ -377,9 +377,10 @@ def _weight(point: MapPoint) -> float:
     return max(coords / 1e4, 0.01) * len(PRESTRAINS)
 
 
-#: CPU seconds per unit of weight (a 10⁴-coordinate structure at one prestress), measured on the full map
-#: (bench/bench_powerlaw.py): the estimate before the run; the run revises it as tasks finish
-CALIBRATION = {"spectrum": 1.0, "spectrum-maxwell": 2.0, "fit": 20.0}
+#: CPU seconds per unit of weight (a 10⁴-coordinate structure's spectrum at one prestrain) as the plan's probes
+#: measured them at load 1 on 2 cores (spectrum 1.18, Maxwell 1.08, fit 0.49: the full map estimated at 265 s of CPU,
+#: measured 283 s): what a run's estimate starts from is its own probes; these are for reading a plan without them
+CALIBRATION = {"spectrum": 1.2, "spectrum-maxwell": 1.1, "fit": 0.5}
 
 
 def plan(options: Mapping[str, Any] | None = None) -> Plan:
@@ -395,10 +396,41 @@ def plan(options: Mapping[str, Any] | None = None) -> Plan:
     tasks = [Task(key=p.key, kind="spectrum" if p.law == "voigt" else "spectrum-maxwell", fn=evaluate_point,
                   args=(p, PRESTRAINS, f), weight=_weight(p)) for p in points]
     for fam in FAMILIES:
-        keys = tuple(p.key for p in points if p.family == fam)
-        if keys:
-            tasks.append(Task(key=f"fit/{fam}", kind="fit", fn=fit_family, args=(fam,), needs=keys))
-    return Plan(study=NAME, options=opts, tasks=tuple(tasks))
+        members = [p for p in points if p.family == fam]
+        if members:
+            tasks.append(Task(key=f"fit/{fam}", kind="fit", fn=fit_family, args=(fam,),
+                              needs=tuple(p.key for p in members), weight=_fit_weight(members)))
+    return Plan(study=NAME, options=opts, tasks=tuple(tasks), calibration=_probes(f), figures=float(len(FIGURES)),
+                sized_by=("--scale",))
+
+
+def _fit_weight(points) -> float:
+    """A family fit's cost in units of a 10⁴-coordinate structure's spectrum at one prestrain: the family's largest
+    structure (its best one is usually among the largest) at each of :data:`FIT_PRESTRAINS`."""
+    return max(_weight(p) for p in points) / len(PRESTRAINS) * len(FIT_PRESTRAINS)
+
+
+#: the calibration probes' structures: a diluted net of Voigt cables, one of Maxwell cables, a small hierarchical
+#: net whose map point and fit are computed (a second or so each)
+_PROBE_POINTS = {"spectrum": _diluted(8, ISOSTATIC), "spectrum-maxwell": _diluted(6, ISOSTATIC, law="maxwell"),
+                 "fit": _simplex(4, 5)}
+
+
+def _fit_probe(point: MapPoint, f_hz) -> FamilyFit:
+    """One unit of the fit kind's work (calibration): a small structure's map point, then its family fit."""
+    return fit_family(point.family, evaluate_point(point, PRESTRAINS, f_hz))
+
+
+def _probes(f_hz) -> tuple:
+    """The plan's calibration probes, one per kind of task, each weighted as the plan weighs its tasks."""
+    spectrum, maxwell, small = (_PROBE_POINTS[k] for k in ("spectrum", "spectrum-maxwell", "fit"))
+    return (Task("a diluted net's spectrum", "spectrum", evaluate_point, (spectrum, PRESTRAINS, f_hz),
+                 weight=_weight(spectrum)),
+            Task("a Maxwell net's spectrum", "spectrum-maxwell", evaluate_point, (maxwell, PRESTRAINS, f_hz),
+                 weight=_weight(maxwell)),
+            # the probe computes the point's four prestrains too: its weight counts them beside the fit's nine
+            Task("a small net's map point and fit", "fit", _fit_probe, (small, f_hz),
+                 weight=_fit_weight([small]) + _weight(small)))
 
 
 # ---- what each curve says --------------------------------------------------------------------------------
@@ -885,9 +917,6 @@ class _PowerLaw:
     name = NAME
     #: the option the command line gives it (``--scale``), with its default
     options = {"scale": "full"}
-    #: CPU seconds per unit of weight of each kind of task, before the run measures its own (measured on the full
-    #: map: :data:`CALIBRATION`)
-    rates = dict(CALIBRATION)
 
     def plan(self, options: Mapping[str, Any] | None = None) -> Plan:
         return plan(options)
