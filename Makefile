@@ -17,8 +17,10 @@ install: $(STAMP)
 reproduce: $(STAMP)
 	$(VENV)/bin/tenscell reproduce --out out/
 
+# the whole suite over the machine's CPUs (pytest-xdist), each test file on one worker so that its module fixtures are
+# computed once; `$(PY) -m pytest` alone runs it in one process
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto --dist loadfile
 
 # does the install work? (about a minute; `make test` is the whole suite): the command line answers, a formula and a
 # mechanism fitted to the bundled data, and the tests of the pipeline's core (structure -> equilibrium ->
