@@ -24,7 +24,7 @@ def test_every_study_follows_the_protocol_and_calibrates_every_kind_of_its_tasks
     assert isinstance(study, Study) and study.name == name and plan.study == name
     probed = {p.kind for p in plan.calibration}
     assert set(plan.kinds()) <= probed, f"{name}: no probe for {set(plan.kinds()) - probed}"
-    assert plan.figures > 0 and plan.tasks
+    assert plan.figures >= 0 and plan.tasks  # a study that draws nothing (structures: tables, a page) says 0
     # the estimate counts every task of the plan: each kind's rate doubled doubles its share of the estimate
     rates = dict.fromkeys(probed, 1.0) | {FIGURE: 1.0}
     assert plan.estimate_cpu(dict.fromkeys(probed, 2.0)) == pytest.approx(2 * plan.estimate_cpu(rates))

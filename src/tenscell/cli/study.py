@@ -30,6 +30,7 @@ STUDIES = {
     "stiffening": "tenscell.studies.stiffening:STUDY",
     "compactness": "tenscell.studies.compactness:STUDY",
     "powerlaw": "tenscell.studies.powerlaw:STUDY",
+    "structures": "tenscell.studies.structures:STUDY",
 }
 #: the paper's variant studies, which `tenscell reproduce` runs (the others fit data)
 VARIANTS = ("no-if", "sensitivity", "references", "semiflexible", "stiffening")
@@ -64,7 +65,10 @@ def register(sub) -> None:
                                    "with goal G3 and the per-cell G' slopes); powerlaw (whether structures of plain "
                                    "members — diluted networks near their rigidity threshold, hierarchical nets, "
                                    "damping set by length or force — make a weak power law: the map of "
-                                   "d ln G'/d ln f, several minutes).")
+                                   "d ln G'/d ln f, several minutes); structures (each mechanism on each structure — "
+                                   "6-, 12-, 30-strut spheres, nucleus, elastic struts, a lattice — fitted to the "
+                                   "bundled pair free and with σ anchored: a ranking of structures; about 15 min of "
+                                   "CPU).")
     p.add_argument("name", choices=sorted((*STUDIES, *LEGACY_OPTIONS)), help="which study")
     p.add_argument("data", nargs="*", help="compactness, mechanisms: file(s) of measured moduli (as for `tenscell "
                                            "fit`), or bundled:NAME")

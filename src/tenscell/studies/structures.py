@@ -301,6 +301,16 @@ def _structure_tasks(st, mechanisms, anchors, seeds, datasets, search) -> list[T
     return tasks
 
 
+def _probe(datasets, search: Mapping) -> Task:
+    """The calibration probe of the kind "fit": the paper cell's free fit of the recommended mechanism from one
+    start with no basin hop, weighed as that share of one paper-cell fit of the study's search (its starts × its
+    hops + 1 least-squares runs)."""
+    probe_search = {**search, "starts": 1, "hops": 0}
+    return Task("one start of a paper-cell fit", "fit", fit_task,
+                ("6-strut paper cell", MECHANISMS[0], "free", 0, datasets, probe_search),
+                weight=1.0 / (search["starts"] * (search["hops"] + 1)))
+
+
 class StructuresStudy:
     """The study (protocol :class:`~tenscell.studies.protocol.Study`): ``name = "structures"``."""
 
@@ -333,7 +343,8 @@ class StructuresStudy:
             tasks += _structure_tasks(st, mechanisms, anchors, seeds, datasets, search)
         return Plan(study=self.name, options={"datasets": datasets, "structures": structures,
                                               "mechanisms": mechanisms, "anchors": anchors, "seeds": seeds,
-                                              "search": search}, tasks=tuple(tasks))
+                                              "search": search}, tasks=tuple(tasks),
+                    calibration=(_probe(datasets, search),), sized_by=("the study's structures and mechanisms",))
 
     def assemble(self, plan: Plan, results: Mapping[str, Any]) -> StudyResult:
         records = [results[t.key] for t in plan.tasks]
