@@ -174,7 +174,7 @@ def _docs_site(tmp_path: Path) -> Path:
     built here from their sources with the site's theme."""
     given = os.environ.get("TENSCELL_DOCS_HTML")
     if given:
-        return Path(given)
+        return Path(given).resolve()  # a path relative to the working directory (.ci/run gives docs/_build/html)
     for module in ("sphinx", "myst_nb", "pydata_sphinx_theme"):
         pytest.importorskip(module, reason=f"{module} is not installed (pip install 'tenscell[docs]')")
     src = tmp_path / "src"
