@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["Cost", "BUDGET_S", "EVALUATIONS_PER_START_HOP", "measure", "check", "announce", "duration", "size",
+__all__ = ["Cost", "BUDGET_S", "EVALUATIONS_PER_START_HOP", "cpu_share", "measure", "check", "announce", "duration", "size",
            "total_memory", "estimate_plan"]
 
 #: model evaluations a fit takes per start and basin-hopping move allowed (--hops + 1 least-squares runs at most): the
@@ -205,3 +205,14 @@ def _free_bytes(path: Path) -> float | None:
         return float(shutil.disk_usage(probe).free)
     except OSError:
         return None
+
+
+def cpu_share(workers: int) -> float:
+    """The share of one CPU each of ``workers`` new processes can expect now: the CPUs over everything runnable
+    (the load average plus them), at most 1. On a shared machine a short timed call is served at once while a
+    long run waits its turn, so wall time is estimated from CPU time and this share."""
+    try:
+        load = os.getloadavg()[0]
+    except (OSError, AttributeError):  # pragma: no cover - no load average on this platform
+        return 1.0
+    return min(1.0, (os.cpu_count() or 1) / max(load + workers, 1.0))

@@ -62,7 +62,7 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
 
 
 #: model evaluations per start and basin-hopping move, shared with `tenscell fit`'s estimate (defined in _cost)
-from ._cost import EVALUATIONS_PER_START_HOP  # noqa: E402
+from ._cost import EVALUATIONS_PER_START_HOP, cpu_share  # noqa: E402
 
 
 def _cpu_per_call(fn, calls: int = 5) -> float:
@@ -73,17 +73,6 @@ def _cpu_per_call(fn, calls: int = 5) -> float:
     for _ in range(calls):
         fn()
     return max(time.process_time() - t0, 1e-9) / calls
-
-
-def cpu_share(workers: int) -> float:
-    """The share of one CPU each of ``workers`` new processes can expect now: the CPUs over everything runnable
-    (the load average plus them), at most 1. On a shared machine a short timed call is served at once while a
-    long run waits its turn, so wall time is estimated from CPU time and this share."""
-    try:
-        load = os.getloadavg()[0]
-    except (OSError, AttributeError):  # pragma: no cover - no load average on this platform
-        return 1.0
-    return min(1.0, (os.cpu_count() or 1) / max(load + workers, 1.0))
 
 
 def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate: bool = True,

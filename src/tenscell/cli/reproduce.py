@@ -191,11 +191,10 @@ REPRODUCE_CPU_S = 134.0
 
 def reproduce_cost():
     """The run's estimate: :data:`REPRODUCE_CPU_S` of CPU over the share of the machine's CPUs the present load leaves
-    (:func:`tenscell.cli.study.cpu_share`, for the two processes its fits use)."""
+    (:func:`tenscell.cli._cost.cpu_share`, for the two processes its fits use)."""
     import os
 
-    from ._cost import Cost
-    from .study import cpu_share
+    from ._cost import Cost, cpu_share
 
     workers = 2
     share = cpu_share(workers)
