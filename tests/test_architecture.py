@@ -372,7 +372,7 @@ def _decompositions_in(module: str, text: str) -> tuple:
     aliases = _aliases(tree)
     parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
     found = []
-    for node, funcs in _runtime_nodes(tree):
+    for node, funcs in _walk(text):  # the nodes of the same cached tree
         if not isinstance(node, (ast.Attribute, ast.Name)) or not isinstance(node.ctx, ast.Load):
             continue
         full = _reference(node, parents.get(node), aliases)
@@ -441,7 +441,7 @@ def eigen_thresholds(root: Path = SRC) -> list[tuple[str, str, int, str]]:
 def _eigen_thresholds_in(module: str, text: str) -> frozenset:
     """:func:`eigen_thresholds` of one module's source (cached by its text)."""
     tree = _parse(text)
-    chain = {id(node): ".".join(funcs) or "<module>" for node, funcs in _runtime_nodes(tree)
+    chain = {id(node): ".".join(funcs) or "<module>" for node, funcs in _walk(text)  # nodes of the same cached tree
              if isinstance(node, ast.Compare)}
     found = set()
     for func in [tree] + [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))]:

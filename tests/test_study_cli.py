@@ -8,6 +8,7 @@ import pytest
 
 from tenscell.cli import main
 from tenscell.cli import study as study_cli
+from tenscell.cli._study_output import write_study_result
 from tenscell.io.data import bundled
 from tenscell.studies.protocol import FIGURE, Figure, Study, StudyResult, Table
 
@@ -46,7 +47,7 @@ def test_the_writer_puts_tables_by_column_name_figures_and_pages(tmp_path):
     f = np.logspace(0, 2, 5)
     result = StudyResult("demo", tables=(Table.from_records("t", [{"a_Hz": 1.0, "b": "x"}, {"b": "y", "a_Hz": 2.5}]),),
                          figures=(Figure("f.png", "calibration_figure", (f, f)),), pages=(("p.md", "# page\n"),))
-    study_cli.write_result(result, tmp_path)
+    write_study_result(tmp_path, result)
     with open(tmp_path / "t.csv") as fh:
         assert list(csv.reader(fh)) == [["a_Hz", "b"], ["1.0", "x"], ["2.5", "y"]]
     assert (tmp_path / "f.png").read_bytes()[:4] == b"\x89PNG"

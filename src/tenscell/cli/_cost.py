@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["Cost", "BUDGET_S", "EVALUATIONS_PER_START_HOP", "cpu_share", "measure", "check", "announce", "duration", "size",
+__all__ = ["Cost", "BUDGET_S", "EVALUATIONS_PER_START_HOP", "cpu_share", "cpu_per_call", "measure", "check", "announce", "duration", "size",
            "total_memory", "estimate_plan"]
 
 #: model evaluations a fit takes per start and basin-hopping move allowed (--hops + 1 least-squares runs at most): the
@@ -130,20 +130,17 @@ def announce(cost: Cost) -> None:
     stage(cost.line())
 
 
-def estimate_plan(plan, declared=None) -> tuple[dict, float]:
+def estimate_plan(plan) -> tuple[dict, float]:
     """A study plan's estimate (:mod:`tenscell.studies.protocol`): its calibration run here (and one figure, when
     the plan has figures), the wall time at the share of a CPU the machine gives now, announced in one line; a
-    plan beyond :data:`BUDGET_S` is refused naming the options that size it. ``declared``: CPU seconds per unit of
-    each kind the study states (a study's ``rates``, measured once), for the kinds its plan brings no probe of.
-    Returns ``(rates, wall seconds)`` (NaN when a kind of task has neither: the line says the estimate comes with
-    the first tasks)."""
+    plan beyond :data:`BUDGET_S` is refused naming the options that size it. Returns ``(rates, wall seconds)``
+    (NaN when a kind of task has no calibration: the line says the estimate comes with the first tasks)."""
     import math
 
     from ..studies.protocol import FIGURE, Task, calibrate, figure_probe
 
     extra = (Task("one figure", FIGURE, figure_probe),) if plan.figures else ()
-    measured, machine = calibrate(plan, extra)
-    rates = {**(declared or {}), **measured}
+    rates, machine = calibrate(plan, extra)
     missing = sorted(k for k in plan.kinds() if k not in rates)
     if missing:
         from .._progress import stage
@@ -205,6 +202,16 @@ def _free_bytes(path: Path) -> float | None:
         return float(shutil.disk_usage(probe).free)
     except OSError:
         return None
+
+
+def cpu_per_call(fn, calls: int = 5) -> float:
+    """CPU seconds of one call of ``fn`` (the mean of ``calls`` after one warm-up): what the work costs, whatever
+    share of the CPUs the machine gives it now."""
+    fn()
+    t0 = time.process_time()
+    for _ in range(calls):
+        fn()
+    return max(time.process_time() - t0, 1e-9) / calls
 
 
 def cpu_share(workers: int) -> float:

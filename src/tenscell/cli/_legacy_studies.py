@@ -62,17 +62,7 @@ def _study_mechanisms(out: Path, log, args=None) -> None:
 
 
 #: model evaluations per start and basin-hopping move, shared with `tenscell fit`'s estimate (defined in _cost)
-from ._cost import EVALUATIONS_PER_START_HOP, cpu_share  # noqa: E402
-
-
-def _cpu_per_call(fn, calls: int = 5) -> float:
-    """CPU seconds of one call of ``fn`` (the mean of ``calls`` after one warm-up): what the work costs, whatever
-    share of the CPUs the machine gives it now."""
-    fn()
-    t0 = time.process_time()
-    for _ in range(calls):
-        fn()
-    return max(time.process_time() - t0, 1e-9) / calls
+from ._cost import EVALUATIONS_PER_START_HOP, cpu_per_call, cpu_share  # noqa: E402
 
 
 def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate: bool = True,
@@ -105,7 +95,7 @@ def mechanisms_cost(datasets, names, starts: int, hops: int, jobs: int, validate
             k = fits_per_model(datasets, problem.n_free, spec.structural, validate, falsify)
             main = starts * ((max(hops, PER_TENDON_HOPS) if per_tendon else hops) + 1)
             n = int(round(rate * (main + (k - 1) * refit)))
-            cpu += n * _cpu_per_call(lambda pb=problem, th=theta: pb.jacobian(th))
+            cpu += n * cpu_per_call(lambda pb=problem, th=theta: pb.jacobian(th))
             evaluations += n
             fits += k
     workers = min(jobs, len(names))
@@ -197,8 +187,7 @@ def run_legacy(args, read_data) -> int:
     else:
         from ._real_cells import real_cells_cost
 
-        announce(check(real_cells_cost(args, jobs_for(len(args.real_cells_models), args.jobs), _cpu_per_call,
-                                       cpu_share), "--starts",
+        announce(check(real_cells_cost(args, jobs_for(len(args.real_cells_models), args.jobs)), "--starts",
                        hint="give fewer --starts or --hops, --cells N, or fewer --mechanisms NAMES"))
     t = time.perf_counter()
     stage(f"study {args.name} ...")

@@ -76,18 +76,17 @@ def budgets(args):
     return names, med, cell, (None if args.cells in (None, 0) else args.cells)
 
 
-def real_cells_cost(args, jobs: int, cpu_per_call, cpu_share):
+def real_cells_cost(args, jobs: int):
     """The study's cost (:class:`tenscell.cli._cost.Cost`): the CPU time of one model evaluation of each model on
-    a median, timed here (``cpu_per_call(fn)``: CPU seconds of one call), × :data:`EVALUATIONS_PER_START_HOP` ×
-    starts × (hops + 1) × its fits (3 per line on the medians, one per cell), over ``jobs`` workers at the CPU share
-    the machine's load leaves them (``cpu_share(workers)``) — the two measures of :mod:`tenscell.cli.study`, passed
-    in by it."""
+    a median, timed here (:func:`tenscell.cli._cost.cpu_per_call`), × :data:`EVALUATIONS_PER_START_HOP` × starts ×
+    (hops + 1) × its fits (3 per line on the medians, one per cell), over ``jobs`` workers at the CPU share the
+    machine's load leaves them (:func:`tenscell.cli._cost.cpu_share`)."""
     import numpy as np
 
     from .._threads import limited
     from ..studies.real_cells import XIE_LINES, real_cells_directory, xie_cells, xie_median
     from ..studies.real_cells_study import BASELINES, POPULATIONS, SPLITS, median_models
-    from ._cost import Cost
+    from ._cost import Cost, cpu_per_call, cpu_share
 
     names, med, cell, max_cells = budgets(args)
     folder = real_cells_directory(args.data_dir)

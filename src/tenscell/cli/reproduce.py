@@ -136,13 +136,14 @@ def reproduce_dynamics(out: Path, log) -> None:
 def reproduce_variants(out: Path, log) -> None:
     """All five variant studies into ``out/variants/<name>/``."""
     from ..studies.protocol import run_study
-    from .study import VARIANTS, load_study, write_result
+    from ._study_output import write_study_result
+    from .study import VARIANTS, load_study
 
     for name in VARIANTS:
         d = out / "variants" / name
         d.mkdir(parents=True, exist_ok=True)
         result = run_study(load_study(name), {})
-        write_result(result, d)
+        write_study_result(d, result)
         log(f"variants/{name}: {', '.join(result.files())}")
 
 

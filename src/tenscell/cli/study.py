@@ -14,7 +14,6 @@ from __future__ import annotations
 import importlib
 import sys
 import time
-from pathlib import Path
 
 from ._args import (add_cluster_options, add_data_options, add_out, data_options_from_args, ensemble_size, integer,
                     number, number_list, path)
@@ -157,18 +156,12 @@ def _read_data(args) -> tuple:
     return tuple(datasets)
 
 
-def write_result(result, out: Path, log=None) -> None:
-    """Every table, figure and page of a study's result into ``out`` (:func:`._study_output.write_study_result`)."""
-    from ._study_output import write_study_result
-
-    write_study_result(out, result, log)
-
-
 def run(args) -> int:
     from .._progress import stage
     from ..io.outputs import OutputSet
     from ..studies.protocol import run_study
     from ._cost import estimate_plan
+    from ._study_output import write_study_result
 
     given = _given(args)
     _refuse_foreign(args.name, _options_of(args.name), given, args.data)
@@ -181,12 +174,12 @@ def run(args) -> int:
     study = load_study(args.name)
     plan = study.plan({**given, "data": data} if data else given)  # the study checks its options: no work yet
     out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")
-    rates, estimate = estimate_plan(plan, getattr(study, "rates", None))
+    rates, estimate = estimate_plan(plan)
     t = time.perf_counter()
     stage(f"study {args.name} ...")
     with out as d:
         result = run_study(study, plan, rates=rates, notify=lambda line: stage(f"    {line}"))
-        write_result(result, d, lambda line: stage(f"    {line}"))
+        write_study_result(d, result, lambda line: stage(f"    {line}"))
         stage(f"    wrote {', '.join(result.files())}")
     print(f"tenscell: study {args.name} finished in {time.perf_counter() - t:.1f} s (estimated "
           f"{estimate:.1f} s); wrote {out.target}/", file=sys.stderr)

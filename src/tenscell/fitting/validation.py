@@ -383,10 +383,10 @@ class OutOfSampleComparison:
     splits: tuple = field(default=())
 
     def row(self, name: str) -> OutOfSample:
-        for r in self.rows:
-            if r.model == name:
-                return r
-        raise ValueError(f"no model named {name!r} here; models: {', '.join(r.model for r in self.rows)}")
+        r = self.get(name)
+        if r is None:
+            raise ValueError(f"no model named {name!r} here; models: {', '.join(r.model for r in self.rows)}")
+        return r
 
     def get(self, name: str) -> OutOfSample | None:
         """The row of model ``name``, or None where it was not scored out of sample (e.g. a baseline that misses

@@ -393,7 +393,7 @@ class MechanismProblem(Problem):
 
     def _evaluate_cells(self, cells, phis, jac: bool) -> tuple:
         if any(pb.time is not None for pb in cells):  # time data: each cell's own contour, one by one
-            return tuple(pb._evaluate_constrained(phi, jac) for pb, phi in zip(cells, phis))
+            return super()._evaluate_cells(cells, phis, jac)
         # moduli only: many cells in one batched solve (a population), each as _evaluate_constrained pairs it
         return tuple((mod, None) for mod in evaluate_cells(cells, phis, jac))
 
