@@ -74,9 +74,28 @@ def test_sparse_jacobian_equals_finite_differences(base, per_cell):
     pb = Population(base, per_cell=per_cell).problem(cells)
     theta = pb.initial_guess(np.random.default_rng(0))
     J = pb._jacobian_from(pb._evaluate_constrained(pb.full(theta), jac=True))
+    assert not pb.sparse_jacobian and isinstance(J, np.ndarray)  # a few cells: dense, the search's exact steps
+    np.testing.assert_allclose(J, pb.jacobian_fd(theta, step=1e-6), rtol=1e-5, atol=1e-7 * np.abs(J).max())
+
+
+def test_large_population_jacobian_is_sparse_and_holds_the_small_ones_blocks():
+    """Beyond DENSE_FREE free parameters the Jacobian is CSR (the search's LSMR steps); a sub-population's dense one
+    is its rows and columns."""
+    from tenscell.fitting.models.population import DENSE_FREE
+
+    cells, G0 = formula_cells(DENSE_FREE)
+    pb = Population(FORMULA, per_cell=("G0",)).problem(cells)
+    assert pb.n_free == DENSE_FREE + 2 and pb.sparse_jacobian
+    theta = np.log(np.r_[0.25, 0.4, 1.1 * G0])
+    J = pb._jacobian_from(pb._evaluate_constrained(pb.full(theta), jac=True))
     assert J.format == "csr"
-    Jd = J.toarray()
-    np.testing.assert_allclose(Jd, pb.jacobian_fd(theta, step=1e-6), rtol=1e-5, atol=1e-7 * np.abs(Jd).max())
+    few = np.array([3, 17, 40])
+    sub = pb.subset(few)
+    assert not sub.sparse_jacobian
+    Js = sub._jacobian_from(sub._evaluate_constrained(sub.full(theta[np.r_[0:2, 2 + few]]), jac=True))
+    rows = np.concatenate([pb.rows(int(k)) for k in few])
+    rows = np.concatenate([rows[rows < pb.n_points], rows[rows >= pb.n_points]])  # the sub-population's order
+    np.testing.assert_array_equal(Js, J[rows][:, np.r_[0:2, 2 + few]].toarray())
 
 
 def test_sparsity_pattern_is_the_block_structure_and_grows_linearly_with_cells():

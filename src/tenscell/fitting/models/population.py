@@ -54,6 +54,9 @@ POPULATION_FORMAT = "tenscell-fitted-population"
 CELL_FIT_EVALUATIONS = 25
 #: cells of the small population a start or a move fits first (PopulationProblem.initial_guess, perturb)
 START_CELLS = 8
+#: free parameters up to which a population's Jacobian is dense and the search's steps exact
+#: (:attr:`PopulationProblem.sparse_jacobian`)
+DENSE_FREE = 64
 
 
 def cell_parameter_name(name: str, k: int) -> str:
@@ -150,6 +153,14 @@ class PopulationProblem(Problem):
         Each cell's base log-parameters where the population does not set them.
     reference_cell : int
         The cell whose geometric-mean G′ is the median over the cells (the starts place the base model on it).
+    sparse_jacobian : bool
+        Whether the search takes the Jacobian sparse, its trust-region steps solved by LSMR (more than
+        :data:`DENSE_FREE` free parameters), or dense, with scipy's exact steps (a small population: the starts'
+        :data:`START_CELLS` cells). LSMR's steps lie in the plane of the gradient and the Gauss–Newton step (scipy's
+        ``trf``); on a small, ill-conditioned population they took 135–200 evaluations (stopped by the budget, short
+        of the optimum) where the exact steps took 55–62 (8 synthetic cells of ``springpot-tension+visc``, 13
+        parameters). On a large one both took the same number (300 cells: 42), and exact steps cost time cubic in
+        the cells.
     """
 
     population: Population
@@ -173,10 +184,10 @@ class PopulationProblem(Problem):
     # the Jacobian's pattern, from ``free`` (set in __post_init__)
     _pattern: tuple = field(init=False, repr=False, default=())
 
-    sparse_jacobian = True
-
     def __post_init__(self):
         object.__setattr__(self, "_pattern", _jacobian_pattern(self))
+        # sparse (LSMR steps) beyond DENSE_FREE free parameters, dense (exact steps) below: class docstring
+        object.__setattr__(self, "sparse_jacobian", self.n_free > DENSE_FREE)
 
     def __repr__(self) -> str:
         return (f"PopulationProblem({self.population.name}: {self.n_cells} cells, {self.n_free} free of "
@@ -185,6 +196,7 @@ class PopulationProblem(Problem):
     @property
     def spec(self) -> Population:
         return self.population
+
 
     @property
     def n_cells(self) -> int:
@@ -245,14 +257,17 @@ class PopulationProblem(Problem):
         return r
 
     def _jacobian_from(self, out):
-        """The block-sparse Jacobian (CSR): each cell's rows hold its shared and own columns only."""
+        """The block-sparse Jacobian (CSR; an array where :attr:`sparse_jacobian` is False): each cell's rows hold its
+        shared and own columns only."""
         _, rows, cols, keep = self._pattern
         data = np.concatenate([pb._jacobian_from(o)[:, kp].ravel() for pb, o, kp in zip(self.cells, out, keep)])
-        return scipy.sparse.csr_matrix((data, (rows, cols)), shape=(self.n_residuals, self.n_free))
+        J = scipy.sparse.csr_matrix((data, (rows, cols)), shape=(self.n_residuals, self.n_free))
+        return J if self.sparse_jacobian else J.toarray()
 
     def jacobian(self, theta) -> np.ndarray:
         """The Jacobian as a dense array (n_residuals, n_free) (the search uses the sparse one)."""
-        return self._jacobian_from(self._evaluate_constrained(self.full(theta), jac=True)).toarray()
+        J = self._jacobian_from(self._evaluate_constrained(self.full(theta), jac=True))
+        return J.toarray() if scipy.sparse.issparse(J) else J
 
     def sparsity(self) -> scipy.sparse.csr_matrix:
         """The Jacobian's nonzero pattern (1 where a residual may depend on a free parameter)."""
@@ -599,7 +614,7 @@ def block_identifiability(problem: PopulationProblem, theta, *, sigma_known: boo
     free_cols = np.cumsum(problem.free) - 1
     analysed = problem.free & np.array([p.at_bound is None for p in pars])
     shared = np.flatnonzero(analysed[: problem.n_shared])
-    J = problem._jacobian_from(problem._evaluate_constrained(problem.full(theta), jac=True)).tocsr()
+    J = scipy.sparse.csr_matrix(problem._jacobian_from(problem._evaluate_constrained(problem.full(theta), jac=True)))
     r = problem.residuals(theta)
     B_all = J[:, free_cols[shared]].toarray()
     blocks, cell_rows = [], []
