@@ -14,6 +14,7 @@ from tenscell.fitting.identifiability import identifiability
 from tenscell.fitting.models import model_from_dict
 from tenscell.fitting.models.catalog import MECHANISMS
 from tenscell.fitting.models.formulas import FORMULAS, lumped_formula
+from tenscell.fitting.problem import PENALTY
 from tenscell.fitting.population_scores import (comment_values, exponent_stiffness, measurement_errors,
                                                 population_cells, score_population, springpot_exponent,
                                                 springpot_exponent_error)
@@ -76,6 +77,26 @@ def test_sparse_jacobian_equals_finite_differences(base, per_cell):
     J = pb._jacobian_from(pb._evaluate_constrained(pb.full(theta), jac=True))
     assert not pb.sparse_jacobian and isinstance(J, np.ndarray)  # a few cells: dense, the search's exact steps
     np.testing.assert_allclose(J, pb.jacobian_fd(theta, step=1e-6), rtol=1e-5, atol=1e-7 * np.abs(J).max())
+
+
+def test_stacked_residuals_and_jacobian_are_each_cells_own_with_its_penalty():
+    """The population assembles its residuals and Jacobian from the cells' stacked moduli: in each cell's rows, the
+    cell's own problem's residuals and Jacobian columns, also for a cell whose evaluation found no stable cell."""
+    cells, _, _ = mechanism_cells(4, noise=0.05)
+    pb = Population("springpot-tension+visc", per_cell=("P",)).problem(cells)
+    phi = pb.full(pb.initial_guess(np.random.default_rng(0)))
+    out = list(pb._evaluate_constrained(phi, jac=True))
+    out[2] = (None, None)  # cell 2 unstable
+    r, J = pb._residuals_from(tuple(out)), pb._jacobian_from(tuple(out))
+    for k, (cp, p) in enumerate(zip(pb.cells, pb.cell_phis(phi))):
+        own = out[k] if k != 2 else cp._evaluate_constrained(p, jac=True)
+        np.testing.assert_allclose(r[pb.rows(k)], cp._residuals_from(out[k]), rtol=1e-14)
+        cols = np.r_[np.arange(pb.n_shared), pb.own_index(k)]
+        order = [cp.names.index(n) for n in pb.shared_names + pb.own_names]  # the cell's columns in the population's
+        expect = cp._jacobian_from(out[k])[:, order]
+        np.testing.assert_allclose(J[pb.rows(k)][:, cols], expect, rtol=1e-13, atol=1e-300)
+        assert (k == 2) == np.all(r[pb.rows(k)] == PENALTY) and np.any(cp._jacobian_from(own) != 0)
+    assert not np.any(J[pb.rows(2)])
 
 
 def test_large_population_jacobian_is_sparse_and_holds_the_small_ones_blocks():

@@ -341,6 +341,14 @@ class Problem:
         many cells at once overrides it (:func:`tenscell.fitting.models.mechanism_kernel.evaluate_cells`)."""
         return tuple(pb._evaluate_constrained(phi, jac) for pb, phi in zip(cells, phis))
 
+    def _moduli_of(self, out):
+        """``(G*, dG*/dφ or None)`` at the data points (Pa; complex; dφ over every parameter) held in an evaluation
+        ``out`` of moduli data (one :meth:`_evaluate_constrained` gives), or None where the evaluation found no stable
+        cell: what :meth:`_residuals_from` and :meth:`_jacobian_from` make ``w·(log10 model − log10 data)`` and its
+        Jacobian of. A population stacks its cells' (:class:`~tenscell.fitting.models.population.PopulationProblem`);
+        a model whose problems may be a population's base implements it."""
+        raise NotImplementedError
+
     def residuals(self, theta) -> np.ndarray:
         """Weighted data residuals ``w·(log10 model − log10 data)`` at free log-parameters ``theta``."""
         return self._residuals_from(self._evaluate_constrained(self.full(theta), jac=False))

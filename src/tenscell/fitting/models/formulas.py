@@ -352,6 +352,9 @@ class FormulaProblem(Problem):
         G, D = self._at(phi, self.time.nodes, Pg[groups], jac, groups)
         return mod, time_values(self.time, G, D)
 
+    def _moduli_of(self, out):
+        return out[0]
+
     def _residuals_from(self, out) -> np.ndarray:
         (G, _), tim = out
         if not (np.all(np.isfinite(G)) and np.all(G.real > 0) and np.all(G.imag > 0)):

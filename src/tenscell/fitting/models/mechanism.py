@@ -397,6 +397,10 @@ class MechanismProblem(Problem):
         # moduli only: many cells in one batched solve (a population), each as _evaluate_constrained pairs it
         return tuple((mod, None) for mod in evaluate_cells(cells, phis, jac))
 
+    def _moduli_of(self, out):
+        mod = out[0]
+        return None if mod is None else (mod.G, mod.dG)
+
     def _residuals_from(self, out) -> np.ndarray:
         mod, tim = out
         if mod is None or not (np.all(mod.G.real > 0) and np.all(mod.G.imag > 0)):

@@ -42,7 +42,7 @@ from ..._results import format_repr
 from ...io.data import DataError, RheologyData
 from ..identifiability import Identifiability, combinations, sigma_estimate, errors_from_covariance
 from ..parameters import Parameters, as_datasets
-from ..problem import LN10, Problem
+from ..problem import LN10, PENALTY, Problem, log_residual_blocks
 from .base import FITTED_KINDS, Capabilities, FitFileError, FitModel, FittedModel, field_of, model_from_dict
 
 __all__ = ["Population", "PopulationProblem", "FittedPopulation", "PopulationIdentifiability",
@@ -251,17 +251,40 @@ class PopulationProblem(Problem):
         # every cell at once where the base model's kernel can (Problem._evaluate_cells)
         return self.cells[0]._evaluate_cells(self.cells, self.cell_phis(phi), jac)
 
+    def _stacked_moduli(self, out, jac: bool):
+        """Every cell's model ``G*`` at its points (P,) and ``dG*/dφ`` over the base model's free parameters (P, q)
+        (None without ``jac``), stacked in the population's order of points (:meth:`Problem._moduli_of` of each
+        evaluation; NaN, and zero derivatives, for a cell whose evaluation found no stable cell)."""
+        pairs = [pb._moduli_of(o) for pb, o in zip(self.cells, out)]
+        sizes = [pb.n_points for pb in self.cells]
+        G = np.concatenate([np.full(n, np.nan + 0j) if m is None else m[0] for m, n in zip(pairs, sizes)])
+        if not jac:
+            return G, None
+        free = self.cells[0].free
+        dG = np.concatenate([np.zeros((n, int(free.sum())), complex) if m is None or m[1] is None else m[1][:, free]
+                             for m, n in zip(pairs, sizes)])
+        return G, dG
+
     def _residuals_from(self, out) -> np.ndarray:
-        r = np.empty(self.n_residuals)
-        r[self._pattern[0]] = np.concatenate([pb._residuals_from(o) for pb, o in zip(self.cells, out)])
+        """``w·(log10 model − log10 data)`` of every cell in stacked array calls; a cell without finite positive
+        G′, G″ at every point gets the base problems' penalty on its rows, as its own problem gives it."""
+        G, _ = self._stacked_moduli(out, jac=False)
+        y = np.concatenate([G.real, G.imag])
+        fine = np.isfinite(y) & (y > 0)
+        cell = np.concatenate([self.dataset_index, self.dataset_index])
+        bad = np.bincount(cell, ~fine, minlength=self.n_cells) > 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = self.weights * (np.log10(y) - self.y_obs)
+        r[bad[cell]] = PENALTY
         return r
 
     def _jacobian_from(self, out):
         """The block-sparse Jacobian (CSR; an array where :attr:`sparse_jacobian` is False): each cell's rows hold its
-        shared and own columns only."""
-        _, rows, cols, keep = self._pattern
-        data = np.concatenate([pb._jacobian_from(o)[:, kp].ravel() for pb, o, kp in zip(self.cells, out, keep)])
-        J = scipy.sparse.csr_matrix((data, (rows, cols)), shape=(self.n_residuals, self.n_free))
+        shared and own columns only; its values from the stacked moduli in array calls."""
+        indices, indptr, kept = self._pattern
+        G, dG = self._stacked_moduli(out, jac=True)
+        data = self.weights[:, None] * log_residual_blocks(G, dG[:, kept])
+        J = scipy.sparse.csr_matrix((data.ravel(), indices, indptr), shape=(self.n_residuals, self.n_free))
         return J if self.sparse_jacobian else J.toarray()
 
     def jacobian(self, theta) -> np.ndarray:
@@ -271,8 +294,8 @@ class PopulationProblem(Problem):
 
     def sparsity(self) -> scipy.sparse.csr_matrix:
         """The Jacobian's nonzero pattern (1 where a residual may depend on a free parameter)."""
-        _, rows, cols, _ = self._pattern
-        return scipy.sparse.csr_matrix((np.ones(rows.size), (rows, cols)), shape=(self.n_residuals, self.n_free))
+        indices, indptr, _ = self._pattern
+        return scipy.sparse.csr_matrix((np.ones(indices.size), indices, indptr), shape=(self.n_residuals, self.n_free))
 
     def moduli(self, theta) -> tuple[np.ndarray, np.ndarray]:
         phis = self.cell_phis(self.full(theta))
@@ -407,32 +430,26 @@ class PopulationProblem(Problem):
 
 
 def _jacobian_pattern(pb: PopulationProblem) -> tuple:
-    """(residual order, rows, columns, per cell the base Jacobian's columns kept) of the sparse Jacobian.
+    """(column indices, row pointers, the base Jacobian's columns kept) of the sparse Jacobian (CSR).
 
-    Cell ``k``'s base residuals (its G′ then its G″) go to the population's rows of its points; its base Jacobian's
-    columns (the base model's free parameters) go to the population's free columns of the shared parameters and of
-    its own (a column of a parameter the population holds is dropped).
+    Every row (a cell's point, G′ rows then G″ rows) holds the base model's free parameters that the population
+    frees: a shared one in its column, an own one in the column of the row's cell (a parameter the population holds
+    is dropped). The rows are those of the stacked moduli (:meth:`PopulationProblem._stacked_moduli`).
     """
     if not pb.cells:
-        return (np.zeros(0, int),) * 3 + ((),)
-    n = pb.n_points
+        return np.zeros(0, int), np.zeros(pb.n_residuals + 1, int), np.zeros(0, bool)
     base_free = np.flatnonzero(pb.cells[0].free)
-    shared_pos = {int(i): j for j, i in enumerate(pb.base_shared)}
-    own_pos = {int(i): j for j, i in enumerate(pb.base_own)}
     free_col = np.where(pb.free, np.cumsum(pb.free) - 1, -1)
-    order, rows, cols, keep = [], [], [], []
-    for k in range(pb.n_cells):
-        pts = np.flatnonzero(pb.dataset_index == k)
-        row_k = np.concatenate([pts, n + pts])
-        index = np.array([shared_pos[i] if i in shared_pos else pb.n_shared + k * pb.n_own + own_pos[i]
-                          for i in base_free.tolist()], dtype=int)
-        col = free_col[index]
-        kept = col >= 0
-        order.append(row_k)
-        rows.append(np.repeat(row_k, int(kept.sum())))
-        cols.append(np.tile(col[kept], row_k.size))
-        keep.append(kept)
-    return np.concatenate(order), np.concatenate(rows), np.concatenate(cols), tuple(keep)
+    cell = np.concatenate([pb.dataset_index, pb.dataset_index])  # each row's cell
+    own_pos = {int(i): j for j, i in enumerate(pb.base_own)}
+    shared_pos = {int(i): j for j, i in enumerate(pb.base_shared)}
+    # each base column's position in the population's parameters, per row (a shared one the same in every row)
+    index = np.stack([np.full(cell.size, shared_pos[i]) if i in shared_pos else
+                      pb.n_shared + cell * pb.n_own + own_pos[i] for i in base_free.tolist()], axis=1)
+    cols = free_col[index]
+    kept = np.all(cols >= 0, axis=0)
+    cols = cols[:, kept]
+    return cols.ravel(), np.arange(cell.size + 1) * int(kept.sum()), kept
 
 
 def _cell_problems(datasets, base: FitModel, cell, bounds, fixed) -> tuple:
