@@ -178,6 +178,44 @@ def command(seed=0) -> None:
     print(f"   command {cpu:.2f} s CPU ({wall:.1f} s wall), fit {fit_cpu:.2f} s CPU: ratio {cpu / fit_cpu:.2f}")
     for line in skipped:
         print(f"   ({line})")
+    _command_breakdown(model, seed)
+
+
+def _command_breakdown(model, seed) -> None:
+    """Where the command's CPU goes beyond its fit: each part of it run once more in this process (the interpreter
+    and the imports in a new one), in the order the command runs them. The command runs the fit in 2 worker
+    processes and the baseline, the plotting import and the figures in a third; all of it with one BLAS thread."""
+    from tenscell._threads import limited
+    from tenscell.cli import fit as cli_fit
+    from tenscell.fitting.models import baseline_of, get_model
+    from tenscell.fitting.scores import compare_models
+
+    importing, _, _ = _command([sys.executable, "-c", "import tenscell.cli.fit, tenscell.fitting"])
+    parts = [("interpreter and imports (a new process)", importing)]
+    spec, data = get_model(model), _data()
+
+    def timed(label, fn):
+        c = time.process_time()
+        with limited():
+            out = fn()
+        parts.append((label, time.process_time() - c))
+        return out
+
+    result = timed("the fit (in this process)", lambda: _fit_cpu(data, spec, seed)[1])
+    baseline = timed("its baseline (worker)", lambda: cli_fit._baseline_fit(data, baseline_of(spec), 2, seed, 0.01))
+    timed("profile plan and estimate", lambda: cli_fit.profile_cost(result, ["EA"], 3.0))
+    timed("report quantities (compute_derived)", result.compute_derived)
+    timed("plotting import (worker)", cli_fit._warm_plotting)
+    pngs = timed("figures: fit and residuals (worker)", lambda: cli_fit.fit_figures(result, baseline, "fit"))
+
+    class Done:
+        def result(self):
+            return pngs
+
+    timed("report.md, report.html, fit.json, fit.csv", lambda: cli_fit.fit_outputs(
+        result, baseline, "fit", comparison=compare_models(result, homogeneous=baseline), figure=Done()))
+    print("   breakdown (CPU s, each part again in this process): "
+          + "; ".join(f"{label} {cpu:.2f}" for label, cpu in parts) + f"; {_load()}")
 
 
 def populations(sizes=(100, 1000)) -> None:
