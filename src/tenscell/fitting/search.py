@@ -50,9 +50,10 @@ converged (:func:`~tenscell.fitting.records.accepted`).
   at a higher total. Replayed on the steps of searches run without stopping
   (4 starts × 15 rounds, on the bundled pair: springpot-alpha-family+visc
   seeds 0–9, springpot+visc, springpot and maxwell 0–5, voigt-compact+visc
-  0–3), this second count ends the search 14, 21 and 17 % sooner for the first
-  three of them (2–3 % for the others) and ends no search at a worse optimum
-  than the first count alone; at 12 (not 16) one of them
+  0–3), this second count ends the searches of springpot-alpha-family+visc,
+  springpot+visc and maxwell 14, 21 and 17 % sooner (springpot's and
+  voigt-compact+visc's 2–3 %) and ends no search at a worse optimum than the
+  first count alone; at 12 (not 16) one of them
   (springpot+visc, seed 0) would be at the edge of losing its optimum, or
 * **the plateau**: every start has run, and the best RMS has improved by less
   than 1 % over the last ``patience`` × ``starts`` steps (every start, on
