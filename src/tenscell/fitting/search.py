@@ -54,7 +54,8 @@ converged (:func:`~tenscell.fitting.records.accepted`).
   springpot+visc and maxwell 14, 21 and 17 % sooner (springpot's and
   voigt-compact+visc's 2–3 %) and ends no search at a worse optimum than the
   first count alone; at 12 (not 16) one of them
-  (springpot+visc, seed 0) would be at the edge of losing its optimum, or
+  (springpot+visc, seed 0) would be at the edge of losing its optimum
+  (``bench/stop_rule_replay.py``), or
 * **the plateau**: every start has run, and the best RMS has improved by less
   than 1 % over the last ``patience`` × ``starts`` steps (every start, on
   average, spent a patience of moves without improving the best: the
