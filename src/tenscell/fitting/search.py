@@ -45,9 +45,9 @@ converged (:func:`~tenscell.fitting.records.accepted`).
   ``patience`` times, as before); or at least two starts hold it and the moves
   of *every* start since its last 5 % improvement add up to
   :data:`EVERY_START` × ``patience`` (16 at the default 12): a start held in a
-  worse basin spends moves too, each of which found nothing better than the
-  best either, but they are draws of another neighbourhood, so they count
-  at a higher total. Replayed on the steps of searches run without stopping
+  worse basin spends moves too, and those found nothing 5 % better either,
+  but they are draws of another neighbourhood, so they count at a higher
+  total. Replayed on the steps of searches run without stopping
   (4 starts × 15 rounds, on the bundled pair: springpot-alpha-family+visc
   seeds 0–9, springpot+visc, springpot and maxwell 0–5, voigt-compact+visc
   0–3), this second count ends the searches of springpot-alpha-family+visc,
