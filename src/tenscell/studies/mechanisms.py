@@ -873,13 +873,13 @@ def _spec(name):
     return VoigtModel("per-tendon", "per-family") if name == PER_TENDON_VOIGT else get_model(name)
 
 
-def _ensemble_probe(name: str, datasets) -> None:
-    """The ensemble of a distributed mechanism fitted from one start with no hop, over :data:`PROBE_ASSIGNMENTS`
-    assignments: a calibration probe of the kind "ensemble assignment" (the short fit is a small part of it)."""
+def _ensemble_probe(name: str, datasets):
+    """A calibration probe of the kind "ensemble assignment": a distributed mechanism fitted from one start with no
+    hop (its setup), and the work timed returned — its ensemble over :data:`PROBE_ASSIGNMENTS` assignments."""
     from ..population.ensemble import ensemble_at_data
 
     r = _fit(datasets, name, {"starts": 1, "hops": 0, "seed": 0, "tolerance": 0.01})
-    ensemble_at_data(r.model, datasets, PROBE_ASSIGNMENTS, progress=False)
+    return lambda: ensemble_at_data(r.model, datasets, PROBE_ASSIGNMENTS, progress=False)
 
 
 def _a_priori_probe(datasets) -> None:
