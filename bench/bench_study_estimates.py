@@ -1,7 +1,8 @@
 """Each study's estimate against its measured time (issue 35: within ×/÷ 1.5 whatever the load).
 
 Runs ``tenscell study NAME`` for every study on the protocol (``tenscell.cli.study.STUDIES``; compactness on the
-bundled Fabry sweep with two bounds and one start) in a new process, reads the estimate it announced before the
+bundled Fabry sweep with two bounds and one start; mechanisms on the bundled pair; real-cells on 5 cells per line with
+4 starts × 4 hops, where the measured cells are) in a new process, reads the estimate it announced before the
 work and the time it took after the announcement (its last line), and prints their ratio with the load average
 before and after each run. ``--burn N`` adds N busy processes of this benchmark's own for the whole run (a second
 load; they are stopped at the end).
@@ -17,8 +18,14 @@ import re
 import subprocess
 import sys
 import tempfile
+from pathlib import Path
 
-ARGS = {"compactness": ["bundled:fabry2001", "--decades", "3,2", "--starts", "1"]}
+ARGS = {"compactness": ["bundled:fabry2001", "--decades", "3,2", "--starts", "1"],
+        "mechanisms": ["bundled:stamenovic2002", "bundled:fabry2001"],
+        # the measured cells (skipped where ../shared/data/real-cells is absent), 5 cells a line, a shorter search
+        "real-cells": ["--cells", "5", "--starts", "4", "--hops", "4"]}
+#: the studies run only where their data are
+NEEDS = {"real-cells": Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "real-cells"}
 
 
 def _burn() -> None:  # pragma: no cover - a busy loop, stopped by terminate()
@@ -33,7 +40,8 @@ def _load() -> str:
 def run(name: str) -> tuple[float, float, str]:
     with tempfile.TemporaryDirectory() as tmp:
         before = _load()
-        proc = subprocess.run([sys.executable, "-m", "tenscell", "study", name, *ARGS.get(name, []), "--out",
+        data = ["--data", str(NEEDS[name])] if name in NEEDS else []
+        proc = subprocess.run([sys.executable, "-m", "tenscell", "study", name, *ARGS.get(name, []), *data, "--out",
                                os.path.join(tmp, "out")], capture_output=True, text=True,
                               env={**os.environ, "MPLBACKEND": "Agg", "TENSCELL_PROGRESS": "1"})
     if proc.returncode != 0:
@@ -57,6 +65,9 @@ def main() -> None:
         print(f"load average {_load()} on {os.cpu_count()} CPUs; {args.burn} busy process(es) of this benchmark")
         worst = 1.0
         for name in args.names or STUDIES:
+            if name in NEEDS and not NEEDS[name].is_dir():
+                print(f"   {name:13s} skipped: no data at {NEEDS[name].resolve()}")
+                continue
             took, estimated, load = run(name)
             ratio = max(took / estimated, estimated / took)
             worst = max(worst, ratio)

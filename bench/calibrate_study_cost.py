@@ -1,16 +1,24 @@
-"""The constants of `tenscell study mechanisms`' cost estimate (tenscell.cli._legacy_studies.EVALUATIONS_PER_START_HOP).
+"""The constants of the studies' cost estimates: ``tenscell.fitting.search.EVALUATIONS_PER_START_HOP`` (the weight of
+a fit task of `tenscell study mechanisms`) and, with ``--populations``,
+``tenscell.studies.real_cells_study.POPULATION_EVALUATIONS`` (the weight of a population's scores in `tenscell study
+real-cells --populations`, in evaluations of its base model on a median spectrum).
 
 Fits every mechanism of the study to the bundled data with the study's search (4 starts, 10 hops, seed 0, one
 process), counts its model evaluations (residuals and Jacobian) per start and per allowed hop, and times one
 evaluation as the estimate does; prints the median over the mechanisms, the per-tendon fit's own rate, and how
 far the estimate of each fit lands from its measured wall time (CPU time too: the machine may be shared).
 
-    .venv/bin/python bench/calibrate_study_cost.py
+    .venv/bin/python bench/calibrate_study_cost.py [--populations]
+
+``--populations`` scores each population model of the study on the first 10 and on all cells of the first measured
+line (its default budget; the real-cell data under ../shared/data/real-cells), times one evaluation of its base
+model on that line's median as the probe does, and prints ``(fixed, per cell)`` in evaluations.
 """
 from __future__ import annotations
 
 import os
 import statistics
+import sys
 import time
 
 import numpy as np
@@ -49,5 +57,32 @@ def main() -> None:
           f"'voigt-per-tendon': {rates[PER_TENDON_VOIGT]:.1f}}}; load average {os.getloadavg()[0]:.1f}")
 
 
+def populations() -> None:
+    from tenscell.fitting import get_model
+    from tenscell.studies import real_cells_study as rc
+    from tenscell.studies._common import PROBE_EVALUATIONS, evaluation_probe
+    from tenscell.studies.real_cells import XIE_LINES, xie_cells, xie_median
+
+    line = XIE_LINES[0]
+    cells, median = xie_cells(line, None), xie_median(line, None)
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs; {line}, {len(cells)} cells")
+    for base, per in rc.POPULATIONS:
+        evaluation_probe(get_model(base), median)
+        c0 = time.process_time()
+        for _ in range(5):
+            evaluation_probe(get_model(base), median)
+        one = (time.process_time() - c0) / (5 * PROBE_EVALUATIONS)
+        cpu = []
+        for n in (10, len(cells)):
+            c0 = time.process_time()
+            rc.population_scores(rc.population_cells(cells[:n]), line, base, per, budget=rc.POPULATION_BUDGET)
+            cpu.append(time.process_time() - c0)
+        slope = (cpu[1] - cpu[0]) / (len(cells) - 10) / one
+        fixed = cpu[0] / one - 10 * slope
+        print(f"{base:30s} 10 cells {cpu[0]:6.1f} s, {len(cells)} cells {cpu[1]:6.1f} s of CPU; one evaluation "
+              f"{1e3 * one:.2f} ms: ({fixed:.0f}, {slope:.0f}) evaluations; load average {os.getloadavg()[0]:.1f}",
+              flush=True)
+
+
 if __name__ == "__main__":
-    main()
+    populations() if "--populations" in sys.argv[1:] else main()

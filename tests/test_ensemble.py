@@ -211,7 +211,7 @@ def test_the_study_refuses_a_bad_ensemble_before_any_fit(monkeypatch):
 
     monkeypatch.setattr("tenscell._parallel.starmap", lambda *a, **k: pytest.fail("fits started"))  # the fits' pool
     for kwargs in ({"ensemble": 1}, {"ensemble": 50, "workers": -1}):
-        with pytest.raises(ValueError, match="K \\(assignments\\)|workers"):
+        with pytest.raises(ValueError, match="K \\(assignments\\)|workers|1 assignment has no spread"):
             study.mechanisms_study([bundled("fabry2001")], mechanisms=["voigt-lognormal-damping"], **kwargs)
 
 

@@ -228,7 +228,7 @@ def test_a_result_pickles_its_fields_only_even_while_its_caches_fill():
                         G_loss=np.array([30, 36, 45, 60, 80, 110.0]), source="synthetic")
     result = fit(data, model="voigt-compact", starts=1, hops=0, progress=False)
     fields = {f.name for f in dataclasses.fields(result)}
-    for _ in range(3):  # the race showed within the first two rounds when it was there
+    for _ in range(2):  # the race showed within the first two rounds when it was there
         fresh = dataclasses.replace(result)
         done = threading.Event()
 

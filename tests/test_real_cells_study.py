@@ -152,9 +152,10 @@ def test_the_command_end_to_end_on_a_few_cells(tmp_path, capsys):
                               "--mechanisms", "springpot-lognormal-kappa+visc"], capsys)
     assert code == 0, err
     assert "estimated" in err and "G3" in stdout
-    from tenscell.cli._real_cells import FILES
-
-    assert sorted(p.name for p in out.iterdir() if p.name != "manifest.json") == sorted(FILES)
+    files = ("real_cells.md", "real_cells_medians.csv", "real_cells_g3.csv", "real_cells_cells.csv",
+             "real_cells_medians.png", "real_cells_slopes.png", "validation_tables.md", "validation_heldout.png",
+             "validation_slopes.png")
+    assert sorted(p.name for p in out.iterdir() if p.name != "manifest.json") == sorted(files)
     rows = list(csv.DictReader((out / "real_cells_medians.csv").open()))
     # 2 lines × (mechanism, its formula, 2 baselines) × 2 splits
     assert len(rows) == 2 * 4 * 2

@@ -457,7 +457,7 @@ def test_extreme_values_in_a_structure_file_are_read_and_used_or_refused_naming_
 def test_a_live_dask_scheduler_passes_the_preflight(tmp_path):
     """The handshake check accepts a real scheduler, by address and by scheduler file (and never waits for it)."""
     distributed = pytest.importorskip("distributed")
-    from tenscell.cli.population import reach_scheduler
+    from tenscell.population.scheduler import reach_scheduler
 
     with distributed.LocalCluster(n_workers=0, protocol="tcp", host="127.0.0.1", dashboard_address=None,
                                   scheduler_port=0) as cluster:

@@ -21,14 +21,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["Cost", "BUDGET_S", "EVALUATIONS_PER_START_HOP", "cpu_share", "cpu_per_call", "measure", "check", "announce", "duration", "size",
+__all__ = ["Cost", "BUDGET_S", "cpu_share", "measure", "check", "announce", "duration", "size",
            "total_memory", "estimate_plan"]
 
-#: model evaluations a fit takes per start and basin-hopping move allowed (--hops + 1 least-squares runs at most): the
-#: median over the built-in mechanisms, and the per-tendon fit's (30 hops at least, polished 4x as long), both counted
-#: on the bundled data (bench/calibrate_study_cost.py prints them; 2 cores, load about 9). `tenscell fit`'s and the
-#: studies' estimates multiply them by a measured model evaluation
-EVALUATIONS_PER_START_HOP = {"mechanism": 20.0, "voigt-per-tendon": 34.0}
 
 #: longest run a command starts (s): a day. Beyond it the command is refused with its estimate; split the
 #: run (fewer draws, cells, amplitudes) or, where the command takes one, give a --scheduler with more workers
@@ -155,7 +150,9 @@ def estimate_plan(plan) -> tuple[dict, float]:
             f"{machine.line()}{workers})")
     if wall > BUDGET_S:
         flags = ", ".join(plan.sized_by) or "the study's options"
-        raise ValueError(f"{plan.sized_by[0] if plan.sized_by else 'study ' + plan.study}: {line}; more than the "
+        heaviest = max(plan.kinds(), key=lambda k: plan.kinds()[k] * rates[k])
+        raise ValueError(f"{plan.sized_by[0] if plan.sized_by else 'study ' + plan.study}: estimated {duration(wall)}"
+                         f" ({len(plan.tasks)} task(s), the most of it {heaviest}), more than the "
                          f"{duration(BUDGET_S)} one run may take: give smaller {flags}")
     from .._progress import stage
 
@@ -202,16 +199,6 @@ def _free_bytes(path: Path) -> float | None:
         return float(shutil.disk_usage(probe).free)
     except OSError:
         return None
-
-
-def cpu_per_call(fn, calls: int = 5) -> float:
-    """CPU seconds of one call of ``fn`` (the mean of ``calls`` after one warm-up): what the work costs, whatever
-    share of the CPUs the machine gives it now."""
-    fn()
-    t0 = time.process_time()
-    for _ in range(calls):
-        fn()
-    return max(time.process_time() - t0, 1e-9) / calls
 
 
 def cpu_share(workers: int) -> float:

@@ -692,14 +692,14 @@ def _evaluation_time(problem, theta) -> float:
 
 def fit_cost(spec, datasets, args) -> Cost:
     """The fit's estimated cost (:class:`tenscell.cli._cost.Cost`): one model evaluation timed here, × the
-    evaluations its search is expected to take (:data:`tenscell.cli._cost.EVALUATIONS_PER_START_HOP` × starts ×
+    evaluations its search is expected to take (:data:`tenscell.fitting.search.EVALUATIONS_PER_START_HOP` × starts ×
     (hops + 1)), over its processes; the baseline runs beside it, the profile is estimated when its parameters are
     known."""
     import numpy as np
 
     from ..fitting.entry import prepare
     from ..fitting.models.catalog import PER_TENDON_VOIGT
-    from ._cost import EVALUATIONS_PER_START_HOP
+    from ..fitting.search import EVALUATIONS_PER_START_HOP
 
     problem = spec.problem(*prepare(datasets, None, args.max_points, spec))
     per = _evaluation_time(problem, problem.initial_guess(np.random.default_rng(args.seed)))

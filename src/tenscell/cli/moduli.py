@@ -142,7 +142,8 @@ def _run_ensemble(args, model, f, prestresses) -> int:
     from ..io.tables import check_finite_rows
     from ..population.ensemble import check_ensemble, mechanism_ensemble
     from ._cost import announce, check
-    from .population import _notifier, parallel_of, reach_scheduler
+    from ..population.scheduler import reach_scheduler
+    from .population import _notifier, parallel_of
 
     try:
         model, K, workers, _ = check_ensemble(model, args.ensemble, args.workers)

@@ -17,7 +17,6 @@ import time
 
 from ._args import (add_cluster_options, add_data_options, add_out, data_options_from_args, ensemble_size, integer,
                     number, number_list, path)
-from ._legacy_studies import LEGACY_OPTIONS, STUDY_ENSEMBLE_K
 from .fit import stated_prestress
 
 #: the studies of `tenscell study NAME`: name -> "module:attribute" of its study object (tenscell.studies.protocol)
@@ -30,7 +29,12 @@ STUDIES = {
     "compactness": "tenscell.studies.compactness:STUDY",
     "powerlaw": "tenscell.studies.powerlaw:STUDY",
     "structures": "tenscell.studies.structures:STUDY",
+    "mechanisms": "tenscell.studies.mechanisms:STUDY",
+    "real-cells": "tenscell.studies.real_cells_study:STUDY",
 }
+#: assignments of the mechanisms study's ensemble unless --ensemble says otherwise
+#: (tenscell.population.ensemble.DEFAULT_K; the parser imports only the standard library)
+STUDY_ENSEMBLE_K = 1000
 #: the paper's variant studies, which `tenscell reproduce` runs (the others fit data)
 VARIANTS = ("no-if", "sensitivity", "references", "semiflexible", "stiffening")
 #: the default of --decades (compactness)
@@ -68,7 +72,7 @@ def register(sub) -> None:
                                    "6-, 12-, 30-strut spheres, nucleus, elastic struts, a lattice — fitted to the "
                                    "bundled pair free and with σ anchored: a ranking of structures; about 15 min of "
                                    "CPU).")
-    p.add_argument("name", choices=sorted((*STUDIES, *LEGACY_OPTIONS)), help="which study")
+    p.add_argument("name", choices=sorted(STUDIES), help="which study")
     p.add_argument("data", nargs="*", help="compactness, mechanisms: file(s) of measured moduli (as for `tenscell "
                                            "fit`), or bundled:NAME")
     add_out(p, derived="study-NAME")
@@ -128,7 +132,7 @@ def _given(args) -> dict:
 
 
 def _options_of(name: str):
-    return LEGACY_OPTIONS[name] if name in LEGACY_OPTIONS else load_study(name).options
+    return load_study(name).options
 
 
 def _refuse_foreign(name: str, own, given: dict, data) -> None:
@@ -140,20 +144,16 @@ def _refuse_foreign(name: str, own, given: dict, data) -> None:
                          else f"study {name} takes no data files, got {' '.join(data)}")
     for dest in given:
         if dest not in own and not (dest == "prestress" and "data" in own):  # --prestress: how to read data files
-            takes = [n for n in sorted((*STUDIES, *LEGACY_OPTIONS))
+            takes = [n for n in sorted(STUDIES)
                      if dest in _options_of(n) or (dest == "prestress" and "data" in _options_of(n))]
             raise ValueError(f"{flag(dest)} applies to study {' and '.join(takes)}, not to study {name}")
 
 
 def _read_data(args) -> tuple:
-    """The data files read and checked (before the output folder and any work), each one's provenance said."""
-    from .._progress import stage
+    """The data files read and checked (before the output folder and any work)."""
     from .fit import read_datasets
 
-    datasets = read_datasets(args.data, args.prestress, 1, data_options_from_args(args))
-    for data in datasets:  # what was read: layout, step, temperature, conversions
-        stage(data.provenance.line())
-    return tuple(datasets)
+    return tuple(read_datasets(args.data, args.prestress, 1, data_options_from_args(args)))
 
 
 def run(args) -> int:
@@ -166,13 +166,11 @@ def run(args) -> int:
     given = _given(args)
     _refuse_foreign(args.name, _options_of(args.name), given, args.data)
     given.pop("prestress", None)  # applied as the data files are read
-    if args.name in LEGACY_OPTIONS:
-        from ._legacy_studies import run_legacy
-
-        return run_legacy(args, _read_data)
     data = _read_data(args) if args.data else None
     study = load_study(args.name)
     plan = study.plan({**given, "data": data} if data else given)  # the study checks its options: no work yet
+    for d in data or ():  # what was read (layout, step, temperature, conversions), once the options are accepted
+        stage(d.provenance.line())
     out = OutputSet(args.out or f"study-{args.name}", command=args.command_line, flag="--out")
     rates, estimate = estimate_plan(plan)
     t = time.perf_counter()
@@ -180,7 +178,9 @@ def run(args) -> int:
     with out as d:
         result = run_study(study, plan, rates=rates, notify=lambda line: stage(f"    {line}"))
         write_study_result(d, result, lambda line: stage(f"    {line}"))
-        stage(f"    wrote {', '.join(result.files())}")
+        stage(f"    wrote {', '.join(result.files())} ({result.cpu_s:.0f} s of CPU in {len(result.tasks)} tasks)")
+    if result.summary:
+        print(result.summary, flush=True)
     print(f"tenscell: study {args.name} finished in {time.perf_counter() - t:.1f} s (estimated "
           f"{estimate:.1f} s); wrote {out.target}/", file=sys.stderr)
     return 0

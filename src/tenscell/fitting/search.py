@@ -104,7 +104,8 @@ from .._threads import limited
 from .problem import Problem
 
 __all__ = ["run_search", "best_chain", "merged_history", "count", "local_fit", "stopped_by_budget", "BUDGET",
-           "AGREE_RMS", "AGREE_LOG", "EVERY_START", "PLATEAU_GAIN", "WELL_CONDITIONED_SPAN", "well_conditioned"]
+           "AGREE_RMS", "AGREE_LOG", "EVERY_START", "PLATEAU_GAIN", "WELL_CONDITIONED_SPAN", "well_conditioned",
+           "EVALUATIONS_PER_START_HOP"]
 
 #: two starts hold the same optimum when their RMS agree within this fraction and every free log-parameter within
 #: :data:`AGREE_LOG` (the stopping rule of the module docstring)
@@ -547,5 +548,12 @@ def _chains(problem: Problem, starts: int, seed, initial) -> list[_Chain]:
     return chains
 
 from .._deprecated import moved_away  # noqa: E402
+
+#: model evaluations a fit takes per start and basin-hopping move allowed (--hops + 1 least-squares runs at most): the
+#: median over the built-in mechanisms, and the per-tendon fit's (30 hops at least, polished 4x as long), both counted
+#: on the bundled data (bench/calibrate_study_cost.py prints them; 2 cores, load about 9); a structure-free formula's
+#: (its 20 main fits in `study mechanisms` on the bundled pair: 2.9 s of CPU at about 1 ms per evaluation, load 4-5).
+#: `tenscell fit`'s and the studies' estimates multiply them by a measured model evaluation
+EVALUATIONS_PER_START_HOP = {"mechanism": 20.0, "voigt-per-tendon": 34.0, "formula": 3.5}
 
 __getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home

@@ -173,22 +173,9 @@ def _decades(result) -> float:
 
 # ---- the study protocol (tenscell study compactness DATA...) --------------------------------------------------
 #: a fit at one bound per start, in units of one evaluation of the model at a start (residuals and Jacobian,
-#: :func:`_evaluation_probe`), as measured on the bundled data with the study's search (20 hops, patience 6)
+#: :func:`tenscell.studies._common.evaluation_probe`), as measured on the bundled data with the study's search (20 hops, patience 6)
 #: (bench/calibrate_study_units.py)
 UNITS_PER_START = 20.0
-
-
-def _evaluation_probe(data, damping: str):
-    """One unit of the study's work: one evaluation (residuals and Jacobian) of the model at a start."""
-    from .._threads import limited
-    from ..fitting.entry import prepare
-    from ..fitting.models.voigt import VoigtModel
-
-    spec = VoigtModel(tendons="per-tendon", damping=damping)
-    problem = spec.problem(*prepare(data, None, 100, spec))
-    theta = problem.initial_guess(np.random.default_rng(0))
-    with limited():
-        return problem.jacobian(theta)
 
 
 class _Compactness:
@@ -201,6 +188,8 @@ class _Compactness:
 
     def plan(self, options):
         from .._parallel import jobs_for
+        from ..fitting.models.voigt import VoigtModel
+        from ._common import PROBE_EVALUATIONS, evaluation_probe
         from .protocol import Plan, Task, study_options
 
         opts = study_options(self, options)
@@ -216,8 +205,9 @@ class _Compactness:
             tasks.append(Task(key, "evaluation", bound_fit, (tuple(opts["data"]), float(d), fit_options),
                               needs=before, weight=UNITS_PER_START * opts["starts"]))
             before = (key,)
-        probe = Task("one evaluation of the model", "evaluation", _evaluation_probe,
-                     (tuple(opts["data"]), opts["damping"]))
+        probe = Task("evaluations of the model", "evaluation", evaluation_probe,
+                     (VoigtModel(tendons="per-tendon", damping=opts["damping"]), tuple(opts["data"])),
+                     weight=PROBE_EVALUATIONS)
         return Plan(self.name, {**opts, "bounds": D}, tuple(tasks), calibration=(probe,), figures=2.0,
                     sized_by=("--decades", "--starts"))
 

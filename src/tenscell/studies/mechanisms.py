@@ -55,8 +55,8 @@ if TYPE_CHECKING:
 __all__ = ["MechanismRow", "MechanismStudy", "MechanismsStudy", "mechanisms_study", "GOALS", "SLOPE_GRID_PER_DECADE",
            "ANCHOR_S", "Anchored", "Falsified", "ExponentTest", "BaselineVerdict", "DISCRIMINATES", "ISSUE33_GOALS",
            "REFEREE_MAX_RMS", "EXPONENT_FREQUENCY_HZ", "ANCHOR_FACTOR", "fits_per_model", "baseline_pool", "anchor_options",
-           "exponent_change", "default_models", "CALIBRATION_CPU_S", "study_tables", "HELDOUT_COLUMNS",
-           "BASELINE_COLUMNS", "main_fit", "MainFit", "Skipped", "assemble_study"]
+           "exponent_change", "default_models", "study_tables", "HELDOUT_COLUMNS",
+           "BASELINE_COLUMNS", "main_fit", "MainFit", "Skipped", "assemble_study", "STUDY", "evaluations_of"]
 
 #: basin-hopping moves of the per-tendon reference fit (at least; the fit's own default)
 PER_TENDON_HOPS = 30
@@ -88,11 +88,6 @@ REFEREE_MAX_RMS = 0.05
 REFIT_MAX_FREE = 12
 #: the frequency (Hz) of the exponent test: α is the local G' slope d log G'/d log f there
 EXPONENT_FREQUENCY_HZ = 0.1
-#: CPU seconds per task by kind on the bundled pair (2 cores, quiet: a calibration the estimate starts from; the
-#: run revises it as tasks finish)
-CALIBRATION_CPU_S = {"a priori": 3.0, "fit": 5.0, "fit-per-tendon": 35.0, "formula": 0.3, "refit": 4.0,
-                     "formula-refit": 0.3,
-                     "ensemble": 6.0}
 
 
 # ---------------------------------------------------------------------------------------
@@ -748,32 +743,89 @@ def default_models(datasets) -> tuple[str, ...]:
 
 
 def _options(options: Mapping[str, Any]) -> dict:
-    """The study's options, checked, with defaults."""
-    from ..fitting.models import MODELS
+    """The study's options, checked (ValueError naming the option in flag syntax), with defaults."""
     from ..fitting.parameters import as_datasets
 
-    if "datasets" not in options:
-        raise ValueError("study mechanisms: needs datasets (a frequency or prestress sweep, or several)")
-    datasets = as_datasets(options["datasets"])
-    names = tuple(options.get("mechanisms") or default_models(datasets))
-    for n in names:
-        if n != PER_TENDON_VOIGT and n not in MODELS:
-            raise ValueError(f"unknown model {n!r}; known: {', '.join(MODELS)}")
-    K = options.get("ensemble")
-    if K:
-        from ..population.ensemble import check_counts
-
-        check_counts(K, options.get("workers"))
-    return {"datasets": datasets, "mechanisms": names, "starts": int(options.get("starts", 4)),
-            "hops": int(options.get("hops", 10)), "seed": int(options.get("seed", 0)),
-            "tolerance": float(options.get("tolerance", 0.01)), "validate": bool(options.get("validate", True)),
+    datasets = options.get("datasets") or options.get("data")
+    if not datasets:
+        raise ValueError("study mechanisms: needs data (a frequency or prestress sweep, or several)")
+    datasets = as_datasets(datasets)
+    names = _model_names(options.get("mechanisms"), datasets)
+    K = _ensemble_size(options)
+    return {"datasets": datasets, "mechanisms": names, "starts": int(options.get("starts") or 4),
+            "hops": int(10 if options.get("hops") is None else options["hops"]), "seed": int(options.get("seed") or 0),
+            "tolerance": float(options.get("tolerance") or 0.01), "validate": bool(options.get("validate", True)),
             "falsify": bool(options.get("falsify", True)), "ensemble": K or None,
-            "workers": options.get("workers"), "scheduler": options.get("scheduler"),
+            "workers": options.get("workers"), "scheduler": options.get("scheduler"), "jobs": options.get("jobs"),
             "progress": options.get("progress"), "notify": options.get("notify")}
+
+
+def _model_names(given, datasets) -> tuple[str, ...]:
+    """The models of the study: ``given`` (a sequence of names, or the command line's comma list), or
+    :func:`default_models`; an unknown name is refused naming ``--mechanisms``."""
+    from ..fitting.models import MODELS
+    from ..fitting.models.catalog import mechanism_names
+
+    if given is None:
+        return default_models(datasets)
+    names = tuple(m.strip() for m in (given.split(",") if isinstance(given, str) else given) if m.strip())
+    known = ", ".join(mechanism_names())
+    if not names:
+        raise ValueError(f"--mechanisms {given!r}: no mechanism named; give a comma list of names ({known}), or "
+                         "leave the flag out for all of them")
+    bad = [n for n in names if n != PER_TENDON_VOIGT and n not in MODELS]
+    if bad:
+        raise ValueError(f"--mechanisms: unknown mechanism {bad[0]!r}; known: {known}")
+    return names
+
+
+def _ensemble_size(options: Mapping[str, Any]) -> int:
+    """K of the ensemble (0: none), checked with where it runs, before any fit: one assignment has no spread,
+    ``--workers`` and ``--scheduler`` need an ensemble, and the scheduler must answer."""
+    from ..population.ensemble import DEFAULT_K, check_counts
+
+    K = options.get("ensemble", DEFAULT_K)
+    K = 0 if K is None else K
+    workers, scheduler = options.get("workers"), options.get("scheduler")
+    if K == 1:
+        raise ValueError("--ensemble: 1 assignment has no spread between assignments; give K >= 2, or 0 for none")
+    if not K and (workers is not None or scheduler is not None):
+        raise ValueError(f"{'--workers' if workers is not None else '--scheduler'} applies to the study's "
+                         "ensemble, and --ensemble 0 has none")
+    if K:
+        check_counts(K, workers)
+    if scheduler is not None:
+        from ..population.scheduler import reach_scheduler
+
+        reach_scheduler(scheduler)
+    return int(K)
 
 
 def _search(o: dict) -> dict:
     return {"starts": o["starts"], "hops": o["hops"], "seed": o["seed"], "tolerance": o["tolerance"]}
+
+
+def evaluations_of(name: str) -> str:
+    """The kind of the study's tasks that fit ``name`` (a model's or a formula's name): their weight is the model
+    evaluations they are expected to take, their rate the CPU seconds of one (:func:`~tenscell.studies._common.evaluation_probe`)."""
+    return f"evaluation of {name}"
+
+
+#: a referee's refit (held out, anchored, unlike, flat loss tangent) in evaluations, as a share of its main fit's:
+#: the mean over the study's default models on the bundled pair, where a refit warm at a refereed model's main fit
+#: took 0.4-0.7 of its CPU and the refits of the 9 models of 14 the referee leaves out (they miss the data in sample)
+#: none — 164 s of refits against 88 s of main fits × 13 refits (load 4-5; the run revises the rates as tasks finish)
+REFIT_SHARE = 0.15
+
+
+def _evaluations(o: dict, what: str = "mechanism") -> float:
+    """Model evaluations one main fit of the study is expected to take: ``EVALUATIONS_PER_START_HOP[what]`` of
+    :mod:`tenscell.fitting.search` × starts × (hops + 1) (``what``: "mechanism", "formula" or "voigt-per-tendon",
+    which searches at least :data:`PER_TENDON_HOPS` hops); a refit's: :data:`REFIT_SHARE` of that."""
+    from ..fitting.search import EVALUATIONS_PER_START_HOP
+
+    hops = max(o["hops"], PER_TENDON_HOPS) if what == "voigt-per-tendon" else o["hops"]
+    return EVALUATIONS_PER_START_HOP[what] * o["starts"] * (hops + 1)
 
 
 def _model_tasks(name: str, o: dict, split_list) -> list:
@@ -782,19 +834,22 @@ def _model_tasks(name: str, o: dict, split_list) -> list:
 
     ds, search = o["datasets"], _search(o)
     per_tendon = name == PER_TENDON_VOIGT
+    kind, n = evaluations_of(name), _evaluations(o, "voigt-per-tendon" if per_tendon else "mechanism")
     fit_key = f"fit/{name}"
-    tasks = [Task(fit_key, "fit-per-tendon" if per_tendon else "fit", main_fit, (name, ds, search))]
+    tasks = [Task(fit_key, kind, main_fit, (name, ds, search), weight=n)]
     if per_tendon:
         return tasks
+    n *= REFIT_SHARE
     if o["validate"]:
-        tasks += [Task(f"heldout/{name}/{s.name}", "refit", heldout_task, (name, s, search), needs=(fit_key,))
+        tasks += [Task(f"heldout/{name}/{s.name}", kind, heldout_task, (name, s, search), needs=(fit_key,), weight=n)
                   for s in split_list]
     if any(getattr(d, "prestress", None) is not None for d in ds):
-        tasks.append(Task(f"anchored/{name}", "refit", anchored_task, (name, ds, search), needs=(fit_key,)))
+        tasks.append(Task(f"anchored/{name}", kind, anchored_task, (name, ds, search), needs=(fit_key,), weight=n))
         if o["falsify"] and any(varies_with_prestress(d) for d in ds if getattr(d, "prestress", None) is not None):
-            tasks += [Task(f"unlike/{name}/{k}", "refit", unlike_task, (name, k, ds, search),
-                           needs=(f"anchored/{name}",)) for k in UNLIKE_KINDS]
-            tasks.append(Task(f"flat/{name}", "refit", flat_task, (name, ds, search), needs=(f"anchored/{name}",)))
+            tasks += [Task(f"unlike/{name}/{k}", kind, unlike_task, (name, k, ds, search),
+                           needs=(f"anchored/{name}",), weight=n) for k in UNLIKE_KINDS]
+            tasks.append(Task(f"flat/{name}", kind, flat_task, (name, ds, search), needs=(f"anchored/{name}",),
+                              weight=n))
     return tasks
 
 
@@ -802,28 +857,94 @@ def _baseline_tasks(name: str, spec, o: dict, split_list) -> list:
     from .protocol import Task
 
     ds, search = o["datasets"], _search(o)
+    kind, n = evaluations_of(name), _evaluations(o, "formula")
     fit_key = f"baseline/{name}"
-    tasks = [Task(fit_key, "formula", main_fit, (spec, ds, search))]
+    tasks = [Task(fit_key, kind, main_fit, (spec, ds, search), weight=n)]
     if o["validate"]:
-        tasks += [Task(f"baseline-heldout/{name}/{s.name}", "formula-refit", heldout_task, (spec, s, search),
-                       needs=(fit_key,)) for s in split_list]
+        tasks += [Task(f"baseline-heldout/{name}/{s.name}", kind, heldout_task, (spec, s, search),
+                       needs=(fit_key,), weight=n * REFIT_SHARE) for s in split_list]
     return tasks
+
+
+#: the assignments of the ensemble a probe evaluates
+PROBE_ASSIGNMENTS = 32
+
+
+def _spec(name):
+    """The model fitted under ``name`` (a name, the per-tendon cell's, or a model object)."""
+    from ..fitting import VoigtModel, get_model
+
+    if not isinstance(name, str):
+        return name
+    return VoigtModel("per-tendon", "per-family") if name == PER_TENDON_VOIGT else get_model(name)
+
+
+def _ensemble_probe(name: str, datasets):
+    """A calibration probe of the kind "ensemble assignment": a distributed mechanism fitted from one start with no
+    hop (its setup), and the work timed returned — its ensemble over :data:`PROBE_ASSIGNMENTS` assignments."""
+    from ..population.ensemble import ensemble_at_data
+
+    r = _fit(datasets, name, {"starts": 1, "hops": 0, "seed": 0, "tolerance": 0.01})
+    return lambda: ensemble_at_data(r.model, datasets, PROBE_ASSIGNMENTS, progress=False)
+
+
+def _a_priori_probe(datasets) -> None:
+    """The a-priori slopes of the first structure alone: a calibration probe of the kind "a priori" (one
+    structure of the table's)."""
+    from .a_priori import a_priori_table
+    from .structures import STRUCTURES
+
+    a_priori_table(datasets, structures=tuple(STRUCTURES)[:1])
+
+
+def _calibration(o: dict, tasks) -> tuple:
+    """One probe for each kind of the plan's tasks: a model's evaluations, the a-priori table, the ensemble."""
+    from ._common import PROBE_EVALUATIONS, evaluation_probe
+    from .protocol import Task
+    from .structures import STRUCTURES
+
+    probes = []
+    for t in tasks:
+        if t.key.startswith(("fit/", "baseline/")):
+            name = t.key.split("/", 1)[1]
+            probes.append(Task(f"probe {name}", evaluations_of(name), evaluation_probe,
+                               (_spec(t.args[0]), o["datasets"]), weight=PROBE_EVALUATIONS))
+        elif t.key == "a priori":
+            probes.append(Task("probe a priori", "a priori", _a_priori_probe, (o["datasets"],),
+                               weight=1.0 / len(STRUCTURES)))
+        elif t.key == "ensemble":
+            best = t.needs[0].split("/", 1)[1]
+            probes.append(Task("probe ensemble", "ensemble assignment", _ensemble_probe, (best, o["datasets"]),
+                               weight=PROBE_ASSIGNMENTS))
+    return tuple(probes)
+
+
+#: the study's figures in units of :data:`tenscell.studies.protocol.FIGURE` (the mechanisms figure's panels)
+_FIGURE_UNITS = 6.0
 
 
 class MechanismsStudy:
     """``tenscell study mechanisms`` on the study protocol (:mod:`tenscell.studies.protocol`).
 
-    Options: ``datasets`` (required), ``mechanisms`` (default :func:`default_models`), ``starts``, ``hops``,
-    ``seed``, ``tolerance`` (every fit's search, refits included), ``validate`` (held-out refits), ``falsify``
-    (unlike data and the exponent test), ``ensemble`` (K assignments of the best distributed mechanism; None: none),
-    ``workers``, ``scheduler`` (where the ensemble runs).
+    Options: ``data`` or ``datasets`` (required), ``mechanisms`` (names, or a comma list; default
+    :func:`default_models`), ``starts``, ``hops``, ``seed``, ``tolerance`` (every fit's search, refits included),
+    ``validate`` (held-out refits), ``falsify`` (unlike data and the exponent test), ``ensemble`` (K assignments of
+    the best distributed mechanism; 0 or None: none), ``workers``, ``scheduler`` (where the ensemble runs),
+    ``jobs`` (worker processes over the tasks; default one per CPU).
+
+    Every fit's task counts the model evaluations it is expected to take; the plan's probes time a few
+    evaluations of each model (:func:`evaluations_of`), so the estimate is evaluations × their measured CPU.
     """
 
     name = "mechanisms"
-    #: CPU seconds per unit of task weight by kind, before the run measures its own (:data:`CALIBRATION_CPU_S`)
-    rates = CALIBRATION_CPU_S
+    #: the options of ``tenscell study mechanisms`` (the protocol's ``Study.options``: name -> default; ``data``:
+    #: the data sets read from the files the command line names; ``ensemble``: K assignments, 0 for none)
+    options: Mapping[str, Any] = {"data": (), "seed": 0, "starts": 4, "jobs": None, "tolerance": 0.01,
+                                  "mechanisms": None, "hops": 10, "ensemble": 1000, "workers": None,
+                                  "scheduler": None}
 
     def plan(self, options: Mapping[str, Any]):
+        from .._parallel import jobs_for
         from ..fitting.validation import splits
         from .falsification import varies_with_prestress
         from .protocol import Plan, Task
@@ -844,25 +965,49 @@ class MechanismsStudy:
             # where its chunks run (the progress and notify callables stay in this process: a task may run in a
             # worker)
             where = {"workers": o["workers"], "scheduler": o["scheduler"], "progress": False}
-            tasks.append(Task("ensemble", "ensemble", ensemble_task, (o["datasets"], o["ensemble"], where),
-                              needs=heterogeneous))
+            tasks.append(Task("ensemble", "ensemble assignment", ensemble_task,
+                              (o["datasets"], o["ensemble"], where), needs=heterogeneous, weight=o["ensemble"]))
         if any(getattr(d, "prestress", None) is not None and varies_with_prestress(d) for d in o["datasets"]):
             tasks.insert(0, Task("a priori", "a priori", a_priori_task, (o["datasets"],)))
         o.update(models=tuple(names), given=tuple(given), pool=tuple(pool), own=own,
-                 splits=tuple(s.name for s in split_list))
-        return Plan(self.name, o, tuple(tasks))
+                 splits=tuple(s.name for s in split_list), jobs=jobs_for(len(tasks), o["jobs"]),
+                 started=time.monotonic())  # the study's wall time begins with its plan
+        return Plan(self.name, o, tuple(tasks), calibration=_calibration(o, tasks), figures=_FIGURE_UNITS,
+                    jobs=o["jobs"], sized_by=("--starts", "--hops", "--mechanisms NAMES"))
 
     def assemble(self, plan, results: Mapping[str, Any]):
-        return self.result(assemble_study(plan, results))
+        return self.result(assemble_study(plan, results, elapsed_s=time.monotonic() - plan.options["started"]))
 
     def result(self, study: MechanismStudy):
-        """The :class:`~tenscell.studies.protocol.StudyResult` of an assembled study: its tables, page, checks."""
+        """The :class:`~tenscell.studies.protocol.StudyResult` of an assembled study: its tables, figure, page and
+        checks, with the ensemble's table, figure and page when one was evaluated."""
         from .protocol import Figure, StudyResult
 
         tables = study_tables(study) + ((study.a_priori,) if study.a_priori is not None else ())
-        return StudyResult(study=self.name, tables=tables, data=study, checks=_checks(study),
-                           summary=_summary(study), pages=(("mechanisms.md", _markdown(study)),),
-                           figures=(Figure("mechanisms.png", "mechanisms_figure", (study, study.datasets)),))
+        figures: tuple = (Figure("mechanisms.png", "mechanisms_figure", (study, study.datasets)),)
+        pages: tuple = (("mechanisms.md", _markdown(study)),)
+        summary = _summary(study)
+        if study.ensemble is not None:
+            more = _ensemble_outputs(study.ensemble)
+            tables, figures, pages = tables + more[0], figures + more[1], pages + more[2]
+        elif study.options.get("ensemble"):
+            summary += "\nno ensemble: none of the mechanisms fitted draws a tendon property from a distribution"
+        return StudyResult(study=self.name, tables=tables, data=study, checks=_checks(study), summary=summary,
+                           pages=pages, figures=figures)
+
+
+def _ensemble_outputs(ensemble) -> tuple:
+    """``ensemble.csv``, ``ensemble.png`` and ``ensemble.md`` of the best distributed mechanism's ensemble, as the
+    protocol's (tables, figures, pages)."""
+    from .._results import reporter
+    from .protocol import Figure, Table
+
+    df = ensemble.to_dataframe()
+    table = Table("ensemble", tuple(df.columns), tuple(tuple(map(float, r)) for r in df.itertuples(index=False)),
+                  description="G', G'' over the assignments of the distributed mechanism with the lowest BIC")
+    title = f"Ensemble of `{ensemble.mechanism}`, the distributed mechanism with the lowest BIC"
+    return ((table,), (Figure("ensemble.png", "ensemble_moduli", (ensemble,)),),
+            (("ensemble.md", reporter("ensemble_markdown")(ensemble, title)),))
 
 
 def _structural(name: str) -> bool:
@@ -1153,7 +1298,11 @@ def mechanisms_study(datasets, *, mechanisms=None, starts: int = 4, hops: int = 
     study = MechanismsStudy()
     plan = study.plan({"datasets": datasets, "mechanisms": mechanisms, "starts": starts, "hops": hops, "seed": seed,
                        "tolerance": tolerance, "validate": validate, "falsify": falsify, "ensemble": ensemble,
-                       "workers": workers, "scheduler": scheduler, "progress": progress, "notify": notify})
-    plan.options["jobs"] = jobs
-    results, _ = execute(plan, jobs=jobs, rates=study.rates)
+                       "workers": workers, "scheduler": scheduler, "progress": progress, "notify": notify,
+                       "jobs": jobs})
+    results, _ = execute(plan, jobs=jobs)
     return assemble_study(plan, results, elapsed_s=time.monotonic() - t0)
+
+
+#: the study of ``tenscell study mechanisms`` (:data:`tenscell.cli.study.STUDIES`)
+STUDY = MechanismsStudy()

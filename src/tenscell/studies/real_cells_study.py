@@ -41,7 +41,7 @@ __all__ = ["HeldOut", "SPLITS", "G3_LIMIT", "DEFAULT_MECHANISMS", "BASELINES", "
            "G4Row", "g4_row", "population_scores", "population_cells", "time_series", "time_domain_fits",
            "TIME_STARTS", "slope_between", "RealCellsStudy", "RealCellsResult", "real_cells_study", "SLOPE_BAND_HZ",
            "MedianFit", "MedianRefit", "median_fit", "median_refit", "model_score", "assemble_real_cells",
-           "CALIBRATION_CPU_S", "load_average"]
+           "load_average", "EVALUATIONS_PER_START_HOP", "POPULATION_EVALUATIONS", "STUDY"]
 
 #: G3's limit on the held-out RMS (decades) of the first split, on both lines
 G3_LIMIT = 0.08
@@ -833,39 +833,95 @@ def load_average() -> float:
         return math.nan
 
 
-#: CPU seconds per task by kind (2 cores, load 1–4: the calibration the estimate starts from; the run revises it as
-#: tasks finish): a median's full fit or refit with 12 starts × 30 hops, one model's per-cell fits of one line, one
-#: population's scores, one time-domain fit
-CALIBRATION_CPU_S = {"median-fit": 3.0, "median-refit": 3.0, "cells": 40.0, "population": 30.0, "time": 60.0}
-
 
 def _real_cells_options(options: Mapping[str, Any]) -> dict:
-    """The study's options, checked, with defaults; every file read (RealCellsMissing otherwise)."""
-    from .real_cells import XIE_LINES, real_cells_directory, xie_cells, xie_median
+    """The study's options, checked, with defaults; every file read (RealCellsMissing otherwise).
 
-    folder = real_cells_directory(options.get("directory"))
-    max_cells = options.get("max_cells")
-    o = {"directory": str(folder), "mechanisms": tuple(options.get("mechanisms") or DEFAULT_MECHANISMS),
-         "budget": options.get("budget") or MEDIAN_BUDGET,
-         "cell_budget": options.get("cell_budget", CELL_BUDGET), "max_cells": max_cells,
+    Takes the command line's options (``data_dir``, ``starts``, ``hops``, ``seed``, ``cells``, ``mechanisms`` as a
+    comma list) or Python's (``directory``, ``budget``, ``cell_budget``, ``max_cells``, ``population_budget``)."""
+    from .real_cells import XIE_LINES, RealCellsMissing, real_cells_directory, xie_cells, xie_median
+
+    cli = "directory" not in options  # the command line names the folder --data DIR
+    where = options.get("directory", options.get("data_dir"))
+    names = _mechanism_names(options.get("mechanisms"))
+    budget, cell_budget, max_cells = _budgets(options)
+    o = {"mechanisms": names, "budget": budget, "cell_budget": cell_budget, "max_cells": max_cells,
          "time_domain": bool(options.get("time_domain", False)), "populations": bool(options.get("populations", False)),
          "population_budget": options.get("population_budget") or POPULATION_BUDGET}
-    o["medians"] = {ln: xie_median(ln, folder) for ln in XIE_LINES}
-    o["cells"] = {ln: xie_cells(ln, folder)[:max_cells] for ln in XIE_LINES}
-    o["series"] = time_series(folder) if o["time_domain"] else ()
+    try:
+        folder = real_cells_directory(where)
+        o["medians"] = {ln: xie_median(ln, folder) for ln in XIE_LINES}
+        o["cells"] = {ln: xie_cells(ln, folder)[:max_cells] for ln in XIE_LINES}
+        o["series"] = time_series(folder) if o["time_domain"] else ()
+    except RealCellsMissing as err:
+        if not cli:
+            raise
+        raise RealCellsMissing(f"--data {'DIR' if where is None else where}: {err}") from None
+    o["directory"] = str(folder)
+    o["jobs"] = options.get("jobs")
     return o
+
+
+def _mechanism_names(given) -> tuple[str, ...]:
+    """The mechanisms scored: ``given`` (names, or the command line's comma list) or :data:`DEFAULT_MECHANISMS`;
+    an unknown one refused naming ``--mechanisms``."""
+    from ..fitting.models.catalog import mechanism_names
+
+    if given is None:
+        return DEFAULT_MECHANISMS
+    names = tuple(m.strip() for m in (given.split(",") if isinstance(given, str) else given) if m.strip())
+    bad = [m for m in names if m not in mechanism_names()]
+    if not names or bad:
+        raise ValueError(f"--mechanisms: {'unknown mechanism ' + repr(bad[0]) if bad else 'no mechanism named'};"
+                         f" known: {', '.join(mechanism_names())}")
+    return names
+
+
+def _budgets(options: Mapping[str, Any]) -> tuple:
+    """``(medians' budget, per-cell budget or None, cells per line or None)``: Python's ``budget``, ``cell_budget``
+    and ``max_cells``, or the command line's ``--starts``/``--hops``/``--seed`` (the medians' budget) and ``--cells N``
+    (the first N cells of each line; 0: no per-cell fits)."""
+    if "cells" not in options and not {"starts", "hops", "seed"} & set(options):
+        return (options.get("budget") or MEDIAN_BUDGET, options.get("cell_budget", CELL_BUDGET),
+                options.get("max_cells"))
+    seed = int(options.get("seed") or 0)
+    starts, hops, cells = options.get("starts"), options.get("hops"), options.get("cells")
+    med = Budget(MEDIAN_BUDGET.starts if starts is None else int(starts), MEDIAN_BUDGET.hops if hops is None
+                 else int(hops), seed)
+    cell = None if cells == 0 else Budget(CELL_BUDGET.starts, CELL_BUDGET.hops, seed)
+    return med, cell, (None if cells in (None, 0) else int(cells))
+
+
+#: model evaluations (residuals and Jacobian) one start of a fit on one Xie spectrum takes per basin-hopping move
+#: allowed, the mean over the default models (measured: 12 starts × 30 hops took 900–8900 evaluations on a median,
+#: 2 cores, load 1–2): the weight of a fit task (its kind's rate, measured by a probe, is one evaluation's CPU)
+EVALUATIONS_PER_START_HOP = 12.0
+#: what a fit of the medians and cells is fitted to (its tasks' kind)
+SPECTRUM = "a spectrum"
+
+
+def _kind(label: str, on: str = SPECTRUM) -> str:
+    """The kind of a task that fits model ``label`` to ``on`` (a spectrum, or a time series by name): its weight is
+    the evaluations it is expected to take, its rate the CPU of one (:func:`~tenscell.studies._common.evaluation_probe`)."""
+    return f"evaluation of {label} on {on}"
+
+
+def _fit_evaluations(budget: Budget) -> float:
+    return EVALUATIONS_PER_START_HOP * budget.starts * (budget.hops + 1)
 
 
 def _median_tasks(o: dict) -> list:
     from .protocol import Task
 
     tasks = []
+    n = _fit_evaluations(o["budget"])
     for line, data in o["medians"].items():
         for spec, role, formula, label in median_models(o["mechanisms"]):
             key = f"median/{line}/{label}"
-            tasks.append(Task(key, "median-fit", median_fit, (spec, data, line, role, formula, label, o["budget"])))
-            tasks += [Task(f"{key}/{sp.name}", "median-refit", median_refit, (spec, data, sp, o["budget"], k == 0),
-                           needs=(key,)) for k, sp in enumerate(SPLITS)]
+            tasks.append(Task(key, _kind(label), median_fit, (spec, data, line, role, formula, label, o["budget"]),
+                              weight=n))
+            tasks += [Task(f"{key}/{sp.name}", _kind(label), median_refit, (spec, data, sp, o["budget"], k == 0),
+                           needs=(key,), weight=n) for k, sp in enumerate(SPLITS)]
     return tasks
 
 
@@ -874,39 +930,120 @@ def _other_tasks(o: dict) -> list:
 
     tasks = []
     if o["cell_budget"] is not None:
-        tasks += [Task(f"cells/{ln}/{name}", "cells", _slopes_task, (o["cells"][ln], ln, name, o["cell_budget"]))
+        per = _fit_evaluations(o["cell_budget"])
+        tasks += [Task(f"cells/{ln}/{name}", _kind(name), _slopes_task, (o["cells"][ln], ln, name, o["cell_budget"]),
+                       weight=per * len(o["cells"][ln]))
                   for ln in o["cells"] for name in (*o["mechanisms"], BASELINES[-1])]
     if o["populations"]:
-        tasks += [Task(f"population/{ln}/{base}", "population", _population_task,
-                       (population_cells(o["cells"][ln]), ln, base, per, o["population_budget"]))
+        tasks += [Task(f"population/{ln}/{base}", _kind(base), _population_task,
+                       (population_cells(o["cells"][ln]), ln, base, per, o["population_budget"]),
+                       weight=_population_evaluations(base, len(o["cells"][ln]), o["population_budget"]))
                   for ln in o["cells"] for base, per in POPULATIONS]
     for ts in o["series"]:
-        models = ("power law", *(("structural-damping+newtonian",) if ts.kind == "creep" else ()), *o["mechanisms"])
-        tasks += [Task(f"time/{ts.name}/{m}", "time", _time_task, (ts, m, TIME_STARTS, o["budget"].seed))
-                  for m in models]
+        tasks += [Task(f"time/{ts.name}/{m}", _kind(m, ts.name), _time_task, (ts, m, TIME_STARTS, o["budget"].seed),
+                       weight=_time_evaluations(m)) for m in _time_models(ts, o["mechanisms"])]
     return tasks
+
+
+def _time_models(series, mechanisms) -> tuple[str, ...]:
+    return ("power law", *(("structural-damping+newtonian",) if series.kind == "creep" else ()), *mechanisms)
+
+
+def _time_evaluations(model: str) -> float:
+    """The evaluations a time-domain fit of ``model`` is expected to take (its search: the baselines'
+    ``BASELINE_SEARCH``, a mechanism's :data:`TIME_STARTS` × ``MECHANISM_HOPS``)."""
+    from .real_cells_time import BASELINE_SEARCH, MECHANISM_HOPS
+
+    if model in ("power law", "structural-damping+newtonian"):
+        return EVALUATIONS_PER_START_HOP * BASELINE_SEARCH["starts"] * (BASELINE_SEARCH["hops"] + 1)
+    return EVALUATIONS_PER_START_HOP * TIME_STARTS * (MECHANISM_HOPS + 1)
+
+
+#: one population's scores (its joint fit, its per-cell initial fits, its held-out folds) in evaluations of its base
+#: model on one median spectrum, ``(fixed, per cell)``, at 2 starts × 1 hop: measured on the MCF-10A cells (10 and
+#: 59 of them: 23 s and 76 s of CPU for the mechanism at 8.7 ms per evaluation, 2.7 s and 12.6 s for the power law +
+#: Newtonian at 0.65 ms; 2 cores, load 3-5; ``python bench/calibrate_study_cost.py --populations`` measures them)
+POPULATION_EVALUATIONS = {"springpot-alpha-family+visc": (1400.0, 123.0), "structural-damping+newtonian": (1000.0, 310.0)}
+
+
+def _population_evaluations(base: str, cells: int, budget: Budget) -> float:
+    """A population's scores on ``cells`` cells in evaluations of ``base`` on a median (:data:`POPULATION_EVALUATIONS`,
+    scaled by the budget's starts × (hops + 1) from the 2 starts × 1 hop they were measured at)."""
+    fixed, per_cell = POPULATION_EVALUATIONS[base]
+    return (fixed + per_cell * cells) * budget.starts * (budget.hops + 1) / 4.0
+
+
+#: one of the study's figures (several panels of curves and points) in units of
+#: :data:`tenscell.studies.protocol.FIGURE`
+FIGURE_UNITS = 3.0
+#: the models of the time-domain baselines by their task names
+_TIME_SPECS = {"power law": "structural-damping"}
+
+
+def _calibration(o: dict, tasks) -> tuple:
+    """One probe for each kind of the plan's tasks: a few evaluations of a model on the first median (or on its time
+    series)."""
+    from ..fitting import get_model
+    from ._common import PROBE_EVALUATIONS, evaluation_probe
+    from .protocol import Task
+
+    probes: dict[str, Task] = {}
+    data = next(iter(o["medians"].values()))
+    series = {ts.name: ts for ts in o["series"]}
+    for t in tasks:
+        if t.kind in probes:
+            continue
+        label, _, on = t.kind.removeprefix("evaluation of ").rpartition(" on ")
+        if on == SPECTRUM:
+            spec, d = _spec_of(label, o["mechanisms"]), data
+        else:
+            spec, d = get_model(_TIME_SPECS.get(label, label)), series[on].data
+        probes[t.kind] = Task(f"probe {t.kind}", t.kind, evaluation_probe, (spec, d), weight=PROBE_EVALUATIONS)
+    return tuple(probes.values())
+
+
+def _spec_of(label: str, mechanisms):
+    """The model a spectrum's task of ``label`` fits (a mechanism, a formula of :func:`median_models`, a baseline,
+    or a population's base model)."""
+    from ..fitting import get_model
+
+    return next((spec for spec, _, _, lab in median_models(mechanisms) if lab == label), None) or get_model(label)
 
 
 class RealCellsStudy:
     """``tenscell study real-cells`` on the study protocol (:mod:`tenscell.studies.protocol`).
 
-    Options: ``directory`` (default :data:`~tenscell.studies.real_cells.DEFAULT_DIRECTORY`), ``mechanisms``,
-    ``budget`` (the medians'), ``cell_budget`` (None: no per-cell fits), ``max_cells``, ``time_domain``,
-    ``populations``, ``population_budget``. Every file is read when the plan is made, before any fit.
+    Options: the command line's ``data_dir``, ``mechanisms`` (a comma list), ``starts``, ``hops``, ``seed`` (the
+    medians' budget), ``cells`` (the first N cells of each line; 0: no per-cell fits), ``time_domain``,
+    ``populations``, ``jobs``; or Python's ``directory`` (default
+    :data:`~tenscell.studies.real_cells.DEFAULT_DIRECTORY`), ``budget``, ``cell_budget`` (None: no per-cell
+    fits), ``max_cells``, ``population_budget``. Every file is read when the plan is made, before any fit.
+
+    A fit's task counts the model evaluations it is expected to take (:data:`EVALUATIONS_PER_START_HOP` × its
+    budget); the plan's probes time a few evaluations of each model, and a population's scores on a few cells.
     """
 
     name = "real-cells"
-    #: CPU seconds per unit of task weight by kind, before the run measures its own (:data:`CALIBRATION_CPU_S`)
-    rates = CALIBRATION_CPU_S
+    #: the options of ``tenscell study real-cells`` (the protocol's ``Study.options``: name -> default)
+    options: Mapping[str, Any] = {"seed": 0, "starts": None, "jobs": None, "mechanisms": None, "hops": None,
+                                  "data_dir": None, "cells": None, "time_domain": False, "populations": False}
 
     def plan(self, options: Mapping[str, Any]):
+        from .._parallel import jobs_for
         from .protocol import Plan
 
         o = _real_cells_options(options)
-        return Plan(self.name, o, (*_median_tasks(o), *_other_tasks(o)))
+        tasks = (*_median_tasks(o), *_other_tasks(o))
+        o["jobs"] = jobs_for(len(tasks), o["jobs"])
+        o["started"] = (time.perf_counter(), load_average())  # the study's wall time and load begin with its plan
+        figures = FIGURE_UNITS * (4 + o["time_domain"] + o["populations"])  # medians, slopes, 2 validation figures
+        return Plan(self.name, o, tasks, calibration=_calibration(o, tasks), figures=figures, jobs=o["jobs"],
+                    sized_by=("--starts", "--hops", "--cells N", "--mechanisms NAMES"))
 
     def assemble(self, plan, results: Mapping[str, Any]):
-        return self.result(assemble_real_cells(plan, results))
+        t0, load0 = plan.options["started"]
+        return self.result(assemble_real_cells(plan, results, wall_s=time.perf_counter() - t0,
+                                               load=(load0, load_average())))
 
     def result(self, study: RealCellsResult):
         """The :class:`~tenscell.studies.protocol.StudyResult` of an assembled study: its tables, figures, pages."""
@@ -980,6 +1117,9 @@ def real_cells_study(directory=None, *, mechanisms: Sequence[str] = DEFAULT_MECH
     plan = study.plan({"directory": directory, "mechanisms": mechanisms, "budget": budget, "cell_budget": cell_budget,
                        "max_cells": max_cells, "time_domain": time_domain, "populations": populations,
                        "population_budget": population_budget})
-    results, _ = execute(plan, jobs=jobs, rates=study.rates, notify=notify)
+    results, _ = execute(plan, jobs=jobs, notify=notify)
     return assemble_real_cells(plan, results, wall_s=time.perf_counter() - w0, load=(load0, load_average()))
 
+
+#: the study of ``tenscell study real-cells`` (:data:`tenscell.cli.study.STUDIES`)
+STUDY = RealCellsStudy()
