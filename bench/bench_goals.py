@@ -50,11 +50,12 @@ def _children_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def _command(argv, **kw) -> tuple[float, float, subprocess.CompletedProcess]:
-    """(CPU s of the command and its workers, wall s, the process)."""
+def _command(argv, env=None, **kw) -> tuple[float, float, subprocess.CompletedProcess]:
+    """(CPU s of the command and its workers, wall s, the process); ``env``: its environment (default: this one's)."""
     before, t = _children_cpu(), time.perf_counter()
-    proc = subprocess.run(argv, capture_output=True, text=True, env={**os.environ, "MPLBACKEND": "Agg",
-                                                                      "TENSCELL_PROGRESS": "1"}, **kw)
+    proc = subprocess.run(argv, capture_output=True, text=True, env={**(os.environ if env is None else env),
+                                                                      "MPLBACKEND": "Agg", "TENSCELL_PROGRESS": "1"},
+                          **kw)
     return _children_cpu() - before, time.perf_counter() - t, proc
 
 
@@ -163,12 +164,15 @@ def multimodal(seeds, starts=4, hops=6) -> None:
           + ", ".join(f"{x:.2f}" for x in first))
 
 
+def _fit_command(model, seed, env=None):
+    with tempfile.TemporaryDirectory() as tmp:
+        return _command([sys.executable, "-m", "tenscell", "fit", "bundled:stamenovic2002", "bundled:fabry2001",
+                         "--model", model, "--seed", str(seed), "--out", os.path.join(tmp, "out")], env=env)
+
+
 def command(seed=0) -> None:
     model = "springpot-alpha-family+visc"
-    with tempfile.TemporaryDirectory() as tmp:
-        cpu, wall, proc = _command([sys.executable, "-m", "tenscell", "fit", "bundled:stamenovic2002",
-                                    "bundled:fabry2001", "--model", model, "--seed", str(seed), "--out",
-                                    os.path.join(tmp, "out")])
+    cpu, wall, proc = _fit_command(model, seed)
     if proc.returncode not in (0, 1):
         print(f"3. fit command: exit {proc.returncode}: {proc.stderr[-1000:]}")
         return
@@ -178,6 +182,53 @@ def command(seed=0) -> None:
     print(f"   command {cpu:.2f} s CPU ({wall:.1f} s wall), fit {fit_cpu:.2f} s CPU: ratio {cpu / fit_cpu:.2f}")
     for line in skipped:
         print(f"   ({line})")
+    if os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        # every process then compiles tenscell's sources as it imports them, which an installed package does not
+        with tempfile.TemporaryDirectory() as cache:
+            env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+            env["PYTHONPYCACHEPREFIX"] = cache
+            _fit_command(model, seed, env)  # writes the bytecode
+            cached, _, _ = _fit_command(model, seed, env)
+        print(f"   (PYTHONDONTWRITEBYTECODE is set: each process compiles tenscell's sources; with the bytecode "
+              f"cached, as installed: {cached:.2f} s CPU, ratio {cached / fit_cpu:.2f})")
+    _command_breakdown(model, seed)
+
+
+def _command_breakdown(model, seed) -> None:
+    """Where the command's CPU goes beyond its fit: each part of it run once more in this process (the interpreter
+    and the imports in a new one), in the order the command runs them. The command runs the fit in 2 worker
+    processes and the baseline, the plotting import and the figures in a third; all of it with one BLAS thread."""
+    from tenscell._threads import limited
+    from tenscell.cli import fit as cli_fit
+    from tenscell.fitting.models import baseline_of, get_model
+    from tenscell.fitting.scores import compare_models
+
+    importing, _, _ = _command([sys.executable, "-c", "import tenscell.cli.fit, tenscell.fitting"])
+    parts = [("interpreter and imports (a new process)", importing)]
+    spec, data = get_model(model), _data()
+
+    def timed(label, fn):
+        c = time.process_time()
+        with limited():
+            out = fn()
+        parts.append((label, time.process_time() - c))
+        return out
+
+    result = timed("the fit (in this process)", lambda: _fit_cpu(data, spec, seed)[1])
+    baseline = timed("its baseline (worker)", lambda: cli_fit._baseline_fit(data, baseline_of(spec), 2, seed, 0.01))
+    timed("profile plan and estimate", lambda: cli_fit.profile_cost(result, ["EA"], 3.0))
+    timed("report quantities (compute_derived)", result.compute_derived)
+    timed("plotting import (worker)", cli_fit._warm_plotting)
+    pngs = timed("figures: fit and residuals (worker)", lambda: cli_fit.fit_figures(result, baseline, "fit"))
+
+    class Done:
+        def result(self):
+            return pngs
+
+    timed("report.md, report.html, fit.json, fit.csv", lambda: cli_fit.fit_outputs(
+        result, baseline, "fit", comparison=compare_models(result, homogeneous=baseline), figure=Done()))
+    print("   breakdown (CPU s, each part again in this process): "
+          + "; ".join(f"{label} {cpu:.2f}" for label, cpu in parts) + f"; {_load()}")
 
 
 def populations(sizes=(100, 1000)) -> None:

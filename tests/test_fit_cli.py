@@ -248,3 +248,21 @@ def test_anchored_refusals(tmp_path, capsys, extra, match):
     assert cli_main(["fit", *extra, "--model", "springpot+visc", "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert match in err and err.count("\n") == 1 and not out.exists()
+
+
+def test_the_fit_command_runs_with_one_blas_thread_throughout(monkeypatch):
+    # the report's quantities and the figures evaluate the model outside the library's hot paths: with several BLAS
+    # threads on a busy machine they cost several times the fit (tenscell.cli.fit.run)
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    import tenscell.cli.fit as cli_fit
+
+    seen = []
+    monkeypatch.setattr(cli_fit, "_run", lambda args: seen.append(
+        [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]) or 0)
+    with threadpool_limits(limits=2, user_api="blas"):
+        outside = [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"]
+        if not outside or max(outside) < 2:
+            pytest.skip("the BLAS libraries here run one thread whatever they are asked")
+        assert cli_fit.run(None) == 0
+    assert seen and seen[0] and set(seen[0]) == {1}

@@ -444,6 +444,32 @@ def test_search_stops_when_the_starts_agree():
     np.testing.assert_allclose(best.theta, [1.1 / 3 + 2 / 3, 1.1 / 3 + 5 / 3, 0.5], atol=1e-7)
 
 
+def test_the_starts_agree_by_every_starts_moves_at_four_thirds_of_the_patience():
+    """Two starts hold the best fit with 5 moves between them (under the patience of 12); two more sit in a worse
+    basin. Their moves count too, towards 4/3 × 12 = 16 (search.EVERY_START), and only while two starts hold the
+    best: one fewer move, or one start fewer on the best, and the search goes on."""
+    from tenscell.fitting import search
+
+    def chain(k, rms, theta, stale):
+        return search._Chain(start=k, rng=np.random.default_rng(k), theta=np.asarray(theta, dtype=float),
+                             cost=0.5 * rms**2, rms=rms, stale=stale)
+
+    settings = search._settings(30, 12, 100, 1e-3, 0.2, 0.5, 0.0, np.array([1e-3]), 4)
+
+    def stop(stales, second_on_best=True):
+        best, worse = [0.0, 1.0, 2.0], [3.0, 1.0, 2.0]
+        chains = [chain(0, 0.1, best, stales[0]), chain(1, 0.1 if second_on_best else 0.15,
+                                                        best if second_on_best else worse, stales[1]),
+                  chain(2, 0.2, worse, stales[2]), chain(3, 0.2, worse, stales[3])]
+        return search._answer_rule(chains, settings, [])
+
+    assert search.EVERY_START * 12 == 16
+    assert stop([2, 3, 5, 5]) == ""  # 15 moves in all
+    assert stop([2, 3, 5, 6]).endswith("and 16 moves of all 4 starts found nothing 5 % better")
+    assert stop([2, 3, 5, 6], second_on_best=False) == ""  # one start holds the best: no agreement
+    assert "12 moves from it" in stop([6, 6, 0, 0])  # the first count: the moves from the best alone
+
+
 def test_search_stops_at_its_plateau_and_says_so():
     """An undetermined parameter keeps the starts apart, and no move improves the best: the plateau ends the
     search before every start has finished, and the stop reason says the tolerance is out of reach."""

@@ -11,7 +11,7 @@ from tenscell.cli import main
 from tenscell.fitting import search
 from tenscell.fitting.models.catalog import PER_TENDON_VOIGT
 from tenscell.io.data import bundled
-from tenscell.studies.mechanisms import STUDY, evaluations_of
+from tenscell.studies.mechanisms import REFIT_SHARE, STUDY, evaluations_of
 
 
 def _plan(names, **options):
@@ -25,16 +25,19 @@ def test_the_estimate_counts_every_fit_of_the_study():
 
     data = (bundled("stamenovic2002"), bundled("fabry2001"))
     rate = search.EVALUATIONS_PER_START_HOP
-    main_fit = 3 * 5  # starts × (hops + 1); every refit runs to the main fit's budget
+    main_fit = 3 * 5  # starts × (hops + 1); a refit, warm at the main fit, takes REFIT_SHARE of its evaluations
     # alone: the main fit, then the anchored refit (maxwell is a mechanism)
     one = _plan(("maxwell",), validate=False, falsify=False).kinds()[evaluations_of("maxwell")]
-    assert one == pytest.approx(rate["mechanism"] * 2 * main_fit)
+    assert one == pytest.approx(rate["mechanism"] * (1 + REFIT_SHARE) * main_fit)
     # with the held-out splits, the unlike versions of the sweep and the flat-loss-tangent lines
     n_split = len(splits(data))
     assert n_split >= 2
     full = _plan(("maxwell",))
     assert full.kinds()[evaluations_of("maxwell")] == pytest.approx(
-        rate["mechanism"] * (2 + n_split + len(UNLIKE_KINDS) + 1) * main_fit)
+        rate["mechanism"] * (1 + REFIT_SHARE * (1 + n_split + len(UNLIKE_KINDS) + 1)) * main_fit)
+    # a structure-free baseline: a formula's fits, its held-out refits at the same share
+    formula = full.kinds()[evaluations_of("structural-damping-prestress+newtonian")]
+    assert formula == pytest.approx(rate["formula"] * (1 + REFIT_SHARE * n_split) * main_fit)
     both = _plan(("maxwell", PER_TENDON_VOIGT))
     # the per-tendon fit searches at least 30 hops; its 37 parameters are too many for the refits
     assert both.kinds()[evaluations_of(PER_TENDON_VOIGT)] == pytest.approx(rate["voigt-per-tendon"] * 3 * 31)

@@ -145,6 +145,21 @@ def _spin(n):
     return total
 
 
+def _set_up_then_spin(setup, n):
+    _spin(setup)  # what the tasks do once (a problem built): not part of the rate
+    return lambda: _spin(n)
+
+
+def test_a_probe_that_returns_its_work_is_timed_without_its_setup():
+    plain = Plan("demo", {}, [Task("a", "fit", _spin, (200_000,))],
+                 calibration=[Task("probe", "fit", _spin, (200_000,))])
+    set_up = Plan("demo", {}, [Task("a", "fit", _spin, (200_000,))],
+                  calibration=[Task("probe", "fit", _set_up_then_spin, (4_000_000, 200_000))])
+    rate, with_setup = calibrate(plain)[0]["fit"], calibrate(set_up)[0]["fit"]
+    # the setup is 20 times the work: timed with it, the rate would be 21 times as large
+    assert with_setup < 3 * rate
+
+
 def test_calibration_rates_are_cpu_per_unit_of_weight():
     probe = Task("probe", "fit", _spin, (200_000,), weight=0.5)
     plan = Plan("demo", {}, [Task("a", "fit", _spin, (400_000,))], calibration=[probe])

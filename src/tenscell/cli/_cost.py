@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-__all__ = ["Cost", "BUDGET_S", "cpu_share", "cpu_per_call", "measure", "check", "announce", "duration", "size",
+__all__ = ["Cost", "BUDGET_S", "cpu_share", "measure", "check", "announce", "duration", "size",
            "total_memory", "estimate_plan"]
 
 
@@ -199,16 +199,6 @@ def _free_bytes(path: Path) -> float | None:
         return float(shutil.disk_usage(probe).free)
     except OSError:
         return None
-
-
-def cpu_per_call(fn, calls: int = 5) -> float:
-    """CPU seconds of one call of ``fn`` (the mean of ``calls`` after one warm-up): what the work costs, whatever
-    share of the CPUs the machine gives it now."""
-    fn()
-    t0 = time.process_time()
-    for _ in range(calls):
-        fn()
-    return max(time.process_time() - t0, 1e-9) / calls
 
 
 def cpu_share(workers: int) -> float:

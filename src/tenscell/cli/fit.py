@@ -560,6 +560,19 @@ class _Clock:
 
 
 def run(args) -> int:
+    """``tenscell fit``: with one BLAS thread throughout, as on the library's hot paths (:mod:`tenscell._threads`):
+    the report's quantities and the figures evaluate the fitted model outside them, and with several BLAS threads
+    on a busy machine these small products cost several times the fit's CPU (measured: 21 s against 10 s for the
+    whole command at a load of 2 on 2 CPUs); its worker processes inherit the setting. The fitting stack is imported
+    first: it loads scipy's own BLAS, which a limit set before it was loaded would not reach."""
+    from .. import fitting  # noqa: F401  (loads every BLAS library the command uses)
+    from .._threads import limited
+
+    with limited():
+        return _run(args)
+
+
+def _run(args) -> int:
     import sys
 
     from .._parallel import background, jobs_for
@@ -697,22 +710,21 @@ def fit_cost(spec, datasets, args) -> Cost:
                        f"least-squares runs × about {rate:g} evaluations; fewer when the tolerance is met early")
 
 
-def profile_cost(result, names) -> Cost:
+def profile_cost(result, names, fit_cpu: float | None = None) -> Cost:
     """The profile's estimated cost: per parameter, at most the refits its bar counts (the grid, the thresholds,
-    the refinements), each a search of ``REFIT_HOPS + 1`` runs warm-started at the fit, one model evaluation timed
-    here at the fit's parameters."""
-    from ..fitting.models.catalog import PER_TENDON_VOIGT
-    from ..fitting.profile import DEFAULT_POINTS, DEFAULT_REFINE, REFIT_HOPS, REFIT_NFEV
-    from ..fitting.search import EVALUATIONS_PER_START_HOP
+    the refinements), each about :data:`~tenscell.fitting.profile.REFIT_EVALUATIONS` model evaluations (a warm run
+    and one move), at the CPU per evaluation of the fit itself (``fit_cpu`` s over its evaluations: the search's
+    own overhead included, as the refits pay it), or of one evaluation timed here without ``fit_cpu``."""
+    from ..fitting.profile import DEFAULT_POINTS, DEFAULT_REFINE, REFIT_EVALUATIONS
 
-    per = _evaluation_time(result.problem, result.theta)
-    rate = EVALUATIONS_PER_START_HOP["voigt-per-tendon" if result.spec.name == PER_TENDON_VOIGT else "mechanism"]
-    refits = len(names) * (DEFAULT_POINTS + 4 + 4 * DEFAULT_REFINE)
-    evaluations = (REFIT_HOPS + 1) * min(rate, REFIT_NFEV)
-    return Cost("refit", refits, per * evaluations, 1,
-                detail=f"at most: {len(names)} parameter(s) × {DEFAULT_POINTS + 4 + 4 * DEFAULT_REFINE} refits, each "
-                       f"{REFIT_HOPS + 1} least-squares runs of about {min(rate, REFIT_NFEV):g} evaluations of "
-                       f"{result.n_free - 1} free parameters")
+    if fit_cpu is not None and result.n_evaluations > 0:
+        per, basis = fit_cpu / result.n_evaluations, "the fit's CPU per evaluation"
+    else:
+        per, basis = _evaluation_time(result.problem, result.theta), "one evaluation timed"
+    per_parameter = DEFAULT_POINTS + 4 + 4 * DEFAULT_REFINE
+    return Cost("refit", len(names) * per_parameter, per * REFIT_EVALUATIONS, 1,
+                detail=f"at most: {len(names)} parameter(s) × {per_parameter} refits, each about "
+                       f"{REFIT_EVALUATIONS} evaluations of {result.n_free - 1} free parameters at {basis}")
 
 
 def _profile(args, result, fit_cpu: float) -> None:
@@ -728,7 +740,7 @@ def _profile(args, result, fit_cpu: float) -> None:
     mode = "needed" if args.profile == "yes" else "auto"
     todo, _ = profile_plan(result, mode)
     if todo:
-        cost = profile_cost(result, [n for n, _ in todo])
+        cost = profile_cost(result, [n for n, _ in todo], fit_cpu)
         if args.profile == "auto" and cost.seconds > AUTO_SHARE * fit_cpu:
             stage(f"profile: not run by default ({', '.join(n for n, _ in todo[:8])}"
                   f"{', ...' if len(todo) > 8 else ''}: {cost.line()}, against {fit_cpu:.1f} s of CPU for the fit; "

@@ -39,7 +39,8 @@ from .identifiability import simple_exponent
 from .records import information_criteria
 
 __all__ = ["ProfileInterval", "ParameterProfile", "ProfileSet", "profile_intervals", "profile_parameter",
-           "needs_profile", "profile_plan", "LEVELS", "DEFAULT_POINTS", "MAX_FREE", "UNDETERMINED_LN"]
+           "needs_profile", "profile_plan", "LEVELS", "DEFAULT_POINTS", "MAX_FREE", "UNDETERMINED_LN",
+           "REFIT_EVALUATIONS"]
 
 #: (confidence level, rise of −2 ln L): χ² with one degree of freedom at 68.27 % and 95 %
 LEVELS = ((0.6827, 1.0), (0.95, 3.841458820694124))
@@ -58,6 +59,11 @@ LOCAL_95 = 1.959963984540054
 REFIT_HOPS = 2
 #: model evaluations per least-squares run of a refit
 REFIT_NFEV = 60
+#: model evaluations one refit takes on average (its warm run, and the move its patience of 1 allows): 17.6–25.5 in
+#: the profiles of springpot-alpha-family+visc, springpot-tension+visc, springpot+visc and sls-trap+visc fitted to
+#: the bundled pair (2 least-squares runs per refit, far below the ``(REFIT_HOPS + 1) × REFIT_NFEV`` allowed); the
+#: command line's estimate of a profile's cost
+REFIT_EVALUATIONS = 26
 #: another parameter compensates along a profile when |d ln θ_j / d ln θ| is at least this over the accepted region
 COMPENSATION_SLOPE = 0.5
 #: ... and the combination varies over that region by at most this fraction of the parameter's own range (in ln)

@@ -16,15 +16,20 @@ def grid(name, values, unit):
     return np.atleast_1d(positive_array(name, values, unit=unit)).ravel()
 
 
-def evaluation_probe(spec, data) -> None:
-    """:data:`PROBE_EVALUATIONS` evaluations of model ``spec``'s Jacobian on ``data`` at its initial guess, with the
-    BLAS threads the search uses: the calibration probe of a study's fit tasks, whose weights count the model
-    evaluations they are expected to take (:mod:`tenscell.studies.protocol`)."""
+def evaluation_probe(spec, data):
+    """The calibration probe of a study's fit tasks, whose weights count the model evaluations they are expected to
+    take (:mod:`tenscell.studies.protocol`): model ``spec``'s problem on ``data`` built (a fit does it once), and
+    the work timed returned — :data:`PROBE_EVALUATIONS` evaluations of its Jacobian at its initial guess, with the
+    BLAS threads the search uses."""
     from .._threads import limited
     from ..fitting.entry import prepare
 
     problem = spec.problem(*prepare(data, None, 100, spec))
     theta = problem.initial_guess(np.random.default_rng(0))
-    with limited():
-        for _ in range(PROBE_EVALUATIONS):
-            problem.jacobian(theta)
+
+    def evaluations() -> None:
+        with limited():
+            for _ in range(PROBE_EVALUATIONS):
+                problem.jacobian(theta)
+
+    return evaluations

@@ -811,16 +811,21 @@ def evaluations_of(name: str) -> str:
     return f"evaluation of {name}"
 
 
-def _evaluations(o: dict, per_tendon: bool = False) -> float:
-    """Model evaluations one fit of the study is expected to take: ``EVALUATIONS_PER_START_HOP`` of
-    :mod:`tenscell.fitting.search` × starts × (hops + 1); the per-tendon fit searches at least
-    :data:`PER_TENDON_HOPS` hops. A refit runs to the main fit's standard: the same count (an upper bound, a warm
-    refit often stops sooner)."""
+#: a referee's refit (held out, anchored, unlike, flat loss tangent) in evaluations, as a share of its main fit's:
+#: the mean over the study's default models on the bundled pair, where a refit warm at a refereed model's main fit
+#: took 0.4-0.7 of its CPU and the refits of the 9 models of 14 the referee leaves out (they miss the data in sample)
+#: none — 164 s of refits against 88 s of main fits × 13 refits (load 4-5; the run revises the rates as tasks finish)
+REFIT_SHARE = 0.15
+
+
+def _evaluations(o: dict, what: str = "mechanism") -> float:
+    """Model evaluations one main fit of the study is expected to take: ``EVALUATIONS_PER_START_HOP[what]`` of
+    :mod:`tenscell.fitting.search` × starts × (hops + 1) (``what``: "mechanism", "formula" or "voigt-per-tendon",
+    which searches at least :data:`PER_TENDON_HOPS` hops); a refit's: :data:`REFIT_SHARE` of that."""
     from ..fitting.search import EVALUATIONS_PER_START_HOP
 
-    if per_tendon:
-        return EVALUATIONS_PER_START_HOP["voigt-per-tendon"] * o["starts"] * (max(o["hops"], PER_TENDON_HOPS) + 1)
-    return EVALUATIONS_PER_START_HOP["mechanism"] * o["starts"] * (o["hops"] + 1)
+    hops = max(o["hops"], PER_TENDON_HOPS) if what == "voigt-per-tendon" else o["hops"]
+    return EVALUATIONS_PER_START_HOP[what] * o["starts"] * (hops + 1)
 
 
 def _model_tasks(name: str, o: dict, split_list) -> list:
@@ -829,11 +834,12 @@ def _model_tasks(name: str, o: dict, split_list) -> list:
 
     ds, search = o["datasets"], _search(o)
     per_tendon = name == PER_TENDON_VOIGT
-    kind, n = evaluations_of(name), _evaluations(o, per_tendon)
+    kind, n = evaluations_of(name), _evaluations(o, "voigt-per-tendon" if per_tendon else "mechanism")
     fit_key = f"fit/{name}"
     tasks = [Task(fit_key, kind, main_fit, (name, ds, search), weight=n)]
     if per_tendon:
         return tasks
+    n *= REFIT_SHARE
     if o["validate"]:
         tasks += [Task(f"heldout/{name}/{s.name}", kind, heldout_task, (name, s, search), needs=(fit_key,), weight=n)
                   for s in split_list]
@@ -851,12 +857,12 @@ def _baseline_tasks(name: str, spec, o: dict, split_list) -> list:
     from .protocol import Task
 
     ds, search = o["datasets"], _search(o)
-    kind, n = evaluations_of(name), _evaluations(o)
+    kind, n = evaluations_of(name), _evaluations(o, "formula")
     fit_key = f"baseline/{name}"
     tasks = [Task(fit_key, kind, main_fit, (spec, ds, search), weight=n)]
     if o["validate"]:
         tasks += [Task(f"baseline-heldout/{name}/{s.name}", kind, heldout_task, (spec, s, search),
-                       needs=(fit_key,), weight=n) for s in split_list]
+                       needs=(fit_key,), weight=n * REFIT_SHARE) for s in split_list]
     return tasks
 
 
@@ -873,13 +879,13 @@ def _spec(name):
     return VoigtModel("per-tendon", "per-family") if name == PER_TENDON_VOIGT else get_model(name)
 
 
-def _ensemble_probe(name: str, datasets) -> None:
-    """The ensemble of a distributed mechanism fitted from one start with no hop, over :data:`PROBE_ASSIGNMENTS`
-    assignments: a calibration probe of the kind "ensemble assignment" (the short fit is a small part of it)."""
+def _ensemble_probe(name: str, datasets):
+    """A calibration probe of the kind "ensemble assignment": a distributed mechanism fitted from one start with no
+    hop (its setup), and the work timed returned — its ensemble over :data:`PROBE_ASSIGNMENTS` assignments."""
     from ..population.ensemble import ensemble_at_data
 
     r = _fit(datasets, name, {"starts": 1, "hops": 0, "seed": 0, "tolerance": 0.01})
-    ensemble_at_data(r.model, datasets, PROBE_ASSIGNMENTS, progress=False)
+    return lambda: ensemble_at_data(r.model, datasets, PROBE_ASSIGNMENTS, progress=False)
 
 
 def _a_priori_probe(datasets) -> None:

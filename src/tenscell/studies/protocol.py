@@ -422,22 +422,32 @@ def calibrate(plan: Plan, extra: Sequence[Task] = ()) -> tuple[dict[str, float],
     """Every kind's rate (CPU s per unit of weight) from ``plan.calibration`` and ``extra`` probes, and the
     machine as measured over them (:class:`Machine`). Each probe runs in this process once to load what it
     imports, then timed: once, or while its CPU time stays below :data:`PROBE_CPU_S`, up to :data:`PROBE_CALLS`
-    times (the mean: a single short call on a shared machine can land on a stall)."""
+    times (the mean: a single short call on a shared machine can land on a stall).
+
+    A probe that returns a callable has set up its work (a problem built, a model fitted: what the tasks it stands
+    for do once, not per unit of weight): the callable is then what is timed, and the probe's weight is its work's.
+    """
     from .._parallel import CpuWindow
 
     cpu: dict[str, float] = {}
     weight: dict[str, float] = {}
     window = CpuWindow()
     for probe in (*plan.calibration, *extra):
-        probe.fn(*probe.args)
+        work = probe.fn(*probe.args)
+        if not callable(work):  # the probe is its own work (its first call loaded what it imports)
+            work = _call(probe.fn, *probe.args)
         calls, seconds = 0, 0.0
         while calls < PROBE_CALLS and (calls == 0 or seconds < PROBE_CPU_S):  # a short probe: its mean of a few
-            seconds += _timed(probe.fn, *probe.args)[1]
+            seconds += _timed(work)[1]
             calls += 1
         cpu[probe.kind] = cpu.get(probe.kind, 0.0) + seconds / calls
         weight[probe.kind] = weight.get(probe.kind, 0.0) + probe.weight
     use = window.stop()
     return {k: max(cpu[k], 1e-6) / weight[k] for k in cpu}, Machine.measure(use)
+
+
+def _call(fn, *args):
+    return lambda: fn(*args)
 
 
 def figure_probe() -> None:

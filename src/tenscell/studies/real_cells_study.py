@@ -893,9 +893,11 @@ def _budgets(options: Mapping[str, Any]) -> tuple:
 
 
 #: model evaluations (residuals and Jacobian) one start of a fit on one Xie spectrum takes per basin-hopping move
-#: allowed, the mean over the default models (measured: 12 starts × 30 hops took 900–8900 evaluations on a median,
-#: 2 cores, load 1–2): the weight of a fit task (its kind's rate, measured by a probe, is one evaluation's CPU)
-EVALUATIONS_PER_START_HOP = 12.0
+#: allowed, searching to its budget (FULL_SEARCH), weighted by each evaluation's CPU: the default mechanisms took 99,
+#: 42, 21 and 8 per start and hop (springpot+visc, springpot-alpha-family+visc, maxwell+visc,
+#: springpot-lognormal-kappa+visc; 4 starts × 4 hops on the MCF-10A median) at 1.7, 2.0, 2.1 and 6.4 ms of CPU per
+#: evaluation as the probe times it: 6.1 s of CPU, which 25 evaluations per start and hop of each give
+EVALUATIONS_PER_START_HOP = 25.0
 #: what a fit of the medians and cells is fitted to (its tasks' kind)
 SPECTRUM = "a spectrum"
 
@@ -960,10 +962,10 @@ def _time_evaluations(model: str) -> float:
 
 
 #: one population's scores (its joint fit, its per-cell initial fits, its held-out folds) in evaluations of its base
-#: model on one median spectrum, ``(fixed, per cell)``, at 2 starts × 1 hop: measured on the MCF-10A cells (10 and
-#: 59 of them: 23 s and 76 s of CPU for the mechanism at 8.7 ms per evaluation, 2.7 s and 12.6 s for the power law +
-#: Newtonian at 0.65 ms; 2 cores, load 3-5; ``python bench/calibrate_study_cost.py --populations`` measures them)
-POPULATION_EVALUATIONS = {"springpot-alpha-family+visc": (1400.0, 123.0), "structural-damping+newtonian": (1000.0, 310.0)}
+#: model on one median spectrum, ``(fixed, per cell)``, at 2 starts × 1 hop (``python bench/calibrate_study_cost.py
+#: --populations`` measures them: the scores on 10 and on all cells of the MCF-10A line, and one evaluation as the
+#: probe times it)
+POPULATION_EVALUATIONS = {"springpot-alpha-family+visc": (6100.0, 535.0), "structural-damping+newtonian": (1860.0, 577.0)}
 
 
 def _population_evaluations(base: str, cells: int, budget: Budget) -> float:
