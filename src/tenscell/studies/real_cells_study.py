@@ -843,13 +843,18 @@ def _real_cells_options(options: Mapping[str, Any]) -> dict:
 
     cli = "directory" not in options  # the command line names the folder --data DIR
     where = options.get("directory", options.get("data_dir"))
+    try:  # the folder first: without the data nothing else can be checked
+        folder = real_cells_directory(where)
+    except RealCellsMissing as err:
+        if not cli:
+            raise
+        raise RealCellsMissing(f"--data {'DIR' if where is None else where}: {err}") from None
     names = _mechanism_names(options.get("mechanisms"))
     budget, cell_budget, max_cells = _budgets(options)
     o = {"mechanisms": names, "budget": budget, "cell_budget": cell_budget, "max_cells": max_cells,
          "time_domain": bool(options.get("time_domain", False)), "populations": bool(options.get("populations", False)),
          "population_budget": options.get("population_budget") or POPULATION_BUDGET}
     try:
-        folder = real_cells_directory(where)
         o["medians"] = {ln: xie_median(ln, folder) for ln in XIE_LINES}
         o["cells"] = {ln: xie_cells(ln, folder)[:max_cells] for ln in XIE_LINES}
         o["series"] = time_series(folder) if o["time_domain"] else ()
