@@ -968,9 +968,9 @@ def _time_evaluations(model: str) -> float:
 
 #: one population's scores (its joint fit, its per-cell initial fits, its held-out folds) in evaluations of its base
 #: model on one median spectrum, ``(fixed, per cell)``, at 2 starts × 1 hop (``python bench/calibrate_study_cost.py
-#: --populations`` measures them: the scores on 10 and on all cells of the MCF-10A line, and one evaluation as the
-#: probe times it)
-POPULATION_EVALUATIONS = {"springpot-alpha-family+visc": (6100.0, 535.0), "structural-damping+newtonian": (1860.0, 577.0)}
+#: --populations`` measures them: the scores on 10 and on all 59 cells of the MCF-10A line took 18.1 s and 55.1 s of
+#: CPU for the mechanism at 3.6 ms per evaluation, 2.0 s and 11.1 s for the power law + Newtonian at 0.32 ms; load 1)
+POPULATION_EVALUATIONS = {"springpot-alpha-family+visc": (2900.0, 211.0), "structural-damping+newtonian": (333.0, 579.0)}
 
 
 def _population_evaluations(base: str, cells: int, budget: Budget) -> float:
