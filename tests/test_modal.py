@@ -275,6 +275,29 @@ def test_hot_paths_run_with_one_blas_thread_and_restore():
     assert tenscell.compliance.__wrapped__  # the public hot paths are marked
 
 
+class _FakeBlas:
+    """A BLAS library's controller (threadpoolctl's): its file and thread count."""
+
+    def __init__(self, path, n):
+        self.filepath, self.num_threads = path, n
+
+    def set_num_threads(self, n):
+        self.num_threads = n
+
+
+def test_a_blas_library_loaded_inside_a_block_is_limited_by_the_next_entry_and_restored(monkeypatch):
+    first, later = _FakeBlas("libopenblas-numpy.so", 2), _FakeBlas("libscipy_openblas.so", 2)
+    libs = [[first]]
+    monkeypatch.setattr(_threads, "_blas_libraries", lambda: libs[0])
+    with _threads.limited():
+        assert first.num_threads == 1
+        libs[0] = [first, later]  # scipy's linear algebra imported inside the block brings its own library
+        with _threads.limited():
+            assert later.num_threads == 1
+        assert later.num_threads == 1  # still the outer block's: restored when it ends, not before
+    assert first.num_threads == 2 and later.num_threads == 2
+
+
 def test_thread_setting_validates(monkeypatch):
     with pytest.raises(ValueError, match="threads"):
         _threads.set_threads(0)

@@ -102,27 +102,44 @@ class limited:
     than through ``threadpool_limits``, which inspects the process at every
     use (about 40 µs, as much as a small model's whole response). A class
     rather than a generator: a loop of small models enters it per call.
+
+    A BLAS library loaded inside the block (scipy brings its own OpenBLAS when
+    its linear algebra is first imported) is limited by the next nested entry,
+    and every library is restored when the outermost block ends.
     """
 
-    __slots__ = ("_depth", "_changed")
+    __slots__ = ("_depth",)
 
     def __enter__(self):
         self._depth = depth = getattr(_local, "depth", 0)
-        self._changed = changed = []
-        n = thread_count() if depth == 0 else None
-        if n is not None:
-            for lc in _blas_libraries():
-                old = lc.num_threads
-                if old != n:
-                    lc.set_num_threads(n)
-                    changed.append((lc, old))
+        if depth == 0:
+            _local.n, _local.changed, _local.paths, _local.seen = thread_count(), [], set(), None
+        if _local.n is not None:
+            libs = _blas_libraries()
+            if libs is not _local.seen:  # the first entry, or a library loaded since the last look
+                _limit(libs, _local.n)
+                _local.seen = libs
         _local.depth = depth + 1
         return self
 
     def __exit__(self, *exc) -> None:
         _local.depth = self._depth
-        for lc, old in self._changed:
-            lc.set_num_threads(old)
+        if self._depth == 0:
+            for lc, old in _local.changed:
+                lc.set_num_threads(old)
+            _local.changed, _local.seen = [], None
+
+
+def _limit(libs, n: int) -> None:
+    """Each library of ``libs`` not yet limited in this block set to ``n`` threads, its setting kept to restore."""
+    for lc in libs:
+        if lc.filepath in _local.paths:
+            continue
+        _local.paths.add(lc.filepath)
+        old = lc.num_threads
+        if old != n:
+            lc.set_num_threads(n)
+            _local.changed.append((lc, old))
 
 
 def hot_path(fn):
