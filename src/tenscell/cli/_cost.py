@@ -150,7 +150,8 @@ def estimate_plan(plan) -> tuple[dict, float]:
             f"{machine.line()}{workers})")
     if wall > BUDGET_S:
         flags = ", ".join(plan.sized_by) or "the study's options"
-        heaviest = max(plan.kinds(), key=lambda k: plan.kinds()[k] * rates[k])
+        kinds = plan.kinds()
+        heaviest = max(kinds, key=lambda k: kinds[k] * rates[k])
         raise ValueError(f"{plan.sized_by[0] if plan.sized_by else 'study ' + plan.study}: estimated {duration(wall)}"
                          f" ({len(plan.tasks)} task(s), the most of it {heaviest}), more than the "
                          f"{duration(BUDGET_S)} one run may take: give smaller {flags}")

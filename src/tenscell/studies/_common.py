@@ -5,7 +5,7 @@ import numpy as np
 
 from .._checks import positive_array
 
-__all__ = ["grid", "evaluation_probe", "PROBE_EVALUATIONS"]
+__all__ = ["grid", "evaluation_probe", "PROBE_EVALUATIONS", "name_list"]
 
 #: evaluations of the residuals' Jacobian one probe makes (the problem is built once per probe)
 PROBE_EVALUATIONS = 10
@@ -14,6 +14,11 @@ PROBE_EVALUATIONS = 10
 def grid(name, values, unit):
     """A 1-D grid of positive values (``unit`` for the message)."""
     return np.atleast_1d(positive_array(name, values, unit=unit)).ravel()
+
+
+def name_list(given) -> tuple[str, ...]:
+    """Names from a sequence or from the command line's comma list (``"a, b"``), blanks dropped."""
+    return tuple(n.strip() for n in (given.split(",") if isinstance(given, str) else given) if n.strip())
 
 
 def evaluation_probe(spec, data):

@@ -47,6 +47,7 @@ import numpy as np
 from ..fitting.models.catalog import MECHANISMS, PER_TENDON_VOIGT
 from ..fitting.anchor import DEFAULT_FACTOR
 from ..fitting.shares import GAUGE_WINDOW_S
+from ..population.ensemble import DEFAULT_K
 
 if TYPE_CHECKING:
     from ..fitting.validation import OutOfSampleComparison
@@ -411,13 +412,13 @@ def _frequency_sweep(datasets) -> int | None:
 
 
 def _fit(datasets, name: str, opts: dict, **extra):
-    from ..fitting import VoigtModel, fit
+    from ..fitting import fit
 
     if name == PER_TENDON_VOIGT:
         # the paper's fit gets the budget `make reproduce` gives it (its default hops, polishing 4× as long as
         # reaching the tolerance took): the reference must be a converged fit, not a truncated search
         # per-family damping: the 37-parameter fit of issue 18 (33 EA, 2 c, s, P_data; L is the exact gauge)
-        return fit(datasets, model=VoigtModel("per-tendon", "per-family"), progress=False, jobs=1,
+        return fit(datasets, model=_spec(name), progress=False, jobs=1,
                    **dict(opts, hops=max(opts["hops"], PER_TENDON_HOPS), polish_effort=4.0), **extra)
     return fit(datasets, model=name, progress=False, jobs=1, **opts, **extra)
 
@@ -765,10 +766,11 @@ def _model_names(given, datasets) -> tuple[str, ...]:
     :func:`default_models`; an unknown name is refused naming ``--mechanisms``."""
     from ..fitting.models import MODELS
     from ..fitting.models.catalog import mechanism_names
+    from ._common import name_list
 
     if given is None:
         return default_models(datasets)
-    names = tuple(m.strip() for m in (given.split(",") if isinstance(given, str) else given) if m.strip())
+    names = name_list(given)
     known = ", ".join(mechanism_names())
     if not names:
         raise ValueError(f"--mechanisms {given!r}: no mechanism named; give a comma list of names ({known}), or "
@@ -782,7 +784,7 @@ def _model_names(given, datasets) -> tuple[str, ...]:
 def _ensemble_size(options: Mapping[str, Any]) -> int:
     """K of the ensemble (0: none), checked with where it runs, before any fit: one assignment has no spread,
     ``--workers`` and ``--scheduler`` need an ensemble, and the scheduler must answer."""
-    from ..population.ensemble import DEFAULT_K, check_counts
+    from ..population.ensemble import check_counts
 
     K = options.get("ensemble", DEFAULT_K)
     K = 0 if K is None else K
@@ -940,7 +942,7 @@ class MechanismsStudy:
     #: the options of ``tenscell study mechanisms`` (the protocol's ``Study.options``: name -> default; ``data``:
     #: the data sets read from the files the command line names; ``ensemble``: K assignments, 0 for none)
     options: Mapping[str, Any] = {"data": (), "seed": 0, "starts": 4, "jobs": None, "tolerance": 0.01,
-                                  "mechanisms": None, "hops": 10, "ensemble": 1000, "workers": None,
+                                  "mechanisms": None, "hops": 10, "ensemble": DEFAULT_K, "workers": None,
                                   "scheduler": None}
 
     def plan(self, options: Mapping[str, Any]):

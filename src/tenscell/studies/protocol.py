@@ -33,6 +33,7 @@ expect now (measured over the calibration, :class:`tenscell._parallel.CpuWindow`
 """
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -435,7 +436,7 @@ def calibrate(plan: Plan, extra: Sequence[Task] = ()) -> tuple[dict[str, float],
     for probe in (*plan.calibration, *extra):
         work = probe.fn(*probe.args)
         if not callable(work):  # the probe is its own work (its first call loaded what it imports)
-            work = _call(probe.fn, *probe.args)
+            work = functools.partial(probe.fn, *probe.args)
         calls, seconds = 0, 0.0
         while calls < PROBE_CALLS and (calls == 0 or seconds < PROBE_CPU_S):  # a short probe: its mean of a few
             seconds += _timed(work)[1]
@@ -444,10 +445,6 @@ def calibrate(plan: Plan, extra: Sequence[Task] = ()) -> tuple[dict[str, float],
         weight[probe.kind] = weight.get(probe.kind, 0.0) + probe.weight
     use = window.stop()
     return {k: max(cpu[k], 1e-6) / weight[k] for k in cpu}, Machine.measure(use)
-
-
-def _call(fn, *args):
-    return lambda: fn(*args)
 
 
 def figure_probe() -> None:

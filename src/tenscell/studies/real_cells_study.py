@@ -843,18 +843,13 @@ def _real_cells_options(options: Mapping[str, Any]) -> dict:
 
     cli = "directory" not in options  # the command line names the folder --data DIR
     where = options.get("directory", options.get("data_dir"))
-    try:  # the folder first: without the data nothing else can be checked
-        folder = real_cells_directory(where)
-    except RealCellsMissing as err:
-        if not cli:
-            raise
-        raise RealCellsMissing(f"--data {'DIR' if where is None else where}: {err}") from None
-    names = _mechanism_names(options.get("mechanisms"))
     budget, cell_budget, max_cells = _budgets(options)
-    o = {"mechanisms": names, "budget": budget, "cell_budget": cell_budget, "max_cells": max_cells,
+    o = {"budget": budget, "cell_budget": cell_budget, "max_cells": max_cells,
          "time_domain": bool(options.get("time_domain", False)), "populations": bool(options.get("populations", False)),
-         "population_budget": options.get("population_budget") or POPULATION_BUDGET}
-    try:
+         "population_budget": options.get("population_budget") or POPULATION_BUDGET, "jobs": options.get("jobs")}
+    try:  # the folder first (without it nothing else can be checked), then the names, then its files
+        folder = real_cells_directory(where)
+        o["mechanisms"] = _mechanism_names(options.get("mechanisms"))
         o["medians"] = {ln: xie_median(ln, folder) for ln in XIE_LINES}
         o["cells"] = {ln: xie_cells(ln, folder)[:max_cells] for ln in XIE_LINES}
         o["series"] = time_series(folder) if o["time_domain"] else ()
@@ -863,7 +858,6 @@ def _real_cells_options(options: Mapping[str, Any]) -> dict:
             raise
         raise RealCellsMissing(f"--data {'DIR' if where is None else where}: {err}") from None
     o["directory"] = str(folder)
-    o["jobs"] = options.get("jobs")
     return o
 
 
@@ -871,10 +865,11 @@ def _mechanism_names(given) -> tuple[str, ...]:
     """The mechanisms scored: ``given`` (names, or the command line's comma list) or :data:`DEFAULT_MECHANISMS`;
     an unknown one refused naming ``--mechanisms``."""
     from ..fitting.models.catalog import mechanism_names
+    from ._common import name_list
 
     if given is None:
         return DEFAULT_MECHANISMS
-    names = tuple(m.strip() for m in (given.split(",") if isinstance(given, str) else given) if m.strip())
+    names = name_list(given)
     bad = [m for m in names if m not in mechanism_names()]
     if not names or bad:
         raise ValueError(f"--mechanisms: {'unknown mechanism ' + repr(bad[0]) if bad else 'no mechanism named'};"
@@ -1027,7 +1022,8 @@ class RealCellsStudy:
     fits), ``max_cells``, ``population_budget``. Every file is read when the plan is made, before any fit.
 
     A fit's task counts the model evaluations it is expected to take (:data:`EVALUATIONS_PER_START_HOP` × its
-    budget); the plan's probes time a few evaluations of each model, and a population's scores on a few cells.
+    budget; a population's scores :data:`POPULATION_EVALUATIONS`); the plan's probes time a few evaluations of each
+    model.
     """
 
     name = "real-cells"
