@@ -115,6 +115,12 @@ AGREE_LOG = 0.05
 #: the starts agree also when the moves of every start since its last 5 % improvement add up to this × patience (and
 #: two starts hold the best fit; the stopping rule of the module docstring)
 EVERY_START = 4 / 3
+#: model evaluations a fit takes per start and basin-hopping move allowed (--hops + 1 least-squares runs at most): the
+#: median over the built-in mechanisms, and the per-tendon fit's (30 hops at least, polished 4x as long), both counted
+#: on the bundled data (bench/calibrate_study_cost.py prints them; 2 cores, load about 9); a structure-free formula's
+#: (its 20 main fits in `study mechanisms` on the bundled pair: 2.9 s of CPU at about 1 ms per evaluation, load 4-5).
+#: `tenscell fit`'s and the studies' estimates multiply them by a measured model evaluation
+EVALUATIONS_PER_START_HOP = {"mechanism": 20.0, "voigt-per-tendon": 34.0, "formula": 3.5}
 #: the plateau: the best RMS improved by less than this fraction over ``patience × starts`` steps
 PLATEAU_GAIN = 0.01
 #: an optimum is well conditioned when the Gram matrix of its Jacobian (the free parameters not at a bound, columns
@@ -548,12 +554,5 @@ def _chains(problem: Problem, starts: int, seed, initial) -> list[_Chain]:
     return chains
 
 from .._deprecated import moved_away  # noqa: E402
-
-#: model evaluations a fit takes per start and basin-hopping move allowed (--hops + 1 least-squares runs at most): the
-#: median over the built-in mechanisms, and the per-tendon fit's (30 hops at least, polished 4x as long), both counted
-#: on the bundled data (bench/calibrate_study_cost.py prints them; 2 cores, load about 9); a structure-free formula's
-#: (its 20 main fits in `study mechanisms` on the bundled pair: 2.9 s of CPU at about 1 ms per evaluation, load 4-5).
-#: `tenscell fit`'s and the studies' estimates multiply them by a measured model evaluation
-EVALUATIONS_PER_START_HOP = {"mechanism": 20.0, "voigt-per-tendon": 34.0, "formula": 3.5}
 
 __getattr__ = moved_away(__name__)  # the public names of 0.2.0 that moved away: a DeprecationWarning names their home
